@@ -1,0 +1,134 @@
+//! The crate's error type.
+//!
+//! Every fallible call in `softrod` returns [`Result<T>`](Result). Variants carry
+//! the data that says what was wrong and where (the field name, the index, the
+//! solver report), so a caller can react programmatically and a person can read
+//! the message.
+
+use crate::statics::StaticReport;
+
+/// Errors returned by `softrod`.
+///
+/// # Example
+/// ```
+/// use softrod::{Error, element::PlanarCable};
+/// let err = PlanarCable::new(-1.0, 300.0, 0.025).unwrap_err();
+/// assert!(matches!(err, Error::InvalidParameter { ref name, .. } if name == "length_m"));
+/// ```
+#[derive(Debug, Clone, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A parameter has a value outside its valid range (or is not finite).
+    #[error("invalid parameter `{name}` = {value}: {reason}")]
+    InvalidParameter {
+        /// The parameter's name (with its path in a scene, e.g. `robot.sections[1].ei_nm2`).
+        name: String,
+        /// The offending value, as text.
+        value: String,
+        /// What the valid range is.
+        reason: String,
+    },
+    /// A vector or matrix has the wrong size.
+    #[error("dimension mismatch in `{name}`: expected {expected}, got {got}")]
+    DimensionMismatch {
+        /// What was passed.
+        name: String,
+        /// The size that was expected.
+        expected: usize,
+        /// The size that was given.
+        got: usize,
+    },
+    /// A linear system could not be solved: a pivot vanished.
+    #[error(
+        "singular matrix in {context}: pivot {index} is {pivot:e} (its row's scale {scale:e})"
+    )]
+    Singular {
+        /// Which matrix (e.g. "tangent stiffness").
+        context: String,
+        /// Row/column of the vanishing pivot.
+        index: usize,
+        /// The pivot's value.
+        pivot: f64,
+        /// The largest absolute entry of the pivot's row.
+        scale: f64,
+    },
+    /// The static (equilibrium) solver did not converge.
+    #[error("static solve did not converge: {report}")]
+    NotConverged {
+        /// What the solver reached before it stopped.
+        report: Box<StaticReport>,
+    },
+    /// A scene file could not be read or is malformed.
+    #[error("scene: {message}")]
+    Scene {
+        /// What is wrong, naming the field where possible.
+        message: String,
+    },
+    /// A computation produced a value that is not finite.
+    #[error("non-finite value in {context}")]
+    NonFinite {
+        /// Where it appeared.
+        context: String,
+    },
+}
+
+/// `Result` with the crate's [`Error`].
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    /// Shorthand for [`Error::InvalidParameter`].
+    pub(crate) fn invalid(
+        name: impl Into<String>,
+        value: impl ToString,
+        reason: impl Into<String>,
+    ) -> Self {
+        Error::InvalidParameter {
+            name: name.into(),
+            value: value.to_string(),
+            reason: reason.into(),
+        }
+    }
+}
+
+/// Checks that `value` is finite and strictly positive.
+pub(crate) fn check_positive(name: &str, value: f64) -> Result<()> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(name, value, "must be finite and > 0"))
+    }
+}
+
+/// Checks that `value` is finite.
+pub(crate) fn check_finite(name: &str, value: f64) -> Result<()> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::invalid(name, value, "must be finite"))
+    }
+}
+
+/// Checks that every entry of `values` is finite.
+pub(crate) fn check_all_finite(name: &str, values: &[f64]) -> Result<()> {
+    match values.iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(Error::invalid(
+            format!("{name}[{i}]"),
+            values[i],
+            "must be finite",
+        )),
+    }
+}
+
+/// Checks a length.
+pub(crate) fn check_len(name: &str, expected: usize, got: usize) -> Result<()> {
+    if expected == got {
+        Ok(())
+    } else {
+        Err(Error::DimensionMismatch {
+            name: name.into(),
+            expected,
+            got,
+        })
+    }
+}

@@ -1,0 +1,40 @@
+//! # softrod
+//!
+//! Shape and distributed-force estimation for slender pneumatic soft robots,
+//! modelled with ANCF cable elements — an open implementation of Huang, Yuan,
+//! Yang and Gu, "Precise Control of Soft Robots Amidst Uncertain Environmental
+//! Contacts and Forces", IEEE T-RO 2024. Equation numbers `(n)` in the docs
+//! are the paper's.
+//!
+//! Modules, one concept each:
+//! - [`element`]: the cable element (14)–(16), energy, gradient, tangent.
+//! - [`assembly`]: a multi-section robot, loads (22), actuation (18).
+//! - [`statics`]: Newton's method on the equilibrium (17).
+//! - [`scene`]: JSON scene files; [`params`]: the values the paper leaves open.
+//! - [`banded`], [`quadrature`]: the numerical kernels.
+//!
+//! All quantities are SI (m, N, Pa, rad).
+//!
+//! # Example
+//! ```
+//! use softrod::{scene::Scene, statics::StaticSolver};
+//! let scene = Scene::two_section();
+//! let robot = scene.robot()?;
+//! let eq = StaticSolver::default().solve(&robot, &scene.loads()?, None)?;
+//! assert!(eq.report.converged);
+//! # Ok::<(), softrod::Error>(())
+//! ```
+#![warn(missing_docs)]
+#![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
+
+pub mod assembly;
+pub mod banded;
+pub mod element;
+pub mod error;
+pub mod loads;
+pub mod params;
+pub mod quadrature;
+pub mod scene;
+pub mod statics;
+
+pub use error::{Error, Result};
