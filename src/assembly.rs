@@ -819,11 +819,7 @@ impl<E: Element> Robot<E> {
             if e > 0 {
                 // interior elements: a plain shift
                 let off = e * nd - nd + self.base_free.len();
-                for a in 0..edof {
-                    for b in 0..edof {
-                        k.add(off + a, off + b, h[a * edof + b]);
-                    }
-                }
+                k.add_block(off, edof, &h[..edof * edof])?;
                 continue;
             }
             for a in 0..edof {

@@ -86,6 +86,37 @@ impl BandedMatrix {
         }
     }
 
+    /// Adds the dense `size × size` block `block` (row-major) at rows and
+    /// columns `off .. off + size`. The block must lie in the band.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if the block is not `size²` long or does
+    /// not fit in the band.
+    pub fn add_block(&mut self, off: usize, size: usize, block: &[f64]) -> Result<()> {
+        crate::error::check_len("block", size * size, block.len())?;
+        if size == 0 {
+            return Ok(());
+        }
+        if off + size > self.n || size - 1 > self.kl.min(self.ku) {
+            return Err(Error::DimensionMismatch {
+                name: "block (outside the band)".into(),
+                expected: self.kl.min(self.ku) + 1,
+                got: size,
+            });
+        }
+        for r in 0..size {
+            let i = off + r;
+            let start = self.idx(i, off);
+            for (d, v) in self.data[start..start + size]
+                .iter_mut()
+                .zip(&block[r * size..(r + 1) * size])
+            {
+                *d += v;
+            }
+        }
+        Ok(())
+    }
+
     /// `y = A x`.
     ///
     /// # Errors
@@ -183,17 +214,23 @@ impl BandedMatrix {
             if pivot < 0.0 {
                 negative += 1;
             }
+            let width = self.width;
+            let len = last_col - k; // entries right of the pivot in row k
+            let row_k = self.idx(k, k);
             for i in k + 1..=last_row {
                 let ik = self.idx(i, k);
                 let l = self.data[ik] / pivot;
                 self.data[ik] = l;
                 if l != 0.0 {
-                    let row_k = self.idx(k, k);
-                    let row_i = self.idx(i, k);
-                    for off in 1..=(last_col - k) {
-                        self.data[row_i + off] -= l * self.data[row_k + off];
+                    // rows i > k lie after row k in storage: split to borrow both
+                    let (head, tail) = self.data.split_at_mut(ik + 1);
+                    let src = &head[row_k + 1..row_k + 1 + len];
+                    let dst = &mut tail[..len];
+                    for (d, s) in dst.iter_mut().zip(src) {
+                        *d -= l * s;
                     }
                 }
+                debug_assert!(ik + 1 + len <= (i + 1) * width);
             }
         }
         Ok(BandedLu {
@@ -275,11 +312,13 @@ impl BandedLu {
         for i in (0..n).rev() {
             let row = i * m + kl; // index of (i, i)
             let last = (i + ku + kl).min(n - 1);
-            let mut s = b[i];
-            for j in i + 1..=last {
-                s -= self.lu.data[row + (j - i)] * b[j];
-            }
-            b[i] = s / self.lu.data[row];
+            let coeffs = &self.lu.data[row + 1..row + 1 + (last - i)];
+            let s: f64 = coeffs
+                .iter()
+                .zip(&b[i + 1..=last])
+                .map(|(a, x)| a * x)
+                .sum();
+            b[i] = (b[i] - s) / self.lu.data[row];
         }
         if let Some(d) = &self.scaling {
             b.iter_mut().zip(d).for_each(|(x, d)| *x *= d);

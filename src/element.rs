@@ -314,49 +314,76 @@ impl Element for PlanarCable {
 
     #[allow(clippy::needless_range_loop)]
     fn add_energy_hessian(&self, qe: &[f64], hess: &mut [f64]) {
-        // Hessian in z = (a, b) at each point, then mapped with ∂a/∂v_k = d1_k I,
-        // ∂b/∂v_k = d2_k I (v_k the k-th 2-vector of q_e).
-        let mut add = |gp: &GaussPoint, hz: &[[f64; 4]; 4]| {
-            for k in 0..4 {
-                for l in 0..4 {
-                    let (ak, bk, al, bl) = (gp.d1[k], gp.d2[k], gp.d1[l], gp.d2[l]);
-                    for i in 0..2 {
-                        for j in 0..2 {
-                            let v = ak * al * hz[i][j]
-                                + ak * bl * hz[i][2 + j]
-                                + bk * al * hz[2 + i][j]
-                                + bk * bl * hz[2 + i][2 + j];
-                            hess[(2 * k + i) * 8 + 2 * l + j] += v;
-                        }
-                    }
-                }
-            }
-        };
+        // At each Gauss point the Hessian in z = (a, b) = (r', r'') is mapped
+        // by T = [d1 ⊗ I; d2 ⊗ I] (4 × 8): H_e += Tᵀ H_z T, computed as
+        // V = H_z T, then Tᵀ V, upper triangle only, mirrored at the end.
+        let mut h = [0.0; 64];
         for gp in &self.axial {
+            // only the (a, a) block: H[(k,i),(l,j)] += d1_k d1_l H_aa[i][j]
             let (a, _) = derivs(qe, &gp.d1, &gp.d2);
             let n = (a[0] * a[0] + a[1] * a[1]).sqrt();
             let eps = n - 1.0;
             let t = [a[0] / n, a[1] / n];
-            let mut hz = [[0.0; 4]; 4];
-            for i in 0..2 {
-                for j in 0..2 {
-                    let id = if i == j { 1.0 } else { 0.0 };
-                    hz[i][j] = gp.w * self.ea * (t[i] * t[j] + eps * (id - t[i] * t[j]) / n);
+            let c = gp.w * self.ea;
+            let haa = [
+                c * (t[0] * t[0] + eps * (1.0 - t[0] * t[0]) / n),
+                c * (t[0] * t[1] - eps * t[0] * t[1] / n),
+                c * (t[1] * t[1] + eps * (1.0 - t[1] * t[1]) / n),
+            ];
+            for k in 0..4 {
+                for l in k..4 {
+                    let f = gp.d1[k] * gp.d1[l];
+                    let r0 = (2 * k) * 8 + 2 * l;
+                    let r1 = (2 * k + 1) * 8 + 2 * l;
+                    h[r0] += f * haa[0];
+                    h[r0 + 1] += f * haa[1];
+                    h[r1] += f * haa[1];
+                    h[r1 + 1] += f * haa[2];
                 }
             }
-            add(gp, &hz);
         }
         for gp in &self.bending {
             let (a, b) = derivs(qe, &gp.d1, &gp.d2);
-            let (kappa, g, h) = curvature(a, b);
+            let (kappa, g, hk) = curvature(a, b);
             let dk = kappa - self.kappa0;
+            let c = gp.w * self.ei;
             let mut hz = [[0.0; 4]; 4];
             for i in 0..4 {
-                for j in 0..4 {
-                    hz[i][j] = gp.w * self.ei * (g[i] * g[j] + dk * h[i][j]);
+                for j in i..4 {
+                    let v = c * (g[i] * g[j] + dk * hk[i][j]);
+                    hz[i][j] = v;
+                    hz[j][i] = v;
                 }
             }
-            add(gp, &hz);
+            // V = H_z T: column (l, j) = d1_l H_z[:, j] + d2_l H_z[:, 2 + j]
+            let mut v = [[0.0; 8]; 4];
+            for l in 0..4 {
+                for j in 0..2 {
+                    for i in 0..4 {
+                        v[i][2 * l + j] = gp.d1[l] * hz[i][j] + gp.d2[l] * hz[i][2 + j];
+                    }
+                }
+            }
+            // Tᵀ V: row (k, i) = d1_k V[i] + d2_k V[2 + i]
+            for k in 0..4 {
+                for i in 0..2 {
+                    let row = 2 * k + i;
+                    for col in row..8 {
+                        h[row * 8 + col] += gp.d1[k] * v[i][col] + gp.d2[k] * v[2 + i][col];
+                    }
+                }
+            }
+        }
+        // mirror the upper triangle (the axial loop filled whole 2×2 blocks
+        // on and above the block diagonal; only the strict upper part is copied)
+        for r in 0..8 {
+            for c in 0..8 {
+                if c >= r {
+                    hess[r * 8 + c] += h[r * 8 + c];
+                } else {
+                    hess[r * 8 + c] += h[c * 8 + r];
+                }
+            }
         }
     }
 
