@@ -92,6 +92,20 @@ impl Section {
     }
 }
 
+/// What the base clamp prescribes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Clamp {
+    /// Position and direction of the base; the axial strain at the base is
+    /// free (the physical clamp; default).
+    #[default]
+    PositionAndDirection,
+    /// Position and the whole slope vector `r_0' = t_0` (MODEL.md's literal
+    /// reading, and exudyn's cantilevers that fix all four base coordinates):
+    /// forbids axial strain at the base, a boundary layer one element long.
+    Full,
+}
+
 /// Pose of the clamped base.
 ///
 /// # Example
@@ -106,6 +120,9 @@ pub struct Base {
     pub position_m: Vec<f64>,
     /// Angle of the base tangent from the x axis (rad).
     pub angle_rad: f64,
+    /// What the clamp prescribes (default `position_and_direction`).
+    #[serde(default)]
+    pub clamp: Clamp,
 }
 
 impl Default for Base {
@@ -113,6 +130,7 @@ impl Default for Base {
         Base {
             position_m: vec![0.0, 0.0],
             angle_rad: 0.0,
+            clamp: Clamp::default(),
         }
     }
 }
@@ -320,7 +338,10 @@ impl<E: Element> Robot<E> {
         let (c, s) = (spec.base.angle_rad.cos(), spec.base.angle_rad.sin());
         let dir: Vec<f64> = if d == 2 { vec![c, s] } else { vec![c, s, 0.0] };
         let base_node = E::straight_node(&spec.base.position_m, &dir);
-        let base_free = E::clamp_free_directions(&base_node);
+        let base_free = match spec.base.clamp {
+            Clamp::PositionAndDirection => E::clamp_free_directions(&base_node),
+            Clamp::Full => Vec::new(),
+        };
         let n_q = node_s.len() * nd;
         let kb = 2 * nd - 1;
         let line_rule = GaussRule::new(5)?;
@@ -407,7 +428,8 @@ impl<E: Element> Robot<E> {
         self.base_free.len() + self.n_q() - E::NODE_DOFS
     }
 
-    /// Number of free coordinates at the clamped base (1 for a cable).
+    /// Number of free coordinates at the clamped base (1 for a cable with
+    /// [`Clamp::PositionAndDirection`], 0 with [`Clamp::Full`]).
     pub fn n_base_free(&self) -> usize {
         self.base_free.len()
     }
@@ -987,6 +1009,36 @@ mod tests {
             *v += 0.02 * (((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5);
         }
         q
+    }
+
+    #[test]
+    fn full_clamp_has_no_free_base_coordinate_and_a_consistent_tangent() {
+        let mut spec = robot(2).spec().clone();
+        spec.base.clamp = Clamp::Full;
+        let r = spec.build_planar().unwrap();
+        assert_eq!(r.n_base_free(), 0);
+        assert_eq!(r.n_free(), r.n_q() - 4);
+        let loads = Loads {
+            pressures_pa: vec![3e4, 1e4],
+            ..Loads::default()
+        };
+        let dead = r.dead_force(&loads).unwrap();
+        let q = perturbed(&r, 9);
+        let mut k = BandedMatrix::zeros(1, 0, 0);
+        r.tangent_into(&q, &loads, &mut k).unwrap();
+        for j in 0..r.n_free() {
+            let mut du = vec![0.0; r.n_free()];
+            du[j] = 1e-7;
+            let dq = r.expand_step(&du).unwrap();
+            let qp: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
+            let qm: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a - b).collect();
+            let rp = r.residual(&qp, &dead, &loads).unwrap();
+            let rm = r.residual(&qm, &dead, &loads).unwrap();
+            for i in 0..r.n_free() {
+                let fd = -(rp[i] - rm[i]) / 2e-7;
+                assert!((fd - k.get(i, j)).abs() < 1e-6 * k.max_abs(), "({i},{j})");
+            }
+        }
     }
 
     #[test]
