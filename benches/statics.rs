@@ -1,7 +1,8 @@
 //! Static solver benches: the cost of one Newton step (assembly of residual
 //! and tangent, banded LU, solve) from 10 to 2000 elements, and whole solves.
 //!
-//! Run: `cargo bench --bench statics` then `python3 benches/fit_exponent.py newton_step`.
+//! Run: `cargo bench --bench statics` then `python3 benches/fit_exponent.py GROUP`
+//! for GROUP in `newton_step`, `static_solve_cold`, `static_solve_warm`.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use std::hint::black_box;
@@ -51,20 +52,28 @@ fn newton_step(c: &mut Criterion) {
 }
 
 fn static_solve(c: &mut Criterion) {
-    let mut group = c.benchmark_group("static_solve");
-    for &n in &[20usize, 200] {
-        let (robot, loads, q) = robot(n);
+    // cold: from the arc configuration; warm: from the previous equilibrium
+    // after a 0.5 kPa pressure change (a control step).
+    let mut cold = c.benchmark_group("static_solve_cold");
+    for &n in &[6usize, 20, 100, 500, 2000] {
+        let (robot, loads, _) = robot(n);
         let solver = StaticSolver::default();
-        group.bench_with_input(BenchmarkId::new("cold", n), &n, |b, _| {
+        cold.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
             b.iter(|| solver.solve(&robot, black_box(&loads), None).unwrap())
         });
+    }
+    cold.finish();
+    let mut warm = c.benchmark_group("static_solve_warm");
+    for &n in &[6usize, 20, 100, 500, 2000] {
+        let (robot, loads, q) = robot(n);
+        let solver = StaticSolver::default();
         let mut nudged = loads.clone();
         nudged.pressures_pa[0] += 500.0;
-        group.bench_with_input(BenchmarkId::new("warm", n), &n, |b, _| {
+        warm.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
             b.iter(|| solver.solve(&robot, black_box(&nudged), Some(&q)).unwrap())
         });
     }
-    group.finish();
+    warm.finish();
 }
 
 criterion_group!(benches, newton_step, static_solve);
