@@ -399,9 +399,11 @@ impl StaticSolver {
             robot.tangent_into(q, loads, &mut w.k)?;
             let qmax = q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             w.floor = FLOOR_FACTOR * f64::EPSILON * w.k.max_abs() * qmax * (n as f64).sqrt();
-            if rn <= w.floor {
-                return Ok(Outcome::Converged(Criterion::Floor));
-            }
+            // At the round-off floor the residual cannot certify more digits,
+            // but one more Newton step still can gain them (the floor does not
+            // shrink with the load; stopping here left small-load solves 1e-11 m
+            // short): take it, keep it unless it raises the residual, stop.
+            let at_floor = rn <= w.floor;
             w.iterations += 1;
             // Newton direction; if it does not descend the potential (Q·dq <= 0,
             // an indefinite tangent far from equilibrium), shift the diagonal:
@@ -449,6 +451,18 @@ impl StaticSolver {
                 1.0
             };
             let step_inf = dq_full.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if at_floor {
+                for ((v, a), b) in trial.iter_mut().zip(q.iter()).zip(&dq_full) {
+                    *v = a + b;
+                }
+                let rt = eval(&trial, &mut r_trial)?;
+                if rt.is_finite() && rt <= rn {
+                    q.copy_from_slice(&trial);
+                    std::mem::swap(&mut w.r, &mut r_trial);
+                    w.last_step = step_inf;
+                }
+                return Ok(Outcome::Converged(Criterion::Floor));
+            }
             let offset_slope: f64 = offset.iter().zip(&dq).map(|(a, b)| a * b).sum();
             // Π decreases along dq when Q·dq > 0 (K positive along dq).
             let slope: f64 = w.r.iter().zip(&dq).map(|(a, b)| a * b).sum();
