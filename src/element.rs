@@ -151,7 +151,8 @@ impl PlanarCable {
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] for non-positive or non-finite `le`, `ea`,
-    /// `ei`, a non-finite `kappa0`, or a rule size outside `1..=32`.
+    /// `ei`, a non-finite `kappa0`, or a rule of 0 points; [`Error::TooLarge`]
+    /// for a rule above [`crate::quadrature::MAX_POINTS`] points.
     ///
     /// # Example
     /// ```
@@ -167,12 +168,27 @@ impl PlanarCable {
         bending_points: usize,
     ) -> Result<Self> {
         check_positive("length_m", le)?;
+        if !(1.0 / (le * le)).is_finite() {
+            // the shape functions' second derivatives (∝ 1/L_e²) overflow
+            return Err(Error::invalid(
+                "length_m",
+                le,
+                "element too short: 1/L_e² overflows",
+            ));
+        }
         check_positive("ea_n", ea)?;
         check_positive("ei_nm2", ei)?;
         check_finite("rest_curvature_per_m", kappa0)?;
         let make = |n: usize, name: &str| -> Result<Vec<GaussPoint>> {
-            let rule =
-                GaussRule::new(n).map_err(|_| Error::invalid(name, n, "must be in 1..=32"))?;
+            // the rule's own error, under this parameter's name
+            let rule = GaussRule::new(n).map_err(|e| match e {
+                Error::TooLarge { value, max, .. } => Error::TooLarge {
+                    name: name.into(),
+                    value,
+                    max,
+                },
+                _ => Error::invalid(name, n, "must be >= 1"),
+            })?;
             Ok(rule
                 .iter()
                 .map(|(xi, w)| {

@@ -110,9 +110,16 @@ impl Error {
         value: impl ToString,
         reason: impl Into<String>,
     ) -> Self {
+        let mut value = value.to_string();
+        // `f64`'s Display writes 1e-320 with 320 digits: keep messages short
+        if value.len() > 24 {
+            if let Ok(v) = value.parse::<f64>() {
+                value = format!("{v:e}");
+            }
+        }
         Error::InvalidParameter {
             name: name.into(),
-            value: value.to_string(),
+            value,
             reason: reason.into(),
         }
     }
