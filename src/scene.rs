@@ -179,7 +179,9 @@ impl Scene {
     pub fn from_json(text: &str) -> Result<Scene> {
         let de = &mut serde_json::Deserializer::from_str(text);
         let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
+            // `?` marks a segment the parser had not identified yet (truncated input)
             let path = e.path().to_string();
+            let path = path.trim_end_matches(".?").trim_end_matches('?');
             let inner = e.into_inner();
             Error::Scene {
                 message: if path.is_empty() || path == "." {
