@@ -537,7 +537,7 @@ impl<E: Element> Robot<E> {
         for &s in &self.node_s {
             let p: Vec<f64> = (0..d).map(|i| self.base_node[i] + s * dir[i]).collect();
             let node = E::straight_node(&p, &dir);
-            q.extend_from_slice(&node[..nd]);
+            q.extend(node.iter().take(nd));
         }
         q
     }
@@ -580,7 +580,7 @@ impl<E: Element> Robot<E> {
             }
             s_prev = s;
             let node = E::straight_node(&[x, y], &[th.cos(), th.sin()]);
-            q.extend_from_slice(&node[..nd]);
+            q.extend(node.iter().take(nd));
         }
         q
     }
