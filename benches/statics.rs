@@ -43,7 +43,7 @@ fn newton_step(c: &mut Criterion) {
                     .unwrap();
                 robot.tangent_into(black_box(&q), &loads, &mut k).unwrap();
                 let lu = k.clone().factor_scaled(0.0, "K").unwrap();
-                lu.solve_in_place(&mut r);
+                lu.solve_in_place(&mut r).unwrap();
                 black_box(&r);
             })
         });

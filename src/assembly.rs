@@ -19,7 +19,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::banded::BandedMatrix;
 use crate::element::{Element, PlanarCable, DEFAULT_GAUSS_POINTS};
-use crate::error::{check_all_finite, check_finite, check_len, check_positive, Error, Result};
+use crate::error::{
+    check_all_finite, check_at_most, check_finite, check_index, check_len, check_positive, Error,
+    Result,
+};
 use crate::loads::{outside, Loads};
 use crate::quadrature::GaussRule;
 
@@ -232,8 +235,13 @@ impl<E: Element> Robot<E> {
     /// [`Error::InvalidParameter`] naming the field at fault
     /// (`robot.sections[i].ei_nm2`, …) for empty robots, zero elements,
     /// non-positive lengths or stiffnesses, negative mass, non-finite
-    /// numbers, inverted pressure bounds, or more than [`MAX_ELEMENTS`]
-    /// elements; [`Error::DimensionMismatch`] for vectors of the wrong size.
+    /// numbers, inverted pressure bounds, or an element type whose constants
+    /// do not fit the assembly; [`Error::TooLarge`] for more than
+    /// [`MAX_ELEMENTS`] elements or Gauss rules above
+    /// [`crate::quadrature::MAX_POINTS`] points (both refused before anything
+    /// proportional is allocated); [`Error::DimensionMismatch`] for vectors
+    /// of the wrong size. Errors of `make` are returned with the section's
+    /// path prefixed to the field name.
     pub fn new(
         spec: RobotSpec,
         make: impl Fn(&Section, f64, usize, usize) -> Result<E>,
@@ -247,13 +255,23 @@ impl<E: Element> Robot<E> {
                 "a robot needs at least one section",
             ));
         }
-        let total = spec.total_elements();
-        if total > MAX_ELEMENTS {
+        // the assembly's fixed-size scratch buffers and node layout
+        if d == 0 || E::MOMENT_DIM == 0 || nd < 2 * d || 2 * nd > MAX_EDOF {
             return Err(Error::invalid(
-                "robot.sections[..].elements",
-                total,
-                format!("at most {MAX_ELEMENTS} elements in all"),
+                "element",
+                format!("DIM = {d}, NODE_DOFS = {nd}"),
+                format!("needs 2 DIM <= NODE_DOFS <= {}", MAX_EDOF / 2),
             ));
+        }
+        let mut total = 0usize;
+        for (i, s) in spec.sections.iter().enumerate() {
+            // `total <= MAX_ELEMENTS` here, so the subtraction cannot underflow
+            check_at_most(
+                &format!("robot.sections[{i}].elements"),
+                s.elements,
+                MAX_ELEMENTS - total,
+            )?;
+            total += s.elements;
         }
         check_len("base.position_m", d, spec.base.position_m.len())?;
         check_all_finite("base.position_m", &spec.base.position_m)?;
@@ -261,12 +279,13 @@ impl<E: Element> Robot<E> {
         check_len("gravity_m_per_s2", d, spec.gravity_m_per_s2.len())?;
         check_all_finite("gravity_m_per_s2", &spec.gravity_m_per_s2)?;
         for (name, n) in [
-            ("axial_gauss_points", spec.axial_gauss_points),
-            ("bending_gauss_points", spec.bending_gauss_points),
+            ("robot.axial_gauss_points", spec.axial_gauss_points),
+            ("robot.bending_gauss_points", spec.bending_gauss_points),
         ] {
-            if n == 0 || n > crate::quadrature::MAX_POINTS {
-                return Err(Error::invalid(name, n, "must be in 1..=32"));
+            if n == 0 {
+                return Err(Error::invalid(name, n, "must be >= 1"));
             }
+            check_at_most(name, n, crate::quadrature::MAX_POINTS)?;
         }
         let mut chambers = Vec::new();
         for (i, s) in spec.sections.iter().enumerate() {
@@ -320,10 +339,11 @@ impl<E: Element> Robot<E> {
         let mut section_nodes = Vec::with_capacity(spec.sections.len());
         node_s.push(0.0);
         let mut s0 = 0.0;
-        for sec in &spec.sections {
+        for (i, sec) in spec.sections.iter().enumerate() {
             let le = sec.length_m / sec.elements as f64;
             let start = node_s.len() - 1;
-            let proto = make(sec, le, spec.axial_gauss_points, spec.bending_gauss_points)?;
+            let proto = make(sec, le, spec.axial_gauss_points, spec.bending_gauss_points)
+                .map_err(|e| e.with_prefix(&format!("robot.sections[{i}].")))?;
             for k in 0..sec.elements {
                 elements.push(proto.clone());
                 node_s.push(if k + 1 == sec.elements {
@@ -338,10 +358,14 @@ impl<E: Element> Robot<E> {
         let (c, s) = (spec.base.angle_rad.cos(), spec.base.angle_rad.sin());
         let dir: Vec<f64> = if d == 2 { vec![c, s] } else { vec![c, s, 0.0] };
         let base_node = E::straight_node(&spec.base.position_m, &dir);
+        check_len("element straight_node", nd, base_node.len())?;
         let base_free = match spec.base.clamp {
             Clamp::PositionAndDirection => E::clamp_free_directions(&base_node),
             Clamp::Full => Vec::new(),
         };
+        for t in &base_free {
+            check_len("element clamp_free_directions", nd, t.len())?;
+        }
         let n_q = node_s.len() * nd;
         let kb = 2 * nd - 1;
         let line_rule = GaussRule::new(5)?;
@@ -510,12 +534,14 @@ impl<E: Element> Robot<E> {
         self.chambers.iter().map(|c| (c.min, c.max)).collect()
     }
 
-    /// Index of the section that holds element `e`.
+    /// Index of the section that holds element `e`; an `e` beyond the last
+    /// element gives the last section (never panics: a robot has at least
+    /// one section).
     pub fn section_of_element(&self, e: usize) -> usize {
         self.section_nodes
             .iter()
             .position(|&(_, end)| e < end)
-            .unwrap_or(self.section_nodes.len() - 1)
+            .unwrap_or(self.section_nodes.len().saturating_sub(1))
     }
 
     /// The clamped base node's coordinates.
@@ -533,7 +559,7 @@ impl<E: Element> Robot<E> {
         for &s in &self.node_s {
             let p: Vec<f64> = (0..d).map(|i| self.base_node[i] + s * dir[i]).collect();
             let node = E::straight_node(&p, &dir);
-            q.extend_from_slice(&node[..nd]);
+            q.extend(node.iter().take(nd));
         }
         q
     }
@@ -576,7 +602,7 @@ impl<E: Element> Robot<E> {
             }
             s_prev = s;
             let node = E::straight_node(&[x, y], &[th.cos(), th.sin()]);
-            q.extend_from_slice(&node[..nd]);
+            q.extend(node.iter().take(nd));
         }
         q
     }
@@ -636,7 +662,8 @@ impl<E: Element> Robot<E> {
     /// # Errors
     /// [`Error::DimensionMismatch`] for wrong sizes, [`Error::InvalidParameter`]
     /// for non-finite values, points off the robot, moments at the clamped
-    /// base or beyond the tip, and pressures outside their bounds.
+    /// base, and pressures outside their bounds; [`Error::IndexOutOfRange`]
+    /// for moments beyond the tip node.
     pub fn validate_loads(&self, loads: &Loads) -> Result<()> {
         let d = E::DIM;
         check_len("pressures_pa", self.n_pressures(), loads.pressures_pa.len())?;
@@ -669,13 +696,31 @@ impl<E: Element> Robot<E> {
                 m.moment_nm.len(),
             )?;
             check_all_finite(&format!("node_moments[{i}].moment_nm"), &m.moment_nm)?;
-            if m.node == 0 || m.node >= self.n_nodes() {
+            check_index(&format!("node_moments[{i}].node"), m.node, self.n_nodes())?;
+            if m.node == 0 {
                 return Err(Error::invalid(
                     format!("node_moments[{i}].node"),
                     m.node,
-                    format!("must be a free node, 1..={}", self.n_nodes() - 1),
+                    "the clamped base takes no moment: must be a free node, >= 1",
                 ));
             }
+        }
+        Ok(())
+    }
+
+    /// The checks of [`Robot::validate_loads`] that indexing depends on (the
+    /// pressure count, the nodes and sizes of the moments), without the
+    /// value checks: the solver evaluates scaled loads whose pressures may
+    /// lie outside their bounds.
+    fn check_load_structure(&self, loads: &Loads) -> Result<()> {
+        check_len("pressures_pa", self.n_pressures(), loads.pressures_pa.len())?;
+        for (i, m) in loads.node_moments.iter().enumerate() {
+            check_len(
+                &format!("node_moments[{i}].moment_nm"),
+                E::MOMENT_DIM,
+                m.moment_nm.len(),
+            )?;
+            check_index(&format!("node_moments[{i}].node"), m.node, self.n_nodes())?;
         }
         Ok(())
     }
@@ -684,7 +729,8 @@ impl<E: Element> Robot<E> {
     /// coordinates: self-weight, line loads, point forces and `J_QF F` (N).
     ///
     /// # Errors
-    /// As [`Robot::validate_loads`].
+    /// As [`Robot::validate_loads`]; [`Error::NonFinite`] if the forces
+    /// overflow.
     pub fn dead_force(&self, loads: &Loads) -> Result<Vec<f64>> {
         self.validate_loads(loads)?;
         let nd = E::NODE_DOFS;
@@ -712,6 +758,13 @@ impl<E: Element> Robot<E> {
         if !loads.distributed_f.is_empty() {
             let jf = self.gram.mul_vec(&loads.distributed_f)?;
             f.iter_mut().zip(jf).for_each(|(a, b)| *a += b);
+        }
+        // finite inputs can still overflow (huge loads, a Gaussian narrower
+        // than the floating-point range resolves)
+        if f.iter().any(|v| !v.is_finite()) {
+            return Err(Error::NonFinite {
+                context: "dead forces (loads too large or too narrow)".into(),
+            });
         }
         Ok(f)
     }
@@ -775,6 +828,7 @@ impl<E: Element> Robot<E> {
         check_len("q", self.n_q(), q.len())?;
         check_len("dead force", self.n_q(), dead.len())?;
         check_len("residual", self.n_free(), out.len())?;
+        self.check_load_structure(loads)?;
         let nb = self.base_free.len();
         for (j, t) in self.base_free.iter().enumerate() {
             out[j] = t.iter().zip(&dead[..nd]).map(|(a, b)| a * b).sum();
@@ -827,7 +881,7 @@ impl<E: Element> Robot<E> {
         let nd = E::NODE_DOFS;
         check_len("q", self.n_q(), q.len())?;
         let kb = 2 * nd - 1;
-        check_len("q", self.n_q(), q.len())?;
+        self.check_load_structure(loads)?;
         if k.n() != self.n_free() {
             *k = BandedMatrix::zeros(self.n_free(), kb, kb);
         } else {
@@ -948,6 +1002,7 @@ impl<E: Element> Robot<E> {
         check_len("q", self.n_q(), from.len())?;
         check_len("q", self.n_q(), to.len())?;
         check_len("dead force", self.n_q(), dead.len())?;
+        self.check_load_structure(loads)?;
         let mut d = 0.0;
         for (e, el) in self.elements.iter().enumerate() {
             let r = e * nd..(e + 2) * nd;
@@ -963,10 +1018,13 @@ impl<E: Element> Robot<E> {
         Ok(d)
     }
 
-    /// Node positions `r_i` (m), one `DIM` vector per node.
+    /// Node positions `r_i` (m), one `DIM` vector per node of `q` (a
+    /// trailing partial node is ignored, so this never panics).
     pub fn node_positions(&self, q: &[f64]) -> Vec<Vec<f64>> {
         let nd = E::NODE_DOFS;
-        q.chunks(nd).map(|c| c[..E::DIM].to_vec()).collect()
+        q.chunks_exact(nd)
+            .map(|c| c.iter().take(E::DIM).copied().collect())
+            .collect()
     }
 }
 

@@ -6,7 +6,10 @@
 //! Partial pivoting keeps the factorization usable when the tangent is
 //! indefinite (compression, buckling, iterates far from equilibrium).
 
-use crate::error::{Error, Result};
+use crate::error::{check_len, Error, Result};
+
+/// The most numbers [`BandedMatrix::try_zeros`] stores (2³⁰, 8 GiB).
+pub const MAX_ENTRIES: usize = 1 << 30;
 
 /// A square banded matrix with `kl` sub- and `ku` super-diagonals.
 ///
@@ -21,7 +24,7 @@ use crate::error::{Error, Result};
 /// a.add(0, 1, -1.0); a.add(1, 0, -1.0); a.add(1, 2, -1.0); a.add(2, 1, -1.0);
 /// let lu = a.clone().factor("example").unwrap();
 /// let mut x = vec![1.0, 0.0, 1.0];
-/// lu.solve_in_place(&mut x);
+/// lu.solve_in_place(&mut x).unwrap();
 /// assert!((x[0] - 1.0).abs() < 1e-14 && (x[1] - 1.0).abs() < 1e-14);
 /// ```
 #[derive(Debug, Clone, PartialEq)]
@@ -35,14 +38,50 @@ pub struct BandedMatrix {
 
 impl BandedMatrix {
     /// An `n × n` zero matrix with bandwidths `kl`, `ku`.
+    ///
+    /// # Panics
+    /// Like `Vec::with_capacity`, if the storage `n (2 kl + ku + 1)` overflows
+    /// `usize` (an allocation failure aborts). [`BandedMatrix::try_zeros`]
+    /// returns an error instead; the library calls this only with sizes
+    /// bounded by [`crate::assembly::MAX_ELEMENTS`].
     pub fn zeros(n: usize, kl: usize, ku: usize) -> Self {
-        let width = 2 * kl + ku + 1;
+        let width = kl.saturating_mul(2).saturating_add(ku).saturating_add(1);
         BandedMatrix {
             n,
             kl,
             ku,
             width,
-            data: vec![0.0; n * width],
+            data: vec![0.0; n.saturating_mul(width)],
+        }
+    }
+
+    /// As [`BandedMatrix::zeros`], refusing sizes above [`MAX_ENTRIES`]
+    /// stored numbers before allocating.
+    ///
+    /// # Errors
+    /// [`Error::TooLarge`] (field `n`) if `n (2 kl + ku + 1)` exceeds
+    /// [`MAX_ENTRIES`] or overflows.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{banded::BandedMatrix, Error};
+    /// assert!(BandedMatrix::try_zeros(10, 1, 1).is_ok());
+    /// let err = BandedMatrix::try_zeros(usize::MAX, 7, 7).unwrap_err();
+    /// assert!(matches!(err, Error::TooLarge { ref name, .. } if name == "n"));
+    /// ```
+    pub fn try_zeros(n: usize, kl: usize, ku: usize) -> Result<Self> {
+        let entries = kl
+            .checked_mul(2)
+            .and_then(|w| w.checked_add(ku))
+            .and_then(|w| w.checked_add(1))
+            .and_then(|w| w.checked_mul(n));
+        match entries {
+            Some(e) if e <= MAX_ENTRIES => Ok(Self::zeros(n, kl, ku)),
+            _ => Err(Error::TooLarge {
+                name: "n".into(),
+                value: n,
+                max: MAX_ENTRIES / (2 * kl.min(MAX_ENTRIES) + ku.min(MAX_ENTRIES) + 1),
+            }),
         }
     }
 
@@ -75,14 +114,15 @@ impl BandedMatrix {
         }
     }
 
-    /// Adds `v` to entry `(i, j)`. Entries outside the band are ignored in
-    /// release builds and trip a debug assertion: assembly code guarantees the band.
+    /// Adds `v` to entry `(i, j)`. Entries outside the band are ignored
+    /// (assembly code guarantees the band); [`BandedMatrix::try_add`] reports them.
     #[inline]
     pub fn add(&mut self, i: usize, j: usize, v: f64) {
-        debug_assert!(self.in_band(i, j), "({i}, {j}) outside the band");
         if self.in_band(i, j) {
             let k = self.idx(i, j);
-            self.data[k] += v;
+            if let Some(a) = self.data.get_mut(k) {
+                *a += v;
+            }
         }
     }
 
@@ -117,12 +157,42 @@ impl BandedMatrix {
         Ok(())
     }
 
+    /// Adds `v` to entry `(i, j)`, which must lie in the band.
+    ///
+    /// # Errors
+    /// [`Error::IndexOutOfRange`] (field `i` or `j`) for an index `>= n`,
+    /// [`Error::InvalidParameter`] (field `j`) for an entry outside the band.
+    ///
+    /// # Example
+    /// ```
+    /// let mut a = softrod::banded::BandedMatrix::zeros(3, 1, 1);
+    /// a.try_add(0, 1, 2.0).unwrap();
+    /// assert!(a.try_add(0, 2, 1.0).is_err());
+    /// ```
+    pub fn try_add(&mut self, i: usize, j: usize, v: f64) -> Result<()> {
+        crate::error::check_index("i", i, self.n)?;
+        crate::error::check_index("j", j, self.n)?;
+        if !self.in_band(i, j) {
+            return Err(Error::invalid(
+                "j",
+                j,
+                format!(
+                    "row {i} of the band holds columns {}..={}",
+                    i.saturating_sub(self.kl),
+                    (i + self.ku).min(self.n - 1)
+                ),
+            ));
+        }
+        self.add(i, j, v);
+        Ok(())
+    }
+
     /// `y = A x`.
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] if `x` does not have `n` entries.
     pub fn mul_vec(&self, x: &[f64]) -> Result<Vec<f64>> {
-        crate::error::check_len("x", self.n, x.len())?;
+        check_len("x", self.n, x.len())?;
         let mut y = vec![0.0; self.n];
         for (i, yi) in y.iter_mut().enumerate() {
             let lo = i.saturating_sub(self.kl);
@@ -137,7 +207,7 @@ impl BandedMatrix {
     /// # Errors
     /// [`Error::DimensionMismatch`] if `d` does not have `n` entries.
     pub fn scale_symmetric(&mut self, d: &[f64]) -> Result<()> {
-        crate::error::check_len("d", self.n, d.len())?;
+        check_len("d", self.n, d.len())?;
         for i in 0..self.n {
             let lo = i.saturating_sub(self.kl);
             let hi = (i + self.ku + 1).min(self.n);
@@ -290,8 +360,12 @@ impl BandedLu {
     }
 
     /// Solves `A x = b` in place (`b` has `n` entries).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] (field `b`) if `b` does not have `n` entries.
     #[allow(clippy::needless_range_loop)]
-    pub fn solve_in_place(&self, b: &mut [f64]) {
+    pub fn solve_in_place(&self, b: &mut [f64]) -> Result<()> {
+        check_len("b", self.lu.n, b.len())?;
         if let Some(d) = &self.scaling {
             b.iter_mut().zip(d).for_each(|(x, d)| *x *= d);
         }
@@ -323,6 +397,7 @@ impl BandedLu {
         if let Some(d) = &self.scaling {
             b.iter_mut().zip(d).for_each(|(x, d)| *x *= d);
         }
+        Ok(())
     }
 
     /// Smallest ratio of a pivot to the largest original entry of its row: a
@@ -373,7 +448,7 @@ mod tests {
             let b = a.mul_vec(&x_true).unwrap();
             let mut x = b.clone();
             let lu = a.clone().factor("test").unwrap();
-            lu.solve_in_place(&mut x);
+            lu.solve_in_place(&mut x).unwrap();
             let r = a.mul_vec(&x).unwrap();
             let res = r
                 .iter()
@@ -404,7 +479,7 @@ mod tests {
             .solve(&nalgebra::DVector::from_vec(b.clone()))
             .unwrap();
         let mut x = b;
-        a.factor("test").unwrap().solve_in_place(&mut x);
+        a.factor("test").unwrap().solve_in_place(&mut x).unwrap();
         for i in 0..n {
             assert!((x[i] - xd[i]).abs() < 1e-9 * (1.0 + xd[i].abs()));
         }
@@ -429,7 +504,8 @@ mod tests {
         a.clone()
             .factor_scaled(0.0, "test")
             .unwrap()
-            .solve_in_place(&mut x);
+            .solve_in_place(&mut x)
+            .unwrap();
         for i in 0..n {
             assert!(
                 (x[i] - x_true[i]).abs() <= 1e-10 * x_true[i].abs().max(1e-300) + 1e-12 / sc[i],

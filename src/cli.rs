@@ -93,8 +93,9 @@ fn write_json<T: Serialize>(value: &T, out: Option<&PathBuf>) -> Result<()> {
     match out {
         Some(path) => std::fs::write(path, text + "\n").with_context(|| format!("cannot write {}", path.display())),
         None => {
-            println!("{text}");
-            Ok(())
+            use std::io::Write;
+            let mut stdout = std::io::stdout().lock();
+            writeln!(stdout, "{text}").and_then(|()| stdout.flush()).context("cannot write to standard output")
         }
     }
 }
@@ -130,13 +131,29 @@ fn default_run() -> Result<()> {
 
 /// Runs the command line.
 pub fn run() -> Result<()> {
-    let cli = Cli::parse();
+    let cli = parse_args()?;
     match cli.command {
         None => default_run(),
         Some(Command::Solve { scene, pressures, out }) => {
             let scene = Scene::from_file(&scene)?;
             let result = solve(&scene, pressures)?;
             write_json(&result, out.as_ref())
+        }
+    }
+}
+
+/// Parses the arguments. `--help` and `--version` print and exit 0; a usage
+/// error becomes a one-line error (clap's own message, without the usage
+/// block) so that `main` reports it like every other error.
+fn parse_args() -> Result<Cli> {
+    match Cli::try_parse() {
+        Ok(cli) => Ok(cli),
+        Err(e) if !e.use_stderr() => e.exit(),
+        Err(e) => {
+            let text = e.to_string();
+            let head = text.split("\n\nUsage:").next().unwrap_or_default().split("\n\nFor more information").next().unwrap_or_default();
+            let line = head.split_whitespace().collect::<Vec<_>>().join(" ");
+            Err(anyhow::anyhow!("{} (see `softrod --help`)", line.trim_start_matches("error: ")))
         }
     }
 }

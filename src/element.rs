@@ -26,6 +26,12 @@ use crate::quadrature::GaussRule;
 /// Slices named `qe` hold `2 * NODE_DOFS` element coordinates; Hessians are
 /// written row-major, `(2 NODE_DOFS)²` numbers. `_into` methods write into the
 /// caller's buffer.
+///
+/// These are low-level, infallible kernels ([`crate::assembly::Robot`] checks
+/// every size before calling them). Implementations must not panic on slices
+/// of the wrong length: [`PlanarCable`] then returns NaN for scalar results
+/// (NaN coordinates for `straight_node`, no directions for
+/// `clamp_free_directions`) and adds nothing to the buffers.
 pub trait Element: Clone + std::fmt::Debug + Send + Sync {
     /// Spatial dimension of the centreline (2 or 3).
     const DIM: usize;
@@ -145,7 +151,8 @@ impl PlanarCable {
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] for non-positive or non-finite `le`, `ea`,
-    /// `ei`, a non-finite `kappa0`, or a rule size outside `1..=32`.
+    /// `ei`, a non-finite `kappa0`, or a rule of 0 points; [`Error::TooLarge`]
+    /// for a rule above [`crate::quadrature::MAX_POINTS`] points.
     ///
     /// # Example
     /// ```
@@ -161,12 +168,27 @@ impl PlanarCable {
         bending_points: usize,
     ) -> Result<Self> {
         check_positive("length_m", le)?;
+        if !(1.0 / (le * le)).is_finite() {
+            // the shape functions' second derivatives (∝ 1/L_e²) overflow
+            return Err(Error::invalid(
+                "length_m",
+                le,
+                "element too short: 1/L_e² overflows",
+            ));
+        }
         check_positive("ea_n", ea)?;
         check_positive("ei_nm2", ei)?;
         check_finite("rest_curvature_per_m", kappa0)?;
         let make = |n: usize, name: &str| -> Result<Vec<GaussPoint>> {
-            let rule =
-                GaussRule::new(n).map_err(|_| Error::invalid(name, n, "must be in 1..=32"))?;
+            // the rule's own error, under this parameter's name
+            let rule = GaussRule::new(n).map_err(|e| match e {
+                Error::TooLarge { value, max, .. } => Error::TooLarge {
+                    name: name.into(),
+                    value,
+                    max,
+                },
+                _ => Error::invalid(name, n, "must be >= 1"),
+            })?;
             Ok(rule
                 .iter()
                 .map(|(xi, w)| {
@@ -193,7 +215,12 @@ impl PlanarCable {
     /// let (eps, kappa) = e.strains(&[0.0, 0.0, 2.0, 0.0, 2.0, 0.0, 2.0, 0.0], 0.5);
     /// assert!((eps - 1.0).abs() < 1e-14 && kappa.abs() < 1e-14);
     /// ```
+    ///
+    /// A `qe` without exactly 8 entries gives `(NaN, NaN)`.
     pub fn strains(&self, qe: &[f64], xi: f64) -> (f64, f64) {
+        let Ok(qe) = <&[f64; 8]>::try_from(qe) else {
+            return (f64::NAN, f64::NAN);
+        };
         let (_, d1, d2) = hermite(xi, self.le);
         let (a, b) = derivs(qe, &d1, &d2);
         let c = a[0] * b[1] - a[1] * b[0];
@@ -216,7 +243,7 @@ impl PlanarCable {
 
 /// `r'` and `r''` at a Gauss point.
 #[inline]
-fn derivs(qe: &[f64], d1: &[f64; 4], d2: &[f64; 4]) -> ([f64; 2], [f64; 2]) {
+fn derivs(qe: &[f64; 8], d1: &[f64; 4], d2: &[f64; 4]) -> ([f64; 2], [f64; 2]) {
     let mut a = [0.0; 2];
     let mut b = [0.0; 2];
     for k in 0..4 {
@@ -277,6 +304,9 @@ impl Element for PlanarCable {
     }
 
     fn energy(&self, qe: &[f64]) -> f64 {
+        let Ok(qe) = <&[f64; 8]>::try_from(qe) else {
+            return f64::NAN;
+        };
         let mut u = 0.0;
         for gp in &self.axial {
             let (a, _) = derivs(qe, &gp.d1, &gp.d2);
@@ -292,6 +322,10 @@ impl Element for PlanarCable {
     }
 
     fn add_energy_gradient(&self, qe: &[f64], grad: &mut [f64]) {
+        let (Ok(qe), Ok(grad)) = (<&[f64; 8]>::try_from(qe), <&mut [f64; 8]>::try_from(grad))
+        else {
+            return;
+        };
         for gp in &self.axial {
             let (a, _) = derivs(qe, &gp.d1, &gp.d2);
             let n = (a[0] * a[0] + a[1] * a[1]).sqrt();
@@ -314,6 +348,10 @@ impl Element for PlanarCable {
 
     #[allow(clippy::needless_range_loop)]
     fn add_energy_hessian(&self, qe: &[f64], hess: &mut [f64]) {
+        let (Ok(qe), Ok(hess)) = (<&[f64; 8]>::try_from(qe), <&mut [f64; 64]>::try_from(hess))
+        else {
+            return;
+        };
         // At each Gauss point the Hessian in z = (a, b) = (r', r'') is mapped
         // by T = [d1 ⊗ I; d2 ⊗ I] (4 × 8): H_e += Tᵀ H_z T, computed as
         // V = H_z T, then Tᵀ V, upper triangle only, mirrored at the end.
@@ -392,15 +430,27 @@ impl Element for PlanarCable {
     }
 
     fn straight_node(position: &[f64], direction: &[f64]) -> Vec<f64> {
-        vec![position[0], position[1], direction[0], direction[1]]
+        match (position, direction) {
+            ([x, y], [dx, dy]) => vec![*x, *y, *dx, *dy],
+            _ => vec![f64::NAN; 4],
+        }
     }
 
     fn add_moment_work(node: &[f64], moment: &[f64], grad: &mut [f64], hess: &mut [f64]) {
         // θ = atan2(y, x) of the slope (x, y) = r'; ∂θ = (-y, x)/ρ²,
         // ∂²θ = [[2xy, y² - x²], [y² - x², -2xy]]/ρ⁴.
-        let (x, y) = (node[2], node[3]);
+        let (Some(&[x, y]), Some(&m), Some(grad), Some(hess)) = (
+            node.get(2..4).and_then(|s| <&[f64; 2]>::try_from(s).ok()),
+            moment.first(),
+            grad.get_mut(..4),
+            hess.get_mut(..16),
+        ) else {
+            return;
+        };
+        if node.len() != 4 || moment.len() != 1 {
+            return;
+        }
         let r2 = x * x + y * y;
-        let m = moment[0];
         grad[2] += m * -y / r2;
         grad[3] += m * x / r2;
         let r4 = r2 * r2;
@@ -412,17 +462,29 @@ impl Element for PlanarCable {
     }
 
     fn node_angle(node: &[f64]) -> f64 {
-        node[3].atan2(node[2])
+        match node {
+            [_, _, x, y] => y.atan2(*x),
+            _ => f64::NAN,
+        }
     }
 
     fn clamp_free_directions(node: &[f64]) -> Vec<Vec<f64>> {
-        let n = (node[2] * node[2] + node[3] * node[3]).sqrt();
-        vec![vec![0.0, 0.0, node[2] / n, node[3] / n]]
+        match node {
+            [_, _, x, y] => {
+                let n = (x * x + y * y).sqrt();
+                vec![vec![0.0, 0.0, x / n, y / n]]
+            }
+            _ => Vec::new(),
+        }
     }
 
     fn moment_work_between(from: &[f64], to: &[f64], moment: &[f64]) -> f64 {
-        let (ax, ay, bx, by) = (from[2], from[3], to[2], to[3]);
-        moment[0] * (ax * by - ay * bx).atan2(ax * bx + ay * by)
+        match (from, to, moment) {
+            ([_, _, ax, ay], [_, _, bx, by], [m]) => {
+                m * (ax * by - ay * bx).atan2(ax * bx + ay * by)
+            }
+            _ => f64::NAN,
+        }
     }
 }
 

@@ -4,6 +4,13 @@
 //! the data that says what was wrong and where (the field name, the index, the
 //! solver report), so a caller can react programmatically and a person can read
 //! the message.
+//!
+//! There is one error enum for the whole crate, not one per module: the
+//! modules share most failure kinds (a bad parameter, a wrong size, an absurd
+//! size, an index off the end, a failed solve), and a caller in a control loop
+//! matches on the kind, not on the module it came from. The enum is
+//! `#[non_exhaustive]`, so variants can be added without breaking callers.
+//! [`Error::field`] gives the name of the field at fault.
 
 use crate::statics::StaticReport;
 
@@ -27,6 +34,27 @@ pub enum Error {
         value: String,
         /// What the valid range is.
         reason: String,
+    },
+    /// A size or count exceeds what the library accepts; refused before
+    /// anything proportional to it is allocated.
+    #[error("`{name}` = {value} is too large: at most {max}")]
+    TooLarge {
+        /// The field's name (with its path in a scene).
+        name: String,
+        /// The requested size.
+        value: usize,
+        /// The largest accepted size.
+        max: usize,
+    },
+    /// An index (a node, a row) is outside its range.
+    #[error("index `{name}` = {index} is out of range: must be below {len}")]
+    IndexOutOfRange {
+        /// The field's name (with its path in a scene).
+        name: String,
+        /// The offending index.
+        index: usize,
+        /// The number of valid indices.
+        len: usize,
     },
     /// A vector or matrix has the wrong size.
     #[error("dimension mismatch in `{name}`: expected {expected}, got {got}")]
@@ -82,11 +110,75 @@ impl Error {
         value: impl ToString,
         reason: impl Into<String>,
     ) -> Self {
+        let mut value = value.to_string();
+        // `f64`'s Display writes 1e-320 with 320 digits: keep messages short
+        if value.len() > 24 {
+            if let Ok(v) = value.parse::<f64>() {
+                value = format!("{v:e}");
+            }
+        }
         Error::InvalidParameter {
             name: name.into(),
-            value: value.to_string(),
+            value,
             reason: reason.into(),
         }
+    }
+}
+
+impl Error {
+    /// The name of the field at fault, for the variants that carry one.
+    ///
+    /// # Example
+    /// ```
+    /// let err = softrod::element::PlanarCable::new(0.1, f64::NAN, 0.025).unwrap_err();
+    /// assert_eq!(err.field(), Some("ea_n"));
+    /// ```
+    pub fn field(&self) -> Option<&str> {
+        match self {
+            Error::InvalidParameter { name, .. }
+            | Error::TooLarge { name, .. }
+            | Error::IndexOutOfRange { name, .. }
+            | Error::DimensionMismatch { name, .. } => Some(name),
+            _ => None,
+        }
+    }
+
+    /// Prefixes the field name (e.g. with its path in a scene).
+    pub(crate) fn with_prefix(mut self, prefix: &str) -> Self {
+        match &mut self {
+            Error::InvalidParameter { name, .. }
+            | Error::TooLarge { name, .. }
+            | Error::IndexOutOfRange { name, .. }
+            | Error::DimensionMismatch { name, .. } => name.insert_str(0, prefix),
+            _ => {}
+        }
+        self
+    }
+}
+
+/// Checks that `value` is at most `max`.
+pub(crate) fn check_at_most(name: &str, value: usize, max: usize) -> Result<()> {
+    if value <= max {
+        Ok(())
+    } else {
+        Err(Error::TooLarge {
+            name: name.into(),
+            value,
+            max,
+        })
+    }
+}
+
+/// Checks that `index` is below `len`.
+pub(crate) fn check_index(name: &str, index: usize, len: usize) -> Result<()> {
+    if index < len {
+        Ok(())
+    } else {
+        Err(Error::IndexOutOfRange {
+            name: name.into(),
+            index,
+            len,
+        })
     }
 }
 

@@ -25,15 +25,13 @@ impl GaussRule {
     /// Builds the `n`-point rule (Newton iteration on the Legendre polynomial).
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] unless `1 <= n <= MAX_POINTS`.
+    /// [`Error::InvalidParameter`] for `n = 0`, [`Error::TooLarge`] for
+    /// `n > MAX_POINTS` (refused before allocating).
     pub fn new(n: usize) -> Result<Self> {
-        if n == 0 || n > MAX_POINTS {
-            return Err(Error::invalid(
-                "gauss_points",
-                n,
-                format!("must be in 1..={MAX_POINTS}"),
-            ));
+        if n == 0 {
+            return Err(Error::invalid("gauss_points", n, "must be >= 1"));
         }
+        crate::error::check_at_most("gauss_points", n, MAX_POINTS)?;
         let mut points = vec![0.0; n];
         let mut weights = vec![0.0; n];
         let nf = n as f64;

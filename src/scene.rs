@@ -9,10 +9,16 @@ use serde::{Deserialize, Serialize};
 
 use crate::assembly::{Base, Chamber, Robot, RobotSpec, Section};
 use crate::element::{PlanarCable, DEFAULT_GAUSS_POINTS};
-use crate::error::{check_len, check_positive, Error, Result};
+use crate::error::{
+    check_all_finite, check_at_most, check_finite, check_index, check_len, check_positive, Error,
+    Result,
+};
 use crate::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use crate::params;
 use crate::statics::StaticSettings;
+
+/// The largest scene file [`Scene::from_file`] reads (64 MiB).
+pub const MAX_SCENE_BYTES: usize = 64 << 20;
 
 /// The element family a scene uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -49,7 +55,7 @@ fn gravity() -> Vec<f64> {
 
 /// A known load of a scene (dead, world axes, SI).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case")]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum SceneLoad {
     /// A distributed load with a profile (`uniform`, `linear`, `gaussian`).
     Distributed(LineLoad),
@@ -166,12 +172,24 @@ impl Scene {
     /// Parses and validates a scene.
     ///
     /// # Errors
-    /// [`Error::Scene`] for malformed JSON, unknown or missing fields (the
-    /// message names the field and the position); the errors of
-    /// [`Scene::validate`].
+    /// [`Error::Scene`] for malformed JSON, unknown or missing fields, wrong
+    /// types (the message starts with the path of the field at fault, e.g.
+    /// `robot.sections[0].elements: invalid value ...`, and gives the line and
+    /// column); the errors of [`Scene::validate`].
     pub fn from_json(text: &str) -> Result<Scene> {
-        let scene: Scene = serde_json::from_str(text).map_err(|e| Error::Scene {
-            message: e.to_string(),
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
+            // `?` marks a segment the parser had not identified yet (truncated input)
+            let path = e.path().to_string();
+            let path = path.trim_end_matches(".?").trim_end_matches('?');
+            let inner = e.into_inner();
+            Error::Scene {
+                message: if path.is_empty() || path == "." {
+                    inner.to_string()
+                } else {
+                    format!("{path}: {inner}")
+                },
+            }
         })?;
         scene.validate()?;
         Ok(scene)
@@ -180,11 +198,20 @@ impl Scene {
     /// Reads a scene file.
     ///
     /// # Errors
-    /// [`Error::Scene`] if the file cannot be read; as [`Scene::from_json`].
+    /// [`Error::Scene`] if the file cannot be read; [`Error::TooLarge`] for
+    /// a file above [`MAX_SCENE_BYTES`] (refused before reading it); as
+    /// [`Scene::from_json`].
     pub fn from_file(path: &std::path::Path) -> Result<Scene> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::Scene {
+        let cannot_read = |e: std::io::Error| Error::Scene {
             message: format!("cannot read {}: {e}", path.display()),
-        })?;
+        };
+        let size = std::fs::metadata(path).map_err(cannot_read)?.len();
+        check_at_most(
+            &format!("size of {} (bytes)", path.display()),
+            usize::try_from(size).unwrap_or(usize::MAX),
+            MAX_SCENE_BYTES,
+        )?;
+        let text = std::fs::read_to_string(path).map_err(cannot_read)?;
         Scene::from_json(&text).map_err(|e| match e {
             Error::Scene { message } => Error::Scene {
                 message: format!("{}: {message}", path.display()),
@@ -197,24 +224,28 @@ impl Scene {
     /// loads, the pressures (count and bounds), the markers, the settings.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] / [`Error::DimensionMismatch`] naming the field.
+    /// [`Error::InvalidParameter`], [`Error::DimensionMismatch`],
+    /// [`Error::TooLarge`] or [`Error::IndexOutOfRange`] naming the field
+    /// with its path in the scene (`loads[2].force_n`, `markers[1].node`,
+    /// `solver.static.max_iterations`, ...).
     pub fn validate(&self) -> Result<()> {
         let robot = self.robot()?;
+        for (i, load) in self.loads.iter().enumerate() {
+            validate_scene_load(&robot, load)
+                .map_err(|e| e.with_prefix(&format!("loads[{i}].")))?;
+        }
         robot.validate_loads(&self.loads()?)?;
-        self.solver.statics.validate()?;
+        self.solver
+            .statics
+            .validate()
+            .map_err(|e| e.with_prefix("solver.static."))?;
         let total = robot.length();
         let mut seen: Vec<f64> = Vec::new();
         for (i, m) in self.markers.iter().enumerate() {
             let s = match (m.node, m.s_m) {
                 (Some(n), None) => {
-                    if n >= robot.n_nodes() {
-                        return Err(Error::invalid(
-                            format!("markers[{i}].node"),
-                            n,
-                            format!("must be in 0..={}", robot.n_nodes() - 1),
-                        ));
-                    }
-                    robot.node_arc()[n]
+                    check_index(&format!("markers[{i}].node"), n, robot.n_nodes())?;
+                    robot.node_arc().get(n).copied().unwrap_or(f64::NAN)
                 }
                 (None, Some(s)) => {
                     robot.locate(&format!("markers[{i}].s_m"), s)?;
@@ -264,7 +295,9 @@ impl Scene {
     /// The scene's loads and pressures as [`Loads`] (pressures default to zero).
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] for a non-positive tip mass or bad gravity.
+    /// [`Error::InvalidParameter`] for a non-positive tip mass or a negative
+    /// extra weight; [`Error::DimensionMismatch`] for a gravity vector of the
+    /// wrong size.
     pub fn loads(&self) -> Result<Loads> {
         let n_chambers: usize = self.robot.sections.iter().map(|s| s.chambers.len()).sum();
         let total: f64 = self.robot.sections.iter().map(|s| s.length_m).sum();
@@ -311,6 +344,7 @@ impl Scene {
                             "must be finite and >= 0",
                         ));
                     }
+                    check_len(&format!("loads[{i}].gravity_m_per_s2"), 2, g.len())?;
                     loads.line_loads.push(LineLoad::Uniform {
                         w_n_per_m: g.iter().map(|g| m * g).collect(),
                     })
@@ -358,6 +392,71 @@ impl Scene {
             markers: [4, 8, 12, 16, 20].iter().map(|&n| Marker { node: Some(n), s_m: None, tangent: false }).collect(),
             solver: SolverSettings::default(),
         }
+    }
+}
+
+/// Checks one scene load against the robot, naming its fields as in the
+/// scene file (the caller prefixes `loads[i].`).
+fn validate_scene_load(robot: &Robot<PlanarCable>, load: &SceneLoad) -> Result<()> {
+    let vec2 = |name: &str, v: &[f64]| -> Result<()> {
+        check_len(name, 2, v.len())?;
+        check_all_finite(name, v)
+    };
+    match load {
+        SceneLoad::Distributed(l) => l.validate("", 2).map_err(|e| match e {
+            // LineLoad names its fields `.field` after the given prefix
+            Error::InvalidParameter {
+                name,
+                value,
+                reason,
+            } => Error::InvalidParameter {
+                name: name.trim_start_matches('.').to_string(),
+                value,
+                reason,
+            },
+            Error::DimensionMismatch {
+                name,
+                expected,
+                got,
+            } => Error::DimensionMismatch {
+                name: name.trim_start_matches('.').to_string(),
+                expected,
+                got,
+            },
+            other => other,
+        }),
+        SceneLoad::TipForce { force_n } => vec2("force_n", force_n),
+        SceneLoad::PointForce { s_m, force_n } => {
+            vec2("force_n", force_n)?;
+            robot.locate("s_m", *s_m).map(|_| ())
+        }
+        SceneLoad::TipMoment { moment_nm } => check_finite("moment_nm", *moment_nm),
+        SceneLoad::NodeMoment { node, moment_nm } => {
+            check_finite("moment_nm", *moment_nm)?;
+            check_index("node", *node, robot.n_nodes())?;
+            if *node == 0 {
+                return Err(Error::invalid(
+                    "node",
+                    0,
+                    "the clamped base takes no moment: must be a free node, >= 1",
+                ));
+            }
+            Ok(())
+        }
+        SceneLoad::SelfWeight {
+            mass_per_length_kg_per_m: m,
+            gravity_m_per_s2: g,
+        } => {
+            if !(m.is_finite() && *m >= 0.0) {
+                return Err(Error::invalid(
+                    "mass_per_length_kg_per_m",
+                    m,
+                    "must be finite and >= 0",
+                ));
+            }
+            vec2("gravity_m_per_s2", g)
+        }
+        SceneLoad::TipMass { mass_kg } => check_positive("mass_kg", *mass_kg),
     }
 }
 

@@ -64,14 +64,23 @@ impl Default for StaticSettings {
 }
 
 impl StaticSettings {
-    /// Checks every field.
+    /// Checks every field: iteration counts in `1..=MAX_ITERATIONS`
+    /// (`max_total_iterations >= max_iterations`), tolerances and the
+    /// smallest load step in `(0, 1)`, `max_step_rotation` finite and positive.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] naming the field.
+    /// [`Error::InvalidParameter`] naming the field; [`Error::TooLarge`] for
+    /// an iteration count above [`MAX_ITERATIONS`].
     pub fn validate(&self) -> Result<()> {
         if self.max_iterations == 0 {
             return Err(Error::invalid("max_iterations", 0, "must be >= 1"));
         }
+        crate::error::check_at_most("max_iterations", self.max_iterations, MAX_ITERATIONS)?;
+        crate::error::check_at_most(
+            "max_total_iterations",
+            self.max_total_iterations,
+            MAX_ITERATIONS,
+        )?;
         if self.max_total_iterations < self.max_iterations {
             return Err(Error::invalid(
                 "max_total_iterations",
@@ -87,16 +96,23 @@ impl StaticSettings {
         ] {
             crate::error::check_positive(name, v)?;
         }
-        if self.min_load_step >= 1.0 {
-            return Err(Error::invalid(
-                "min_load_step",
-                self.min_load_step,
-                "must be < 1",
-            ));
+        for (name, v) in [
+            ("residual_tolerance", self.residual_tolerance),
+            ("increment_tolerance", self.increment_tolerance),
+            ("min_load_step", self.min_load_step),
+        ] {
+            // a relative tolerance of 1 or more accepts any configuration
+            if v >= 1.0 {
+                return Err(Error::invalid(name, v, "must be < 1"));
+            }
         }
         Ok(())
     }
 }
+
+/// The largest iteration budget [`StaticSettings`] accept: it bounds the
+/// time a solve may take.
+pub const MAX_ITERATIONS: usize = 100_000;
 
 /// Which test ended a converged solve.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -277,8 +293,14 @@ impl StaticSolver {
         let offset = vec![0.0; n];
         let q_start = q.clone();
         let mut load_steps = 0;
-        let mut outcome = self.newton(robot, &dead, loads, &offset, &mut q, &mut w, scale)?;
-        if matches!(outcome, Outcome::Failed(_)) {
+        // loads so large that their norm overflows (or a start point where the
+        // forces do): no tolerance can be stated, so no solve is attempted
+        let mut outcome = if scale.is_finite() {
+            self.newton(robot, &dead, loads, &offset, &mut q, &mut w, scale)?
+        } else {
+            Outcome::Failed(FailureCause::NonFinite)
+        };
+        if matches!(outcome, Outcome::Failed(_)) && scale.is_finite() {
             // Homotopy from the start point: R_λ(q) = Q(q; λ loads) − (1 − λ) Q(q_start; no loads).
             // At λ = 0 the start point is exact; the load-dependent part of the
             // tangent (the torques' Hessian) grows with λ, so iterates stay
@@ -333,6 +355,11 @@ impl StaticSolver {
         // final residual for the report
         robot.residual_into(&q, &dead, loads, &mut w.r)?;
         let res = norm2(&w.r);
+        // no NaN leaves the library: a "converged" state with a non-finite
+        // coordinate or residual is a failure
+        if !(res.is_finite() && q.iter().all(|v| v.is_finite())) {
+            outcome = Outcome::Failed(FailureCause::NonFinite);
+        }
         let (converged, criterion, cause) = match outcome {
             Outcome::Converged(c) => (true, Some(c), None),
             Outcome::Failed(c) => (false, None, Some(c)),
@@ -343,14 +370,14 @@ impl StaticSolver {
             cause,
             iterations: w.iterations,
             load_steps,
-            residual_norm_n: if res.is_finite() { res } else { f64::MAX },
-            residual_tolerance_n: self.settings.residual_tolerance * scale,
-            residual_floor_n: w.floor,
-            load_scale_n: scale,
-            increment_norm_m: w.last_step,
+            residual_norm_n: finite_or_max(res),
+            residual_tolerance_n: finite_or_max(self.settings.residual_tolerance * scale),
+            residual_floor_n: finite_or_max(w.floor),
+            load_scale_n: finite_or_max(scale),
+            increment_norm_m: finite_or_max(w.last_step),
             wall_time_s: start.elapsed().as_secs_f64(),
         };
-        if converged && q.iter().all(|v| v.is_finite()) {
+        if converged {
             Ok(Equilibrium { q, report })
         } else {
             Err(Error::NotConverged {
@@ -426,7 +453,7 @@ impl StaticSolver {
                     Err(e) => return Err(e),
                 };
                 dq.copy_from_slice(&w.r);
-                lu.solve_in_place(&mut dq);
+                lu.solve_in_place(&mut dq)?;
                 let slope: f64 = w.r.iter().zip(&dq).map(|(a, b)| a * b).sum();
                 if slope > 0.0 && dq.iter().all(|v| v.is_finite()) {
                     found = true;
@@ -535,6 +562,16 @@ fn load_scale<E: Element>(robot: &Robot<E>, dead: &[f64], loads: &Loads, q: &[f6
         *a += r - e;
     }
     Ok(norm2(&applied))
+}
+
+/// `v`, or `f64::MAX` in place of an infinity or NaN: every number of a
+/// report is finite.
+fn finite_or_max(v: f64) -> f64 {
+    if v.is_finite() {
+        v
+    } else {
+        f64::MAX
+    }
 }
 
 fn norm2(v: &[f64]) -> f64 {

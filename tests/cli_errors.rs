@@ -1,0 +1,117 @@
+//! The command line fails with a non-zero exit and exactly one line on
+//! stderr, `softrod: error: ...`, for every bad invocation: no usage block,
+//! no panic message, no backtrace (issue "Hardening", point 1).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use std::process::Command;
+
+fn run(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_softrod"))
+        .args(args)
+        .env("RUST_BACKTRACE", "1")
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn temp_file(name: &str, text: &str) -> String {
+    let path = std::env::temp_dir().join(format!("softrod-cli-{}-{name}", std::process::id()));
+    std::fs::write(&path, text).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+#[test]
+fn every_bad_invocation_is_one_line_and_a_non_zero_exit() {
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/two_section.json");
+    let malformed = temp_file(
+        "malformed.json",
+        r#"{"robot": {"sections": [{"length_m": 0.1,"#,
+    );
+    let huge = temp_file(
+        "huge.json",
+        r#"{"robot": {"sections": [{"length_m": 0.1, "ea_n": 1, "ei_nm2": 1, "elements": 1000000000}]}}"#,
+    );
+    let cases: Vec<(&str, Vec<&str>, &str)> = vec![
+        (
+            "unknown flag",
+            vec!["--bogus"],
+            "unexpected argument '--bogus'",
+        ),
+        (
+            "unknown subcommand",
+            vec!["estimate-everything"],
+            "unrecognized subcommand",
+        ),
+        ("missing scene", vec!["solve"], "<SCENE>"),
+        (
+            "missing file",
+            vec!["solve", "/nonexistent/scene.json"],
+            "cannot read /nonexistent/scene.json",
+        ),
+        (
+            "malformed scene",
+            vec!["solve", &malformed],
+            "EOF while parsing",
+        ),
+        (
+            "absurd element count",
+            vec!["solve", &huge],
+            "robot.sections[0].elements",
+        ),
+        (
+            "NaN pressure",
+            vec!["solve", example, "--pressures", "0,NaN,0,0"],
+            "pressures_pa[1]",
+        ),
+        (
+            "pressure out of bounds",
+            vec!["solve", example, "--pressures", "0,0,0,1e9"],
+            "pressures_pa[3]",
+        ),
+        (
+            "too few pressures",
+            vec!["solve", example, "--pressures", "1,2"],
+            "pressures_pa",
+        ),
+        (
+            "pressure not a number",
+            vec!["solve", example, "--pressures", "1,two,3,4"],
+            "two",
+        ),
+        (
+            "unwritable output",
+            vec!["solve", example, "--out", "/nonexistent/dir/out.json"],
+            "cannot write /nonexistent/dir/out.json",
+        ),
+    ];
+    for (what, args, needle) in cases {
+        let (code, _, stderr) = run(&args);
+        assert_ne!(code, 0, "{what}: exit 0");
+        let lines: Vec<&str> = stderr.lines().collect();
+        assert_eq!(lines.len(), 1, "{what}: stderr is not one line:\n{stderr}");
+        assert!(lines[0].starts_with("softrod: error: "), "{what}: {stderr}");
+        assert!(
+            lines[0].contains(needle),
+            "{what}: `{needle}` not in {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{what}: {stderr}");
+        println!("{what:25} exit {code}: {}", lines[0]);
+    }
+}
+
+#[test]
+fn help_version_and_a_good_solve_exit_zero() {
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/two_section.json");
+    for args in [vec!["--help"], vec!["--version"], vec!["solve", example]] {
+        let (code, stdout, stderr) = run(&args);
+        assert_eq!(code, 0, "{args:?}: {stderr}");
+        assert!(
+            !stdout.is_empty() && stderr.is_empty(),
+            "{args:?}: {stderr}"
+        );
+    }
+}

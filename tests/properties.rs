@@ -1,0 +1,365 @@
+//! Property tests (issue "Hardening", point 4): equilibrium at every returned
+//! solution, rigid-motion invariance of the elastic energy, a symmetric
+//! tangent, scene JSON round trips, and bitwise-repeatable solves.
+//!
+//! Case counts are modest so the file runs in a few seconds in release; each
+//! property states its count in its `ProptestConfig`.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use proptest::prelude::*;
+use softrod::assembly::Robot;
+use softrod::banded::BandedMatrix;
+use softrod::element::PlanarCable;
+use softrod::loads::{LineLoad, Loads, NodeMoment, PointForce};
+use softrod::scene::{Marker, Scene, SceneLoad};
+use softrod::statics::StaticSolver;
+use softrod::Error;
+
+fn config(cases: u32) -> ProptestConfig {
+    ProptestConfig {
+        cases,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    }
+}
+
+/// The two-section scene with `n1`, `n2` elements.
+fn scene(n1: usize, n2: usize) -> Scene {
+    let mut s = Scene::two_section();
+    s.robot.sections[0].elements = n1;
+    s.robot.sections[1].elements = n2;
+    s.markers.clear();
+    s
+}
+
+/// Random loads that the robot can carry: pressures within their bounds,
+/// a tip force, a uniform load and a tip moment of moderate size.
+#[derive(Debug, Clone)]
+struct LoadCase {
+    n1: usize,
+    n2: usize,
+    pressures: Vec<f64>,
+    tip_force: [f64; 2],
+    uniform: [f64; 2],
+    tip_moment: f64,
+}
+
+fn load_case() -> impl Strategy<Value = LoadCase> {
+    (
+        1usize..=12,
+        1usize..=12,
+        prop::collection::vec(0.0..100e3f64, 4),
+        prop::array::uniform2(-0.3..0.3f64),
+        prop::array::uniform2(-2.0..2.0f64),
+        -0.05..0.05f64,
+    )
+        .prop_map(
+            |(n1, n2, pressures, tip_force, uniform, tip_moment)| LoadCase {
+                n1,
+                n2,
+                pressures,
+                tip_force,
+                uniform,
+                tip_moment,
+            },
+        )
+}
+
+fn build(c: &LoadCase) -> (Robot<PlanarCable>, Loads) {
+    let robot = scene(c.n1, c.n2).robot().unwrap();
+    let loads = Loads {
+        pressures_pa: c.pressures.clone(),
+        point_forces: vec![PointForce {
+            s_m: robot.length(),
+            force_n: c.tip_force.to_vec(),
+        }],
+        line_loads: vec![LineLoad::Uniform {
+            w_n_per_m: c.uniform.to_vec(),
+        }],
+        node_moments: vec![NodeMoment {
+            node: robot.n_nodes() - 1,
+            moment_nm: vec![c.tip_moment],
+        }],
+        ..Loads::default()
+    };
+    (robot, loads)
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// A deterministic deformed configuration: the reference configuration
+/// with every free coordinate perturbed.
+fn deformed(robot: &Robot<PlanarCable>, amplitude: f64, seed: u64) -> Vec<f64> {
+    let mut q = robot.reference_configuration();
+    let mut s = seed;
+    for v in q.iter_mut().skip(4) {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        *v += amplitude * (((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5);
+    }
+    q
+}
+
+proptest! {
+    #![proptest_config(config(48))]
+
+    /// At every returned solution the equilibrium residual, recomputed from
+    /// the public API, is below the reported tolerance or round-off floor,
+    /// and every returned number is finite. 48 cases.
+    #[test]
+    fn residual_is_below_the_reported_tolerance_at_every_solution(c in load_case()) {
+        let (robot, loads) = build(&c);
+        let eq = match StaticSolver::default().solve(&robot, &loads, None) {
+            Ok(eq) => eq,
+            // loads this moderate must converge
+            Err(e) => return Err(TestCaseError::fail(format!("{e}"))),
+        };
+        let r = &eq.report;
+        prop_assert!(eq.q.iter().all(|v| v.is_finite()));
+        let dead = robot.dead_force(&loads).unwrap();
+        let res = norm(&robot.residual(&eq.q, &dead, &loads).unwrap());
+        let bound = r.residual_tolerance_n.max(r.residual_floor_n);
+        prop_assert!(res <= bound * (1.0 + 1e-9), "|Q| = {res:e} > {bound:e}: {r}");
+        prop_assert!((res - r.residual_norm_n).abs() <= 1e-12 * bound.max(res), "{res} vs {r}");
+    }
+
+    /// Solving the same problem twice, with a freshly built robot, gives
+    /// bitwise identical coordinates and reports (wall time aside). 48 cases.
+    #[test]
+    fn solves_are_bitwise_repeatable(c in load_case()) {
+        let (robot, loads) = build(&c);
+        let (robot2, loads2) = build(&c);
+        let solver = StaticSolver::default();
+        let a = solver.solve(&robot, &loads, None);
+        let b = solver.solve(&robot2, &loads2, None);
+        match (a, b) {
+            (Ok(a), Ok(b)) => {
+                let bits = |q: &[f64]| q.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                prop_assert_eq!(bits(&a.q), bits(&b.q));
+                let mut ra = a.report.clone();
+                ra.wall_time_s = b.report.wall_time_s;
+                prop_assert_eq!(
+                    format!("{ra:?}").replace(' ', ""),
+                    format!("{:?}", b.report).replace(' ', "")
+                );
+                prop_assert_eq!(ra.residual_norm_n.to_bits(), b.report.residual_norm_n.to_bits());
+            }
+            (Err(Error::NotConverged { report: ra }), Err(Error::NotConverged { report: rb })) => {
+                prop_assert_eq!(ra.iterations, rb.iterations);
+                prop_assert_eq!(ra.residual_norm_n.to_bits(), rb.residual_norm_n.to_bits());
+            }
+            (a, b) => prop_assert!(false, "outcomes differ: {a:?} vs {b:?}"),
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(config(64))]
+
+    /// The elastic energy of a deformed configuration does not change when
+    /// the whole configuration is rotated and translated (positions
+    /// `R r + t`, slopes `R r'`). 64 cases.
+    #[test]
+    fn elastic_energy_is_invariant_under_rigid_motions(
+        n in 1usize..=10,
+        seed in any::<u64>(),
+        amplitude in 0.0..0.05f64,
+        angle in -10.0..10.0f64,
+        t in prop::array::uniform2(-5.0..5.0f64),
+    ) {
+        let robot = scene(n, n).robot().unwrap();
+        let q = deformed(&robot, amplitude, seed);
+        let (c, s) = (angle.cos(), angle.sin());
+        let moved: Vec<f64> = q
+            .chunks_exact(4)
+            .flat_map(|p| {
+                [
+                    c * p[0] - s * p[1] + t[0],
+                    s * p[0] + c * p[1] + t[1],
+                    c * p[2] - s * p[3],
+                    s * p[2] + c * p[3],
+                ]
+            })
+            .collect();
+        let u0 = robot.elastic_energy(&q).unwrap();
+        let u1 = robot.elastic_energy(&moved).unwrap();
+        prop_assert!(u0.is_finite() && u1.is_finite());
+        prop_assert!((u0 - u1).abs() <= 1e-9 * u0.abs() + 1e-15, "{u0} vs {u1}");
+    }
+
+    /// The tangent stiffness (elastic part plus the moment loads of the
+    /// actuation and of concentrated moments: all conservative) is
+    /// symmetric at any configuration. 64 cases.
+    #[test]
+    fn tangent_is_symmetric(
+        n1 in 1usize..=8,
+        n2 in 1usize..=8,
+        seed in any::<u64>(),
+        amplitude in 0.0..0.1f64,
+        pressures in prop::collection::vec(0.0..100e3f64, 4),
+        moment in -0.1..0.1f64,
+    ) {
+        let robot = scene(n1, n2).robot().unwrap();
+        let q = deformed(&robot, amplitude, seed);
+        let loads = Loads {
+            pressures_pa: pressures,
+            node_moments: vec![NodeMoment { node: n1, moment_nm: vec![moment] }],
+            ..Loads::default()
+        };
+        let mut k = BandedMatrix::zeros(1, 0, 0);
+        robot.tangent_into(&q, &loads, &mut k).unwrap();
+        let scale = k.max_abs();
+        prop_assert!(scale.is_finite() && scale > 0.0);
+        let n = robot.n_free();
+        for i in 0..n {
+            for j in i + 1..n {
+                let (a, b) = (k.get(i, j), k.get(j, i));
+                prop_assert!((a - b).abs() <= 1e-12 * scale, "K[{i},{j}] = {a} vs K[{j},{i}] = {b}");
+            }
+        }
+    }
+}
+
+/// Random valid scenes: every field of the two-section scene drawn from
+/// its valid range, loads of every kind, markers by node and by arc.
+fn scene_strategy() -> impl Strategy<Value = Scene> {
+    let num = || -1e3..1e3f64;
+    let pos = || 1e-3..1e3f64;
+    (
+        (
+            1usize..=20,
+            1usize..=20,
+            pos(),
+            pos(),
+            pos(),
+            pos(),
+            0.0..2.0f64,
+            num(),
+        ),
+        (
+            num(),
+            num(),
+            num(),
+            -10.0..10.0f64,
+            num(),
+            0.0..0.24f64,
+            1usize..=20,
+            1usize..=8,
+        ),
+        (
+            prop::array::uniform4(0.0..1.0f64),
+            prop::array::uniform4(-1e-5..1e-5f64),
+            1e-12..0.1f64,
+            1usize..=50,
+            1e-3..3.0f64,
+        ),
+        (".{0,12}", any::<bool>(), 1usize..=32, 1usize..=32),
+    )
+        .prop_map(
+            |(
+                (n1, n2, l1, l2, ea, ei, mass, kappa),
+                (a, b, c, angle, m, s_frac, node, mass_kg),
+                (p, gains, tol, iters, rot),
+                (name, tangent, ax, be),
+            )| {
+                let mut s = Scene::two_section();
+                s.name = name;
+                s.robot.axial_gauss_points = ax;
+                s.robot.bending_gauss_points = be;
+                let (l1, l2) = (l1 * 1e-3, l2 * 1e-3);
+                for (sec, (n, l)) in s.robot.sections.iter_mut().zip([(n1, l1), (n2, l2)]) {
+                    sec.elements = n;
+                    sec.length_m = l;
+                    sec.ea_n = ea;
+                    sec.ei_nm2 = ei;
+                    sec.mass_per_length_kg_per_m = mass;
+                    sec.rest_curvature_per_m = kappa;
+                }
+                for (k, ch) in s
+                    .robot
+                    .sections
+                    .iter_mut()
+                    .flat_map(|s| s.chambers.iter_mut())
+                    .enumerate()
+                {
+                    ch.gain_nm_per_pa = vec![gains[k]];
+                }
+                s.pressures_pa = p.iter().map(|f| f * 1e5).collect();
+                s.base.position_m = vec![a, b];
+                s.base.angle_rad = angle;
+                s.gravity_m_per_s2 = vec![c, -c.abs()];
+                let total = l1 + l2;
+                let nodes = n1 + n2;
+                s.loads = vec![
+                    SceneLoad::TipForce {
+                        force_n: vec![a, b],
+                    },
+                    SceneLoad::PointForce {
+                        s_m: s_frac / 0.24 * total,
+                        force_n: vec![c, m],
+                    },
+                    SceneLoad::TipMoment { moment_nm: m },
+                    SceneLoad::NodeMoment {
+                        node: 1 + node % nodes,
+                        moment_nm: -m,
+                    },
+                    SceneLoad::SelfWeight {
+                        mass_per_length_kg_per_m: mass,
+                        gravity_m_per_s2: vec![a, c],
+                    },
+                    SceneLoad::TipMass {
+                        mass_kg: mass_kg as f64 * 0.01,
+                    },
+                    SceneLoad::Distributed(LineLoad::Gaussian {
+                        amplitude_n_per_m: vec![a, b],
+                        center_m: s_frac,
+                        width_m: tol,
+                    }),
+                    SceneLoad::Distributed(LineLoad::Linear {
+                        w_start_n_per_m: vec![m, a],
+                        w_end_n_per_m: vec![b, c],
+                    }),
+                ];
+                s.markers = vec![
+                    Marker {
+                        node: Some(node % (nodes + 1)),
+                        s_m: None,
+                        tangent,
+                    },
+                    Marker {
+                        node: None,
+                        s_m: Some(total * (0.5 + 0.5 * s_frac / 0.24) * 0.999 + 1e-9),
+                        tangent: !tangent,
+                    },
+                ];
+                s.solver.statics.residual_tolerance = tol;
+                s.solver.statics.max_iterations = iters;
+                s.solver.statics.max_total_iterations = iters * 10;
+                s.solver.statics.max_step_rotation = rot;
+                s
+            },
+        )
+}
+
+proptest! {
+    #![proptest_config(config(128))]
+
+    /// Serialize → parse gives the same scene, and serializing again gives
+    /// the same text. 128 cases.
+    #[test]
+    fn scene_json_round_trips_unchanged(s in scene_strategy()) {
+        let text = serde_json::to_string(&s).unwrap();
+        let parsed: Scene = serde_json::from_str(&text).unwrap();
+        prop_assert_eq!(&parsed, &s);
+        prop_assert_eq!(serde_json::to_string(&parsed).unwrap(), text.clone());
+        // the validating parser accepts it unless it is a duplicate marker
+        match Scene::from_json(&text) {
+            Ok(v) => prop_assert_eq!(v, s),
+            Err(Error::InvalidParameter { name, .. }) if name == "markers[1]" => {}
+            Err(e) => prop_assert!(false, "{e}"),
+        }
+    }
+}
