@@ -666,7 +666,7 @@ impl<E: Element> Robot<E> {
     /// for moments beyond the tip node.
     pub fn validate_loads(&self, loads: &Loads) -> Result<()> {
         let d = E::DIM;
-        check_len("pressures_pa", self.n_pressures(), loads.pressures_pa.len())?;
+        self.check_load_structure(loads)?;
         check_all_finite("pressures_pa", &loads.pressures_pa)?;
         for (i, (p, c)) in loads.pressures_pa.iter().zip(&self.chambers).enumerate() {
             if *p < c.min || *p > c.max {
@@ -690,13 +690,7 @@ impl<E: Element> Robot<E> {
             self.locate(&format!("point_forces[{i}].s_m"), p.s_m)?;
         }
         for (i, m) in loads.node_moments.iter().enumerate() {
-            check_len(
-                &format!("node_moments[{i}].moment_nm"),
-                E::MOMENT_DIM,
-                m.moment_nm.len(),
-            )?;
             check_all_finite(&format!("node_moments[{i}].moment_nm"), &m.moment_nm)?;
-            check_index(&format!("node_moments[{i}].node"), m.node, self.n_nodes())?;
             if m.node == 0 {
                 return Err(Error::invalid(
                     format!("node_moments[{i}].node"),
