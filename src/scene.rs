@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 use crate::assembly::{Base, Chamber, Robot, RobotSpec, Section};
 use crate::element::{PlanarCable, DEFAULT_GAUSS_POINTS};
 use crate::error::{check_len, check_positive, Error, Result};
+use crate::estimate::EstimatorSettings;
 use crate::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use crate::params;
 use crate::statics::StaticSettings;
@@ -119,6 +120,11 @@ pub struct SolverSettings {
     /// Static solver settings.
     #[serde(default, rename = "static")]
     pub statics: StaticSettings,
+    /// Estimator settings (`"estimator": {"backend": "newton" | "sqp",
+    /// "alpha": ..., "noise_sigma_m": ..., ...}`, every field optional; see
+    /// [`EstimatorSettings`] for the fields and their defaults).
+    #[serde(default)]
+    pub estimator: EstimatorSettings,
 }
 
 /// A scene.
@@ -202,6 +208,7 @@ impl Scene {
         let robot = self.robot()?;
         robot.validate_loads(&self.loads()?)?;
         self.solver.statics.validate()?;
+        self.solver.estimator.validate()?;
         let total = robot.length();
         let mut seen: Vec<f64> = Vec::new();
         for (i, m) in self.markers.iter().enumerate() {

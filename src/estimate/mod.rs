@@ -962,13 +962,19 @@ impl<E: Element> Core<E> {
     /// Solves the equilibrium at `F` from `q0`: a few plain Newton steps
     /// (fast for warm starts), else the globalized [`StaticSolver`].
     pub fn equilibrium(&mut self, f: &[f64], q0: &[f64]) -> Result<Equil> {
+        self.equilibrium_opt(f, q0, true)
+    }
+
+    /// As [`Core::equilibrium`]; without `fallback` a failure of the plain
+    /// Newton steps is an error at once (cheap, for line-search trials).
+    pub fn equilibrium_opt(&mut self, f: &[f64], q0: &[f64], fallback: bool) -> Result<Equil> {
         let dead = self.dead_with(f)?;
         let n = self.robot.n_free();
         let len = self.robot.length();
         let mut q = q0.to_vec();
         let mut r = vec![0.0; n];
         let mut prev = f64::INFINITY;
-        for _ in 0..8 {
+        for _ in 0..12 {
             self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
             let lu = match self.factor(&q) {
                 Ok(lu) => lu,
@@ -977,7 +983,7 @@ impl<E: Element> Core<E> {
             let mut du = r.clone();
             lu.solve_in_place(&mut du);
             let step = du.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            if !step.is_finite() || step > 0.05 * len || step > 0.5 * prev {
+            if !step.is_finite() || step > 0.25 * len || step > 0.9 * prev {
                 break;
             }
             let dq = self.robot.expand_step(&du)?;
@@ -991,6 +997,11 @@ impl<E: Element> Core<E> {
                     residual_n: norm2(&r),
                 });
             }
+        }
+        if !fallback {
+            return Err(Error::NonFinite {
+                context: "plain Newton steps of the equilibrium did not converge".into(),
+            });
         }
         // fallback: the globalized static solver
         let solver = StaticSolver::new(self.settings.statics.clone())?;
@@ -1081,9 +1092,10 @@ impl<E: Element> Core<E> {
                     let v: f64 = dv.z[i].iter().zip(&dv.jm[j]).map(|(a, b)| a * b).sum();
                     v + if i == j { alpha / op.wt[i] } else { 0.0 }
                 });
-                // symmetrize (round-off)
+                // symmetrize (round-off); a tiny relative jitter if the
+                // markers are (nearly) redundant and α W⁻¹ is below round-off
                 let s = (&s + s.transpose()) * 0.5;
-                let chol = s.cholesky().ok_or_else(not_spd)?;
+                let chol = cholesky_jittered(s).ok_or_else(not_spd)?;
                 let t = DVector::from_fn(m, |i, _| {
                     dv.jm[i].iter().zip(f).map(|(a, b)| a * b).sum::<f64>() - e[i]
                 });
@@ -1110,7 +1122,7 @@ impl<E: Element> Core<E> {
                         .sum::<f64>()
                         + if a == b { alpha } else { 0.0 }
                 });
-                let chol = n.cholesky().ok_or_else(not_spd)?;
+                let chol = cholesky_jittered(n).ok_or_else(not_spd)?;
                 let rhs = DVector::from_fn(nf, |a, _| {
                     -(0..m).map(|i| op.wt[i] * dv.jm[i][a] * e[i]).sum::<f64>() - alpha * f[a]
                 });
@@ -1248,10 +1260,18 @@ impl<E: Element> Core<E> {
 
     /// Intermediate measurement vectors from the previous observation to `y`
     /// when the jump exceeds `max_observation_jump_m` (positions only count).
-    pub fn sub_targets(&self, op: &ObsOp) -> Vec<Vec<f64>> {
+    pub fn sub_targets(&self, op: &ObsOp, q_start: &[f64]) -> Vec<Vec<f64>> {
+        // from the last observation, or (first step) from the markers of
+        // the starting shape
+        let predicted: Vec<f64>;
         let prev = match &self.warm {
             Some(w) if w.y.len() == op.y.len() => &w.y,
-            _ => return vec![op.y.clone()],
+            _ => {
+                predicted = (0..op.n())
+                    .map(|i| op.apply_row(i, q_start, E::NODE_DOFS, E::DIM))
+                    .collect();
+                &predicted
+            }
         };
         let jump =
             op.y.iter()
@@ -1334,6 +1354,35 @@ impl<E: Element> Core<E> {
         }
         Ok(10f64.powf(0.5 * (lo + hi)))
     }
+}
+
+/// The factor (≤ 1) that keeps the predicted marker motion `max_i |J_i dF|`
+/// within `cap` (m): a trust region against Gauss–Newton overshoots far from
+/// the solution (loads under which the statics barely converge).
+pub(crate) fn step_cap(jm: &[Vec<f64>], step: &[f64], cap: f64) -> f64 {
+    let pred = jm.iter().map(|j| dot(j, step).abs()).fold(0.0f64, f64::max);
+    if pred > cap && pred.is_finite() {
+        cap / pred
+    } else {
+        1.0
+    }
+}
+
+/// Cholesky factor of a symmetric positive semi-definite matrix, with a
+/// diagonal jitter of 1e-14 … 1e-10 of the largest diagonal entry if the
+/// plain factorization fails.
+fn cholesky_jittered(m: DMatrix<f64>) -> Option<nalgebra::Cholesky<f64, nalgebra::Dyn>> {
+    let dmax = m.diagonal().iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    for jitter in [0.0, 1e-14, 1e-12, 1e-10] {
+        let mut a = m.clone();
+        for i in 0..a.nrows() {
+            a[(i, i)] += jitter * dmax;
+        }
+        if let Some(c) = a.cholesky() {
+            return Some(c);
+        }
+    }
+    None
 }
 
 /// The cross product: scalar (as a 1-vector) in 2-D, vector in 3-D.
@@ -1421,18 +1470,25 @@ pub(crate) fn run_step<E: Element, S>(
             let (mut f0, mut q0) = get_core(core_of).start()?;
             let n_ob = op.n();
             let a = Core::<E>::discrepancy_alpha(n_ob, |a| {
-                let s = solve_one(core_of, &op, f0.clone(), q0.clone(), a)?;
-                if s.report.converged {
-                    f0.clone_from(&s.f);
-                    q0.clone_from(&s.q);
+                // a failure (at an extreme α) counts as a perfect fit: the
+                // search then moves to larger α
+                match solve_one(core_of, &op, f0.clone(), q0.clone(), a) {
+                    Ok(s) => {
+                        if s.report.converged {
+                            f0.clone_from(&s.f);
+                            q0.clone_from(&s.q);
+                        }
+                        Ok(s.report.weighted_residual)
+                    }
+                    Err(_) => Ok(0.0),
                 }
-                Ok(s.report.weighted_residual)
             })?;
             get_core(core_of).alpha = Some(a);
             a
         }
     };
-    let targets = get_core(core_of).sub_targets(&op);
+    let (_, q_start) = get_core(core_of).start()?;
+    let targets = get_core(core_of).sub_targets(&op, &q_start);
     let n_sub = targets.len();
     let mut iterations = 0;
     let mut last: Option<Solved> = None;

@@ -24,8 +24,8 @@ use crate::error::Result;
 use crate::loads::Loads;
 
 use super::{
-    dot, norm2, run_step, Backend, Core, Estimate, EstimateReport, Estimator, EstimatorSettings,
-    ObsOp, Observation, Solved,
+    dot, norm2, run_step, step_cap, Backend, Core, Estimate, EstimateReport, Estimator,
+    EstimatorSettings, ObsOp, Observation, Solved,
 };
 
 /// The reduced Gauss–Newton estimator (backend "newton").
@@ -133,9 +133,11 @@ impl<E: Element> NewtonEstimator<E> {
             let obj = wr + pen;
             let dv = core.derivs(&lu, op)?;
             let g = core.gradient(&dv, op, &e, &f, alpha)?;
-            let (step, l) = core.gn_step(&dv, op, &e, &f, alpha)?;
+            let (mut step, l) = core.gn_step(&dv, op, &e, &f, alpha)?;
+            let dec = -0.5 * dot(&g, &step);
+            let cap = step_cap(&dv.jm, &step, settings.max_observation_jump_m);
+            step.iter_mut().for_each(|v| *v *= cap);
             let slope = dot(&g, &step);
-            let dec = -0.5 * slope;
             let scale = obj.max(n_ob);
             let report =
                 |converged: bool, iterations: usize, cause: Option<String>| EstimateReport {
@@ -154,7 +156,7 @@ impl<E: Element> NewtonEstimator<E> {
                 };
             // converged: predicted decrease below tolerance, or at the
             // round-off floor (tiny and no longer shrinking)
-            let floor = dec <= 1e-10 * scale && dec > 0.5 * prev_dec;
+            let floor = dec <= 1e-13 * scale && dec > 0.9 * prev_dec;
             if dec <= settings.tolerance * scale || floor || !dec.is_finite() && slope == 0.0 {
                 return Ok(Solved {
                     f,
@@ -183,7 +185,7 @@ impl<E: Element> NewtonEstimator<E> {
             let mut accepted = None;
             for _ in 0..30 {
                 let ft: Vec<f64> = f.iter().zip(&step).map(|(a, b)| a + t * b).collect();
-                if let Ok(eq) = core.equilibrium(&ft, &q) {
+                if let Ok(eq) = core.equilibrium_opt(&ft, &q, t < 0.01) {
                     let (wr_t, pen_t, _) = core.objective(op, &eq.q, &ft, alpha)?;
                     if wr_t + pen_t <= obj + 1e-4 * t * slope || dec <= 1e-8 * scale {
                         accepted = Some((ft, eq));
