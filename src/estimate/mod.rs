@@ -238,7 +238,8 @@ pub struct EstimatorSettings {
     pub tolerance: f64,
     /// Largest marker jump (m) between successive observations handled in
     /// one go; larger jumps are split into a sequence of intermediate
-    /// observations (default 0.02 m).
+    /// observations; also the trust radius of one step's predicted node motion
+    /// (default 0.02 m).
     pub max_observation_jump_m: f64,
     /// Inequalities on the load (SQP backend only; default none).
     pub bounds: Vec<LoadBound>,
@@ -739,6 +740,8 @@ pub(crate) struct Core<E: Element> {
     pub kmat: BandedMatrix,
     pub alpha: Option<f64>,
     pub warm: Option<Warm>,
+    /// The last factorization of `K` and the shape it was taken at.
+    pub lu_cache: Option<(Vec<f64>, BandedLu)>,
 }
 
 /// The solved equilibrium at some `F`: configuration and the factored tangent.
@@ -793,6 +796,7 @@ impl<E: Element> Core<E> {
             settings,
             n_f,
             warm: None,
+            lu_cache: None,
         })
     }
 
@@ -971,8 +975,47 @@ impl<E: Element> Core<E> {
         let dead = self.dead_with(f)?;
         let n = self.robot.n_free();
         let len = self.robot.length();
-        let mut q = q0.to_vec();
         let mut r = vec![0.0; n];
+        // chord (modified Newton) steps with the last factorization: warm
+        // starts need a few residuals and one fresh factorization (for exact
+        // derivatives at the solution) instead of one per Newton step
+        if let Some((q_lu, lu)) = self.lu_cache.take() {
+            let mut q = q0.to_vec();
+            let mut prev = f64::INFINITY;
+            let mut done = false;
+            let mut moved = false;
+            for _ in 0..12 {
+                self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+                let mut du = r.clone();
+                lu.solve_in_place(&mut du);
+                let step = du.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                if !step.is_finite() || step > 0.25 * len || step > 0.5 * prev {
+                    break;
+                }
+                let dq = self.robot.expand_step(&du)?;
+                q.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
+                prev = step;
+                if step <= 1e-10 * len {
+                    done = true;
+                    break;
+                }
+                moved = true;
+            }
+            if done {
+                self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+                // the cached factors are exact if q has not left their point
+                let same = !moved && q_lu.iter().zip(q0).all(|(a, b)| a == b);
+                let lu = if same { lu } else { self.factor(&q)? };
+                self.lu_cache = Some((q.clone(), lu.clone()));
+                return Ok(Equil {
+                    q,
+                    lu,
+                    residual_n: norm2(&r),
+                });
+            }
+            self.lu_cache = Some((q_lu, lu));
+        }
+        let mut q = q0.to_vec();
         let mut prev = f64::INFINITY;
         for _ in 0..12 {
             self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
@@ -991,6 +1034,7 @@ impl<E: Element> Core<E> {
             prev = step;
             if step <= 1e-10 * len {
                 self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+                self.lu_cache = Some((q.clone(), lu.clone()));
                 return Ok(Equil {
                     q,
                     lu,
@@ -1008,6 +1052,7 @@ impl<E: Element> Core<E> {
         let loads = self.loads_with(f);
         let eq = solver.solve(&self.robot, &loads, Some(q0))?;
         let lu = self.factor(&eq.q)?;
+        self.lu_cache = Some((eq.q.clone(), lu.clone()));
         Ok(Equil {
             q: eq.q,
             lu,
@@ -1310,22 +1355,25 @@ impl<E: Element> Core<E> {
 
     /// Chooses `α` by the discrepancy principle: `weighted_residual(α) =
     /// n_ob`, with `solve(α)` returning the weighted residual of the estimate
-    /// at `α`. The residual grows with `α`: from `α = 1` the bracket is
-    /// widened by factors of 100, then bisected in `log10 α` to 0.02.
+    /// at `α`. The residual grows with `α`: from `α = 100` the bracket is
+    /// widened by factors of 10, then bisected in `log10 α` to 0.02.
     pub fn discrepancy_alpha(
         n_ob: usize,
         mut solve: impl FnMut(f64) -> Result<f64>,
     ) -> Result<f64> {
         let target = n_ob as f64;
         let (lo_lim, hi_lim) = (-14.0f64, 14.0f64);
-        let mut a = 0.0f64;
-        let mut r = solve(1.0)?;
+        // start where the reduced problem is well conditioned (with whitened
+        // weights α = 100 is a strong regularization) and move by decades:
+        // each solve starts from the previous one (continuation)
+        let mut a = 2.0f64;
+        let mut r = solve(100.0)?;
         let (mut lo, mut hi);
         if r > target {
             hi = a;
             while r > target && a > lo_lim {
                 hi = a;
-                a -= 2.0;
+                a -= 1.0;
                 r = solve(10f64.powf(a))?;
             }
             if r > target {
@@ -1336,7 +1384,7 @@ impl<E: Element> Core<E> {
             lo = a;
             while r <= target && a < hi_lim {
                 lo = a;
-                a += 2.0;
+                a += 1.0;
                 r = solve(10f64.powf(a))?;
             }
             if r <= target {
@@ -1483,7 +1531,14 @@ pub(crate) fn run_step<E: Element, S>(
                     Err(_) => Ok(0.0),
                 }
             })?;
-            get_core(core_of).alpha = Some(a);
+            let core = get_core(core_of);
+            core.alpha = Some(a);
+            // the last solve of the search is close: start from it
+            core.warm = Some(Warm {
+                f: f0,
+                q: q0,
+                y: op.y.clone(),
+            });
             a
         }
     };

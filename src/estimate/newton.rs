@@ -135,7 +135,22 @@ impl<E: Element> NewtonEstimator<E> {
             let g = core.gradient(&dv, op, &e, &f, alpha)?;
             let (mut step, l) = core.gn_step(&dv, op, &e, &f, alpha)?;
             let dec = -0.5 * dot(&g, &step);
-            let cap = step_cap(&dv.jm, &step, settings.max_observation_jump_m);
+            // trust region: the predicted motion of every node, M K⁻¹ Mᵀ G dF
+            // (one more solve), within max_observation_jump_m
+            let mut du = core.robot.restrict(&core.gen_force(&step)?)?;
+            lu.solve_in_place(&mut du);
+            let dq = core.robot.expand_step(&du)?;
+            let nd = E::NODE_DOFS;
+            let moved = dq
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| i % nd < E::DIM)
+                .fold(0.0f64, |m, (_, v)| m.max(v.abs()));
+            let cap = if moved > settings.max_observation_jump_m && moved.is_finite() {
+                settings.max_observation_jump_m / moved
+            } else {
+                step_cap(&dv.jm, &step, settings.max_observation_jump_m)
+            };
             step.iter_mut().for_each(|v| *v *= cap);
             let slope = dot(&g, &step);
             let scale = obj.max(n_ob);
@@ -241,6 +256,7 @@ impl<E: Element + 'static> Estimator for NewtonEstimator<E> {
 
     fn reset(&mut self) {
         self.core.warm = None;
+        self.core.lu_cache = None;
         self.core.alpha = self.core.settings.alpha;
     }
 }

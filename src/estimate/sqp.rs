@@ -516,6 +516,7 @@ impl<E: Element + 'static> Estimator for SqpEstimator<E> {
 
     fn reset(&mut self) {
         self.core.warm = None;
+        self.core.lu_cache = None;
         self.core.alpha = self.core.settings.alpha;
     }
 }
