@@ -386,7 +386,7 @@ pub struct Observation {
 
 impl Observation {
     /// The exact positions of the configuration `q` at the given nodes (a
-    /// noise-free synthetic observation).
+    /// noise-free synthetic observation); nodes beyond `q` are skipped.
     pub fn at_nodes<E: Element>(_robot: &Robot<E>, q: &[f64], nodes: &[usize]) -> Self {
         let nd = E::NODE_DOFS;
         let d = E::DIM;
