@@ -394,7 +394,15 @@ impl<E: Element> SqpEstimator<E> {
             }
             let lin = dot(&c, &d);
             let scale = obj.max(n_ob);
-            let feasible = rn <= 1e-9 * load;
+            // feasible: |Q| relative to the applied loads, or at the round-off
+            // floor ε |K|max |q|∞ √n (which grows with the element count)
+            let qmax = q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let floor = 0.1
+                * f64::EPSILON
+                * self.core.kmat.max_abs()
+                * qmax
+                * (self.core.robot.n_free() as f64).sqrt();
+            let feasible = rn <= (1e-9 * load).max(floor);
             // with a bound active the step is clarabel's, accurate to its
             // tolerances only: a predicted decrease of 1e-9 then ends it
             let tol = if active {
@@ -449,7 +457,11 @@ impl<E: Element> SqpEstimator<E> {
                 let (wr_t, pen_t, _) = self.core.objective(op, &qt, &ft, alpha)?;
                 let phi_t = wr_t + pen_t + mu * rt.iter().map(|v| v.abs()).sum::<f64>();
                 let small = dec <= 1e-8 * scale && rn <= 1e-6 * load;
-                if phi_t <= phi + 1e-4 * t * slope.min(0.0) || small {
+                // near the round-off floor μ|Q|₁ is noise: a trial that stays
+                // feasible to 10× the tolerance and decreases J is accepted
+                let feasible_t = norm2(&rt) <= 10.0 * (1e-9 * load).max(floor);
+                let descends = wr_t + pen_t <= obj + 1e-4 * t * lin.min(0.0);
+                if phi_t <= phi + 1e-4 * t * slope.min(0.0) || small || (feasible_t && descends) {
                     q = qt;
                     f = ft;
                     accepted = true;
