@@ -8,6 +8,8 @@ use serde::Serialize;
 
 use softrod::assembly::Robot;
 use softrod::element::{Element, PlanarCable};
+use softrod::estimate::{Backend, Estimate, EstimateReport, MarkerObservation, Observation};
+use softrod::loads::{LineLoad, PointForce};
 use softrod::scene::Scene;
 use softrod::statics::{StaticReport, StaticSolver};
 
@@ -34,6 +36,42 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Estimate shape and distributed load from marker positions (Sec. III)
+    /// and write the result as JSON.
+    ///
+    /// The markers file is JSON: {"markers": [{"node": 4, "position_m": [x, y]},
+    /// {"s_m": 0.24, "position_m": [x, y], "tangent": [tx, ty]}, ...]} (positions in m,
+    /// world axes; optional "position_weight"/"tangent_weight" per component).
+    /// Without it, the observation is synthesized: the scene is solved forward
+    /// with its own loads and seeded 0.01 mm noise is added at the scene's markers.
+    Estimate {
+        /// Scene file (JSON); its loads and pressures are the known loads.
+        scene: PathBuf,
+        /// Backend (default: the scene's `solver.estimator.backend`).
+        #[arg(long, value_enum)]
+        backend: Option<BackendArg>,
+        /// Markers file (JSON, see above).
+        #[arg(long)]
+        markers: Option<PathBuf>,
+        /// Output file (default: standard output).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+enum BackendArg {
+    Newton,
+    Sqp,
+}
+
+impl From<BackendArg> for Backend {
+    fn from(b: BackendArg) -> Self {
+        match b {
+            BackendArg::Newton => Backend::Newton,
+            BackendArg::Sqp => Backend::Sqp,
+        }
+    }
 }
 
 /// One node of a result.
@@ -100,7 +138,193 @@ fn write_json<T: Serialize>(value: &T, out: Option<&PathBuf>) -> Result<()> {
     }
 }
 
+/// One sample of the estimated load.
+#[derive(Serialize)]
+struct LoadSample {
+    /// Undeformed arc coordinate (m).
+    s: f64,
+    /// Load per undeformed length, world axes (N/m).
+    w: Vec<f64>,
+}
+
+/// Resultant of the estimated load.
+#[derive(Serialize)]
+struct ResultantOut {
+    /// Force (N), world axes.
+    force_n: Vec<f64>,
+    /// Standard deviation of each force component for the stated marker noise (N).
+    force_std_n: Vec<f64>,
+    /// Moment about the base position, in the estimated shape (N·m).
+    moment_nm: Vec<f64>,
+}
+
+/// The result of `softrod estimate`.
+#[derive(Serialize)]
+struct EstimateOut {
+    scene: String,
+    backend: String,
+    /// Where the observation came from.
+    observation: String,
+    /// Node coordinates of the estimated shape (m).
+    nodes: Vec<NodeOut>,
+    /// The estimated distributed load on an evenly spaced grid of `load_grid_points` arc coordinates.
+    load: Vec<LoadSample>,
+    load_grid_points: usize,
+    /// The raw load parameters F (N/m, N/m², node-major [w, w']; or the force, N).
+    load_parameters: Vec<f64>,
+    resultant: ResultantOut,
+    /// Marker residuals A q - y (m), in observation order.
+    marker_residuals_m: Vec<f64>,
+    /// Standard deviation of the estimated marker-space shape (m), per observed component.
+    marker_std_m: Vec<f64>,
+    /// Largest standard deviation of a load parameter (N/m or N).
+    max_load_parameter_std: f64,
+    /// The marker noise the covariances are stated for (m).
+    noise_sigma_m: f64,
+    report: EstimateReport,
+}
+
+const LOAD_GRID: usize = 49;
+
+fn estimate_out(scene: &Scene, robot: &Robot<PlanarCable>, e: &Estimate, observation: String) -> EstimateOut {
+    let nd = PlanarCable::NODE_DOFS;
+    let nodes = robot
+        .node_arc()
+        .iter()
+        .enumerate()
+        .map(|(i, &s)| NodeOut { s_m: s, position_m: e.q[i * nd..i * nd + 2].to_vec(), slope: e.q[i * nd + 2..i * nd + 4].to_vec() })
+        .collect();
+    let d = e.resultant_force_n.len();
+    let m = e.marker_residuals.len();
+    EstimateOut {
+        scene: scene.name.clone(),
+        backend: e.report.backend.name().to_string(),
+        observation,
+        nodes,
+        load: e.sample_load(LOAD_GRID).into_iter().map(|(s, w)| LoadSample { s, w }).collect(),
+        load_grid_points: LOAD_GRID,
+        load_parameters: e.f.clone(),
+        resultant: ResultantOut {
+            force_n: e.resultant_force_n.clone(),
+            force_std_n: (0..d).map(|a| e.resultant_force_cov[a * d + a].max(0.0).sqrt()).collect(),
+            moment_nm: e.resultant_moment_nm.clone(),
+        },
+        marker_residuals_m: e.marker_residuals.clone(),
+        marker_std_m: (0..m).map(|i| e.marker_cov[i * m + i].max(0.0).sqrt()).collect(),
+        max_load_parameter_std: e.std_f().into_iter().fold(0.0, f64::max),
+        noise_sigma_m: e.noise_sigma_m,
+        report: e.report.clone(),
+    }
+}
+
+/// The scene's markers read off the configuration `q` (exact).
+fn observe(scene: &Scene, robot: &Robot<PlanarCable>, q: &[f64]) -> Result<Observation> {
+    let mut markers = Vec::new();
+    for m in &scene.markers {
+        let s = match (m.node, m.s_m) {
+            (Some(n), _) => robot.node_arc()[n],
+            (None, Some(s)) => s,
+            _ => anyhow::bail!("a marker needs `node` or `s_m`"),
+        };
+        let (e, xi) = robot.locate("marker", s)?;
+        let p = robot.position_at(q, s)?;
+        let mut mo = match m.node {
+            Some(n) => MarkerObservation::at_node(n, p),
+            None => MarkerObservation::at_arc(s, p),
+        };
+        if m.tangent {
+            let le = robot.elements()[e].length();
+            let (_, ds, _) = softrod::element::hermite(xi, le);
+            let qe = &q[e * 4..e * 4 + 8];
+            mo.tangent = Some((0..2).map(|i| (0..4).map(|k| ds[k] * qe[2 * k + i]).sum()).collect());
+        }
+        markers.push(mo);
+    }
+    Ok(Observation { markers })
+}
+
+fn estimate(scene: &Scene, backend: Option<Backend>, markers: Option<&PathBuf>) -> Result<EstimateOut> {
+    let robot = scene.robot()?;
+    let known = scene.loads()?;
+    let mut settings = scene.solver.estimator.clone();
+    if let Some(b) = backend {
+        settings.backend = b;
+    }
+    let (obs, source) = match markers {
+        Some(path) => {
+            let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+            let obs: Observation = serde_json::from_str(&text).with_context(|| format!("{}: not a markers file", path.display()))?;
+            (obs, format!("markers file {}", path.display()))
+        }
+        None => {
+            let solver = StaticSolver::new(scene.solver.statics.clone())?;
+            let eq = solver.solve(&robot, &known, None)?;
+            let obs = observe(scene, &robot, &eq.q)?.with_noise(1e-5, 1);
+            (obs, "synthesized: the scene solved forward with its own loads, seeded 0.01 mm noise added to the marker positions (seed 1); the estimated load should be near zero".to_string())
+        }
+    };
+    let mut est = settings.backend.build(robot.clone(), known, settings)?;
+    let e = est.step(&obs)?;
+    Ok(estimate_out(scene, &robot, &e, source))
+}
+
+fn median_warm_step(est: &mut dyn softrod::estimate::Estimator, observations: &[Observation]) -> Result<f64> {
+    let mut times = Vec::with_capacity(observations.len());
+    for o in observations {
+        let t = std::time::Instant::now();
+        est.step(o)?;
+        times.push(t.elapsed().as_secs_f64());
+    }
+    times.sort_by(f64::total_cmp);
+    Ok(times.get(times.len() / 2).copied().unwrap_or(f64::NAN))
+}
+
 fn default_run() -> Result<()> {
+    solve_summary()?;
+    println!();
+    estimation_demo()
+}
+
+/// The main job: an unknown payload on the two-section robot, five noisy
+/// markers, both backends.
+fn estimation_demo() -> Result<()> {
+    let scene = Scene::two_section();
+    let robot = scene.robot()?;
+    let known = scene.loads()?;
+    let tip_mass_kg = 0.02;
+    let uniform = [0.0, -0.5];
+    let mut truth = known.clone();
+    truth.point_forces.push(PointForce { s_m: robot.length(), force_n: vec![0.0, -9.81 * tip_mass_kg] });
+    truth.line_loads.push(LineLoad::Uniform { w_n_per_m: uniform.to_vec() });
+    let eq = StaticSolver::default().solve(&robot, &truth, None)?;
+    let nodes: Vec<usize> = scene.markers.iter().filter_map(|m| m.node).collect();
+    let sigma = 1e-5;
+    let obs = Observation::at_nodes(&robot, &eq.q, &nodes).with_noise(sigma, 1);
+    let true_force = [uniform[0] * robot.length(), uniform[1] * robot.length() - 9.81 * tip_mass_kg];
+    let tip = |q: &[f64]| (q[q.len() - 4], q[q.len() - 3]);
+    let (tx, ty) = tip(&eq.q);
+    println!("Estimation (Sec. III): unknown payload = {:.0} g tip mass + uniform {:.2} N/m, not known to the estimator", tip_mass_kg * 1e3, uniform[1]);
+    println!("  {} markers at nodes {:?}, seeded noise {:.2} mm; alpha by the discrepancy principle", nodes.len(), nodes, sigma * 1e3);
+    println!("  truth:    tip ({:+.5}, {:+.5}) m, resultant ({:+.4}, {:+.4}) N", tx, ty, true_force[0], true_force[1]);
+    for backend in [Backend::Newton, Backend::Sqp] {
+        let mut est = backend.build(robot.clone(), known.clone(), scene.solver.estimator.clone())?;
+        let e = est.step(&obs)?;
+        let (ex, ey) = tip(&e.q);
+        let sd: Vec<f64> = (0..2).map(|a| e.resultant_force_cov[a * 2 + a].max(0.0).sqrt()).collect();
+        println!(
+            "  {:<6}    tip ({:+.5}, {:+.5}) m (error {:.3} mm), resultant ({:+.4} ± {:.4}, {:+.4} ± {:.4}) N, moment {:+.4} N·m; {} iterations, alpha {:.3e}, first step {:.1} ms",
+            backend.name(), ex, ey, (ex - tx).hypot(ey - ty) * 1e3, e.resultant_force_n[0], sd[0], e.resultant_force_n[1], sd[1], e.resultant_moment_nm[0], e.report.iterations, e.report.alpha, e.report.wall_time_s * 1e3
+        );
+        // streaming: 50 new noisy frames of the same scene, warm-started
+        let frames: Vec<Observation> = (0..50).map(|k| Observation::at_nodes(&robot, &eq.q, &nodes).with_noise(sigma, 100 + k)).collect();
+        let t = median_warm_step(est.as_mut(), &frames)?;
+        println!("            warm step (new noisy frame, median of 50): {:.1} µs", t * 1e6);
+    }
+    println!("Run `softrod estimate examples/two_section.json --backend newton --out estimate.json` for a full result.");
+    Ok(())
+}
+
+fn solve_summary() -> Result<()> {
     let scene = Scene::two_section();
     let robot = scene.robot()?;
     let out = solve(&scene, None)?;
@@ -137,6 +361,14 @@ pub fn run() -> Result<()> {
         Some(Command::Solve { scene, pressures, out }) => {
             let scene = Scene::from_file(&scene)?;
             let result = solve(&scene, pressures)?;
+            write_json(&result, out.as_ref())
+        }
+        Some(Command::Estimate { scene, backend, markers, out }) => {
+            let scene = Scene::from_file(&scene)?;
+            let result = estimate(&scene, backend.map(Backend::from), markers.as_ref())?;
+            if markers.is_none() {
+                eprintln!("softrod: no markers file: {}", result.observation);
+            }
             write_json(&result, out.as_ref())
         }
     }

@@ -86,6 +86,12 @@ pub enum Error {
         /// What the solver reached before it stopped.
         report: Box<StaticReport>,
     },
+    /// An estimator did not converge (see [`crate::estimate`]).
+    #[error("estimation did not converge: {report}")]
+    EstimateNotConverged {
+        /// What the estimator reached before it stopped.
+        report: Box<crate::estimate::EstimateReport>,
+    },
     /// A scene file could not be read or is malformed.
     #[error("scene: {message}")]
     Scene {

@@ -10,6 +10,7 @@
 //! - [`element`]: the cable element (14)–(16), energy, gradient, tangent.
 //! - [`assembly`]: a multi-section robot, loads (22), actuation (18).
 //! - [`statics`]: Newton's method on the equilibrium (17).
+//! - [`estimate`]: shape and load estimation (25)–(30), backends `newton` and `sqp`.
 //! - [`scene`]: JSON scene files; [`params`]: the values the paper leaves open.
 //! - [`banded`], [`quadrature`]: the numerical kernels.
 //!
@@ -31,6 +32,7 @@ pub mod assembly;
 pub mod banded;
 pub mod element;
 pub mod error;
+pub mod estimate;
 pub mod loads;
 pub mod params;
 pub mod quadrature;

@@ -13,6 +13,7 @@ use crate::error::{
     check_all_finite, check_at_most, check_finite, check_index, check_len, check_positive, Error,
     Result,
 };
+use crate::estimate::EstimatorSettings;
 use crate::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use crate::params;
 use crate::statics::StaticSettings;
@@ -125,6 +126,11 @@ pub struct SolverSettings {
     /// Static solver settings.
     #[serde(default, rename = "static")]
     pub statics: StaticSettings,
+    /// Estimator settings (`"estimator": {"backend": "newton" | "sqp",
+    /// "alpha": ..., "noise_sigma_m": ..., ...}`, every field optional; see
+    /// [`EstimatorSettings`] for the fields and their defaults).
+    #[serde(default)]
+    pub estimator: EstimatorSettings,
 }
 
 /// A scene.
@@ -239,6 +245,10 @@ impl Scene {
             .statics
             .validate()
             .map_err(|e| e.with_prefix("solver.static."))?;
+        self.solver
+            .estimator
+            .validate()
+            .map_err(|e| e.with_prefix("solver.estimator."))?;
         let total = robot.length();
         let mut seen: Vec<f64> = Vec::new();
         for (i, m) in self.markers.iter().enumerate() {

@@ -1,0 +1,262 @@
+//! The reduced Gauss–Newton estimator (27)–(30).
+//!
+//! `q = q(F)` by the static solve (warm-started from the previous iterate),
+//! so the problem is unconstrained in `F`:
+//! `J(F) = (A q(F) − y)ᵀ W (A q(F) − y) + α Fᵀ H F`.
+//!
+//! - Sensitivity (28): `∂u/∂F = K⁻¹ Mᵀ G` over the free coordinates `u`
+//!   (`K = −∂Q/∂q` restricted with [`Robot::restrict`], `G = J_QF`). The
+//!   marker Jacobian `J = A M K⁻¹ Mᵀ G` is formed row by row by adjoint
+//!   solves, `z_i = M K⁻¹ Mᵀ a_iᵀ`, `J_i = Gᵀ z_i` (K is symmetric): `n_ob`
+//!   solves with one factorization of `K` per iteration.
+//! - Gradient (29): `g = 2 (Jᵀ W e + α H F)`, `e = A q − y`.
+//! - Gauss–Newton Hessian (30): `2 (Jᵀ W J + α H)`. For the distributed
+//!   load (`G = H = B`) the step is solved in the representer form
+//!   `F + dF = Σ_i c_i z_i`, `(α W⁻¹ + Zᵀ B Z) c = J F − e`: a Cholesky of an
+//!   `n_ob × n_ob` matrix, nothing of size `n_q³`.
+//! - Globalization: Armijo backtracking on `J`, each trial a warm static solve.
+//! - Warm start from the last `F*` and shape; a large jump of the markers is
+//!   taken through intermediate observations.
+
+use crate::assembly::Robot;
+use crate::element::Element;
+use crate::error::Result;
+use crate::loads::Loads;
+
+use super::{
+    dot, norm2, run_step, step_cap, Backend, Core, Estimate, EstimateReport, Estimator,
+    EstimatorSettings, ObsOp, Observation, Solved,
+};
+
+/// The reduced Gauss–Newton estimator (backend "newton").
+///
+/// # Example
+/// ```
+/// use softrod::estimate::{Estimator, EstimatorSettings, NewtonEstimator, Observation};
+/// use softrod::{scene::Scene, statics::StaticSolver};
+/// let scene = Scene::two_section();
+/// let (robot, loads) = (scene.robot()?, scene.loads()?);
+/// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+/// let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]).with_noise(1e-5, 1);
+/// let mut est = NewtonEstimator::new(robot, loads, EstimatorSettings::default())?;
+/// let e = est.step(&obs)?; // α by the discrepancy principle
+/// assert!(e.report.converged);
+/// let again = est.step(&obs)?; // warm: converges at once
+/// assert!(again.report.iterations <= 2);
+/// # Ok::<(), softrod::Error>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct NewtonEstimator<E: Element> {
+    core: Core<E>,
+}
+
+impl<E: Element> NewtonEstimator<E> {
+    /// An estimator for `robot` under the known loads `known`.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidParameter`] for invalid settings or bounds
+    /// (bounds need the SQP backend); the errors of [`Robot::validate_loads`].
+    pub fn new(robot: Robot<E>, known: Loads, settings: EstimatorSettings) -> Result<Self> {
+        if !settings.bounds.is_empty() {
+            return Err(crate::Error::invalid(
+                "estimator.bounds",
+                settings.bounds.len(),
+                "bounds on the load need the sqp backend",
+            ));
+        }
+        Ok(NewtonEstimator {
+            core: Core::new(robot, known, settings)?,
+        })
+    }
+
+    /// The robot.
+    pub fn robot(&self) -> &Robot<E> {
+        &self.core.robot
+    }
+
+    /// Objective `J(F)` and reduced gradient (29) at `F` for `observation`
+    /// (static solve from the warm shape), for checks and for users who
+    /// drive their own optimizer.
+    ///
+    /// # Errors
+    /// As [`Estimator::step`].
+    pub fn objective_and_gradient(
+        &mut self,
+        observation: &Observation,
+        f: &[f64],
+        alpha: f64,
+    ) -> Result<(f64, Vec<f64>)> {
+        let op = self.core.obs_op(observation)?;
+        crate::error::check_len("f", self.core.n_f, f.len())?;
+        let (_, q0) = self.core.start()?;
+        let eq = self.core.equilibrium(f, &q0)?;
+        let lu = self.core.factor(&eq.q)?;
+        let (wr, pen, e) = self.core.objective(&op, &eq.q, f, alpha)?;
+        let dv = self.core.derivs(&lu, &op)?;
+        let g = self.core.gradient(&dv, &op, &e, f, alpha)?;
+        Ok((wr + pen, g))
+    }
+
+    /// The observed quantities `A q(F)` and the marker Jacobian
+    /// `∂(A q)/∂F` (row-major, `n_ob × n_F`) at `F`.
+    ///
+    /// # Errors
+    /// As [`Estimator::step`].
+    pub fn markers_and_jacobian(
+        &mut self,
+        observation: &Observation,
+        f: &[f64],
+    ) -> Result<(Vec<f64>, Vec<f64>)> {
+        let op = self.core.obs_op(observation)?;
+        crate::error::check_len("f", self.core.n_f, f.len())?;
+        let (_, q0) = self.core.start()?;
+        let eq = self.core.equilibrium(f, &q0)?;
+        let lu = self.core.factor(&eq.q)?;
+        let ob: Vec<f64> = (0..op.n())
+            .map(|i| op.apply_row(i, &eq.q, E::NODE_DOFS, E::DIM))
+            .collect();
+        let dv = self.core.derivs(&lu, &op)?;
+        Ok((ob, dv.jm.concat()))
+    }
+
+    fn solve_one(&mut self, op: &ObsOp, f0: Vec<f64>, q0: Vec<f64>, alpha: f64) -> Result<Solved> {
+        let core = &mut self.core;
+        let settings = core.settings.clone();
+        let mut f = f0;
+        let eq = core.equilibrium(&f, &q0)?;
+        let (mut q, mut lu, mut res_n) = (eq.q, eq.lu, eq.residual_n);
+        let n_ob = op.n() as f64;
+        let mut iterations = 0;
+        let mut prev_dec = f64::INFINITY;
+        loop {
+            let (wr, pen, e) = core.objective(op, &q, &f, alpha)?;
+            let obj = wr + pen;
+            let dv = core.derivs(&lu, op)?;
+            let g = core.gradient(&dv, op, &e, &f, alpha)?;
+            let (mut step, l) = core.gn_step(&dv, op, &e, &f, alpha)?;
+            let dec = -0.5 * dot(&g, &step);
+            // trust region: the predicted motion of every node, M K⁻¹ Mᵀ G dF
+            // (one more solve), within max_observation_jump_m
+            let mut du = core.robot.restrict(&core.gen_force(&step)?)?;
+            lu.solve_in_place(&mut du)?;
+            let dq = core.robot.expand_step(&du)?;
+            let nd = E::NODE_DOFS;
+            let moved = dq
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| i % nd < E::DIM)
+                .fold(0.0f64, |m, (_, v)| m.max(v.abs()));
+            let cap = if moved > settings.max_observation_jump_m && moved.is_finite() {
+                settings.max_observation_jump_m / moved
+            } else {
+                step_cap(&dv.jm, &step, settings.max_observation_jump_m)
+            };
+            step.iter_mut().for_each(|v| *v *= cap);
+            let slope = dot(&g, &step);
+            let scale = obj.max(n_ob);
+            let report =
+                |converged: bool, iterations: usize, cause: Option<String>| EstimateReport {
+                    backend: Backend::Newton,
+                    converged,
+                    iterations,
+                    sub_steps: 1,
+                    objective: obj,
+                    weighted_residual: wr,
+                    n_observations: op.n(),
+                    gradient_norm: norm2(&g),
+                    equilibrium_residual_n: res_n,
+                    alpha,
+                    wall_time_s: 0.0,
+                    cause,
+                };
+            // converged: predicted decrease below tolerance, or at the
+            // round-off floor (tiny and no longer shrinking)
+            let floor = dec <= 1e-13 * scale && dec > 0.9 * prev_dec;
+            if dec <= settings.tolerance * scale || floor || !dec.is_finite() && slope == 0.0 {
+                return Ok(Solved {
+                    f,
+                    q,
+                    derivs: dv,
+                    cov_factor: l,
+                    e,
+                    report: report(true, iterations, None),
+                });
+            }
+            if iterations >= settings.max_iterations {
+                return Ok(Solved {
+                    f,
+                    q,
+                    derivs: dv,
+                    cov_factor: l,
+                    e,
+                    report: report(false, iterations, Some("iteration limit".into())),
+                });
+            }
+            iterations += 1;
+            prev_dec = dec;
+            // Armijo backtracking; tiny predicted decreases take the full
+            // step (the objective's round-off would hide the decrease)
+            let mut t = 1.0;
+            let mut accepted = None;
+            for _ in 0..30 {
+                let ft: Vec<f64> = f.iter().zip(&step).map(|(a, b)| a + t * b).collect();
+                if let Ok(eq) = core.equilibrium_opt(&ft, &q, t < 0.01) {
+                    let (wr_t, pen_t, _) = core.objective(op, &eq.q, &ft, alpha)?;
+                    if wr_t + pen_t <= obj + 1e-4 * t * slope || dec <= 1e-8 * scale {
+                        accepted = Some((ft, eq));
+                        break;
+                    }
+                }
+                t *= 0.5;
+            }
+            match accepted {
+                Some((ft, eq)) => {
+                    f = ft;
+                    q = eq.q;
+                    lu = eq.lu;
+                    res_n = eq.residual_n;
+                }
+                None => {
+                    return Ok(Solved {
+                        f,
+                        q,
+                        derivs: dv,
+                        cov_factor: l,
+                        e,
+                        report: report(
+                            dec <= 1e-6 * scale,
+                            iterations,
+                            Some("line search failed".into()),
+                        ),
+                    })
+                }
+            }
+        }
+    }
+}
+
+impl<E: Element + 'static> Estimator for NewtonEstimator<E> {
+    fn step(&mut self, observation: &Observation) -> Result<Estimate> {
+        run_step(
+            self,
+            observation,
+            Backend::Newton,
+            |s| &mut s.core,
+            Self::solve_one,
+        )
+    }
+
+    fn backend(&self) -> Backend {
+        Backend::Newton
+    }
+
+    fn alpha(&self) -> Option<f64> {
+        self.core.alpha
+    }
+
+    fn reset(&mut self) {
+        self.core.warm = None;
+        self.core.lu_cache = None;
+        self.core.alpha = self.core.settings.alpha;
+    }
+}
