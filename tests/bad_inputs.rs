@@ -15,6 +15,9 @@ use serde_json::{json, Value};
 use softrod::assembly::{RobotSpec, Section, MAX_ELEMENTS};
 use softrod::banded::BandedMatrix;
 use softrod::element::PlanarCable;
+use softrod::estimate::{
+    Backend, BoundFrame, EstimatorSettings, LoadBound, MarkerObservation, Observation,
+};
 use softrod::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use softrod::quadrature::GaussRule;
 use softrod::scene::{Marker, Scene, SceneLoad};
@@ -43,6 +46,30 @@ fn kind_of(e: &Error) -> Option<Kind> {
         Error::NonFinite { .. } => Kind::NonFinite,
         _ => return None,
     })
+}
+
+/// Builds an estimator for the two-section robot (settings changed by
+/// `fs`) and takes one step on an observation of its straight configuration
+/// at nodes 4, 8, 12, 16, 20 (changed by `fo`).
+fn estimate(
+    backend: Backend,
+    fs: impl FnOnce(&mut EstimatorSettings),
+    fo: impl FnOnce(&mut Observation),
+) -> Result<(), Error> {
+    let scene = Scene::two_section();
+    let robot = scene.robot()?;
+    let q = robot.reference_configuration();
+    let mut settings = EstimatorSettings::default();
+    fs(&mut settings);
+    let mut obs = Observation {
+        markers: [4usize, 8, 12, 16, 20]
+            .iter()
+            .map(|&n| MarkerObservation::at_node(n, q[4 * n..4 * n + 2].to_vec()))
+            .collect(),
+    };
+    fo(&mut obs);
+    let mut est = backend.build(robot, scene.loads()?, settings)?;
+    est.step(&obs).map(|_| ())
 }
 
 /// Validates the two-section scene after `f` changed it.
@@ -1063,6 +1090,141 @@ fn cases() -> Vec<Case> {
             || Scene::from_file(std::path::Path::new("/nonexistent/scene.json")).map(|_| ()),
             Parse,
             "cannot read /nonexistent/scene.json",
+        ),
+        // --- the estimator's inputs ---
+        case(
+            "alpha = 0 (fewer observations than load parameters)",
+            || estimate(Backend::Newton, |s| s.alpha = Some(0.0), |_| {}),
+            Invalid,
+            "estimator.alpha",
+        ),
+        case(
+            "negative alpha",
+            || estimate(Backend::Sqp, |s| s.alpha = Some(-1.0), |_| {}),
+            Invalid,
+            "estimator.alpha",
+        ),
+        case(
+            "NaN alpha",
+            || estimate(Backend::Newton, |s| s.alpha = Some(f64::NAN), |_| {}),
+            Invalid,
+            "estimator.alpha",
+        ),
+        case(
+            "zero marker noise",
+            || estimate(Backend::Newton, |s| s.noise_sigma_m = 0.0, |_| {}),
+            Invalid,
+            "estimator.noise_sigma_m",
+        ),
+        case(
+            "zero estimator iterations",
+            || estimate(Backend::Sqp, |s| s.max_iterations = 0, |_| {}),
+            Invalid,
+            "estimator.max_iterations",
+        ),
+        case(
+            "zero position weight",
+            || {
+                estimate(
+                    Backend::Newton,
+                    |_| {},
+                    |o| o.markers[1].position_weight = Some(vec![1.0, 0.0]),
+                )
+            },
+            Invalid,
+            "observation.markers[1].position_weight[1]",
+        ),
+        case(
+            "negative position weight",
+            || {
+                estimate(
+                    Backend::Sqp,
+                    |_| {},
+                    |o| o.markers[0].position_weight = Some(vec![-1.0, 1.0]),
+                )
+            },
+            Invalid,
+            "observation.markers[0].position_weight[0]",
+        ),
+        case(
+            "NaN observed position",
+            || {
+                estimate(
+                    Backend::Newton,
+                    |_| {},
+                    |o| o.markers[2].position_m[0] = f64::NAN,
+                )
+            },
+            Invalid,
+            "observation.markers[2].position_m[0]",
+        ),
+        case(
+            "3-D position for a planar robot",
+            || {
+                estimate(
+                    Backend::Newton,
+                    |_| {},
+                    |o| o.markers[0].position_m.push(0.0),
+                )
+            },
+            Dim,
+            "observation.markers[0].position_m",
+        ),
+        case(
+            "observed marker beyond the tip (node)",
+            || estimate(Backend::Newton, |_| {}, |o| o.markers[4].node = Some(21)),
+            Index,
+            "observation.markers[4].node",
+        ),
+        case(
+            "observed marker beyond the tip (arc)",
+            || {
+                estimate(
+                    Backend::Sqp,
+                    |_| {},
+                    |o| o.markers[4] = MarkerObservation::at_arc(0.3, vec![0.3, 0.0]),
+                )
+            },
+            Invalid,
+            "observation.markers[4].s_m",
+        ),
+        case(
+            "duplicated observed marker",
+            || estimate(Backend::Newton, |_| {}, |o| o.markers[1].node = Some(4)),
+            Invalid,
+            "observation.markers[1]",
+        ),
+        case(
+            "empty observation",
+            || estimate(Backend::Newton, |_| {}, |o| o.markers.clear()),
+            Invalid,
+            "observation.markers",
+        ),
+        case(
+            "zero bound direction",
+            || {
+                estimate(
+                    Backend::Sqp,
+                    |s| {
+                        s.bounds = vec![LoadBound {
+                            s_m: 0.1,
+                            frame: BoundFrame::World,
+                            direction: vec![0.0, 0.0],
+                            min_n_per_m: Some(0.0),
+                            max_n_per_m: None,
+                        }]
+                    },
+                    |_| {},
+                )
+            },
+            Invalid,
+            "estimator.bounds[0].direction",
+        ),
+        case(
+            "unknown estimator setting",
+            || json(|v| v["solver"]["estimator"] = json!({"backend": "newton", "beta": 1.0})),
+            Parse,
+            "beta",
         ),
     ]
 }

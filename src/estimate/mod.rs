@@ -271,6 +271,15 @@ impl EstimatorSettings {
     /// [`Error::InvalidParameter`] naming the field.
     pub fn validate(&self) -> Result<()> {
         if let Some(a) = self.alpha {
+            if a == 0.0 {
+                return Err(Error::invalid(
+                    "estimator.alpha",
+                    a,
+                    "must be > 0: with alpha = 0 the markers do not determine the load \
+                     (a distributed load has n_q parameters, more than the observed \
+                     components); give a small alpha, or none for the discrepancy principle",
+                ));
+            }
             check_positive("estimator.alpha", a)?;
         }
         check_positive("estimator.noise_sigma_m", self.noise_sigma_m)?;
@@ -818,17 +827,12 @@ impl<E: Element> Core<E> {
         }
         let pw = 1.0 / (self.settings.noise_sigma_m * self.settings.noise_sigma_m);
         let tw = 1.0 / (self.settings.tangent_sigma * self.settings.tangent_sigma);
+        let mut seen: Vec<f64> = Vec::with_capacity(obs.markers.len());
         for (i, m) in obs.markers.iter().enumerate() {
             let name = |f: &str| format!("observation.markers[{i}].{f}");
             let s = match (m.node, m.s_m) {
                 (Some(n), None) => {
-                    if n >= robot.n_nodes() {
-                        return Err(Error::invalid(
-                            name("node"),
-                            n,
-                            format!("must be in 0..={}", robot.n_nodes() - 1),
-                        ));
-                    }
+                    crate::error::check_index(&name("node"), n, robot.n_nodes())?;
                     robot.node_arc()[n]
                 }
                 (None, Some(s)) => s,
@@ -841,6 +845,17 @@ impl<E: Element> Core<E> {
                 }
             };
             let (e, xi) = robot.locate(&name("s_m"), s)?;
+            if seen
+                .iter()
+                .any(|t: &f64| (t - s).abs() <= 1e-9 * robot.length())
+            {
+                return Err(Error::invalid(
+                    format!("observation.markers[{i}]"),
+                    s,
+                    "duplicates another marker's position",
+                ));
+            }
+            seen.push(s);
             let le = robot.elements()[e].length();
             let (sh, dsh, _) = hermite(xi, le);
             check_len(&name("position_m"), d, m.position_m.len())?;
