@@ -648,6 +648,39 @@ impl Estimate {
     }
 }
 
+/// Implements [`Estimator`] for a backend type with a `core` field and a
+/// `solve_one` method (the two backends differ only in those).
+macro_rules! impl_estimator {
+    ($ty:ident, $backend:expr) => {
+        impl<E: Element + 'static> Estimator for $ty<E> {
+            fn step(&mut self, observation: &Observation) -> Result<Estimate> {
+                run_step(
+                    self,
+                    observation,
+                    $backend,
+                    |s| &mut s.core,
+                    Self::solve_one,
+                )
+            }
+
+            fn backend(&self) -> Backend {
+                $backend
+            }
+
+            fn alpha(&self) -> Option<f64> {
+                self.core.alpha
+            }
+
+            fn reset(&mut self) {
+                self.core.warm = None;
+                self.core.lu_cache = None;
+                self.core.alpha = self.core.settings.alpha;
+            }
+        }
+    };
+}
+pub(crate) use impl_estimator;
+
 /// An estimator: one observation in, one estimate out, keeping its warm
 /// start (the last `F*` and shape) between calls.
 ///

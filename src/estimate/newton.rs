@@ -235,28 +235,4 @@ impl<E: Element> NewtonEstimator<E> {
     }
 }
 
-impl<E: Element + 'static> Estimator for NewtonEstimator<E> {
-    fn step(&mut self, observation: &Observation) -> Result<Estimate> {
-        run_step(
-            self,
-            observation,
-            Backend::Newton,
-            |s| &mut s.core,
-            Self::solve_one,
-        )
-    }
-
-    fn backend(&self) -> Backend {
-        Backend::Newton
-    }
-
-    fn alpha(&self) -> Option<f64> {
-        self.core.alpha
-    }
-
-    fn reset(&mut self) {
-        self.core.warm = None;
-        self.core.lu_cache = None;
-        self.core.alpha = self.core.settings.alpha;
-    }
-}
+crate::estimate::impl_estimator!(NewtonEstimator, Backend::Newton);

@@ -507,28 +507,4 @@ impl<E: Element> SqpEstimator<E> {
     }
 }
 
-impl<E: Element + 'static> Estimator for SqpEstimator<E> {
-    fn step(&mut self, observation: &Observation) -> Result<Estimate> {
-        run_step(
-            self,
-            observation,
-            Backend::Sqp,
-            |s| &mut s.core,
-            Self::solve_one,
-        )
-    }
-
-    fn backend(&self) -> Backend {
-        Backend::Sqp
-    }
-
-    fn alpha(&self) -> Option<f64> {
-        self.core.alpha
-    }
-
-    fn reset(&mut self) {
-        self.core.warm = None;
-        self.core.lu_cache = None;
-        self.core.alpha = self.core.settings.alpha;
-    }
-}
+crate::estimate::impl_estimator!(SqpEstimator, Backend::Sqp);
