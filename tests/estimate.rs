@@ -294,7 +294,7 @@ fn pressures(u: &[f64]) -> Vec<f64> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 6, .. ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 6, rng_seed: proptest::test_runner::RngSeed::Fixed(0x50f7_70d4), .. ProptestConfig::default() })]
 
     /// Both backends solve (25): on randomized problems (pressures, unknown
     /// tip force and uniform load, marker noise, alpha over two decades,
