@@ -121,7 +121,7 @@ fn nodes_match_exudyn_at_equal_element_count() {
 /// Converged solutions: softrod at 256 elements (default rules and clamp)
 /// against exudyn's finest mesh and the extensible elastica. The bound
 /// is 1e-5 L for both. Measured: at most 7.2e-9 L against exudyn at 128
-/// elements (exudyn's own discretization error) and 2.0e-11 L against the
+/// elements (exudyn's own discretization error) and 5.5e-11 L against the
 /// elastica; so we also hold the elastica to 1e-9 L.
 #[test]
 fn converged_tips_match_exudyn_and_the_elastica() {
