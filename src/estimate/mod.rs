@@ -1011,6 +1011,30 @@ impl<E: Element> Core<E> {
         self.robot.residual(q, &dead, &self.known)
     }
 
+    /// One plain Newton (or, with old factors, chord) step at `q` with the
+    /// factors `lu`: the residual goes into `r`, and the step is applied
+    /// unless it is not finite, longer than a quarter of the robot, or not
+    /// shorter than `limit` (m). Returns the step's size (m) if applied.
+    fn plain_step(
+        &self,
+        q: &mut [f64],
+        dead: &[f64],
+        lu: &BandedLu,
+        r: &mut [f64],
+        limit: f64,
+    ) -> Result<Option<f64>> {
+        self.robot.residual_into(q, dead, &self.known, r)?;
+        let mut du = r.to_vec();
+        lu.solve_in_place(&mut du)?;
+        let step = du.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if !step.is_finite() || step > 0.25 * self.robot.length() || step > limit {
+            return Ok(None);
+        }
+        let dq = self.robot.expand_step(&du)?;
+        q.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
+        Ok(Some(step))
+    }
+
     /// Solves the equilibrium at `F` from `q0`: a few plain Newton steps
     /// (fast for warm starts), else the globalized [`StaticSolver`].
     pub fn equilibrium(&mut self, f: &[f64], q0: &[f64]) -> Result<Equil> {
@@ -1033,15 +1057,9 @@ impl<E: Element> Core<E> {
             let mut done = false;
             let mut moved = false;
             for _ in 0..12 {
-                self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
-                let mut du = r.clone();
-                lu.solve_in_place(&mut du)?;
-                let step = du.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                if !step.is_finite() || step > 0.25 * len || step > 0.5 * prev {
+                let Some(step) = self.plain_step(&mut q, &dead, &lu, &mut r, 0.5 * prev)? else {
                     break;
-                }
-                let dq = self.robot.expand_step(&du)?;
-                q.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
+                };
                 prev = step;
                 if step <= 1e-10 * len {
                     done = true;
@@ -1066,19 +1084,13 @@ impl<E: Element> Core<E> {
         let mut q = q0.to_vec();
         let mut prev = f64::INFINITY;
         for _ in 0..12 {
-            self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
             let lu = match self.factor(&q) {
                 Ok(lu) => lu,
                 Err(_) => break,
             };
-            let mut du = r.clone();
-            lu.solve_in_place(&mut du)?;
-            let step = du.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            if !step.is_finite() || step > 0.25 * len || step > 0.9 * prev {
+            let Some(step) = self.plain_step(&mut q, &dead, &lu, &mut r, 0.9 * prev)? else {
                 break;
-            }
-            let dq = self.robot.expand_step(&du)?;
-            q.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
+            };
             prev = step;
             if step <= 1e-10 * len {
                 self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
