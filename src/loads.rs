@@ -67,14 +67,22 @@ impl LineLoad {
         }
     }
 
-    /// Checks dimensions and values.
+    /// Checks dimensions and values; errors name the field `name.field`, or
+    /// just `field` when `name` is empty.
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] when a vector does not have `dim` entries,
     /// [`Error::InvalidParameter`] for a non-finite value or a non-positive width.
     pub fn validate(&self, name: &str, dim: usize) -> Result<()> {
+        let path = |field: &str| {
+            if name.is_empty() {
+                field.to_string()
+            } else {
+                format!("{name}.{field}")
+            }
+        };
         let vec = |field: &str, v: &[f64]| -> Result<()> {
-            let n = format!("{name}.{field}");
+            let n = path(field);
             crate::error::check_len(&n, dim, v.len())?;
             check_all_finite(&n, v)
         };
@@ -93,8 +101,8 @@ impl LineLoad {
                 width_m,
             } => {
                 vec("amplitude_n_per_m", amplitude_n_per_m)?;
-                check_finite(&format!("{name}.center_m"), *center_m)?;
-                check_positive(&format!("{name}.width_m"), *width_m)
+                check_finite(&path("center_m"), *center_m)?;
+                check_positive(&path("width_m"), *width_m)
             }
         }
     }

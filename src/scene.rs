@@ -413,28 +413,7 @@ fn validate_scene_load(robot: &Robot<PlanarCable>, load: &SceneLoad) -> Result<(
         check_all_finite(name, v)
     };
     match load {
-        SceneLoad::Distributed(l) => l.validate("", 2).map_err(|e| match e {
-            // LineLoad names its fields `.field` after the given prefix
-            Error::InvalidParameter {
-                name,
-                value,
-                reason,
-            } => Error::InvalidParameter {
-                name: name.trim_start_matches('.').to_string(),
-                value,
-                reason,
-            },
-            Error::DimensionMismatch {
-                name,
-                expected,
-                got,
-            } => Error::DimensionMismatch {
-                name: name.trim_start_matches('.').to_string(),
-                expected,
-                got,
-            },
-            other => other,
-        }),
+        SceneLoad::Distributed(l) => l.validate("", 2),
         SceneLoad::TipForce { force_n } => vec2("force_n", force_n),
         SceneLoad::PointForce { s_m, force_n } => {
             vec2("force_n", force_n)?;
