@@ -92,6 +92,13 @@ pub enum Error {
         /// What the estimator reached before it stopped.
         report: Box<crate::estimate::EstimateReport>,
     },
+    /// The refinement of `"elements": "auto"` sections did not reach its
+    /// tolerance (see [`crate::refine`]).
+    #[error("refinement did not reach its tolerance: {report}")]
+    RefinementNotConverged {
+        /// The target, every mesh tried and why the refinement stopped.
+        report: Box<crate::refine::RefinementFailure>,
+    },
     /// A scene file could not be read or is malformed.
     #[error("scene: {message}")]
     Scene {
