@@ -12,6 +12,7 @@
 //! - [`statics`]: Newton's method on the equilibrium (17).
 //! - [`estimate`]: shape and load estimation (25)–(30), backends `newton` and `sqp`.
 //! - [`scene`]: JSON scene files; [`params`]: the values the paper leaves open.
+//! - [`refine`]: `"elements": "auto"`, the smallest mesh meeting a tolerance.
 //! - [`banded`], [`quadrature`]: the numerical kernels.
 //!
 //! All quantities are SI (m, N, Pa, rad).
@@ -36,6 +37,7 @@ pub mod estimate;
 pub mod loads;
 pub mod params;
 pub mod quadrature;
+pub mod refine;
 pub mod scene;
 pub mod statics;
 

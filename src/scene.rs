@@ -13,7 +13,7 @@ use crate::error::{
     check_all_finite, check_at_most, check_finite, check_index, check_len, check_positive, Error,
     Result,
 };
-use crate::estimate::EstimatorSettings;
+use crate::estimate::{EstimatorSettings, LoadModel};
 use crate::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use crate::params;
 use crate::statics::StaticSettings;
@@ -133,6 +133,104 @@ pub struct SolverSettings {
     pub estimator: EstimatorSettings,
 }
 
+/// The default of [`RefinementTarget`]'s `max_elements`.
+pub const DEFAULT_MAX_REFINED_ELEMENTS: usize = 2000;
+
+fn max_refined() -> usize {
+    DEFAULT_MAX_REFINED_ELEMENTS
+}
+
+/// What the refinement of `"elements": "auto"` sections must achieve: a
+/// tolerance on one named quantity, with the unit in the field name
+/// (`"refinement": {"quantity": "tip_position", "tolerance_m": 1e-5}`).
+/// See [`crate::refine`] for how the mesh is chosen.
+///
+/// # Example
+/// ```
+/// use softrod::scene::RefinementTarget;
+/// let t: RefinementTarget = serde_json::from_str(
+///     r#"{"quantity": "load_resultant", "tolerance_n": 1e-3, "max_elements": 400}"#).unwrap();
+/// assert_eq!(t.tolerance(), 1e-3);
+/// assert_eq!(t.max_elements(), 400);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "quantity", rename_all = "snake_case", deny_unknown_fields)]
+pub enum RefinementTarget {
+    /// The tip position of the scene's static equilibrium (its loads and
+    /// pressures): the Euclidean norm of its error at most `tolerance_m`.
+    TipPosition {
+        /// Tolerance on the tip position error (m).
+        tolerance_m: f64,
+        /// Most elements (in all, fixed sections included) a tried mesh may
+        /// have (default [`DEFAULT_MAX_REFINED_ELEMENTS`]).
+        #[serde(default = "max_refined")]
+        max_elements: usize,
+    },
+    /// The resultant force of the estimated unknown load, fitted to an
+    /// observation (see [`crate::refine`]): the norm of its error at most
+    /// `tolerance_n`.
+    LoadResultant {
+        /// Tolerance on the resultant force error (N).
+        tolerance_n: f64,
+        /// Most elements (in all) a tried mesh may have (default
+        /// [`DEFAULT_MAX_REFINED_ELEMENTS`]).
+        #[serde(default = "max_refined")]
+        max_elements: usize,
+    },
+}
+
+impl RefinementTarget {
+    /// The tolerance, in the quantity's unit (m or N).
+    pub fn tolerance(&self) -> f64 {
+        match *self {
+            RefinementTarget::TipPosition { tolerance_m, .. } => tolerance_m,
+            RefinementTarget::LoadResultant { tolerance_n, .. } => tolerance_n,
+        }
+    }
+
+    /// The most elements a tried mesh may have.
+    pub fn max_elements(&self) -> usize {
+        match *self {
+            RefinementTarget::TipPosition { max_elements, .. }
+            | RefinementTarget::LoadResultant { max_elements, .. } => max_elements,
+        }
+    }
+
+    /// The tolerance's field name in the scene (`tolerance_m` or `tolerance_n`).
+    pub fn tolerance_field(&self) -> &'static str {
+        match self {
+            RefinementTarget::TipPosition { .. } => "tolerance_m",
+            RefinementTarget::LoadResultant { .. } => "tolerance_n",
+        }
+    }
+}
+
+/// Where the unknown load of an estimation acts, independently of the mesh
+/// (`"unknown_load": {"acts_at": "point", "s_m": 0.24}`). A point load is
+/// estimated as a concentrated force at the node at `s_m`
+/// ([`LoadModel::Concentrated`]); the node must exist (on a fixed mesh) or
+/// is kept by the refinement (with `"elements": "auto"`). See
+/// [`Scene::estimator_settings`].
+///
+/// # Example
+/// ```
+/// use softrod::scene::UnknownLoad;
+/// let u: UnknownLoad = serde_json::from_str(r#"{"acts_at": "point", "s_m": 0.24}"#).unwrap();
+/// assert_eq!(u, UnknownLoad::Point { s_m: 0.24 });
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "acts_at", rename_all = "snake_case", deny_unknown_fields)]
+pub enum UnknownLoad {
+    /// A distributed load along the whole backbone ([`LoadModel::Distributed`]).
+    Distributed,
+    /// A force at one point of the backbone.
+    Point {
+        /// Undeformed arc coordinate of the point (m, > 0: the clamped base
+        /// takes no load).
+        s_m: f64,
+    },
+}
+
 /// A scene.
 ///
 /// # Example
@@ -172,6 +270,14 @@ pub struct Scene {
     /// Solver settings.
     #[serde(default)]
     pub solver: SolverSettings,
+    /// The tolerance that chooses the element counts of `"elements": "auto"`
+    /// sections (required with them, refused without them).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refinement: Option<RefinementTarget>,
+    /// Where the unknown load of an estimation acts (default: the estimator's
+    /// `load_model`, itself distributed by default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unknown_load: Option<UnknownLoad>,
 }
 
 impl Scene {
@@ -234,13 +340,44 @@ impl Scene {
     /// [`Error::TooLarge`] or [`Error::IndexOutOfRange`] naming the field
     /// with its path in the scene (`loads[2].force_n`, `markers[1].node`,
     /// `solver.static.max_iterations`, ...).
+    ///
+    /// A scene with `"elements": "auto"` sections is checked on the smallest
+    /// mesh its refinement may try, and the combinations that depend on the
+    /// mesh are refused: a missing `refinement` (or one without an auto
+    /// section), a tolerance that is not finite and positive, a
+    /// `max_elements` below the smallest mesh, markers, moments or a
+    /// concentrated `load_model` given by node index.
     pub fn validate(&self) -> Result<()> {
-        let robot = self.robot()?;
+        let auto = self.has_auto_elements();
+        let smallest;
+        let mesh = if auto {
+            smallest = self.smallest_refined_mesh()?;
+            &smallest
+        } else {
+            if let Some(t) = &self.refinement {
+                return Err(Error::invalid(
+                    "refinement",
+                    t.tolerance(),
+                    "no section has \"elements\": \"auto\": remove `refinement` or set a \
+                     section's elements to \"auto\"",
+                ));
+            }
+            self
+        };
+        let robot = mesh.robot()?;
         for (i, load) in self.loads.iter().enumerate() {
+            if let (true, SceneLoad::NodeMoment { node, .. }) = (auto, load) {
+                return Err(Error::invalid(
+                    format!("loads[{i}].node"),
+                    node,
+                    "a node index depends on the mesh, which \"elements\": \"auto\" leaves \
+                     to the refinement: use a tip_moment, or fixed element counts",
+                ));
+            }
             validate_scene_load(&robot, load)
                 .map_err(|e| e.with_prefix(&format!("loads[{i}].")))?;
         }
-        robot.validate_loads(&self.loads()?)?;
+        robot.validate_loads(&mesh.loads()?)?;
         self.solver
             .statics
             .validate()
@@ -253,6 +390,14 @@ impl Scene {
         let mut seen: Vec<f64> = Vec::new();
         for (i, m) in self.markers.iter().enumerate() {
             let s = match (m.node, m.s_m) {
+                (Some(n), None) if auto => {
+                    return Err(Error::invalid(
+                        format!("markers[{i}].node"),
+                        n,
+                        "a node index depends on the mesh, which \"elements\": \"auto\" \
+                         leaves to the refinement: give the marker's s_m",
+                    ))
+                }
                 (Some(n), None) => {
                     check_index(&format!("markers[{i}].node"), n, robot.n_nodes())?;
                     robot.node_arc().get(n).copied().unwrap_or(f64::NAN)
@@ -278,6 +423,159 @@ impl Scene {
             }
             seen.push(s);
         }
+        if auto {
+            Ok(()) // checked on the way to the smallest mesh
+        } else {
+            self.check_unknown_load(&robot, false)
+        }
+    }
+
+    /// Whether any section asks for `"elements": "auto"`.
+    pub fn has_auto_elements(&self) -> bool {
+        self.robot.sections.iter().any(|s| s.auto_elements)
+    }
+
+    /// The scene with the given element count for every section (auto ones
+    /// included): `auto_elements` cleared and `refinement` dropped, so the
+    /// result is a plain scene that builds its robot. This is how
+    /// [`crate::refine`] resolves an `"auto"` scene.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `counts` does not have one entry per
+    /// section. (The counts are checked when the robot is built.)
+    ///
+    /// # Example
+    /// ```
+    /// let scene = softrod::scene::Scene::two_section().with_elements(&[3, 5])?;
+    /// assert_eq!(scene.robot()?.n_elements(), 8);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn with_elements(&self, counts: &[usize]) -> Result<Scene> {
+        check_len("elements", self.robot.sections.len(), counts.len())?;
+        let mut scene = self.clone();
+        for (s, &n) in scene.robot.sections.iter_mut().zip(counts) {
+            s.elements = n;
+            s.auto_elements = false;
+        }
+        scene.refinement = None;
+        Ok(scene)
+    }
+
+    /// The estimator settings of the scene: `solver.estimator`, with the load
+    /// model that `unknown_load` states (a point load becomes
+    /// [`LoadModel::Concentrated`] at the node at its arc coordinate).
+    ///
+    /// # Errors
+    /// As [`Scene::robot`] when the scene states a point load (the node is
+    /// looked up on the robot); [`Error::InvalidParameter`] naming
+    /// `unknown_load.s_m` if no node lies there.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{estimate::LoadModel, scene::{Scene, UnknownLoad}};
+    /// let mut scene = Scene::two_section();
+    /// scene.unknown_load = Some(UnknownLoad::Point { s_m: 0.18 });
+    /// assert_eq!(scene.estimator_settings()?.load_model, LoadModel::Concentrated { node: 15 });
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn estimator_settings(&self) -> Result<EstimatorSettings> {
+        let mut settings = self.solver.estimator.clone();
+        match self.unknown_load {
+            None => {}
+            Some(UnknownLoad::Distributed) => settings.load_model = LoadModel::Distributed,
+            Some(UnknownLoad::Point { s_m }) => {
+                let robot = self.robot()?;
+                settings.load_model = LoadModel::Concentrated {
+                    node: node_at(&robot, "unknown_load.s_m", s_m)?,
+                };
+            }
+        }
+        Ok(settings)
+    }
+
+    /// The smallest mesh the refinement of an `"auto"` scene may try, after
+    /// checking the refinement's fields.
+    fn smallest_refined_mesh(&self) -> Result<Scene> {
+        let Some(target) = self.refinement else {
+            let i = self
+                .robot
+                .sections
+                .iter()
+                .position(|s| s.auto_elements)
+                .unwrap_or(0);
+            return Err(Error::invalid(
+                "refinement",
+                "none",
+                format!(
+                    "robot.sections[{i}].elements is \"auto\": give the tolerance it must meet, \
+                     e.g. \"refinement\": {{\"quantity\": \"tip_position\", \"tolerance_m\": 1e-5}}"
+                ),
+            ));
+        };
+        check_positive(
+            &format!("refinement.{}", target.tolerance_field()),
+            target.tolerance(),
+        )?;
+        check_at_most(
+            "refinement.max_elements",
+            target.max_elements(),
+            crate::assembly::MAX_ELEMENTS,
+        )?;
+        // the sections' own fields first, on one element per auto section
+        let ones: Vec<usize> = self
+            .robot
+            .sections
+            .iter()
+            .map(|s| if s.auto_elements { 1 } else { s.elements })
+            .collect();
+        let robot = self.with_elements(&ones)?.robot()?;
+        self.check_unknown_load(&robot, true)?;
+        let ladder = crate::refine::Ladder::new(self)?;
+        let smallest = ladder.total_elements(1);
+        if smallest > target.max_elements() {
+            return Err(Error::invalid(
+                "refinement.max_elements",
+                target.max_elements(),
+                format!("must be at least {smallest}, the smallest mesh the refinement can try"),
+            ));
+        }
+        self.with_elements(&ladder.elements(1))
+    }
+
+    /// Checks `unknown_load` against the robot (on a fixed mesh, a point
+    /// load must fall on a node) and against the estimator's `load_model`.
+    fn check_unknown_load(&self, robot: &Robot<PlanarCable>, auto: bool) -> Result<()> {
+        if let (true, LoadModel::Concentrated { node }) = (auto, self.solver.estimator.load_model) {
+            return Err(Error::invalid(
+                "solver.estimator.load_model.node",
+                node,
+                "a node index depends on the mesh, which \"elements\": \"auto\" leaves to the \
+                 refinement: give \"unknown_load\": {\"acts_at\": \"point\", \"s_m\": ...}",
+            ));
+        }
+        let Some(u) = self.unknown_load else {
+            return Ok(());
+        };
+        if self.solver.estimator.load_model != LoadModel::default() {
+            return Err(Error::invalid(
+                "unknown_load",
+                format!("{u:?}"),
+                "solver.estimator.load_model is also given: state the load model in one place",
+            ));
+        }
+        if let UnknownLoad::Point { s_m } = u {
+            robot.locate("unknown_load.s_m", s_m)?;
+            if s_m <= NODE_MATCH * robot.length() {
+                return Err(Error::invalid(
+                    "unknown_load.s_m",
+                    s_m,
+                    "the clamped base takes no load: must be > 0",
+                ));
+            }
+            if !auto {
+                node_at(robot, "unknown_load.s_m", s_m)?;
+            }
+        }
         Ok(())
     }
 
@@ -295,8 +593,12 @@ impl Scene {
     /// Builds the robot.
     ///
     /// # Errors
-    /// As [`Robot::new`].
+    /// As [`Robot::new`]; [`Error::InvalidParameter`] naming
+    /// `robot.sections[i].elements` for a section whose count is `"auto"`
+    /// (resolve the scene with [`crate::refine::auto_elements`] or
+    /// [`Scene::with_elements`] first).
     pub fn robot(&self) -> Result<Robot<PlanarCable>> {
+        self.check_resolved()?;
         match self.robot.element {
             ElementKind::PlanarCable => self.robot_spec().build_planar(),
         }
@@ -307,8 +609,10 @@ impl Scene {
     /// # Errors
     /// [`Error::InvalidParameter`] for a non-positive tip mass or a negative
     /// extra weight; [`Error::DimensionMismatch`] for a gravity vector of the
-    /// wrong size.
+    /// wrong size; as [`Scene::robot`] for an `"auto"` section (a tip
+    /// moment's node depends on the mesh).
     pub fn loads(&self) -> Result<Loads> {
+        self.check_resolved()?;
         let n_chambers: usize = self.robot.sections.iter().map(|s| s.chambers.len()).sum();
         let total: f64 = self.robot.sections.iter().map(|s| s.length_m).sum();
         let mut loads = Loads {
@@ -372,6 +676,19 @@ impl Scene {
         Ok(loads)
     }
 
+    /// Refuses a scene with an `"auto"` section (one that is not resolved).
+    fn check_resolved(&self) -> Result<()> {
+        match self.robot.sections.iter().position(|s| s.auto_elements) {
+            None => Ok(()),
+            Some(i) => Err(Error::invalid(
+                format!("robot.sections[{i}].elements"),
+                "\"auto\"",
+                "the count is chosen by refinement: resolve the scene with \
+                 softrod::refine::auto_elements (or Scene::with_elements) first",
+            )),
+        }
+    }
+
     /// The paper's two-section robot (MODEL.md §5) with the values of
     /// [`crate::params`], horizontal, under its own weight and the default
     /// pressures; five markers. This is the built-in default scene and equals
@@ -388,6 +705,7 @@ impl Scene {
             ei_nm2: params::EI_NM2,
             mass_per_length_kg_per_m: params::MASS_PER_LENGTH_KG_PER_M,
             elements: params::ELEMENTS_PER_SECTION,
+            auto_elements: false,
             rest_curvature_per_m: 0.0,
             chambers: vec![chamber(1.0), chamber(-1.0)],
         };
@@ -401,6 +719,37 @@ impl Scene {
             pressures_pa: params::DEFAULT_PRESSURES_PA.to_vec(),
             markers: [4, 8, 12, 16, 20].iter().map(|&n| Marker { node: Some(n), s_m: None, tangent: false }).collect(),
             solver: SolverSettings::default(),
+            refinement: None,
+            unknown_load: None,
+        }
+    }
+}
+
+/// A node matches an arc coordinate within this fraction of the robot's length.
+pub(crate) const NODE_MATCH: f64 = 1e-9;
+
+/// The node at arc coordinate `s` (within [`NODE_MATCH`] of the length).
+fn node_at(robot: &Robot<PlanarCable>, name: &str, s: f64) -> Result<usize> {
+    robot.locate(name, s)?;
+    let arc = robot.node_arc();
+    let tol = NODE_MATCH * robot.length();
+    let i = arc.partition_point(|&x| x < s - tol);
+    match arc.get(i) {
+        Some(&x) if (x - s).abs() <= tol => Ok(i),
+        _ => {
+            let near: Vec<String> = [i.checked_sub(1), Some(i)]
+                .into_iter()
+                .flatten()
+                .filter_map(|j| arc.get(j).map(|x| format!("node {j} at {x} m")))
+                .collect();
+            Err(Error::invalid(
+                name,
+                s,
+                format!(
+                    "no node lies there (nearest: {}); a point load needs a node",
+                    near.join(", ")
+                ),
+            ))
         }
     }
 }
