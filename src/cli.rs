@@ -21,6 +21,7 @@ use softrod::assembly::Robot;
 use softrod::element::{Element, PlanarCable};
 use softrod::estimate::{Backend, Estimate, EstimateReport, MarkerObservation, Observation};
 use softrod::loads::{LineLoad, PointForce};
+use softrod::refine::{Quantity, Refinement};
 use softrod::scene::Scene;
 use softrod::statics::{StaticReport, StaticSolver};
 
@@ -105,6 +106,9 @@ struct SolveOut {
     tip_position_m: Vec<f64>,
     tip_angle_rad: f64,
     report: StaticReport,
+    /// How the counts of "elements": "auto" sections were chosen.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    refinement: Option<Refinement>,
 }
 
 fn solve_out(scene: &Scene, robot: &Robot<PlanarCable>, pressures: Vec<f64>, q: &[f64], report: StaticReport) -> SolveOut {
@@ -123,6 +127,7 @@ fn solve_out(scene: &Scene, robot: &Robot<PlanarCable>, pressures: Vec<f64>, q: 
         tip_angle_rad: PlanarCable::node_angle(tip),
         nodes,
         report,
+        refinement: None,
     }
 }
 
@@ -193,6 +198,9 @@ struct EstimateOut {
     /// The marker noise the covariances are stated for (m).
     noise_sigma_m: f64,
     report: EstimateReport,
+    /// How the counts of "elements": "auto" sections were chosen.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    refinement: Option<Refinement>,
 }
 
 const LOAD_GRID: usize = 49;
@@ -225,7 +233,14 @@ fn estimate_out(scene: &Scene, robot: &Robot<PlanarCable>, e: &Estimate, observa
         max_load_parameter_std: e.std_f().into_iter().fold(0.0, f64::max),
         noise_sigma_m: e.noise_sigma_m,
         report: e.report.clone(),
+        refinement: None,
     }
+}
+
+/// Reads a markers file.
+fn read_markers(path: &PathBuf) -> Result<Observation> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("{}: not a markers file", path.display()))
 }
 
 /// The scene's markers read off the configuration `q` (exact).
@@ -257,16 +272,12 @@ fn observe(scene: &Scene, robot: &Robot<PlanarCable>, q: &[f64]) -> Result<Obser
 fn estimate(scene: &Scene, backend: Option<Backend>, markers: Option<&PathBuf>) -> Result<EstimateOut> {
     let robot = scene.robot()?;
     let known = scene.loads()?;
-    let mut settings = scene.solver.estimator.clone();
+    let mut settings = scene.estimator_settings()?;
     if let Some(b) = backend {
         settings.backend = b;
     }
     let (obs, source) = match markers {
-        Some(path) => {
-            let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-            let obs: Observation = serde_json::from_str(&text).with_context(|| format!("{}: not a markers file", path.display()))?;
-            (obs, format!("markers file {}", path.display()))
-        }
+        Some(path) => (read_markers(path)?, format!("markers file {}", path.display())),
         None => {
             let solver = StaticSolver::new(scene.solver.statics.clone())?;
             let eq = solver.solve(&robot, &known, None)?;
@@ -277,6 +288,34 @@ fn estimate(scene: &Scene, backend: Option<Backend>, markers: Option<&PathBuf>) 
     let mut est = settings.backend.build(robot.clone(), known, settings)?;
     let e = est.step(&obs)?;
     Ok(estimate_out(scene, &robot, &e, source))
+}
+
+/// Resolves "elements": "auto" sections by refinement (the observation for a
+/// `load_resultant` target) and says on stderr what was chosen.
+fn refine(scene: Scene, observation: Option<&Observation>) -> Result<(Scene, Option<Refinement>)> {
+    if !scene.has_auto_elements() {
+        return Ok((scene, None));
+    }
+    let quantity = scene.refinement.as_ref().map(Quantity::of);
+    let observation = match quantity {
+        Some(Quantity::LoadResultant) => Some(observation.context("a load_resultant refinement fits the estimator to marker positions: give `softrod estimate SCENE --markers FILE`")?),
+        _ => None,
+    };
+    let r = softrod::refine::auto_elements(&scene, observation)?;
+    eprintln!(
+        "softrod: elements \"auto\": chose {:?} elements per section ({} in all) for {} within {:e} {}: estimated error {:.2e} ± {:.1e} {} (observed order {:.2}, {} meshes tried)",
+        r.elements,
+        r.total_elements,
+        r.quantity.name(),
+        r.tolerance,
+        r.quantity.unit(),
+        r.estimated_error,
+        r.error_margin,
+        r.quantity.unit(),
+        r.observed_order,
+        r.history.len()
+    );
+    Ok((r.scene.clone(), Some(r)))
 }
 
 fn median_warm_step(est: &mut dyn softrod::estimate::Estimator, observations: &[Observation]) -> Result<f64> {
@@ -370,13 +409,29 @@ pub fn run() -> Result<()> {
     match cli.command {
         None => default_run(),
         Some(Command::Solve { scene, pressures, out }) => {
-            let scene = Scene::from_file(&scene)?;
-            let result = solve(&scene, pressures)?;
+            let mut scene = Scene::from_file(&scene)?;
+            if let (true, Some(p)) = (scene.has_auto_elements(), &pressures) {
+                // the refinement solves with the pressures the result is for
+                scene.pressures_pa = p.clone();
+            }
+            let (scene, refinement) = refine(scene, None)?;
+            let mut result = solve(&scene, pressures)?;
+            result.refinement = refinement;
             write_json(&result, out.as_ref())
         }
         Some(Command::Estimate { scene, backend, markers, out }) => {
-            let scene = Scene::from_file(&scene)?;
-            let result = estimate(&scene, backend.map(Backend::from), markers.as_ref())?;
+            let mut scene = Scene::from_file(&scene)?;
+            if let Some(b) = backend {
+                // the refinement estimates with the backend the result is for
+                scene.solver.estimator.backend = b.into();
+            }
+            let observation = match (&markers, scene.has_auto_elements()) {
+                (Some(path), true) => Some(read_markers(path)?),
+                _ => None,
+            };
+            let (scene, refinement) = refine(scene, observation.as_ref())?;
+            let mut result = estimate(&scene, backend.map(Backend::from), markers.as_ref())?;
+            result.refinement = refinement;
             if markers.is_none() {
                 eprintln!("softrod: no markers file: {}", result.observation);
             }
