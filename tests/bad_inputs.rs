@@ -20,7 +20,7 @@ use softrod::estimate::{
 };
 use softrod::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use softrod::quadrature::GaussRule;
-use softrod::scene::{Marker, Scene, SceneLoad};
+use softrod::scene::{Marker, RefinementTarget, Scene, SceneLoad};
 use softrod::statics::{StaticSettings, StaticSolver};
 use softrod::Error;
 
@@ -89,6 +89,22 @@ fn json(f: impl FnOnce(&mut Value)) -> Result<(), Error> {
     let mut v: Value = serde_json::from_str(include_str!("../examples/two_section.json")).unwrap();
     f(&mut v);
     Scene::from_json(&v.to_string()).map(|_| ())
+}
+
+/// Parses `examples/auto_tip.json` (the two-section robot with
+/// `"elements": "auto"`, markers by arc coordinate and a `tip_position`
+/// refinement) after `f` changed its JSON value.
+fn auto_json(f: impl FnOnce(&mut Value)) -> Result<(), Error> {
+    let mut v: Value = serde_json::from_str(include_str!("../examples/auto_tip.json")).unwrap();
+    f(&mut v);
+    Scene::from_json(&v.to_string()).map(|_| ())
+}
+
+/// Validates `examples/auto_tip.json` after `f` changed the parsed scene.
+fn auto_scene(f: impl FnOnce(&mut Scene)) -> Result<(), Error> {
+    let mut s = Scene::from_json(include_str!("../examples/auto_tip.json")).unwrap();
+    f(&mut s);
+    s.validate()
 }
 
 /// Solves the two-section scene with `loads` from `q0`.
@@ -1064,6 +1080,163 @@ fn cases() -> Vec<Case> {
             move || json(|v| v["robot"]["sections"][1]["elements"] = json!(2.5)),
             Parse,
             "robot.sections[1].elements",
+        ),
+        case(
+            "element count neither a number nor auto",
+            move || json(|v| v["robot"]["sections"][0]["elements"] = json!("many")),
+            Parse,
+            "robot.sections[0].elements: invalid value: string \"many\", expected a positive integer or \"auto\"",
+        ),
+        case(
+            "auto without a refinement",
+            move || {
+                json(|v| v["robot"]["sections"][1]["elements"] = json!("auto"))
+            },
+            Invalid,
+            "refinement",
+        ),
+        case(
+            "refinement without an auto section",
+            move || {
+                json(|v| {
+                    v["refinement"] = json!({"quantity": "tip_position", "tolerance_m": 1e-5})
+                })
+            },
+            Invalid,
+            "refinement",
+        ),
+        case(
+            "zero tolerance",
+            move || auto_json(|v| v["refinement"]["tolerance_m"] = json!(0.0)),
+            Invalid,
+            "refinement.tolerance_m",
+        ),
+        case(
+            "negative tolerance",
+            move || {
+                auto_json(|v| {
+                    v["refinement"] = json!({"quantity": "load_resultant", "tolerance_n": -1e-3})
+                })
+            },
+            Invalid,
+            "refinement.tolerance_n",
+        ),
+        case(
+            "NaN tolerance",
+            move || {
+                auto_scene(|s| {
+                    s.refinement = Some(RefinementTarget::TipPosition {
+                        tolerance_m: nan,
+                        max_elements: 100,
+                    })
+                })
+            },
+            Invalid,
+            "refinement.tolerance_m",
+        ),
+        case(
+            "max_elements below the smallest mesh",
+            move || auto_json(|v| v["refinement"]["max_elements"] = json!(1)),
+            Invalid,
+            "refinement.max_elements",
+        ),
+        case(
+            "max_elements above the limit",
+            move || auto_json(|v| v["refinement"]["max_elements"] = json!(MAX_ELEMENTS + 1)),
+            TooLarge,
+            "refinement.max_elements",
+        ),
+        case(
+            "unknown refinement quantity",
+            move || auto_json(|v| v["refinement"]["quantity"] = json!("tip_angle")),
+            Parse,
+            "unknown variant `tip_angle`",
+        ),
+        case(
+            "tolerance in the wrong unit",
+            move || {
+                auto_json(|v| {
+                    v["refinement"] = json!({"quantity": "tip_position", "tolerance_n": 1e-3})
+                })
+            },
+            Parse,
+            "tolerance_n",
+        ),
+        case(
+            "refinement without a tolerance",
+            move || auto_json(|v| v["refinement"] = json!({"quantity": "tip_position"})),
+            Parse,
+            "missing field `tolerance_m`",
+        ),
+        case(
+            "marker by node with auto",
+            move || auto_json(|v| v["markers"][2] = json!({"node": 4})),
+            Invalid,
+            "markers[2].node",
+        ),
+        case(
+            "node moment with auto",
+            move || {
+                auto_json(|v| v["loads"] = json!([{"type": "node_moment", "node": 3, "moment_nm": 0.01}]))
+            },
+            Invalid,
+            "loads[0].node",
+        ),
+        case(
+            "concentrated load model by node with auto",
+            move || {
+                auto_json(|v| {
+                    v["solver"]["estimator"] = json!({"load_model": {"kind": "concentrated", "node": 20}})
+                })
+            },
+            Invalid,
+            "solver.estimator.load_model.node",
+        ),
+        case(
+            "unknown load stated twice",
+            move || {
+                json(|v| {
+                    v["unknown_load"] = json!({"acts_at": "point", "s_m": 0.24});
+                    v["solver"]["estimator"] = json!({"load_model": {"kind": "concentrated", "node": 20}});
+                })
+            },
+            Invalid,
+            "unknown_load",
+        ),
+        case(
+            "unknown point load off the robot",
+            move || auto_json(|v| v["unknown_load"] = json!({"acts_at": "point", "s_m": 0.3})),
+            Invalid,
+            "unknown_load.s_m",
+        ),
+        case(
+            "unknown point load at the clamped base",
+            move || json(|v| v["unknown_load"] = json!({"acts_at": "point", "s_m": 0.0})),
+            Invalid,
+            "unknown_load.s_m",
+        ),
+        case(
+            "unknown point load between nodes of a fixed mesh",
+            move || json(|v| v["unknown_load"] = json!({"acts_at": "point", "s_m": 0.13})),
+            Invalid,
+            "unknown_load.s_m",
+        ),
+        case(
+            "unknown point load no mesh within max_elements puts a node at",
+            move || {
+                auto_json(|v| {
+                    v["unknown_load"] = json!({"acts_at": "point", "s_m": 0.1234567891});
+                    v["refinement"]["max_elements"] = json!(50);
+                })
+            },
+            Invalid,
+            "unknown_load.s_m",
+        ),
+        case(
+            "unknown load kind",
+            move || json(|v| v["unknown_load"] = json!({"acts_at": "line"})),
+            Parse,
+            "unknown variant `line`",
         ),
         case(
             "string for a number",
