@@ -298,7 +298,7 @@ impl Ladder {
                 continue;
             }
             let ratio = (s.length_m / shortest).round().max(1.0);
-            if !(ratio <= max as f64) {
+            if ratio.is_nan() || ratio > max as f64 {
                 return Err(Error::invalid(
                     "refinement.max_elements",
                     max,
