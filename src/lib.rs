@@ -13,6 +13,7 @@
 //! - [`estimate`]: shape and load estimation (25)–(30), backends `newton` and `sqp`.
 //! - [`scene`]: JSON scene files; [`params`]: the values the paper leaves open.
 //! - [`banded`], [`quadrature`]: the numerical kernels.
+//! - [`report`]: `softrod report`, the speed–accuracy chart and the stability map.
 //!
 //! All quantities are SI (m, N, Pa, rad).
 //!
@@ -36,6 +37,7 @@ pub mod estimate;
 pub mod loads;
 pub mod params;
 pub mod quadrature;
+pub mod report;
 pub mod scene;
 pub mod statics;
 
