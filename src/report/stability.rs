@@ -299,8 +299,10 @@ pub fn run(opts: &ReportOptions) -> Result<StabilityReport> {
         .count();
     Ok(StabilityReport {
         description: "Stability of the estimators: pairs of parameters swept with the others at their \
-                      defaults; each case takes a previous frame (cold start, α chosen there unless \
-                      fixed) and then the measured frame, whose outcome and errors are recorded. The \
+                      defaults; each case takes a first noisy frame of the true shape (cold start, α \
+                      chosen there unless fixed), for a jump a previous frame (the markers moved back \
+                      towards the straight robot by the jump), then the measured frame, whose outcome \
+                      and errors are recorded. The \
                       estimator's model has 20 elements (2 sections × 10), exudyn's clamp; σ declared \
                       to the estimator = the true noise, at least 0.01 mm."
             .into(),
@@ -330,8 +332,8 @@ impl StabilityReport {
     /// The Markdown table "where each method fails, and why".
     pub fn markdown(&self) -> String {
         let mut s = String::new();
-        s.push_str("| backend | map | converged | failures by cause | where it fails (first cases) | worst converged backbone RMS |\n");
-        s.push_str("|---|---|---|---|---|---|\n");
+        s.push_str("| backend | map | converged | failures by cause | where it fails | worst converged backbone RMS | slowest case |\n");
+        s.push_str("|---|---|---|---|---|---|---|\n");
         for &b in &self.backends {
             for map in &self.maps {
                 let cells = self.cells_of(&map.name, b);
@@ -360,15 +362,15 @@ impl StabilityReport {
                 } else {
                     by.iter()
                         .map(|(c, v)| {
-                            let more = if v.len() > 4 {
-                                format!(" (+{} more)", v.len() - 4)
+                            let more = if v.len() > 12 {
+                                format!(" (+{} more)", v.len() - 12)
                             } else {
                                 String::new()
                             };
                             format!(
                                 "{}: {}{}",
                                 c.code(),
-                                v.iter().take(4).cloned().collect::<Vec<_>>().join("; "),
+                                v.iter().take(12).cloned().collect::<Vec<_>>().join("; "),
                                 more
                             )
                         })
@@ -390,8 +392,12 @@ impl StabilityReport {
                         )
                     })
                     .unwrap_or_else(|| "—".into());
+                let slowest = cells
+                    .iter()
+                    .map(|c| c.outcome.total_s)
+                    .fold(0.0f64, f64::max);
                 s.push_str(&format!(
-                    "| {} | {} × {} | {}/{} | {} | {} | {} |\n",
+                    "| {} | {} × {} | {}/{} | {} | {} | {} | {:.2} s |\n",
                     b.name(),
                     map.x.title(),
                     map.y.title(),
@@ -399,7 +405,8 @@ impl StabilityReport {
                     cells.len(),
                     causes,
                     wherestr,
-                    worst
+                    worst,
+                    slowest
                 ));
             }
         }

@@ -239,8 +239,8 @@ pub struct Outcome {
     pub cause: Option<FailureCause>,
     /// The error message or failed report, if any.
     pub message: Option<String>,
-    /// Which step failed: "setup", "previous frame", "measured frame",
-    /// "warm frame k".
+    /// Which step failed: "setup", "first frame", "previous frame",
+    /// "measured frame", "warm frame k".
     pub failed_at: Option<String>,
     /// Outer iterations of the measured frame's step (or of the failed one).
     pub iterations: usize,
@@ -414,11 +414,12 @@ pub fn case_errors(
 
 /// Runs one case (unguarded: see [`run_guarded`]).
 ///
-/// The estimator first takes the previous frame (cold start; `α` is chosen
-/// there when not fixed): the measured markers moved back by `jump_m`
-/// ([`previous_frame`]), or, for no jump, a noisy re-measurement of the same
-/// shape. Then the measured frame (seed `seed`), whose errors are recorded,
-/// then `warm_frames` more noisy re-measurements, timed.
+/// The estimator first takes a noisy measurement of the shape (cold start;
+/// `α` is chosen there when not fixed, so that α comes from a physical
+/// frame), then, for a jump, the previous frame: the markers moved back by
+/// `jump_m` ([`previous_frame`]). Then the measured frame (seed `seed`),
+/// reached from the previous one: its outcome and errors are recorded. Then
+/// `warm_frames` more noisy re-measurements, timed.
 pub fn run_case(spec: &CaseSpec) -> Outcome {
     let start = Instant::now();
     let reference = &spec.reference;
@@ -445,16 +446,13 @@ pub fn run_case(spec: &CaseSpec) -> Outcome {
     };
     let arcs = marker_arcs(reference.length_m, spec.markers);
     let measured = observe(reference, &arcs, spec.noise_m, spec.seed);
-    let previous = if spec.jump_m > 0.0 {
-        previous_frame(&measured, spec.jump_m)
-    } else {
-        observe(
-            reference,
-            &arcs,
-            spec.noise_m,
-            spec.seed.wrapping_add(1_000_003),
-        )
-    };
+    let first = observe(
+        reference,
+        &arcs,
+        spec.noise_m,
+        spec.seed.wrapping_add(1_000_003),
+    );
+    let previous = (spec.jump_m > 0.0).then(|| previous_frame(&measured, spec.jump_m));
     let step = |est: &mut Box<dyn crate::estimate::Estimator>,
                 o: &Observation|
      -> std::result::Result<(Estimate, f64), (FailureCause, String, usize)> {
@@ -487,10 +485,18 @@ pub fn run_case(spec: &CaseSpec) -> Outcome {
             }
         }
     };
-    if let Err((c, m, it)) = step(&mut est, &previous) {
-        let mut o = fail(c, m, "previous frame");
+    if let Err((c, m, it)) = step(&mut est, &first) {
+        let mut o = fail(c, m, "first frame");
         o.iterations = it;
         return o;
+    }
+    if let Some(previous) = &previous {
+        if let Err((c, m, it)) = step(&mut est, previous) {
+            let mut o = fail(c, m, "previous frame");
+            o.iterations = it;
+            o.alpha_used = est.alpha();
+            return o;
+        }
     }
     let (e, dt) = match step(&mut est, &measured) {
         Ok(x) => x,
