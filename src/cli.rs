@@ -69,6 +69,29 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Speed against accuracy (Pareto chart) and the stability map of the
+    /// estimators, against exudyn references: writes pareto.{png,svg,json},
+    /// stability_*.{png,svg}, stability.json and stability.md.
+    Report {
+        /// Output directory.
+        #[arg(long, default_value = "validation/figures")]
+        out: PathBuf,
+        /// A tiny sweep (seconds) instead of the full one (minutes).
+        #[arg(long)]
+        quick: bool,
+        /// One part only.
+        #[arg(long, value_enum)]
+        only: Option<PartArg>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+enum PartArg {
+    Pareto,
+    Stability,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -437,7 +460,36 @@ pub fn run() -> Result<()> {
             }
             write_json(&result, out.as_ref())
         }
+        Some(Command::Report { out, quick, only, quiet }) => report(out, quick, only, quiet),
     }
+}
+
+fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Result<()> {
+    use softrod::report::{self, Part, ReportOptions};
+    let only = only.map(|p| match p {
+        PartArg::Pareto => Part::Pareto,
+        PartArg::Stability => Part::Stability,
+    });
+    let opts = ReportOptions { quick, only, quiet, ..ReportOptions::new(out) };
+    let summary = report::run(&opts, &[])?;
+    if let Some(p) = &summary.pareto {
+        outln!("Pareto: {} configurations ({} cases) in {:.1} s; backbone-RMS front (fastest first):", p.points.len(), p.cases.len(), p.wall_time_s);
+        for q in p.front_backbone() {
+            outln!(
+                "  {:<6} {:3} elements {:2} markers: {:8.3} ms, backbone {:.4} mm, load {:.1} %, force {:.1} %",
+                q.backend.name(), q.elements, q.markers, q.median_step_s * 1e3, q.backbone_rms_m * 1e3, q.load_rel_l2 * 100.0, q.force_rel * 100.0
+            );
+        }
+    }
+    if let Some(s) = &summary.stability {
+        let failed = s.cells.iter().filter(|c| !c.outcome.converged).count();
+        outln!("Stability: {} cases in {:.1} s, {} failed, {} panics", s.cells.len(), s.wall_time_s, failed, s.panics);
+    }
+    outln!("wrote {} files in {:.1} s:", summary.files.len(), summary.wall_time_s);
+    for f in &summary.files {
+        outln!("  {}", f.display());
+    }
+    Ok(())
 }
 
 /// Parses the arguments. `--help` and `--version` print and exit 0; a usage

@@ -105,6 +105,14 @@ pub enum Error {
         /// What is wrong, naming the field where possible.
         message: String,
     },
+    /// Reading or writing a file failed (a reference file, a report output).
+    #[error("input/output failed for `{path}`: {message}")]
+    Io {
+        /// The file or directory.
+        path: String,
+        /// What went wrong.
+        message: String,
+    },
     /// A computation produced a value that is not finite.
     #[error("non-finite value in {context}")]
     NonFinite {

@@ -14,6 +14,7 @@
 //! - [`scene`]: JSON scene files; [`params`]: the values the paper leaves open.
 //! - [`refine`]: `"elements": "auto"`, the smallest mesh meeting a tolerance.
 //! - [`banded`], [`quadrature`]: the numerical kernels.
+//! - [`report`]: `softrod report`, the speed–accuracy chart and the stability map.
 //!
 //! All quantities are SI (m, N, Pa, rad).
 //!
@@ -38,6 +39,7 @@ pub mod loads;
 pub mod params;
 pub mod quadrature;
 pub mod refine;
+pub mod report;
 pub mod scene;
 pub mod statics;
 
