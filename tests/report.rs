@@ -10,10 +10,12 @@ use proptest::prelude::*;
 use serde_json::Value;
 use softrod::estimate::{Backend, EstimatorSettings, LoadBound, MarkerObservation, Observation};
 use softrod::loads::Loads;
+use softrod::report::auto_point::{auto_scene, AUTO_FORCE_FRACTION};
 use softrod::report::pareto::{pareto_front, pareto_front_tol};
 use softrod::report::reference::{embedded_names, Reference};
 use softrod::report::sweep::{
-    model_robot, run_case, run_guarded, run_guarded_with, CaseSpec, FailureCause, Outcome,
+    marker_arcs, model_robot, observe, run_case, run_guarded, run_guarded_with, CaseSpec,
+    FailureCause, Outcome,
 };
 use softrod::report::{run, Part, ReportOptions};
 
@@ -97,6 +99,29 @@ fn quick_report_writes_every_file_and_records_every_case() {
     for q in p.points.iter().filter(|q| q.converged) {
         assert!(q.median_step_s > 0.0 && q.backbone_rms_m > 0.0 && q.load_rel_l2.is_finite());
     }
+    // where "elements": "auto" lands: one point per marker count, each on
+    // a mesh whose estimated resultant error meets the tolerance
+    assert!(p.auto_notes.is_empty(), "{:?}", p.auto_notes);
+    assert_eq!(p.auto_points.len(), g.markers.len());
+    for a in &p.auto_points {
+        assert!(a.label.starts_with("auto"), "{}", a.label);
+        assert!(a.median_step_s > 0.0 && a.backbone_rms_m.is_finite() && a.force_rel.is_finite());
+    }
+    let reference = Reference::embedded(&g.references[0]).unwrap();
+    let r = reference.resultant_force_n();
+    let tol = AUTO_FORCE_FRACTION * r[0].hypot(r[1]);
+    let scene = auto_scene(&reference, g.noise_m, tol).unwrap();
+    let obs = observe(
+        &reference,
+        &marker_arcs(reference.length_m, g.markers[0]),
+        g.noise_m,
+        7,
+    );
+    let chosen = softrod::refine::auto_elements(&scene, Some(&obs)).unwrap();
+    assert!(chosen.estimated_error <= tol);
+    assert!(p.auto_points[0]
+        .label
+        .ends_with(&format!(": {} el", chosen.total_elements)));
     // the stability sweep: every cell of every map for every backend, each
     // with an outcome: converged with finite errors, or a cause
     let s = summary.stability.unwrap();

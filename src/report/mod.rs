@@ -4,6 +4,7 @@
 //! - [`pareto`]: backend × element count × marker count against exudyn's
 //!   128-element solutions ([`reference`]); error (backbone RMS, load error)
 //!   against the median time per warm estimate; the Pareto front marked.
+//! - [`auto_point`]: where `"elements": "auto"` lands on the Pareto chart.
 //! - [`stability`]: marker noise, load magnitude, marker count, the jump
 //!   between successive observations and `α`, per backend: converged or
 //!   not, the failure cause ([`sweep::FailureCause`]), iterations, errors;
@@ -23,6 +24,7 @@
 //! # Ok::<(), softrod::Error>(())
 //! ```
 
+pub mod auto_point;
 pub mod pareto;
 pub mod plot;
 pub mod reference;
@@ -188,8 +190,15 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
     std::fs::create_dir_all(&opts.out_dir).map_err(|e| io_error(&opts.out_dir, e))?;
     let mut files = Vec::new();
     let pareto = if opts.only != Some(Part::Stability) {
-        let r = pareto::run(opts, extra)?;
-        files.extend(r.write(&opts.out_dir, extra)?);
+        let mut r = pareto::run(opts, extra)?;
+        let pb = progress(1, opts.quiet, "auto");
+        pb.set_message("elements: \"auto\" on the Pareto references");
+        let (auto, notes) = auto_point::auto_points(opts, &r.grid)?;
+        pb.finish_and_clear();
+        r.auto_points = auto;
+        r.auto_notes = notes;
+        let marked: Vec<LabelledPoint> = extra.iter().chain(&r.auto_points).cloned().collect();
+        files.extend(r.write(&opts.out_dir, &marked)?);
         Some(r)
     } else {
         None

@@ -127,6 +127,10 @@ pub struct ParetoReport {
     pub machine: Machine,
     /// Wall time of the sweep (s).
     pub wall_time_s: f64,
+    /// Where `"elements": "auto"` lands (see [`super::auto_point`]).
+    pub auto_points: Vec<LabelledPoint>,
+    /// Why a marker count has no auto point, if any.
+    pub auto_notes: Vec<String>,
 }
 
 /// Which points are non-dominated when minimizing both coordinates (time,
@@ -287,6 +291,8 @@ pub fn run(opts: &ReportOptions, _extra: &[LabelledPoint]) -> Result<ParetoRepor
         cases,
         machine,
         wall_time_s: start.elapsed().as_secs_f64(),
+        auto_points: Vec::new(),
+        auto_notes: Vec::new(),
     })
 }
 
