@@ -3,7 +3,7 @@
 //! Unknowns: the free coordinates `u` (so `q = q(u)`, linear: the base
 //! stretch and nodes 1…N) and the load parameters `F`. The objective is
 //! quadratic in `(u, F)`, only the equilibrium `Q(F, q, P) = 0` (17) is
-//! nonlinear. Each iteration solves, with clarabel,
+//! nonlinear. Each iteration takes a full-space step `(du, dF)` from the QP
 //!
 //! ```text
 //! min_{du, dF}  ½ dᵀ P d + cᵀ d
@@ -14,19 +14,35 @@
 //!
 //! `P` holds the objective's Hessian only (no constraint curvature): a
 //! Gauss–Newton SQP, whose fixed points are the KKT points of (25), the same
-//! as the reduced method's. The QP data are rescaled so that clarabel's
-//! absolute tolerances act as relative ones (the QP is homogeneous in its
-//! right-hand sides), and the returned `du` is recomputed from `dF` with the
-//! banded factorization of `K`, so the linearized equilibrium holds to
-//! round-off. Globalization: backtracking on the ℓ1 merit function
-//! `φ = J + μ |Q|₁`, `μ` above the largest equality multiplier.
-//! When no bound is active in a QP's solution, the step is polished: `dF` is
-//! recomputed exactly on that active set (the equality-constrained QP, solved
-//! through the banded factorization of `K` and an `n_ob × n_ob` Cholesky);
-//! clarabel alone resolves the weakly penalized directions (the slopes `w'`)
-//! only to about 1e-5 of `|F|`.
-//! After convergence the shape is re-solved at the final `F` (a few Newton
-//! steps) so the estimate is an exact equilibrium.
+//! as the reduced method's. How the QP is solved:
+//!
+//! - **No bounds** (`EstimatorSettings::bounds` empty): the QP has equality
+//!   constraints only, and its KKT system is solved directly, without an
+//!   interior-point method: block elimination with the banded LU of `K`
+//!   (`du = K⁻¹ (Q + Mᵀ G dF)`) leaves for `dF` the Gauss–Newton system of
+//!   the reduced problem at the linearized residual `e' = e + A M K⁻¹ Q`,
+//!   solved in the representer form (an `n_ob × n_ob` Cholesky, see
+//!   `Core::gn_step`). One tangent factorization per iteration; the
+//!   equality multipliers follow from the `du` rows, `K λ = 2 Mᵀ AᵀW (e + A M du)`.
+//! - **With bounds**: clarabel's interior-point method. The QP data are
+//!   rescaled so that clarabel's absolute tolerances act as relative ones
+//!   (the QP is homogeneous in its right-hand sides), and the returned `du`
+//!   is recomputed from `dF` with the banded factorization of `K`, so the
+//!   linearized equilibrium holds to round-off. When no bound is active in
+//!   a QP's solution, `dF` is polished: recomputed exactly on that active
+//!   set (the equality-constrained QP above); clarabel alone resolves the
+//!   weakly penalized directions (the slopes `w'`) only to about 1e-5 of
+//!   `|F|`.
+//!
+//! Globalization: backtracking on the ℓ1 merit function `φ = J + μ |Q|₁`,
+//! `μ` above the largest equality multiplier, each trial pulled back onto
+//! the equilibrium manifold by chord steps (a second-order correction).
+//! Convergence is judged on feasibility and on the predicted decrease along
+//! the manifold, `−g̃ᵀ dF` with `g̃` the reduced gradient (29) at the
+//! feasibility-restored residual `e'` (with a bound active: `−cᵀ d`).
+//! After convergence the shape is re-solved at the final `F` (a chord step
+//! with the last factorization, or a few Newton steps) so the estimate is
+//! an exact equilibrium.
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
@@ -35,12 +51,13 @@ use clarabel::solver::{
 };
 
 use crate::assembly::Robot;
+use crate::banded::BandedLu;
 use crate::element::{hermite, Element};
 use crate::error::{Error, Result};
 use crate::loads::Loads;
 
 use super::{
-    dot, norm2, run_step, Backend, BoundFrame, Core, Estimate, EstimateReport, Estimator,
+    dot, norm2, run_step, Backend, BoundFrame, Core, Derivs, Estimate, EstimateReport, Estimator,
     EstimatorSettings, LoadModel, ObsOp, Observation, Solved,
 };
 
@@ -68,7 +85,7 @@ pub struct SqpEstimator<E: Element> {
     /// Upper-triangle triplets of `H` (constant).
     h_upper: Vec<(usize, usize, f64)>,
     /// The factored tangent of the last QP (for the second-order correction).
-    last_lu: Option<crate::banded::BandedLu>,
+    last_lu: Option<BandedLu>,
 }
 
 impl<E: Element> SqpEstimator<E> {
@@ -174,8 +191,12 @@ impl<E: Element> SqpEstimator<E> {
         Ok(rows)
     }
 
-    /// One QP: returns `(du, dF, λ_eq)`.
-    #[allow(clippy::too_many_arguments)]
+    /// One QP at `(q, F)` with the tangent factored there: the step
+    /// `(du, dF)`, the largest equality multiplier, the objective's linear
+    /// term `c` and whether a bound is active. Without bounds the QP is the
+    /// equality-constrained one, solved exactly through the banded
+    /// factorization of `K` ([`SqpEstimator::equality_qp`]); with bounds
+    /// clarabel solves it ([`SqpEstimator::clarabel_qp`]).
     fn qp(
         &mut self,
         op: &ObsOp,
@@ -184,9 +205,107 @@ impl<E: Element> SqpEstimator<E> {
         e: &[f64],
         r: &[f64],
         alpha: f64,
-    ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, bool)> {
-        let bounds = self.bound_rows(q)?;
+    ) -> Result<QpStep> {
         let core = &mut self.core;
+        let (nd, d) = (E::NODE_DOFS, E::DIM);
+        let nfree = core.robot.n_free();
+        core.robot.tangent_into(q, &core.known, &mut core.kmat)?;
+        let lu = core.kmat.clone().factor_scaled(0.0, "tangent stiffness")?;
+        // c = 2 [Mᵀ AᵀW e; α H F]
+        let mut wa = vec![0.0; core.robot.n_q()];
+        for (i, row) in op.rows.iter().enumerate() {
+            for k in 0..4 {
+                wa[row.e * nd + k * d + row.comp] += 2.0 * op.wt[i] * e[i] * row.w[k];
+            }
+        }
+        let mut c = core.robot.restrict(&wa)?;
+        c.extend(core.penalty_grad(f)?.iter().map(|v| 2.0 * alpha * v));
+        debug_assert_eq!(c.len(), nfree + core.n_f);
+        let step = if core.settings.bounds.is_empty() {
+            self.equality_qp(&lu, op, f, e, r, alpha, c)?
+        } else {
+            self.clarabel_qp(&lu, op, q, f, e, r, alpha, c)?
+        };
+        self.core.lu_cache = Some((q.to_vec(), lu.clone()));
+        self.last_lu = Some(lu);
+        Ok(step)
+    }
+
+    /// The equality-constrained QP (no bounds), exactly: its KKT system
+    /// `[P, A_eqᵀ; A_eq, 0]` is solved by block elimination with the banded
+    /// LU of `K` (`du = K⁻¹ (Q + Mᵀ G dF)`) and, for `dF`, the Gauss–Newton
+    /// system of the reduced problem at the linearized residual
+    /// `e' = e + A M K⁻¹ Q` ([`Core::gn_step`]: an `n_ob × n_ob` Cholesky in
+    /// the representer form). The equality multipliers follow from the `du`
+    /// rows of the KKT system, `K λ = 2 Mᵀ AᵀW (e + A M du)`.
+    #[allow(clippy::too_many_arguments)]
+    fn equality_qp(
+        &mut self,
+        lu: &BandedLu,
+        op: &ObsOp,
+        f: &[f64],
+        e: &[f64],
+        r: &[f64],
+        alpha: f64,
+        c: Vec<f64>,
+    ) -> Result<QpStep> {
+        let core = &self.core;
+        let (nd, d) = (E::NODE_DOFS, E::DIM);
+        let mut w0 = r.to_vec();
+        lu.solve_in_place(&mut w0)?;
+        let dq0 = core.robot.expand_step(&w0)?;
+        let e1: Vec<f64> = (0..op.n())
+            .map(|i| e[i] + op.apply_row(i, &dq0, nd, d))
+            .collect();
+        let dv = core.derivs(lu, op)?;
+        let (df, l) = core.gn_step(&dv, op, &e1, f, alpha)?;
+        let g1 = core.gradient(&dv, op, &e1, f, alpha)?;
+        let dec_opt = (-dot(&g1, &df)).max(0.0);
+        let du = self.du_from(lu, r, &df)?;
+        // λ = 2 Σ_i w_i ẽ_i K⁻¹ Mᵀ a_iᵀ, ẽ = e + A M du (z_i = M K⁻¹ Mᵀ a_iᵀ)
+        let dq = core.robot.expand_step(&du)?;
+        let mut lam = vec![0.0; core.robot.n_q()];
+        for (i, zi) in dv.z.iter().enumerate() {
+            let s = 2.0 * op.wt[i] * (e[i] + op.apply_row(i, &dq, nd, d));
+            lam.iter_mut().zip(zi).for_each(|(a, b)| *a += s * b);
+        }
+        let lambda_max = lam.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        Ok(QpStep {
+            du,
+            df,
+            lambda_max,
+            c,
+            active: false,
+            dec_opt: Some(dec_opt),
+            derivs: Some((dv, l)),
+        })
+    }
+
+    /// `du` from the linearized equilibrium, `K du = Q + Mᵀ G dF`.
+    fn du_from(&self, lu: &BandedLu, r: &[f64], df: &[f64]) -> Result<Vec<f64>> {
+        let mut rhs = r.to_vec();
+        for &(i, j, v) in &self.g_free {
+            rhs[i] += v * df[j];
+        }
+        lu.solve_in_place(&mut rhs)?;
+        Ok(rhs)
+    }
+
+    /// The QP with bounds, by clarabel's interior-point method.
+    #[allow(clippy::too_many_arguments)]
+    fn clarabel_qp(
+        &mut self,
+        lu: &BandedLu,
+        op: &ObsOp,
+        q: &[f64],
+        f: &[f64],
+        e: &[f64],
+        r: &[f64],
+        alpha: f64,
+        c: Vec<f64>,
+    ) -> Result<QpStep> {
+        let bounds = self.bound_rows(q)?;
+        let core = &self.core;
         let nfree = core.robot.n_free();
         let nq = core.robot.n_q();
         let nf = core.n_f;
@@ -194,7 +313,6 @@ impl<E: Element> SqpEstimator<E> {
         let (nd, d) = (E::NODE_DOFS, E::DIM);
         // objective
         let mut pt: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
-        let mut c = vec![0.0; n];
         for i in 0..op.n() {
             let ma = core.robot.restrict(&op.dense_row(i, nq, nd, d))?;
             let nz: Vec<(usize, f64)> = ma
@@ -204,7 +322,6 @@ impl<E: Element> SqpEstimator<E> {
                 .filter(|(_, v)| *v != 0.0)
                 .collect();
             for &(a, va) in &nz {
-                c[a] += 2.0 * op.wt[i] * e[i] * va;
                 for &(b, vb) in &nz {
                     if a <= b {
                         *pt.entry((a, b)).or_insert(0.0) += 2.0 * op.wt[i] * va * vb;
@@ -212,18 +329,12 @@ impl<E: Element> SqpEstimator<E> {
                 }
             }
         }
-        let hf = core.penalty_grad(f)?;
-        for (k, v) in hf.iter().enumerate() {
-            c[nfree + k] = 2.0 * alpha * v;
-        }
         for &(i, j, v) in &self.h_upper {
             *pt.entry((nfree + i, nfree + j)).or_insert(0.0) += 2.0 * alpha * v;
         }
         let pmax = pt.values().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
         // constraints
-        core.robot.tangent_into(q, &core.known, &mut core.kmat)?;
-        let kmat = core.kmat.clone();
-        let lu = kmat.clone().factor_scaled(0.0, "tangent stiffness")?;
+        let kmat = &core.kmat;
         let mut b_eq: Vec<f64> = r.iter().map(|v| -v).collect();
         let mut ineq: Vec<(Vec<(usize, f64)>, f64)> = Vec::new();
         for (coeffs, lo, hi) in &bounds {
@@ -308,7 +419,6 @@ impl<E: Element> SqpEstimator<E> {
                 context: format!("SQP subproblem: clarabel status {:?}", sol.status),
             });
         }
-        let mut du: Vec<f64> = sol.x[..nfree].iter().map(|v| v * gamma).collect();
         let mut df: Vec<f64> = sol.x[nfree..].iter().map(|v| v * gamma).collect();
         // polish on the active set (as OSQP does): with no bound active the
         // QP is the equality-constrained one, whose exact solution is the
@@ -320,6 +430,11 @@ impl<E: Element> SqpEstimator<E> {
             .iter()
             .zip(&sol.z[m_eq..])
             .any(|(s, z)| *s <= 1e-6 || *z > 1e-6 * s.max(1e-300));
+        let lambda_max = sol.z[..m_eq]
+            .iter()
+            .fold(0.0f64, |m, v| m.max((v * gamma * pmax).abs()));
+        let x_du: Vec<f64> = sol.x[..nfree].iter().map(|v| v * gamma).collect();
+        let mut dec_opt = None;
         if !active {
             let mut w0 = r.to_vec();
             lu.solve_in_place(&mut w0)?;
@@ -327,28 +442,35 @@ impl<E: Element> SqpEstimator<E> {
             let e1: Vec<f64> = (0..op.n())
                 .map(|i| e[i] + op.apply_row(i, &dq0, nd, d))
                 .collect();
-            let dv = core.derivs(&lu, op)?;
+            let dv = core.derivs(lu, op)?;
             let (step, _) = core.gn_step(&dv, op, &e1, f, alpha)?;
             if step.iter().all(|v| v.is_finite()) {
+                let g1 = core.gradient(&dv, op, &e1, f, alpha)?;
+                dec_opt = Some((-dot(&g1, &step)).max(0.0));
                 df = step;
             }
         }
-        let lambda: Vec<f64> = sol.z[..m_eq].iter().map(|v| v * gamma * pmax).collect();
         // polish: du from the linearized equilibrium, K du = Q + Mᵀ G dF
-        let mut rhs = r.to_vec();
-        for &(i, j, v) in &self.g_free {
-            rhs[i] += v * df[j];
+        let mut du = self.du_from(lu, r, &df)?;
+        if !du.iter().all(|v| v.is_finite()) {
+            du = x_du;
         }
-        lu.solve_in_place(&mut rhs)?;
-        if rhs.iter().all(|v| v.is_finite()) {
-            du = rhs;
-        }
-        self.last_lu = Some(lu);
-        Ok((du, df, lambda, c, active))
+        Ok(QpStep {
+            du,
+            df,
+            lambda_max,
+            c,
+            active,
+            dec_opt,
+            derivs: None,
+        })
     }
 
+    #[allow(clippy::too_many_lines)]
     fn solve_one(&mut self, op: &ObsOp, f0: Vec<f64>, q0: Vec<f64>, alpha: f64) -> Result<Solved> {
         let settings = self.core.settings.clone();
+        let (nd, d) = (E::NODE_DOFS, E::DIM);
+        let len = self.core.robot.length();
         let mut f = f0;
         let mut q = q0;
         let n_ob = op.n() as f64;
@@ -357,42 +479,56 @@ impl<E: Element> SqpEstimator<E> {
         let mut cause = None;
         let mut converged = false;
         let mut prev_dec = f64::INFINITY;
+        // the state at (q, F): dead force, residual Q, objective parts; an
+        // accepted line-search trial hands its own on to the next iteration
+        let mut dead = self.core.dead_with(&f)?;
+        let mut r = self.core.residual(&q, &f)?;
+        let (mut wr, mut pen, mut e) = self.core.objective(op, &q, &f, alpha)?;
+        // derivatives and covariance factor of the last QP, taken at q
+        let mut at_q: Option<(Derivs, Vec<f64>)> = None;
         loop {
-            let (wr, pen, e) = self.core.objective(op, &q, &f, alpha)?;
             let obj = wr + pen;
-            let r = self.core.residual(&q, &f)?;
-            let dead = self.core.dead_with(&f)?;
             let load = norm2(&self.core.robot.restrict(&dead)?).max(1e-12);
             let rn = norm2(&r);
             if iterations >= settings.max_iterations {
                 cause = Some("iteration limit".to_string());
                 break;
             }
-            let (mut du, mut df, lambda, c, active) = match self.qp(op, &q, &f, &e, &r, alpha) {
+            let QpStep {
+                mut du,
+                mut df,
+                lambda_max: lmax,
+                c,
+                active,
+                dec_opt,
+                derivs,
+            } = match self.qp(op, &q, &f, &e, &r, alpha) {
                 Ok(s) => s,
                 Err(err) => {
                     cause = Some(err.to_string());
                     break;
                 }
             };
+            at_q = derivs;
             iterations += 1;
-            let mut d = du.clone();
-            d.extend_from_slice(&df);
+            let mut dm = du.clone();
+            dm.extend_from_slice(&df);
             // model decrease of the objective
-            let dec = (-dot(&c, &d)).max(0.0);
+            let dec = (-dot(&c, &dm)).max(0.0);
             // trust region on the predicted marker motion
-            let dq_pred = self.core.robot.expand_step(&du)?;
+            let mut dq = self.core.robot.expand_step(&du)?;
             let moved = (0..op.n())
-                .map(|i| op.apply_row(i, &dq_pred, E::NODE_DOFS, E::DIM).abs())
+                .map(|i| op.apply_row(i, &dq, nd, d).abs())
                 .fold(0.0f64, f64::max);
             if moved > settings.max_observation_jump_m && moved.is_finite() {
                 let s = settings.max_observation_jump_m / moved;
                 du.iter_mut()
                     .chain(df.iter_mut())
-                    .chain(d.iter_mut())
+                    .chain(dm.iter_mut())
+                    .chain(dq.iter_mut())
                     .for_each(|v| *v *= s);
             }
-            let lin = dot(&c, &d);
+            let lin = dot(&c, &dm);
             let scale = obj.max(n_ob);
             // feasible: |Q| relative to the applied loads, or at the round-off
             // floor ε |K|max |q|∞ √n (which grows with the element count)
@@ -410,26 +546,29 @@ impl<E: Element> SqpEstimator<E> {
             } else {
                 settings.tolerance
             };
-            if feasible && (dec <= tol * scale || (dec <= 1e-13 * scale && dec > 0.9 * prev_dec)) {
+            // convergence is judged on the decrease along the manifold
+            let dec_c = dec_opt.unwrap_or(dec);
+            if feasible
+                && (dec_c <= tol * scale || (dec_c <= 1e-13 * scale && dec_c > 0.9 * prev_dec))
+            {
                 converged = true;
                 break;
             }
-            prev_dec = if feasible { dec } else { f64::INFINITY };
-            let lmax = lambda.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            prev_dec = if feasible { dec_c } else { f64::INFINITY };
             mu = mu.max(1.5 * lmax + 1e-12);
             let r1: f64 = r.iter().map(|v| v.abs()).sum();
             let phi = obj + mu * r1;
             let slope = lin - mu * r1;
-            let dq = self.core.robot.expand_step(&du)?;
             let mut t = 1.0;
             let mut accepted = false;
             // second-order correction (against the Maratos effect): the
             // trial shape is pulled back onto the equilibrium manifold by
-            // one step u += K⁻¹ Q(q_t, F_t) with the factorization at q
+            // chord steps u += K⁻¹ Q(q_t, F_t) with the factorization at q
             for _ in 0..30 {
                 let mut qt: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + t * b).collect();
                 let ft: Vec<f64> = f.iter().zip(&df).map(|(a, b)| a + t * b).collect();
-                let mut rt = self.core.residual(&qt, &ft)?;
+                let dead_t = self.core.dead_with(&ft)?;
+                let mut rt = self.core.robot.residual(&qt, &dead_t, &self.core.known)?;
                 if let Some(lu) = &self.last_lu {
                     // up to four chord steps while the residual shrinks
                     let mut rn_t = norm2(&rt);
@@ -441,7 +580,7 @@ impl<E: Element> SqpEstimator<E> {
                         }
                         let corr = self.core.robot.expand_step(&du_c)?;
                         let qc: Vec<f64> = qt.iter().zip(&corr).map(|(a, b)| a + b).collect();
-                        let rc = self.core.residual(&qc, &ft)?;
+                        let rc = self.core.robot.residual(&qc, &dead_t, &self.core.known)?;
                         let rn_c = norm2(&rc);
                         if rn_c.is_nan() || rn_c >= rn_t {
                             break;
@@ -454,7 +593,7 @@ impl<E: Element> SqpEstimator<E> {
                         }
                     }
                 }
-                let (wr_t, pen_t, _) = self.core.objective(op, &qt, &ft, alpha)?;
+                let (wr_t, pen_t, e_t) = self.core.objective(op, &qt, &ft, alpha)?;
                 let phi_t = wr_t + pen_t + mu * rt.iter().map(|v| v.abs()).sum::<f64>();
                 let small = dec <= 1e-8 * scale && rn <= 1e-6 * load;
                 // near the round-off floor μ|Q|₁ is noise: a trial that stays
@@ -464,6 +603,10 @@ impl<E: Element> SqpEstimator<E> {
                 if phi_t <= phi + 1e-4 * t * slope.min(0.0) || small || (feasible_t && descends) {
                     q = qt;
                     f = ft;
+                    dead = dead_t;
+                    r = rt;
+                    (wr, pen, e) = (wr_t, pen_t, e_t);
+                    at_q = None;
                     accepted = true;
                     break;
                 }
@@ -477,15 +620,37 @@ impl<E: Element> SqpEstimator<E> {
                 break;
             }
         }
-        // exact equilibrium at the final F, derivatives and covariance there
-        let eq = self.core.equilibrium(&f, &q)?;
-        let (wr, pen, e) = self.core.objective(op, &eq.q, &f, alpha)?;
-        let dv = self.core.derivs(&eq.lu, op)?;
+        // exact equilibrium at the final F, derivatives and covariance
+        // there: at a feasible point one chord step with the last QP's
+        // factorization (taken at q) does it, and that QP's derivatives are
+        // exact; otherwise the equilibrium is re-solved and re-factored
+        let mut finish = None;
+        if let (Some((dv, l)), Some(lu)) = (at_q.take(), &self.last_lu) {
+            let mut w = r.clone();
+            lu.solve_in_place(&mut w)?;
+            let step = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if step <= 1e-10 * len {
+                let dq = self.core.robot.expand_step(&w)?;
+                q.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
+                let residual_n = norm2(&self.core.robot.residual(&q, &dead, &self.core.known)?);
+                finish = Some((q.clone(), dv, l, residual_n));
+            }
+        }
+        let (q, dv, l, residual_n) = match finish {
+            Some(x) => x,
+            None => {
+                let eq = self.core.equilibrium(&f, &q)?;
+                let dv = self.core.derivs(&eq.lu, op)?;
+                let e = op.residual(&eq.q, nd, d);
+                let (_, l) = self.core.gn_step(&dv, op, &e, &f, alpha)?;
+                (eq.q, dv, l, eq.residual_n)
+            }
+        };
+        let (wr, pen, e) = self.core.objective(op, &q, &f, alpha)?;
         let g = self.core.gradient(&dv, op, &e, &f, alpha)?;
-        let (_, l) = self.core.gn_step(&dv, op, &e, &f, alpha)?;
         Ok(Solved {
             f,
-            q: eq.q,
+            q,
             derivs: dv,
             cov_factor: l,
             e,
@@ -498,13 +663,36 @@ impl<E: Element> SqpEstimator<E> {
                 weighted_residual: wr,
                 n_observations: op.n(),
                 gradient_norm: norm2(&g),
-                equilibrium_residual_n: eq.residual_n,
+                equilibrium_residual_n: residual_n,
                 alpha,
                 wall_time_s: 0.0,
                 cause,
             },
         })
     }
+}
+
+/// One SQP subproblem's solution.
+struct QpStep {
+    /// Step of the free coordinates (m).
+    du: Vec<f64>,
+    /// Step of the load parameters.
+    df: Vec<f64>,
+    /// The largest equality multiplier `|λ|∞` (for the merit weight).
+    lambda_max: f64,
+    /// The objective's linear term `c` over `(u, F)`.
+    c: Vec<f64>,
+    /// Whether a bound is active in the solution.
+    active: bool,
+    /// The predicted decrease along the constraint manifold,
+    /// `−g̃ᵀ dF` with `g̃` the reduced gradient (29) at the
+    /// feasibility-restored residual `e' = e + A M K⁻¹ Q`, when known
+    /// (no bound active). Unlike `−cᵀ d` it carries no term linear in the
+    /// equilibrium residual `Q`, so it reaches the round-off floor at once.
+    dec_opt: Option<f64>,
+    /// The derivatives at `q` and the covariance factor there, when the
+    /// step computed them.
+    derivs: Option<(Derivs, Vec<f64>)>,
 }
 
 crate::estimate::impl_estimator!(SqpEstimator, Backend::Sqp);
