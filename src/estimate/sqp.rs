@@ -24,22 +24,32 @@
 //!   solved in the representer form (an `n_ob × n_ob` Cholesky, see
 //!   `Core::gn_step`). One tangent factorization per iteration; the
 //!   equality multipliers follow from the `du` rows, `K λ = 2 Mᵀ AᵀW (e + A M du)`.
-//! - **With bounds**: clarabel's interior-point method. The QP data are
-//!   rescaled so that clarabel's absolute tolerances act as relative ones
-//!   (the QP is homogeneous in its right-hand sides), and the returned `du`
-//!   is recomputed from `dF` with the banded factorization of `K`, so the
-//!   linearized equilibrium holds to round-off. When no bound is active in
-//!   a QP's solution, `dF` is polished: recomputed exactly on that active
-//!   set (the equality-constrained QP above); clarabel alone resolves the
-//!   weakly penalized directions (the slopes `w'`) only to about 1e-5 of
-//!   `|F|`.
+//! - **With bounds**: the bounds act on `F` only, so on a known active set
+//!   the QP is again equality-constrained and solved exactly through the
+//!   same reduced system (`N = Jᵀ W J + α H` applied by Woodbury, one
+//!   `n_act × n_act` Cholesky for the active rows' multipliers).
+//!   Active-set iterations (drop a negative multiplier, add the most
+//!   violated bound) start from the last QP's active set and stop at the
+//!   QP's KKT conditions, a certificate of optimality for this convex QP.
+//!   Clarabel's interior-point method solves the QP when there is no
+//!   active set yet (the first QP of an estimator) or when the warm-started
+//!   iterations fail; its solution's active set then seeds the same exact
+//!   solve, and only if that fails too is clarabel's step used as it is.
+//!   For clarabel the QP data are rescaled so that its absolute tolerances
+//!   act as relative ones (the QP is homogeneous in its right-hand sides);
+//!   `du` is always recomputed from `dF` with the banded factorization of
+//!   `K`, so the linearized equilibrium holds to round-off. (Clarabel alone
+//!   resolves the weakly penalized directions, the slopes `w'`, only to
+//!   about 1e-5 of `|F|`; the exact solve does not have that limit.)
 //!
 //! Globalization: backtracking on the ℓ1 merit function `φ = J + μ |Q|₁`,
 //! `μ` above the largest equality multiplier, each trial pulled back onto
 //! the equilibrium manifold by chord steps (a second-order correction).
 //! Convergence is judged on feasibility and on the predicted decrease along
 //! the manifold, `−g̃ᵀ dF` with `g̃` the reduced gradient (29) at the
-//! feasibility-restored residual `e'` (with a bound active: `−cᵀ d`).
+//! feasibility-restored residual `e'` (for a step of clarabel's: `−cᵀ d`,
+//! to 1e-9), and on the bounds holding at the current `F` (in the local
+//! frame they move with the shape).
 //! After convergence the shape is re-solved at the final `F` (a chord step
 //! with the last factorization, or a few Newton steps) so the estimate is
 //! an exact equilibrium.
@@ -86,6 +96,12 @@ pub struct SqpEstimator<E: Element> {
     h_upper: Vec<(usize, usize, f64)>,
     /// The factored tangent of the last QP (for the second-order correction).
     last_lu: Option<BandedLu>,
+    /// The factored load Gram matrix `B` (distributed load with bounds).
+    gram_lu: Option<BandedLu>,
+    /// The bounds active in the last QP's solution (indices into the rows
+    /// of [`SqpEstimator::inequalities`]): the first guess for the next QP
+    /// (`None` before the first: clarabel then finds one).
+    active_set: Option<Vec<usize>>,
 }
 
 impl<E: Element> SqpEstimator<E> {
@@ -117,11 +133,22 @@ impl<E: Element> SqpEstimator<E> {
             }
         }
         let _ = nq;
+        let gram_lu = match core.settings.load_model {
+            LoadModel::Distributed if !core.settings.bounds.is_empty() => Some(
+                core.robot
+                    .load_gram()
+                    .clone()
+                    .factor_scaled(0.0, "load Gram matrix")?,
+            ),
+            _ => None,
+        };
         Ok(SqpEstimator {
             core,
             g_free,
             h_upper,
             last_lu: None,
+            gram_lu,
+            active_set: None,
         })
     }
 
@@ -196,7 +223,7 @@ impl<E: Element> SqpEstimator<E> {
     /// term `c` and whether a bound is active. Without bounds the QP is the
     /// equality-constrained one, solved exactly through the banded
     /// factorization of `K` ([`SqpEstimator::equality_qp`]); with bounds
-    /// clarabel solves it ([`SqpEstimator::clarabel_qp`]).
+    /// [`SqpEstimator::bounded_qp`].
     fn qp(
         &mut self,
         op: &ObsOp,
@@ -224,7 +251,7 @@ impl<E: Element> SqpEstimator<E> {
         let step = if core.settings.bounds.is_empty() {
             self.equality_qp(&lu, op, f, e, r, alpha, c)?
         } else {
-            self.clarabel_qp(&lu, op, q, f, e, r, alpha, c)?
+            self.bounded_qp(&lu, op, q, f, e, r, alpha, c)?
         };
         self.core.lu_cache = Some((q.to_vec(), lu.clone()));
         self.last_lu = Some(lu);
@@ -262,20 +289,15 @@ impl<E: Element> SqpEstimator<E> {
         let g1 = core.gradient(&dv, op, &e1, f, alpha)?;
         let dec_opt = (-dot(&g1, &df)).max(0.0);
         let du = self.du_from(lu, r, &df)?;
-        // λ = 2 Σ_i w_i ẽ_i K⁻¹ Mᵀ a_iᵀ, ẽ = e + A M du (z_i = M K⁻¹ Mᵀ a_iᵀ)
-        let dq = core.robot.expand_step(&du)?;
-        let mut lam = vec![0.0; core.robot.n_q()];
-        for (i, zi) in dv.z.iter().enumerate() {
-            let s = 2.0 * op.wt[i] * (e[i] + op.apply_row(i, &dq, nd, d));
-            lam.iter_mut().zip(zi).for_each(|(a, b)| *a += s * b);
-        }
-        let lambda_max = lam.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let lambda_max = self.lambda_max(&dv, op, e, &du)?;
         Ok(QpStep {
             du,
             df,
             lambda_max,
             c,
             active: false,
+            exact: true,
+            bound_violation: 0.0,
             dec_opt: Some(dec_opt),
             derivs: Some((dv, l)),
         })
@@ -291,9 +313,39 @@ impl<E: Element> SqpEstimator<E> {
         Ok(rhs)
     }
 
-    /// The QP with bounds, by clarabel's interior-point method.
+    /// The bounds as rows `a · dF ≤ h` over the load step at `(q, F)`.
+    fn inequalities(&self, q: &[f64], f: &[f64]) -> Result<Vec<Ineq>> {
+        let mut ineq = Vec::new();
+        for (coeffs, lo, hi) in self.bound_rows(q)? {
+            let val: f64 = coeffs.iter().map(|(k, v)| v * f[*k]).sum();
+            if let Some(lo) = lo {
+                ineq.push(Ineq {
+                    a: coeffs.iter().map(|(k, v)| (*k, -v)).collect(),
+                    h: val - lo,
+                });
+            }
+            if let Some(hi) = hi {
+                ineq.push(Ineq {
+                    a: coeffs.clone(),
+                    h: hi - val,
+                });
+            }
+        }
+        Ok(ineq)
+    }
+
+    /// The QP with bounds. The bounds act on `F` only, so on a known active
+    /// set the QP is equality-constrained and solved exactly through the
+    /// reduced Gauss–Newton system ([`Reduced`]): the unconstrained step
+    /// `dF₀` corrected by the active rows' multipliers. An active set is
+    /// accepted only with its optimality certificate (every inactive bound
+    /// holds, every active multiplier has the right sign; the QP is convex,
+    /// so these KKT conditions are sufficient). Tried in turn: the active
+    /// set of the last QP, none (`dF₀` itself), and the one clarabel's
+    /// interior-point solution identifies; if that too fails the
+    /// certificate, clarabel's step is taken as it is.
     #[allow(clippy::too_many_arguments)]
-    fn clarabel_qp(
+    fn bounded_qp(
         &mut self,
         lu: &BandedLu,
         op: &ObsOp,
@@ -304,7 +356,83 @@ impl<E: Element> SqpEstimator<E> {
         alpha: f64,
         c: Vec<f64>,
     ) -> Result<QpStep> {
-        let bounds = self.bound_rows(q)?;
+        let ineq = self.inequalities(q, f)?;
+        let core = &self.core;
+        let (nd, d) = (E::NODE_DOFS, E::DIM);
+        let mut w0 = r.to_vec();
+        lu.solve_in_place(&mut w0)?;
+        let dq0 = core.robot.expand_step(&w0)?;
+        let e1: Vec<f64> = (0..op.n())
+            .map(|i| e[i] + op.apply_row(i, &dq0, nd, d))
+            .collect();
+        let dv = core.derivs(lu, op)?;
+        let (df0, l) = core.gn_step(&dv, op, &e1, f, alpha)?;
+        let g1 = core.gradient(&dv, op, &e1, f, alpha)?;
+        let reduced = Reduced::new(core, self.gram_lu.as_ref(), &dv, op, alpha);
+        let solve_from = |start: &[usize]| -> Option<(Vec<f64>, Vec<usize>)> {
+            active_set_solve(reduced.as_ref()?, &ineq, f, &df0, start)
+        };
+        let warm = self.active_set.as_deref().and_then(solve_from);
+        let (df, act, exact) = match warm {
+            Some((df, act)) => (df, act, true),
+            None => {
+                let (df_ip, act) = self.clarabel_df(op, r, alpha, &c, &ineq)?;
+                match solve_from(&act) {
+                    Some((df, act)) => (df, act, true),
+                    None => (df_ip, act, false),
+                }
+            }
+        };
+        // the bounds at the current F (they move with the shape in the
+        // local frame): the largest violation relative to the row's scale
+        let bound_violation = ineq
+            .iter()
+            .map(|ie| {
+                let size: f64 = ie.a.iter().map(|(j, v)| (v * f[*j]).abs()).sum();
+                -ie.h / (size + ie.h.abs()).max(1e-300)
+            })
+            .fold(0.0f64, f64::max);
+        let dec_opt = exact.then(|| (-dot(&g1, &df)).max(0.0));
+        self.active_set = Some(act.clone());
+        let du = self.du_from(lu, r, &df)?;
+        let lambda_max = self.lambda_max(&dv, op, e, &du)?;
+        Ok(QpStep {
+            du,
+            df,
+            lambda_max,
+            c,
+            active: !act.is_empty(),
+            exact,
+            bound_violation,
+            dec_opt,
+            derivs: Some((dv, l)),
+        })
+    }
+
+    /// The largest equality multiplier, from the `du` rows of the KKT
+    /// system (the bounds do not involve `u`):
+    /// `λ = 2 Σ_i w_i ẽ_i K⁻¹ Mᵀ a_iᵀ`, `ẽ = e + A M du`.
+    fn lambda_max(&self, dv: &Derivs, op: &ObsOp, e: &[f64], du: &[f64]) -> Result<f64> {
+        let (nd, d) = (E::NODE_DOFS, E::DIM);
+        let dq = self.core.robot.expand_step(du)?;
+        let mut lam = vec![0.0; self.core.robot.n_q()];
+        for (i, zi) in dv.z.iter().enumerate() {
+            let s = 2.0 * op.wt[i] * (e[i] + op.apply_row(i, &dq, nd, d));
+            lam.iter_mut().zip(zi).for_each(|(a, b)| *a += s * b);
+        }
+        Ok(lam.iter().fold(0.0f64, |m, v| m.max(v.abs())))
+    }
+
+    /// The full-space QP with bounds by clarabel's interior-point method:
+    /// its load step and the bounds active in its solution.
+    fn clarabel_df(
+        &self,
+        op: &ObsOp,
+        r: &[f64],
+        alpha: f64,
+        c: &[f64],
+        ineq: &[Ineq],
+    ) -> Result<(Vec<f64>, Vec<usize>)> {
         let core = &self.core;
         let nfree = core.robot.n_free();
         let nq = core.robot.n_q();
@@ -333,28 +461,9 @@ impl<E: Element> SqpEstimator<E> {
             *pt.entry((nfree + i, nfree + j)).or_insert(0.0) += 2.0 * alpha * v;
         }
         let pmax = pt.values().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
-        // constraints
-        let kmat = &core.kmat;
-        let mut b_eq: Vec<f64> = r.iter().map(|v| -v).collect();
-        let mut ineq: Vec<(Vec<(usize, f64)>, f64)> = Vec::new();
-        for (coeffs, lo, hi) in &bounds {
-            let val: f64 = coeffs.iter().map(|(k, v)| v * f[*k]).sum();
-            if let Some(lo) = lo {
-                ineq.push((
-                    coeffs.iter().map(|(k, v)| (nfree + k, -v)).collect(),
-                    val - lo,
-                ));
-            }
-            if let Some(hi) = hi {
-                ineq.push((
-                    coeffs.iter().map(|(k, v)| (nfree + k, *v)).collect(),
-                    hi - val,
-                ));
-            }
-        }
         // scaling: objective by 1/pmax, unknowns by γ
         let cmax = c.iter().fold(0.0f64, |m, v| m.max(v.abs())) / pmax;
-        let bmax = b_eq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let bmax = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let gamma = cmax.max(bmax).max(1e-300);
         let (mut ri, mut ci, mut vi) = (Vec::new(), Vec::new(), Vec::new());
         for ((a, b), v) in &pt {
@@ -365,6 +474,7 @@ impl<E: Element> SqpEstimator<E> {
         let p_mat = CscMatrix::new_from_triplets(n, n, ri, ci, vi);
         let c_s: Vec<f64> = c.iter().map(|v| v / (pmax * gamma)).collect();
         let (mut ri, mut ci, mut vi) = (Vec::new(), Vec::new(), Vec::new());
+        let kmat = &core.kmat;
         for i in 0..nfree {
             let lo = i.saturating_sub(2 * nd - 1);
             let hi = (i + 2 * nd).min(nfree);
@@ -383,18 +493,17 @@ impl<E: Element> SqpEstimator<E> {
             vi.push(v);
         }
         let m_eq = nfree;
-        for (row, (coeffs, _)) in ineq.iter().enumerate() {
-            for &(k, v) in coeffs {
+        for (row, ie) in ineq.iter().enumerate() {
+            for &(k, v) in &ie.a {
                 ri.push(m_eq + row);
-                ci.push(k);
+                ci.push(nfree + k);
                 vi.push(v);
             }
         }
         let m = m_eq + ineq.len();
         let a_mat = CscMatrix::new_from_triplets(m, n, ri, ci, vi);
-        b_eq.iter_mut().for_each(|v| *v /= gamma);
-        let mut b = b_eq;
-        b.extend(ineq.iter().map(|(_, h)| h / gamma));
+        let mut b: Vec<f64> = r.iter().map(|v| -v / gamma).collect();
+        b.extend(ineq.iter().map(|ie| ie.h / gamma));
         let mut cones: Vec<SupportedConeT<f64>> = vec![ZeroConeT(m_eq)];
         if !ineq.is_empty() {
             cones.push(NonnegativeConeT(ineq.len()));
@@ -419,51 +528,15 @@ impl<E: Element> SqpEstimator<E> {
                 context: format!("SQP subproblem: clarabel status {:?}", sol.status),
             });
         }
-        let mut df: Vec<f64> = sol.x[nfree..].iter().map(|v| v * gamma).collect();
-        // polish on the active set (as OSQP does): with no bound active the
-        // QP is the equality-constrained one, whose exact solution is the
-        // Gauss–Newton step from the feasibility-restored residual
-        // e' = e + A M K⁻¹ Q. The interior-point solution is accurate to its
-        // tolerances in the well-determined directions only: the penalty's
-        // curvature along the slopes w' is ~1e-8 of the data term's.
-        let active = sol.s[m_eq..]
+        let df: Vec<f64> = sol.x[nfree..].iter().map(|v| v * gamma).collect();
+        let act: Vec<usize> = sol.s[m_eq..]
             .iter()
             .zip(&sol.z[m_eq..])
-            .any(|(s, z)| *s <= 1e-6 || *z > 1e-6 * s.max(1e-300));
-        let lambda_max = sol.z[..m_eq]
-            .iter()
-            .fold(0.0f64, |m, v| m.max((v * gamma * pmax).abs()));
-        let x_du: Vec<f64> = sol.x[..nfree].iter().map(|v| v * gamma).collect();
-        let mut dec_opt = None;
-        if !active {
-            let mut w0 = r.to_vec();
-            lu.solve_in_place(&mut w0)?;
-            let dq0 = core.robot.expand_step(&w0)?;
-            let e1: Vec<f64> = (0..op.n())
-                .map(|i| e[i] + op.apply_row(i, &dq0, nd, d))
-                .collect();
-            let dv = core.derivs(lu, op)?;
-            let (step, _) = core.gn_step(&dv, op, &e1, f, alpha)?;
-            if step.iter().all(|v| v.is_finite()) {
-                let g1 = core.gradient(&dv, op, &e1, f, alpha)?;
-                dec_opt = Some((-dot(&g1, &step)).max(0.0));
-                df = step;
-            }
-        }
-        // polish: du from the linearized equilibrium, K du = Q + Mᵀ G dF
-        let mut du = self.du_from(lu, r, &df)?;
-        if !du.iter().all(|v| v.is_finite()) {
-            du = x_du;
-        }
-        Ok(QpStep {
-            du,
-            df,
-            lambda_max,
-            c,
-            active,
-            dec_opt,
-            derivs: None,
-        })
+            .enumerate()
+            .filter(|(_, (s, z))| **s <= 1e-6 || **z > 1e-6 * s.max(1e-300))
+            .map(|(k, _)| k)
+            .collect();
+        Ok((df, act))
     }
 
     #[allow(clippy::too_many_lines)]
@@ -500,6 +573,8 @@ impl<E: Element> SqpEstimator<E> {
                 lambda_max: lmax,
                 c,
                 active,
+                exact,
+                bound_violation,
                 dec_opt,
                 derivs,
             } = match self.qp(op, &q, &f, &e, &r, alpha) {
@@ -538,10 +613,10 @@ impl<E: Element> SqpEstimator<E> {
                 * self.core.kmat.max_abs()
                 * qmax
                 * (self.core.robot.n_free() as f64).sqrt();
-            let feasible = rn <= (1e-9 * load).max(floor);
+            let feasible = rn <= (1e-9 * load).max(floor) && bound_violation <= 1e-9;
             // with a bound active the step is clarabel's, accurate to its
             // tolerances only: a predicted decrease of 1e-9 then ends it
-            let tol = if active {
+            let tol = if active && !exact {
                 settings.tolerance.max(1e-9)
             } else {
                 settings.tolerance
@@ -684,6 +759,12 @@ struct QpStep {
     c: Vec<f64>,
     /// Whether a bound is active in the solution.
     active: bool,
+    /// Whether the step solves the QP exactly (else it is clarabel's, to
+    /// its tolerances).
+    exact: bool,
+    /// The largest violation of a bound at the current `F`, relative to
+    /// the bounded quantity's scale (0 if all hold).
+    bound_violation: f64,
     /// The predicted decrease along the constraint manifold,
     /// `−g̃ᵀ dF` with `g̃` the reduced gradient (29) at the
     /// feasibility-restored residual `e' = e + A M K⁻¹ Q`, when known
@@ -693,6 +774,177 @@ struct QpStep {
     /// The derivatives at `q` and the covariance factor there, when the
     /// step computed them.
     derivs: Option<(Derivs, Vec<f64>)>,
+}
+
+/// One bound row `a · dF ≤ h` (`a` sparse over the load parameters).
+struct Ineq {
+    a: Vec<(usize, f64)>,
+    h: f64,
+}
+
+/// The QP's load step by active-set iterations from the rows `start`: each
+/// solves the equality-constrained QP on the current set, drops the row
+/// with the most negative multiplier or else adds the most violated
+/// inactive bound, and stops when neither exists: then every inactive
+/// bound holds (to 1e-9 of its row's scale) and no active multiplier is
+/// negative (beyond 1e-9 of the largest), the KKT conditions of the convex
+/// QP, so the step is its solution. `None` if that takes more than
+/// `2 n_rows + 8` solves or a solve fails (dependent active rows).
+fn active_set_solve(
+    red: &Reduced<'_>,
+    ineq: &[Ineq],
+    f: &[f64],
+    df0: &[f64],
+    start: &[usize],
+) -> Option<(Vec<f64>, Vec<usize>)> {
+    let mut act: Vec<usize> = start.iter().copied().filter(|&k| k < ineq.len()).collect();
+    act.sort_unstable();
+    act.dedup();
+    for _ in 0..2 * ineq.len() + 8 {
+        let (df, nu) = if act.is_empty() {
+            (df0.to_vec(), Vec::new())
+        } else {
+            red.solve_on(&act, ineq, df0)?
+        };
+        if !df.iter().chain(&nu).all(|v| v.is_finite()) {
+            return None;
+        }
+        let numax = nu.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let (i_min, nu_min) =
+            nu.iter()
+                .copied()
+                .enumerate()
+                .fold(
+                    (0, f64::INFINITY),
+                    |m, (i, v)| if v < m.1 { (i, v) } else { m },
+                );
+        if nu_min < -1e-9 * numax {
+            act.remove(i_min);
+            continue;
+        }
+        let (k_max, viol_max) = ineq
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| act.binary_search(k).is_err())
+            .map(|(k, ie)| {
+                let lhs: f64 = ie.a.iter().map(|(j, v)| v * df[*j]).sum();
+                let size: f64 =
+                    ie.a.iter()
+                        .map(|(j, v)| v.abs() * (f[*j].abs() + df[*j].abs()))
+                        .sum();
+                (k, (lhs - ie.h) / (size + ie.h.abs()).max(1e-300))
+            })
+            .fold(
+                (0, f64::NEG_INFINITY),
+                |m, (k, v)| if v > m.1 { (k, v) } else { m },
+            );
+        if viol_max > 1e-9 {
+            if let Err(pos) = act.binary_search(&k_max) {
+                act.insert(pos, k_max);
+            }
+            continue;
+        }
+        return Some((df, act));
+    }
+    None
+}
+
+/// The reduced Gauss–Newton Hessian `N = Jᵀ W J + α H` at one
+/// linearization, applied as `N⁻¹`: for the distributed load
+/// (`J = Z B`, `H = B`) by Woodbury,
+/// `N⁻¹ = α⁻¹ (B⁻¹ − Zᵀ S⁻¹ Z)`, `S = α W⁻¹ + Z B Zᵀ` (`n_ob × n_ob`);
+/// for a concentrated load `N` itself (`DIM × DIM`).
+struct Reduced<'a> {
+    z: &'a [Vec<f64>],
+    chol: nalgebra::Cholesky<f64, nalgebra::Dyn>,
+    gram_lu: Option<&'a BandedLu>,
+    alpha: f64,
+}
+
+impl<'a> Reduced<'a> {
+    fn new<E: Element>(
+        core: &Core<E>,
+        gram_lu: Option<&'a BandedLu>,
+        dv: &'a Derivs,
+        op: &ObsOp,
+        alpha: f64,
+    ) -> Option<Self> {
+        let m = op.n();
+        let mat = match core.settings.load_model {
+            LoadModel::Distributed => {
+                gram_lu?;
+                nalgebra::DMatrix::from_fn(m, m, |i, j| {
+                    0.5 * (dot(&dv.z[i], &dv.jm[j]) + dot(&dv.z[j], &dv.jm[i]))
+                        + if i == j { alpha / op.wt[i] } else { 0.0 }
+                })
+            }
+            LoadModel::Concentrated { .. } => {
+                let nf = core.n_f;
+                nalgebra::DMatrix::from_fn(nf, nf, |a, b| {
+                    (0..m)
+                        .map(|i| op.wt[i] * dv.jm[i][a] * dv.jm[i][b])
+                        .sum::<f64>()
+                        + if a == b { alpha } else { 0.0 }
+                })
+            }
+        };
+        Some(Reduced {
+            z: &dv.z,
+            chol: mat.cholesky()?,
+            gram_lu,
+            alpha,
+        })
+    }
+
+    /// `N⁻¹ a` for a sparse `a` over the load parameters (`n_f` long).
+    fn n_inv(&self, a: &[(usize, f64)], nf: usize) -> Option<Vec<f64>> {
+        let mut x = vec![0.0; nf];
+        for &(j, v) in a {
+            x[j] += v;
+        }
+        match self.gram_lu {
+            Some(lu) => {
+                let t = nalgebra::DVector::from_fn(self.z.len(), |i, _| {
+                    a.iter().map(|(j, v)| v * self.z[i][*j]).sum::<f64>()
+                });
+                let s = self.chol.solve(&t);
+                lu.solve_in_place(&mut x).ok()?;
+                for (zi, si) in self.z.iter().zip(s.iter()) {
+                    x.iter_mut().zip(zi).for_each(|(a, b)| *a -= si * b);
+                }
+                x.iter_mut().for_each(|v| *v /= self.alpha);
+                Some(x)
+            }
+            None => {
+                let v = self.chol.solve(&nalgebra::DVector::from_vec(x));
+                Some(v.iter().copied().collect())
+            }
+        }
+    }
+
+    /// The step with the rows `act` held at equality, `a_k · dF = h_k`:
+    /// `dF = dF₀ − Σ_k ν_k N⁻¹ a_k`, `(C N⁻¹ Cᵀ) ν = C dF₀ − h`; also `ν`
+    /// (the rows' multipliers, up to a positive factor).
+    fn solve_on(&self, act: &[usize], ineq: &[Ineq], df0: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+        let nf = df0.len();
+        let y: Vec<Vec<f64>> = act
+            .iter()
+            .map(|&k| self.n_inv(&ineq.get(k)?.a, nf))
+            .collect::<Option<_>>()?;
+        let rowdot =
+            |k: usize, v: &[f64]| -> f64 { ineq[k].a.iter().map(|(j, c)| c * v[*j]).sum() };
+        let na = act.len();
+        let mmat = nalgebra::DMatrix::from_fn(na, na, |i, j| {
+            0.5 * (rowdot(act[i], &y[j]) + rowdot(act[j], &y[i]))
+        });
+        let rhs = nalgebra::DVector::from_fn(na, |i, _| rowdot(act[i], df0) - ineq[act[i]].h);
+        let nu = mmat.cholesky()?.solve(&rhs);
+        let mut df = df0.to_vec();
+        for (yk, nk) in y.iter().zip(nu.iter()) {
+            df.iter_mut().zip(yk).for_each(|(a, b)| *a -= nk * b);
+        }
+        Some((df, nu.iter().copied().collect()))
+    }
 }
 
 crate::estimate::impl_estimator!(SqpEstimator, Backend::Sqp);
