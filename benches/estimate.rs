@@ -69,7 +69,11 @@ fn case(n: usize, m: usize) -> Case {
     truth.line_loads.push(LineLoad::Uniform {
         w_n_per_m: vec![0.0, -0.5],
     });
-    let eq = StaticSolver::default().solve(&robot, &truth, None).unwrap();
+    // from the known loads' equilibrium (a cold solve of the true loads
+    // does not converge at 1000 elements and more)
+    let solver = StaticSolver::default();
+    let q_known = solver.solve(&robot, &known, None).unwrap().q;
+    let eq = solver.solve(&robot, &truth, Some(&q_known)).unwrap();
     let markers: Vec<MarkerObservation> = (1..=m)
         .map(|k| {
             let s = robot.length() * k as f64 / m as f64;
@@ -101,13 +105,15 @@ fn settings() -> EstimatorSettings {
 /// A warm estimator (its first step taken on frame 0). If that first step
 /// does not converge (the Newton backend's cold start can fail at 160
 /// elements), the estimator is led there through 16 observations
-/// interpolated from the markers of the known loads' equilibrium.
-fn warm(c: &Case, backend: Backend, settings: EstimatorSettings) -> Box<dyn Estimator> {
+/// interpolated from the markers of the known loads' equilibrium; if that
+/// fails too, the estimator is returned with the error (the benchmark then
+/// times steps that do not converge, and says so).
+fn warm(c: &Case, backend: Backend, settings: EstimatorSettings) -> Warm {
     let mut est = backend
         .build(c.robot.clone(), c.known.clone(), settings)
         .unwrap();
     if est.step(&c.frames[0]).is_ok() {
-        return est;
+        return (est, None);
     }
     est.reset();
     let q0 = StaticSolver::default()
@@ -130,28 +136,58 @@ fn warm(c: &Case, backend: Backend, settings: EstimatorSettings) -> Box<dyn Esti
                 MarkerObservation::at_arc(s, p)
             })
             .collect();
-        est.step(&Observation { markers }).unwrap();
+        if let Err(e) = est.step(&Observation { markers }) {
+            return (est, Some(format!("no warm start: {e}")));
+        }
     }
-    est.step(&c.frames[0]).unwrap();
-    est
+    let failed = est
+        .step(&c.frames[0])
+        .err()
+        .map(|e| format!("no warm start: {e}"));
+    (est, failed)
 }
 
+/// An estimator and, if it could not be warmed, why.
+type Warm = (Box<dyn Estimator>, Option<String>);
+
 /// Benchmarks one warm step per iteration, cycling through the frames.
-/// The case is built only if the id passes criterion's filter.
+/// The case is built only if the id passes criterion's filter. A step that
+/// does not converge is timed all the same (the time to the answer) and
+/// counted: then a `not_converged` file next to criterion's results says
+/// how many (`benches/table.py` marks those medians).
 fn bench_warm(
     group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
-    id: BenchmarkId,
-    make: impl Fn() -> (Case, Box<dyn Estimator>),
+    (name, backend, param): (&str, Backend, String),
+    make: impl Fn() -> (Case, Warm),
 ) {
-    let mut state: Option<(Case, Box<dyn Estimator>)> = None;
-    let mut k = 0;
-    group.bench_function(id, |b| {
-        let (c, est) = state.get_or_insert_with(&make);
+    let dir = marker_dir(name, backend, &param);
+    let _ = std::fs::remove_file(dir.join("not_converged"));
+    let mut state: Option<(Case, Warm)> = None;
+    let (mut k, mut steps, mut failed) = (0, 0usize, 0usize);
+    group.bench_function(BenchmarkId::new(backend.name(), &param), |b| {
+        let (c, (est, cold)) = state.get_or_insert_with(&make);
         b.iter(|| {
             k = (k + 1) % c.frames.len();
-            black_box(est.step(black_box(&c.frames[k])).unwrap());
-        })
+            let ok = black_box(est.step(black_box(&c.frames[k]))).is_ok();
+            steps += 1;
+            failed += usize::from(!ok);
+        });
+        if failed > 0 {
+            let why = cold.as_deref().unwrap_or("");
+            let msg = format!("{failed} of {steps} warm steps did not converge {why}\n");
+            eprintln!("{name}/{}/{param}: {msg}", backend.name());
+            let _ = std::fs::create_dir_all(&dir);
+            let _ = std::fs::write(dir.join("not_converged"), msg);
+        }
     });
+}
+
+/// Where criterion keeps the results of `group/backend/param`.
+fn marker_dir(group: &str, backend: Backend, param: &str) -> std::path::PathBuf {
+    std::path::Path::new("target/criterion")
+        .join(group)
+        .join(backend.name())
+        .join(param)
 }
 
 fn warm_step(c: &mut Criterion) {
@@ -160,11 +196,11 @@ fn warm_step(c: &mut Criterion) {
     for n in ELEMENTS {
         for m in MARKERS {
             for backend in BACKENDS {
-                let id = BenchmarkId::new(backend.name(), format!("{n}el_{m}mk"));
+                let id = ("estimate_warm_step", backend, format!("{n}el_{m}mk"));
                 bench_warm(&mut group, id, || {
                     let c = case(n, m);
-                    let est = warm(&c, backend, settings());
-                    (c, est)
+                    let w = warm(&c, backend, settings());
+                    (c, w)
                 });
             }
         }
@@ -209,10 +245,7 @@ fn cold_step(c: &mut Criterion) {
 /// leaves a `not_converged` file next to criterion's results for the id
 /// (`benches/table.py` marks those medians).
 fn note_failure(group: &str, backend: Backend, param: &str, c: &Case, settings: EstimatorSettings) {
-    let dir = std::path::Path::new("target/criterion")
-        .join(group)
-        .join(backend.name())
-        .join(param);
+    let dir = marker_dir(group, backend, param);
     let marker = dir.join("not_converged");
     let _ = std::fs::remove_file(&marker);
     let mut est = backend
@@ -254,11 +287,11 @@ fn warm_scaling(c: &mut Criterion) {
     let mut group = c.benchmark_group("estimate_warm_scaling");
     for n in SCALING {
         for backend in BACKENDS {
-            let id = BenchmarkId::new(backend.name(), n);
+            let id = ("estimate_warm_scaling", backend, n.to_string());
             bench_warm(&mut group, id, || {
                 let c = case(n, 5);
-                let est = warm(&c, backend, settings());
-                (c, est)
+                let w = warm(&c, backend, settings());
+                (c, w)
             });
         }
     }
@@ -269,7 +302,11 @@ fn warm_step_bounded(c: &mut Criterion) {
     // `cargo bench --bench estimate -- 'estimate_warm_step_bounded/'`
     let mut group = c.benchmark_group("estimate_warm_step_bounded");
     for n in [20usize, 80] {
-        let id = BenchmarkId::new(Backend::Sqp.name(), format!("{n}el_5mk"));
+        let id = (
+            "estimate_warm_step_bounded",
+            Backend::Sqp,
+            format!("{n}el_5mk"),
+        );
         bench_warm(&mut group, id, || {
             let c = case(n, 5);
             let s_m = 0.5 * c.robot.length();
@@ -291,7 +328,7 @@ fn warm_step_bounded(c: &mut Criterion) {
             // the bound must be active, else this measures the free case
             let w = e.load_at(s_m)[1];
             assert!((w + 0.3).abs() < 1e-6, "bound not active: w_y = {w}");
-            (c, est)
+            (c, (est, None))
         });
     }
     group.finish();

@@ -7,8 +7,8 @@ target/criterion/<group>/[<backend>/]<parameter>/new/estimates.json
 (medians); exponents are least-squares slopes of log t against log n for
 n >= 100 (the logic of benches/fit_exponent.py). A cell is empty when that
 benchmark has not been run; `†` marks a cold step that did not converge
-(the time to the error is shown; benches/estimate.rs leaves a
-`not_converged` file for it).
+or a warm-step benchmark in which some steps did not converge (the time to
+the answer is shown; benches/estimate.rs leaves a `not_converged` file).
 """
 import pathlib
 import sys
@@ -90,8 +90,8 @@ def scaling():
     print("|---|" + "---|" * (len(SCALING) + 1))
     for b in BACKENDS:
         rows = medians(f"{group}/{b}")
-        d = dict(rows)
-        print(f"| `{b}` | " + " | ".join(fmt(d.get(n)) for n in SCALING) + f" | {exponent(rows)} |")
+        cells = [cell(ROOT / group / b / str(n)) for n in SCALING]
+        print(f"| `{b}` | " + " | ".join(cells) + f" | {exponent(rows)} |")
     print()
 
 
