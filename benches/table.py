@@ -86,10 +86,12 @@ def scaling():
     if not (ROOT / group).is_dir():
         return
     print("| warm step, 5 markers (`estimate_warm_scaling`) | "
-          + " | ".join(f"{n} el" for n in SCALING) + " | fit exponent (100–2000) |")
+          + " | ".join(f"{n} el" for n in SCALING) + " | fit exponent (100–2000, † left out) |")
     print("|---|" + "---|" * (len(SCALING) + 1))
     for b in BACKENDS:
-        rows = medians(f"{group}/{b}")
+        # the fit leaves out sizes with non-converged steps (†)
+        rows = [(n, t) for n, t in medians(f"{group}/{b}")
+                if not (ROOT / group / b / str(n) / "not_converged").exists()]
         cells = [cell(ROOT / group / b / str(n)) for n in SCALING]
         print(f"| `{b}` | " + " | ".join(cells) + f" | {exponent(rows)} |")
     print()
