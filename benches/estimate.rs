@@ -1,61 +1,345 @@
-//! Estimation benches: one warm streaming step (a new noisy frame of the
-//! same scene) per backend on the two-section robot (20 elements, 5
-//! markers, unknown 20 g tip mass + 0.5 N/m uniform load, alpha fixed at the
-//! value the discrepancy principle picks there), for 20 and 80 elements.
+//! Estimation benches on the paper's two-section robot: the unknown load is
+//! a 20 g tip mass plus a 0.5 N/m uniform load, the markers are spread
+//! evenly along the robot (at arc lengths `k L / m`, `k = 1..=m`), each
+//! frame is the true shape plus 0.01 mm noise, and `α = 31` (the value the
+//! discrepancy principle picks at 20 elements and 5 markers).
 //!
-//! Run: `cargo bench --bench estimate`.
+//! Groups (criterion ids are `GROUP/BACKEND/PARAMETER`):
+//! - `estimate_warm_step/BACKEND/<n>el_<m>mk`: one streaming step (a new
+//!   noisy frame of the same scene) of a warm estimator, for elements
+//!   `n ∈ {5, 10, 20, 40, 80, 160}` × markers `m ∈ {2, 3, 5, 8, 11}`.
+//! - `estimate_cold_step/BACKEND/<n>el_<m>mk`: the first step of a fresh
+//!   estimator with `α` given (static solve of the known loads, then the
+//!   estimate), same grid.
+//! - `estimate_alpha_search/BACKEND/20el_5mk`: the first step of a fresh
+//!   estimator without `α` (the discrepancy-principle search), once.
+//! - `estimate_warm_scaling/BACKEND/<n>`: the warm step with 5 markers for
+//!   `n ∈ {100, 200, 500, 1000, 2000}`, for the log–log fit exponent.
+//! - `estimate_warm_step_bounded/sqp/<n>el_5mk`: the sqp warm step with one
+//!   load bound (`w_y ≥ −0.3 N/m` at mid-length, active at the solution), 20
+//!   and 80 elements.
+//!
+//! Run everything (a few minutes; short warm-up and measurement times are
+//! set below, the command line overrides them):
+//! `cargo bench --bench estimate`
+//! Filter by a regular expression on the id, e.g. only the sqp warm steps:
+//! `cargo bench --bench estimate -- 'estimate_warm_step/sqp'`
+//! Tables for the README: `python3 benches/table.py`.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use std::hint::black_box;
+use std::time::Duration;
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use softrod::estimate::{Backend, EstimatorSettings, Observation};
-use softrod::loads::{LineLoad, PointForce};
+use criterion::{criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion};
+use softrod::assembly::Robot;
+use softrod::element::PlanarCable;
+use softrod::estimate::{
+    Backend, BoundFrame, Estimator, EstimatorSettings, LoadBound, MarkerObservation, Observation,
+};
+use softrod::loads::{LineLoad, Loads, PointForce};
 use softrod::scene::Scene;
 use softrod::statics::StaticSolver;
 
-fn warm_step(c: &mut Criterion) {
-    let mut group = c.benchmark_group("estimate_warm_step");
-    for &n in &[20usize, 80] {
-        let mut scene = Scene::two_section();
-        for s in &mut scene.robot.sections {
-            s.elements = n / 2;
-        }
-        let robot = scene.robot().unwrap();
-        let known = scene.loads().unwrap();
-        let mut truth = known.clone();
-        truth.point_forces.push(PointForce {
-            s_m: robot.length(),
-            force_n: vec![0.0, -0.02 * 9.81],
-        });
-        truth.line_loads.push(LineLoad::Uniform {
-            w_n_per_m: vec![0.0, -0.5],
-        });
-        let eq = StaticSolver::default().solve(&robot, &truth, None).unwrap();
-        let nodes: Vec<usize> = (1..=5).map(|k| k * n / 5).collect();
-        let frames: Vec<Observation> = (0..64)
-            .map(|k| Observation::at_nodes(&robot, &eq.q, &nodes).with_noise(1e-5, k))
+const ELEMENTS: [usize; 6] = [5, 10, 20, 40, 80, 160];
+const MARKERS: [usize; 5] = [2, 3, 5, 8, 11];
+const SCALING: [usize; 5] = [100, 200, 500, 1000, 2000];
+const ALPHA: f64 = 31.0;
+const BACKENDS: [Backend; 2] = [Backend::Newton, Backend::Sqp];
+
+/// The scene with `n` elements in all, its known loads and 64 noisy frames
+/// of `m` markers on the true equilibrium.
+struct Case {
+    robot: Robot<PlanarCable>,
+    known: Loads,
+    frames: Vec<Observation>,
+}
+
+fn case(n: usize, m: usize) -> Case {
+    let mut scene = Scene::two_section();
+    scene.robot.sections[0].elements = n / 2;
+    scene.robot.sections[1].elements = n - n / 2;
+    let robot = scene.robot().unwrap();
+    assert_eq!(robot.elements().len(), n);
+    let known = scene.loads().unwrap();
+    let mut truth = known.clone();
+    truth.point_forces.push(PointForce {
+        s_m: robot.length(),
+        force_n: vec![0.0, -0.02 * 9.81],
+    });
+    truth.line_loads.push(LineLoad::Uniform {
+        w_n_per_m: vec![0.0, -0.5],
+    });
+    // from the known loads' equilibrium (a cold solve of the true loads
+    // does not converge at 1000 elements and more)
+    let solver = StaticSolver::default();
+    let q_known = solver.solve(&robot, &known, None).unwrap().q;
+    let eq = solver.solve(&robot, &truth, Some(&q_known)).unwrap();
+    let markers: Vec<MarkerObservation> = (1..=m)
+        .map(|k| {
+            let s = robot.length() * k as f64 / m as f64;
+            MarkerObservation::at_arc(s, robot.position_at(&eq.q, s).unwrap())
+        })
+        .collect();
+    let frames = (0..64)
+        .map(|k| {
+            Observation {
+                markers: markers.clone(),
+            }
+            .with_noise(1e-5, k)
+        })
+        .collect();
+    Case {
+        robot,
+        known,
+        frames,
+    }
+}
+
+fn settings() -> EstimatorSettings {
+    EstimatorSettings {
+        alpha: Some(ALPHA),
+        ..EstimatorSettings::default()
+    }
+}
+
+/// A warm estimator (its first step taken on frame 0). If that first step
+/// does not converge (the Newton backend's cold start can fail at 160
+/// elements), the estimator is led there through 16 observations
+/// interpolated from the markers of the known loads' equilibrium; if that
+/// fails too, the estimator is returned with the error (the benchmark then
+/// times steps that do not converge, and says so).
+fn warm(c: &Case, backend: Backend, settings: EstimatorSettings) -> Warm {
+    let mut est = backend
+        .build(c.robot.clone(), c.known.clone(), settings)
+        .unwrap();
+    if est.step(&c.frames[0]).is_ok() {
+        return (est, None);
+    }
+    est.reset();
+    let q0 = StaticSolver::default()
+        .solve(&c.robot, &c.known, None)
+        .unwrap()
+        .q;
+    let target = &c.frames[0].markers;
+    for k in 1..=16 {
+        let t = f64::from(k) / 16.0;
+        let markers = target
+            .iter()
+            .map(|mk| {
+                let s = mk.s_m.unwrap();
+                let p0 = c.robot.position_at(&q0, s).unwrap();
+                let p = p0
+                    .iter()
+                    .zip(&mk.position_m)
+                    .map(|(a, b)| a + t * (b - a))
+                    .collect();
+                MarkerObservation::at_arc(s, p)
+            })
             .collect();
-        for backend in [Backend::Newton, Backend::Sqp] {
-            let settings = EstimatorSettings {
-                alpha: Some(31.0),
-                ..EstimatorSettings::default()
-            };
-            let mut est = backend
-                .build(robot.clone(), known.clone(), settings)
-                .unwrap();
-            est.step(&frames[0]).unwrap();
-            let mut k = 0;
-            group.bench_with_input(BenchmarkId::new(backend.name(), n), &n, |b, _| {
-                b.iter(|| {
-                    k = (k + 1) % frames.len();
-                    black_box(est.step(black_box(&frames[k])).unwrap());
-                })
+        if let Err(e) = est.step(&Observation { markers }) {
+            return (est, Some(format!("no warm start: {e}")));
+        }
+    }
+    let failed = est
+        .step(&c.frames[0])
+        .err()
+        .map(|e| format!("no warm start: {e}"));
+    (est, failed)
+}
+
+/// An estimator and, if it could not be warmed, why.
+type Warm = (Box<dyn Estimator>, Option<String>);
+
+/// Benchmarks one warm step per iteration, cycling through the frames.
+/// The case is built only if the id passes criterion's filter. A step that
+/// does not converge is timed all the same (the time to the answer) and
+/// counted: then a `not_converged` file next to criterion's results says
+/// how many (`benches/table.py` marks those medians).
+fn bench_warm(
+    group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    (name, backend, param): (&str, Backend, String),
+    make: impl Fn() -> (Case, Warm),
+) {
+    let dir = marker_dir(name, backend, &param);
+    let _ = std::fs::remove_file(dir.join("not_converged"));
+    let mut state: Option<(Case, Warm)> = None;
+    let (mut k, mut steps, mut failed) = (0, 0usize, 0usize);
+    group.bench_function(BenchmarkId::new(backend.name(), &param), |b| {
+        let (c, (est, cold)) = state.get_or_insert_with(&make);
+        b.iter(|| {
+            k = (k + 1) % c.frames.len();
+            let ok = black_box(est.step(black_box(&c.frames[k]))).is_ok();
+            steps += 1;
+            failed += usize::from(!ok);
+        });
+        if failed > 0 {
+            let why = cold.as_deref().unwrap_or("");
+            let msg = format!("{failed} of {steps} warm steps did not converge {why}\n");
+            eprintln!("{name}/{}/{param}: {msg}", backend.name());
+            let _ = std::fs::create_dir_all(&dir);
+            let _ = std::fs::write(dir.join("not_converged"), msg);
+        }
+    });
+}
+
+/// Where criterion keeps the results of `group/backend/param`.
+fn marker_dir(group: &str, backend: Backend, param: &str) -> std::path::PathBuf {
+    std::path::Path::new("target/criterion")
+        .join(group)
+        .join(backend.name())
+        .join(param)
+}
+
+fn warm_step(c: &mut Criterion) {
+    // `cargo bench --bench estimate -- 'estimate_warm_step/'`
+    let mut group = c.benchmark_group("estimate_warm_step");
+    for n in ELEMENTS {
+        for m in MARKERS {
+            for backend in BACKENDS {
+                let id = ("estimate_warm_step", backend, format!("{n}el_{m}mk"));
+                bench_warm(&mut group, id, || {
+                    let c = case(n, m);
+                    let w = warm(&c, backend, settings());
+                    (c, w)
+                });
+            }
+        }
+    }
+    group.finish();
+}
+
+fn cold_step(c: &mut Criterion) {
+    // `cargo bench --bench estimate -- 'estimate_cold_step/'`
+    let mut group = c.benchmark_group("estimate_cold_step");
+    for n in ELEMENTS {
+        for m in MARKERS {
+            for backend in BACKENDS {
+                let param = format!("{n}el_{m}mk");
+                let id = BenchmarkId::new(backend.name(), &param);
+                let mut state: Option<Case> = None;
+                group.bench_function(id, |b| {
+                    let c = state.get_or_insert_with(|| {
+                        let c = case(n, m);
+                        note_failure("estimate_cold_step", backend, &param, &c, settings());
+                        c
+                    });
+                    b.iter_batched(
+                        || {
+                            backend
+                                .build(c.robot.clone(), c.known.clone(), settings())
+                                .unwrap()
+                        },
+                        // the time to the answer, an estimate or a
+                        // non-convergence (marked by `note_failure`)
+                        |mut est| black_box(est.step(black_box(&c.frames[1])).is_ok()),
+                        BatchSize::SmallInput,
+                    )
+                });
+            }
+        }
+    }
+    group.finish();
+}
+
+/// Runs the cold step once; if it does not converge, says so on stderr and
+/// leaves a `not_converged` file next to criterion's results for the id
+/// (`benches/table.py` marks those medians).
+fn note_failure(group: &str, backend: Backend, param: &str, c: &Case, settings: EstimatorSettings) {
+    let dir = marker_dir(group, backend, param);
+    let marker = dir.join("not_converged");
+    let _ = std::fs::remove_file(&marker);
+    let mut est = backend
+        .build(c.robot.clone(), c.known.clone(), settings)
+        .unwrap();
+    if let Err(e) = est.step(&c.frames[1]) {
+        eprintln!("{group}/{}/{param}: {e}", backend.name());
+        let _ = std::fs::create_dir_all(&dir);
+        let _ = std::fs::write(&marker, format!("{e}\n"));
+    }
+}
+
+fn alpha_search(c: &mut Criterion) {
+    // `cargo bench --bench estimate -- 'estimate_alpha_search/'`
+    let mut group = c.benchmark_group("estimate_alpha_search");
+    for backend in BACKENDS {
+        let id = BenchmarkId::new(backend.name(), "20el_5mk");
+        let mut state: Option<Case> = None;
+        group.bench_function(id, |b| {
+            let c = state.get_or_insert_with(|| case(20, 5));
+            b.iter_batched(
+                || {
+                    let s = EstimatorSettings {
+                        alpha: None,
+                        ..EstimatorSettings::default()
+                    };
+                    backend.build(c.robot.clone(), c.known.clone(), s).unwrap()
+                },
+                |mut est| black_box(est.step(black_box(&c.frames[1])).is_ok()),
+                BatchSize::SmallInput,
+            )
+        });
+    }
+    group.finish();
+}
+
+fn warm_scaling(c: &mut Criterion) {
+    // `cargo bench --bench estimate -- 'estimate_warm_scaling/'`
+    let mut group = c.benchmark_group("estimate_warm_scaling");
+    for n in SCALING {
+        for backend in BACKENDS {
+            let id = ("estimate_warm_scaling", backend, n.to_string());
+            bench_warm(&mut group, id, || {
+                let c = case(n, 5);
+                let w = warm(&c, backend, settings());
+                (c, w)
             });
         }
     }
     group.finish();
 }
 
-criterion_group!(benches, warm_step);
+fn warm_step_bounded(c: &mut Criterion) {
+    // `cargo bench --bench estimate -- 'estimate_warm_step_bounded/'`
+    let mut group = c.benchmark_group("estimate_warm_step_bounded");
+    for n in [20usize, 80] {
+        let id = (
+            "estimate_warm_step_bounded",
+            Backend::Sqp,
+            format!("{n}el_5mk"),
+        );
+        bench_warm(&mut group, id, || {
+            let c = case(n, 5);
+            let s_m = 0.5 * c.robot.length();
+            let bound = LoadBound {
+                s_m,
+                frame: BoundFrame::World,
+                direction: vec![0.0, 1.0],
+                min_n_per_m: Some(-0.3),
+                max_n_per_m: None,
+            };
+            let s = EstimatorSettings {
+                bounds: vec![bound],
+                ..settings()
+            };
+            let mut est = Backend::Sqp
+                .build(c.robot.clone(), c.known.clone(), s)
+                .unwrap();
+            let e = est.step(&c.frames[0]).unwrap();
+            // the bound must be active, else this measures the free case
+            let w = e.load_at(s_m)[1];
+            assert!((w + 0.3).abs() < 1e-6, "bound not active: w_y = {w}");
+            (c, (est, None))
+        });
+    }
+    group.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default()
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(1));
+    targets = warm_step, warm_step_bounded, warm_scaling, cold_step, alpha_search
+}
 criterion_main!(benches);

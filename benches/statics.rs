@@ -1,8 +1,17 @@
-//! Static solver benches: the cost of one Newton step (assembly of residual
-//! and tangent, banded LU, solve) from 10 to 2000 elements, and whole solves.
+//! Static solver benches on the paper's two-section robot (elements split
+//! `n/2 + (n − n/2)` between the sections) under its weight and the default
+//! pressures:
+//! - `newton_step/<n>`: one Newton step (assembly of residual and tangent,
+//!   banded LU, solve) at the equilibrium, 10 to 2000 elements;
+//! - `static_solve_cold/<n>`: a whole solve from the arc configuration,
+//!   5 to 2000 elements;
+//! - `static_solve_warm/<n>`: a whole solve from the previous equilibrium
+//!   after a 0.5 kPa pressure change (a control step), 5 to 2000 elements.
 //!
-//! Run: `cargo bench --bench statics` then `python3 benches/fit_exponent.py GROUP`
-//! for GROUP in `newton_step`, `static_solve_cold`, `static_solve_warm`.
+//! Run: `cargo bench --bench statics -- --warm-up-time 1 --measurement-time 3`
+//! (filter by group: `cargo bench --bench statics -- static_solve_warm`),
+//! then `python3 benches/table.py` for the README tables, or
+//! `python3 benches/fit_exponent.py GROUP 100` for one group's fit.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use std::hint::black_box;
@@ -19,10 +28,10 @@ use softrod::statics::StaticSolver;
 /// and the default pressures, at its equilibrium.
 fn robot(n: usize) -> (Robot<PlanarCable>, Loads, Vec<f64>) {
     let mut scene = softrod::scene::Scene::two_section();
-    for s in &mut scene.robot.sections {
-        s.elements = n.div_ceil(2);
-    }
+    scene.robot.sections[0].elements = n / 2;
+    scene.robot.sections[1].elements = n - n / 2;
     let robot = scene.robot().unwrap();
+    assert_eq!(robot.elements().len(), n);
     let mut loads = scene.loads().unwrap();
     loads.pressures_pa = params::DEFAULT_PRESSURES_PA.to_vec();
     let eq = StaticSolver::default().solve(&robot, &loads, None).unwrap();
@@ -30,6 +39,7 @@ fn robot(n: usize) -> (Robot<PlanarCable>, Loads, Vec<f64>) {
 }
 
 fn newton_step(c: &mut Criterion) {
+    // `cargo bench --bench statics -- newton_step`
     let mut group = c.benchmark_group("newton_step");
     for &n in &[10usize, 20, 50, 100, 200, 500, 1000, 2000] {
         let (robot, loads, q) = robot(n);
@@ -54,8 +64,9 @@ fn newton_step(c: &mut Criterion) {
 fn static_solve(c: &mut Criterion) {
     // cold: from the arc configuration; warm: from the previous equilibrium
     // after a 0.5 kPa pressure change (a control step).
+    // `cargo bench --bench statics -- static_solve_cold`
     let mut cold = c.benchmark_group("static_solve_cold");
-    for &n in &[6usize, 20, 100, 500, 2000] {
+    for &n in &[5usize, 6, 20, 100, 500, 2000] {
         let (robot, loads, _) = robot(n);
         let solver = StaticSolver::default();
         cold.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
@@ -63,8 +74,9 @@ fn static_solve(c: &mut Criterion) {
         });
     }
     cold.finish();
+    // `cargo bench --bench statics -- static_solve_warm`
     let mut warm = c.benchmark_group("static_solve_warm");
-    for &n in &[6usize, 20, 100, 500, 2000] {
+    for &n in &[5usize, 6, 20, 100, 500, 2000] {
         let (robot, loads, q) = robot(n);
         let solver = StaticSolver::default();
         let mut nudged = loads.clone();
