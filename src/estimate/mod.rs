@@ -674,6 +674,7 @@ macro_rules! impl_estimator {
             fn reset(&mut self) {
                 self.core.warm = None;
                 self.core.lu_cache = None;
+                self.core.eq_state = None;
                 self.core.alpha = self.core.settings.alpha;
             }
         }
@@ -784,6 +785,20 @@ pub(crate) struct Core<E: Element> {
     pub warm: Option<Warm>,
     /// The last factorization of `K` and the shape it was taken at.
     pub lu_cache: Option<(Vec<f64>, BandedLu)>,
+    /// The last solved equilibrium: its load, shape and residual.
+    pub eq_state: Option<EqState>,
+}
+
+/// A solved equilibrium [`Core::equilibrium_opt`] remembers: asked again at
+/// the same `(F, q)` it returns at once, and a trial load `F'` from the same
+/// shape starts from `Q(q, F') = Q(q, F) + Mᵀ G (F' − F)` (the unknown load
+/// enters linearly) instead of a new residual evaluation.
+#[derive(Debug, Clone)]
+pub(crate) struct EqState {
+    f: Vec<f64>,
+    q: Vec<f64>,
+    r: Vec<f64>,
+    residual_n: f64,
 }
 
 /// The solved equilibrium at some `F`: configuration and the factored tangent.
@@ -792,6 +807,9 @@ pub(crate) struct Equil {
     pub lu: BandedLu,
     pub residual_n: f64,
 }
+
+/// The Cholesky factor of a Gauss–Newton system ([`Core::gn_solve`]).
+pub(crate) struct GnFactor(nalgebra::Cholesky<f64, nalgebra::Dyn>);
 
 /// Derivatives at an equilibrium for an observation.
 pub(crate) struct Derivs {
@@ -839,6 +857,7 @@ impl<E: Element> Core<E> {
             n_f,
             warm: None,
             lu_cache: None,
+            eq_state: None,
         })
     }
 
@@ -928,7 +947,7 @@ impl<E: Element> Core<E> {
     /// `G F` over all coordinates (N).
     pub fn gen_force(&self, f: &[f64]) -> Result<Vec<f64>> {
         match self.settings.load_model {
-            LoadModel::Distributed => self.robot.load_gram().mul_vec(f),
+            LoadModel::Distributed => self.robot.apply_load_gram(f),
             LoadModel::Concentrated { node } => {
                 let nd = E::NODE_DOFS;
                 let mut g = vec![0.0; self.robot.n_q()];
@@ -941,7 +960,7 @@ impl<E: Element> Core<E> {
     /// `Gᵀ v` (`v` over all coordinates).
     pub fn gen_force_t(&self, v: &[f64]) -> Result<Vec<f64>> {
         match self.settings.load_model {
-            LoadModel::Distributed => self.robot.load_gram().mul_vec(v),
+            LoadModel::Distributed => self.robot.apply_load_gram(v),
             LoadModel::Concentrated { node } => {
                 let nd = E::NODE_DOFS;
                 Ok(v[node * nd..node * nd + E::DIM].to_vec())
@@ -952,7 +971,7 @@ impl<E: Element> Core<E> {
     /// `H F`.
     pub fn penalty_grad(&self, f: &[f64]) -> Result<Vec<f64>> {
         match self.settings.load_model {
-            LoadModel::Distributed => self.robot.load_gram().mul_vec(f),
+            LoadModel::Distributed => self.robot.apply_load_gram(f),
             LoadModel::Concentrated { .. } => Ok(f.to_vec()),
         }
     }
@@ -999,10 +1018,13 @@ impl<E: Element> Core<E> {
         loads
     }
 
-    /// Factors the tangent at `q`.
+    /// Factors the tangent at `q`: `L D Lᵀ` of the Jacobi-scaled tangent
+    /// (it is symmetric, and positive definite near a stable equilibrium),
+    /// the pivoted LU if it is not positive definite.
     pub fn factor(&mut self, q: &[f64]) -> Result<BandedLu> {
         self.robot.tangent_into(q, &self.known, &mut self.kmat)?;
-        self.kmat.clone().factor_scaled(0.0, "tangent stiffness")
+        debug_assert!(self.kmat.is_symmetric());
+        self.kmat.factor_scaled_symmetric(0.0, "tangent stiffness")
     }
 
     /// The residual `Q` over the free coordinates at `(q, F)`.
@@ -1012,26 +1034,28 @@ impl<E: Element> Core<E> {
     }
 
     /// One plain Newton (or, with old factors, chord) step at `q` with the
-    /// factors `lu`: the residual goes into `r`, and the step is applied
-    /// unless it is not finite, longer than a quarter of the robot, or not
-    /// shorter than `limit` (m). Returns the step's size (m) if applied.
+    /// factors `lu` for the residual `r` at `q` (computed by the caller):
+    /// the step is applied unless it is not finite, longer than a quarter
+    /// of the robot, or not shorter than `limit` (m). Returns the step's
+    /// size (m) if applied. `du` (`n_free`) and `dq` (`n_q`) are scratch.
+    #[allow(clippy::too_many_arguments)]
     fn plain_step(
         &self,
         q: &mut [f64],
-        dead: &[f64],
         lu: &BandedLu,
-        r: &mut [f64],
+        r: &[f64],
+        du: &mut [f64],
+        dq: &mut [f64],
         limit: f64,
     ) -> Result<Option<f64>> {
-        self.robot.residual_into(q, dead, &self.known, r)?;
-        let mut du = r.to_vec();
-        lu.solve_in_place(&mut du)?;
+        du.copy_from_slice(r);
+        lu.solve_in_place(du)?;
         let step = du.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         if !step.is_finite() || step > 0.25 * self.robot.length() || step > limit {
             return Ok(None);
         }
-        let dq = self.robot.expand_step(&du)?;
-        q.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
+        self.robot.expand_step_into(du, dq)?;
+        q.iter_mut().zip(dq.iter()).for_each(|(a, b)| *a += b);
         Ok(Some(step))
     }
 
@@ -1043,21 +1067,50 @@ impl<E: Element> Core<E> {
 
     /// As [`Core::equilibrium`]; without `fallback` a failure of the plain
     /// Newton steps is an error at once (cheap, for line-search trials).
+    ///
+    /// Warm starts take chord (modified Newton) steps with the cached
+    /// factorization: a few residuals, then one fresh factorization at the
+    /// solution for exact derivatives (kept for the next call). Each
+    /// converged solve ends with a step below `1e-10 L`.
     pub fn equilibrium_opt(&mut self, f: &[f64], q0: &[f64], fallback: bool) -> Result<Equil> {
+        // asked again at the last solution (a warm start): nothing to solve
+        if let (Some(st), Some((q_lu, lu))) = (&self.eq_state, &self.lu_cache) {
+            if st.f == f && st.q == q0 && q_lu == q0 {
+                return Ok(Equil {
+                    q: q0.to_vec(),
+                    lu: lu.clone(),
+                    residual_n: st.residual_n,
+                });
+            }
+        }
         let dead = self.dead_with(f)?;
         let n = self.robot.n_free();
         let len = self.robot.length();
         let mut r = vec![0.0; n];
-        // chord (modified Newton) steps with the last factorization: warm
-        // starts need a few residuals and one fresh factorization (for exact
-        // derivatives at the solution) instead of one per Newton step
+        let mut du = vec![0.0; n];
+        let mut dq = vec![0.0; self.robot.n_q()];
+        // the residual at q0 from the remembered one, if q0 is its shape
+        let known_residual = match &self.eq_state {
+            Some(st) if st.q == q0 && st.f.len() == f.len() => {
+                let df: Vec<f64> = f.iter().zip(&st.f).map(|(a, b)| a - b).collect();
+                let gdf = self.gen_force(&df)?;
+                self.robot.restrict_into(&gdf, &mut r)?;
+                r.iter_mut().zip(&st.r).for_each(|(a, b)| *a += b);
+                true
+            }
+            _ => false,
+        };
         if let Some((q_lu, lu)) = self.lu_cache.take() {
             let mut q = q0.to_vec();
             let mut prev = f64::INFINITY;
             let mut done = false;
             let mut moved = false;
-            for _ in 0..12 {
-                let Some(step) = self.plain_step(&mut q, &dead, &lu, &mut r, 0.5 * prev)? else {
+            for it in 0..12 {
+                if it > 0 || !known_residual {
+                    self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+                }
+                let Some(step) = self.plain_step(&mut q, &lu, &r, &mut du, &mut dq, 0.5 * prev)?
+                else {
                     break;
                 };
                 prev = step;
@@ -1068,38 +1121,44 @@ impl<E: Element> Core<E> {
                 moved = true;
             }
             if done {
-                self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
                 // the cached factors are exact if q has not left their point
                 let same = !moved && q_lu.iter().zip(q0).all(|(a, b)| a == b);
-                let lu = if same { lu } else { self.factor(&q)? };
-                self.lu_cache = Some((q.clone(), lu.clone()));
-                return Ok(Equil {
-                    q,
-                    lu,
-                    residual_n: norm2(&r),
-                });
+                let lu = if same {
+                    self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+                    lu
+                } else {
+                    // fresh factors at the solution, with its residual
+                    self.robot.residual_and_tangent_into(
+                        &q,
+                        &dead,
+                        &self.known,
+                        &mut r,
+                        &mut self.kmat,
+                    )?;
+                    self.kmat
+                        .factor_scaled_symmetric(0.0, "tangent stiffness")?
+                };
+                return Ok(self.solved(f, q, lu, r));
             }
             self.lu_cache = Some((q_lu, lu));
         }
         let mut q = q0.to_vec();
         let mut prev = f64::INFINITY;
         for _ in 0..12 {
-            let lu = match self.factor(&q) {
+            // Newton: residual and tangent at q in one pass
+            self.robot
+                .residual_and_tangent_into(&q, &dead, &self.known, &mut r, &mut self.kmat)?;
+            let lu = match self.kmat.factor_scaled_symmetric(0.0, "tangent stiffness") {
                 Ok(lu) => lu,
                 Err(_) => break,
             };
-            let Some(step) = self.plain_step(&mut q, &dead, &lu, &mut r, 0.9 * prev)? else {
+            let Some(step) = self.plain_step(&mut q, &lu, &r, &mut du, &mut dq, 0.9 * prev)? else {
                 break;
             };
             prev = step;
             if step <= 1e-10 * len {
                 self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
-                self.lu_cache = Some((q.clone(), lu.clone()));
-                return Ok(Equil {
-                    q,
-                    lu,
-                    residual_n: norm2(&r),
-                });
+                return Ok(self.solved(f, q, lu, r));
             }
         }
         if !fallback {
@@ -1111,28 +1170,66 @@ impl<E: Element> Core<E> {
         let solver = StaticSolver::new(self.settings.statics.clone())?;
         let loads = self.loads_with(f);
         let eq = solver.solve(&self.robot, &loads, Some(q0))?;
-        let lu = self.factor(&eq.q)?;
-        self.lu_cache = Some((eq.q.clone(), lu.clone()));
-        Ok(Equil {
-            q: eq.q,
-            lu,
-            residual_n: eq.report.residual_norm_n,
-        })
+        self.robot
+            .residual_and_tangent_into(&eq.q, &dead, &self.known, &mut r, &mut self.kmat)?;
+        let lu = self
+            .kmat
+            .factor_scaled_symmetric(0.0, "tangent stiffness")?;
+        let mut out = self.solved(f, eq.q, lu, r);
+        out.residual_n = eq.report.residual_norm_n;
+        Ok(out)
+    }
+
+    /// Records a solved equilibrium (`r` its residual, `lu` the factors
+    /// at `q`) in the caches and returns it.
+    fn solved(&mut self, f: &[f64], q: Vec<f64>, lu: BandedLu, r: Vec<f64>) -> Equil {
+        let residual_n = norm2(&r);
+        self.lu_cache = Some((q.clone(), lu.clone()));
+        self.eq_state = Some(EqState {
+            f: f.to_vec(),
+            q: q.clone(),
+            r,
+            residual_n,
+        });
+        Equil { q, lu, residual_n }
     }
 
     /// Adjoint fields and the marker Jacobian at an equilibrium (28): row
-    /// `i` of `∂(Aq)/∂F` is `Gᵀ M K⁻¹ Mᵀ a_iᵀ` (K symmetric), one solve per
-    /// observed component.
+    /// `i` of `∂(Aq)/∂F` is `Gᵀ M K⁻¹ Mᵀ a_iᵀ` (K symmetric). The `n_ob`
+    /// adjoint systems share one factorization and one sweep over it.
     pub fn derivs(&self, lu: &BandedLu, op: &ObsOp) -> Result<Derivs> {
         let nq = self.robot.n_q();
+        let nfree = self.robot.n_free();
         let (nd, d) = (E::NODE_DOFS, E::DIM);
-        let mut z = Vec::with_capacity(op.n());
-        let mut jm = Vec::with_capacity(op.n());
-        for i in 0..op.n() {
-            let a = op.dense_row(i, nq, nd, d);
-            let mut u = self.robot.restrict(&a)?;
-            lu.solve_in_place(&mut u)?;
-            let zi = self.robot.expand_step(&u)?;
+        let m = op.n();
+        // right-hand sides Mᵀ a_iᵀ, row-major n_free × m
+        let mut b = vec![0.0; nfree * m];
+        let mut u = vec![0.0; nfree];
+        for (i, row) in op.rows.iter().enumerate() {
+            if row.e == 0 {
+                // touches the base node: restrict through the clamp
+                let ai = op.dense_row(i, nq, nd, d);
+                self.robot.restrict_into(&ai, &mut u)?;
+                for (k, v) in u.iter().enumerate() {
+                    b[k * m + i] = *v;
+                }
+            } else {
+                let nb = self.robot.n_base_free();
+                for k in 0..4 {
+                    let gi = row.e * nd + k * d + row.comp;
+                    b[(nb + gi - nd) * m + i] += row.w[k];
+                }
+            }
+        }
+        lu.solve_many_in_place(&mut b, m)?;
+        let mut z = Vec::with_capacity(m);
+        let mut jm = Vec::with_capacity(m);
+        for i in 0..m {
+            for (k, uk) in u.iter_mut().enumerate() {
+                *uk = b[k * m + i];
+            }
+            let mut zi = vec![0.0; nq];
+            self.robot.expand_step_into(&u, &mut zi)?;
             jm.push(self.gen_force_t(&zi)?);
             z.push(zi);
         }
@@ -1185,40 +1282,48 @@ impl<E: Element> Core<E> {
         f: &[f64],
         alpha: f64,
     ) -> Result<(Vec<f64>, Vec<f64>)> {
+        let (step, fac) = self.gn_solve(dv, op, e, f, alpha)?;
+        let l = self.cov_factor(dv, op, &fac);
+        Ok((step, l))
+    }
+
+    /// The step of [`Core::gn_step`] and the Cholesky factor of its system
+    /// (for [`Core::cov_factor`]), without the covariance factor: an
+    /// iteration needs only the step.
+    pub fn gn_solve(
+        &self,
+        dv: &Derivs,
+        op: &ObsOp,
+        e: &[f64],
+        f: &[f64],
+        alpha: f64,
+    ) -> Result<(Vec<f64>, GnFactor)> {
         let m = op.n();
         let nf = self.n_f;
-        let sigma = self.settings.noise_sigma_m;
         let not_spd = || Error::NonFinite {
             context: "Gauss-Newton matrix of the estimator (not positive definite)".into(),
         };
         match self.settings.load_model {
             LoadModel::Distributed => {
-                let s = DMatrix::from_fn(m, m, |i, j| {
-                    let v: f64 = dv.z[i].iter().zip(&dv.jm[j]).map(|(a, b)| a * b).sum();
-                    v + if i == j { alpha / op.wt[i] } else { 0.0 }
-                });
-                // symmetrize (round-off); a tiny relative jitter if the
-                // markers are (nearly) redundant and α W⁻¹ is below round-off
-                let s = (&s + s.transpose()) * 0.5;
+                // S = Zᵀ B Z + α W⁻¹ (symmetric: the upper triangle, mirrored)
+                let mut s = DMatrix::zeros(m, m);
+                for i in 0..m {
+                    for j in i..m {
+                        let v = dot(&dv.z[i], &dv.jm[j]);
+                        s[(i, j)] = v;
+                        s[(j, i)] = v;
+                    }
+                    s[(i, i)] += alpha / op.wt[i];
+                }
                 let chol = cholesky_jittered(s).ok_or_else(not_spd)?;
-                let t = DVector::from_fn(m, |i, _| {
-                    dv.jm[i].iter().zip(f).map(|(a, b)| a * b).sum::<f64>() - e[i]
-                });
+                let t = DVector::from_fn(m, |i, _| dot(&dv.jm[i], f) - e[i]);
                 let c = chol.solve(&t);
                 let mut step: Vec<f64> = f.iter().map(|v| -v).collect();
                 for (i, zi) in dv.z.iter().enumerate() {
-                    step.iter_mut().zip(zi).for_each(|(a, b)| *a += c[i] * b);
+                    let ci = c[i];
+                    step.iter_mut().zip(zi).for_each(|(a, b)| *a += ci * b);
                 }
-                // L = σ Z S⁻¹
-                let sinv = chol.inverse();
-                let mut l = vec![0.0; nf * m];
-                for k in 0..nf {
-                    for j in 0..m {
-                        l[k * m + j] =
-                            sigma * (0..m).map(|i| dv.z[i][k] * sinv[(i, j)]).sum::<f64>();
-                    }
-                }
-                Ok((step, l))
+                Ok((step, GnFactor(chol)))
             }
             LoadModel::Concentrated { .. } => {
                 let n = DMatrix::from_fn(nf, nf, |a, b| {
@@ -1232,18 +1337,44 @@ impl<E: Element> Core<E> {
                     -(0..m).map(|i| op.wt[i] * dv.jm[i][a] * e[i]).sum::<f64>() - alpha * f[a]
                 });
                 let step = chol.solve(&rhs);
-                let ninv = chol.inverse();
-                let mut l = vec![0.0; nf * m];
+                Ok((step.iter().copied().collect(), GnFactor(chol)))
+            }
+        }
+    }
+
+    /// The covariance factor `L = σ (JᵀWJ + αH)⁻¹ JᵀW` (`n_F × n_ob`,
+    /// row-major) from the factor of [`Core::gn_solve`] at the same
+    /// derivatives: `σ Z S⁻¹` for the distributed load, `σ N⁻¹ JᵀW` for a
+    /// concentrated one (`O(n_F n_ob²)`).
+    pub fn cov_factor(&self, dv: &Derivs, op: &ObsOp, fac: &GnFactor) -> Vec<f64> {
+        let m = op.n();
+        let nf = self.n_f;
+        let sigma = self.settings.noise_sigma_m;
+        let inv = fac.0.inverse();
+        let mut l = vec![0.0; nf * m];
+        match self.settings.load_model {
+            LoadModel::Distributed => {
+                // L[k, j] = σ Σ_i z_i[k] S⁻¹[i, j]: accumulated row of S⁻¹ at a time
+                for (i, zi) in dv.z.iter().enumerate() {
+                    let srow: Vec<f64> = (0..m).map(|j| sigma * inv[(i, j)]).collect();
+                    for (lk, zik) in l.chunks_exact_mut(m).zip(zi) {
+                        for (v, sij) in lk.iter_mut().zip(&srow) {
+                            *v += zik * sij;
+                        }
+                    }
+                }
+            }
+            LoadModel::Concentrated { .. } => {
                 for a in 0..nf {
                     for j in 0..m {
                         l[a * m + j] = sigma
-                            * (0..nf).map(|b| ninv[(a, b)] * dv.jm[j][b]).sum::<f64>()
+                            * (0..nf).map(|b| inv[(a, b)] * dv.jm[j][b]).sum::<f64>()
                             * op.wt[j];
                     }
                 }
-                Ok((step.iter().copied().collect(), l))
             }
         }
+        l
     }
 
     /// Assembles the [`Estimate`] at a converged `(q, F)`.
@@ -1259,7 +1390,6 @@ impl<E: Element> Core<E> {
         report: EstimateReport,
     ) -> Result<Estimate> {
         let d = E::DIM;
-        let nd = E::NODE_DOFS;
         let m = op.n();
         let nf = self.n_f;
         // resultant force weights: c_i = ∫ (row i of w) dX, and moment
@@ -1267,33 +1397,39 @@ impl<E: Element> Core<E> {
         // Cov(resultant) = (C L)(C L)ᵀ with C the d × n_F map F → ∫w
         let mut cl = vec![0.0; d * m];
         for a in 0..d {
-            for j in 0..m {
-                cl[a * m + j] = (0..nf)
-                    .map(|k| fw[a * nf + k] * cov_factor[k * m + j])
-                    .sum();
+            let cla = &mut cl[a * m..(a + 1) * m];
+            for (fwk, lk) in fw[a * nf..(a + 1) * nf]
+                .iter()
+                .zip(cov_factor.chunks_exact(m))
+            {
+                if *fwk != 0.0 {
+                    cla.iter_mut().zip(lk).for_each(|(c, l)| *c += fwk * l);
+                }
             }
         }
         let mut resultant_force_cov = vec![0.0; d * d];
         for a in 0..d {
             for b in 0..d {
                 resultant_force_cov[a * d + b] =
-                    (0..m).map(|j| cl[a * m + j] * cl[b * m + j]).sum();
+                    dot(&cl[a * m..(a + 1) * m], &cl[b * m..(b + 1) * m]);
             }
         }
         // marker-space shape covariance: (J L)(J L)ᵀ
         let mut jl = vec![0.0; m * m];
         for i in 0..m {
-            for j in 0..m {
-                jl[i * m + j] = (0..nf).map(|k| dv.jm[i][k] * cov_factor[k * m + j]).sum();
+            let jli = &mut jl[i * m..(i + 1) * m];
+            for (jik, lk) in dv.jm[i].iter().zip(cov_factor.chunks_exact(m)) {
+                if *jik != 0.0 {
+                    jli.iter_mut().zip(lk).for_each(|(c, l)| *c += jik * l);
+                }
             }
         }
         let mut marker_cov = vec![0.0; m * m];
         for i in 0..m {
             for j in 0..m {
-                marker_cov[i * m + j] = (0..m).map(|k| jl[i * m + k] * jl[j * m + k]).sum();
+                marker_cov[i * m + j] = dot(&jl[i * m..(i + 1) * m], &jl[j * m..(j + 1) * m]);
             }
         }
-        let _ = nd;
         Ok(Estimate {
             q,
             f,
@@ -1333,29 +1469,43 @@ impl<E: Element> Core<E> {
                 }
             }
             LoadModel::Distributed => {
+                const MAX_DIM: usize = 3;
                 let rule = crate::quadrature::GaussRule::new(5)?;
+                // the shape functions at the rule's points (elements of a
+                // section share a length: recomputed only when it changes)
+                let mut le_prev = f64::NAN;
+                let mut shapes = [[0.0; 4]; 5];
                 for (e, el) in self.robot.elements().iter().enumerate() {
                     let le = el.length();
-                    for (xi, wt) in rule.iter() {
-                        let sh = el.shape(xi);
-                        let mut w = vec![0.0; d];
-                        let mut r = vec![0.0; d];
+                    if le != le_prev {
+                        for (sh, (xi, _)) in shapes.iter_mut().zip(rule.iter()) {
+                            *sh = el.shape(xi);
+                        }
+                        le_prev = le;
+                    }
+                    for (sh, (_, wt)) in shapes.iter().zip(rule.iter()) {
+                        let mut w = [0.0; MAX_DIM];
+                        let mut r = [0.0; MAX_DIM];
                         for (k, sk) in sh.iter().enumerate() {
-                            for i in 0..d {
+                            for i in 0..d.min(MAX_DIM) {
                                 w[i] += sk * f[e * nd + k * d + i];
                                 r[i] += sk * q[e * nd + k * d + i];
                                 fw[i * nf + e * nd + k * d + i] += wt * le * sk;
                             }
                         }
-                        for i in 0..d {
+                        for i in 0..d.min(MAX_DIM) {
                             force[i] += wt * le * w[i];
                             r[i] -= r0[i];
                         }
-                        let mm = cross(&r, &w);
-                        moment
-                            .iter_mut()
-                            .zip(mm)
-                            .for_each(|(a, b)| *a += wt * le * b);
+                        if d == 2 {
+                            moment[0] += wt * le * (r[0] * w[1] - r[1] * w[0]);
+                        } else {
+                            let mm = cross(&r[..d], &w[..d]);
+                            moment
+                                .iter_mut()
+                                .zip(mm)
+                                .for_each(|(a, b)| *a += wt * le * b);
+                        }
                     }
                 }
             }

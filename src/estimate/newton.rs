@@ -133,7 +133,8 @@ impl<E: Element> NewtonEstimator<E> {
             let obj = wr + pen;
             let dv = core.derivs(&lu, op)?;
             let g = core.gradient(&dv, op, &e, &f, alpha)?;
-            let (mut step, l) = core.gn_step(&dv, op, &e, &f, alpha)?;
+            // the step only: the covariance factor is formed once, at the end
+            let (mut step, fac) = core.gn_solve(&dv, op, &e, &f, alpha)?;
             let dec = -0.5 * dot(&g, &step);
             // trust region: the predicted motion of every node, M K⁻¹ Mᵀ G dF
             // (one more solve), within max_observation_jump_m
@@ -173,6 +174,7 @@ impl<E: Element> NewtonEstimator<E> {
             // round-off floor (tiny and no longer shrinking)
             let floor = dec <= 1e-13 * scale && dec > 0.9 * prev_dec;
             if dec <= settings.tolerance * scale || floor || !dec.is_finite() && slope == 0.0 {
+                let l = core.cov_factor(&dv, op, &fac);
                 return Ok(Solved {
                     f,
                     q,
@@ -183,6 +185,7 @@ impl<E: Element> NewtonEstimator<E> {
                 });
             }
             if iterations >= settings.max_iterations {
+                let l = core.cov_factor(&dv, op, &fac);
                 return Ok(Solved {
                     f,
                     q,
@@ -217,6 +220,7 @@ impl<E: Element> NewtonEstimator<E> {
                     res_n = eq.residual_n;
                 }
                 None => {
+                    let l = core.cov_factor(&dv, op, &fac);
                     return Ok(Solved {
                         f,
                         q,
@@ -228,7 +232,7 @@ impl<E: Element> NewtonEstimator<E> {
                             iterations,
                             Some("line search failed".into()),
                         ),
-                    })
+                    });
                 }
             }
         }
