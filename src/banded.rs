@@ -485,7 +485,7 @@ impl BandedMatrix {
 /// `Σ a_i b_i` over the common length, in four independent partial sums
 /// (the compiler keeps them in registers and may vectorize).
 #[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
     let (a, b) = (&a[..n], &b[..n]);
     let mut s = [0.0f64; 4];

@@ -234,7 +234,10 @@ pub struct EstimatorSettings {
     /// Outer iterations per observation (default 100).
     pub max_iterations: usize,
     /// Convergence: the predicted decrease of the objective below
-    /// `tolerance × max(objective, n_ob)` (default 1e-15; a round-off floor also ends it).
+    /// `tolerance × max(objective, n_ob)` (default 1e-15; a round-off floor
+    /// also ends it). The Newton backend also stops after a step whose
+    /// predicted successor decrease, `dec²/dec_prev`, is below `1e-3 ×` that
+    /// (taken without confirming it by another linearization).
     pub tolerance: f64,
     /// Largest marker jump (m) between successive observations handled in
     /// one go; larger jumps are split into a sequence of intermediate
@@ -486,7 +489,11 @@ pub struct EstimateReport {
     pub weighted_residual: f64,
     /// Number of observed components `n_ob`.
     pub n_observations: usize,
-    /// Norm of the reduced gradient (29) of the objective with respect to `F`.
+    /// Norm of the reduced gradient (29) of the objective with respect to
+    /// `F` at the last linearization: the estimate itself, or, when the
+    /// Newton backend took its last step unconfirmed (the decrease predicted
+    /// after it far below the tolerance, see [`NewtonEstimator`]), the
+    /// iterate before that step.
     pub gradient_norm: f64,
     /// Final equilibrium residual `|Q|_2` (N).
     pub equilibrium_residual_n: f64,
@@ -538,7 +545,11 @@ pub struct Estimate {
     /// Marker residuals `A q − y` in observation order (m; tangents dimensionless).
     pub marker_residuals: Vec<f64>,
     /// Covariance factor `L` (`n_F × n_ob`, row-major): `Cov(F) = L Lᵀ`, see
-    /// [`Estimate::covariance_f`].
+    /// [`Estimate::covariance_f`]. Like the other covariances it is taken at
+    /// the last linearization (see [`EstimateReport::gradient_norm`]; after
+    /// an unconfirmed last step the two points differ by that step, whose
+    /// predicted decrease is below `1e-3 tolerance`: the covariances then
+    /// differ by about the square root of that, relatively).
     pub cov_factor: Vec<f64>,
     /// Covariance of the estimated marker-space shape `A q` (`n_ob × n_ob`,
     /// row-major; m²).
@@ -675,6 +686,7 @@ macro_rules! impl_estimator {
                 self.core.warm = None;
                 self.core.lu_cache = None;
                 self.core.eq_state = None;
+                self.core.derivs_cache = None;
                 self.core.alpha = self.core.settings.alpha;
             }
         }
@@ -710,7 +722,7 @@ pub trait Estimator {
 // The shared core: observation operator, equilibrium, Jacobians.
 
 /// One observed scalar: `Σ_k w_k q_e[k·DIM + comp]`, element `e`.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct ObsRow {
     pub e: usize,
     pub w: [f64; 4],
@@ -787,6 +799,9 @@ pub(crate) struct Core<E: Element> {
     pub lu_cache: Option<(Vec<f64>, BandedLu)>,
     /// The last solved equilibrium: its load, shape and residual.
     pub eq_state: Option<EqState>,
+    /// The derivatives at the last converged estimate's shape for its
+    /// observation rows: a warm step's first iteration starts there.
+    pub derivs_cache: Option<(Vec<f64>, Vec<ObsRow>, Derivs)>,
 }
 
 /// A solved equilibrium [`Core::equilibrium_opt`] remembers: asked again at
@@ -809,9 +824,99 @@ pub(crate) struct Equil {
 }
 
 /// The Cholesky factor of a Gauss–Newton system ([`Core::gn_solve`]).
-pub(crate) struct GnFactor(nalgebra::Cholesky<f64, nalgebra::Dyn>);
+pub(crate) struct GnFactor(SmallCholesky);
+
+/// `A = L Lᵀ` of a small dense symmetric positive definite matrix
+/// (row-major `L`; the Gauss–Newton systems are `n_ob × n_ob` or
+/// `n_F × n_F` with a concentrated load).
+pub(crate) struct SmallCholesky {
+    m: usize,
+    l: Vec<f64>,
+}
+
+impl SmallCholesky {
+    /// The factor of `a` (row-major `m × m`, symmetric), with a diagonal
+    /// jitter of 1e-14 … 1e-10 of the largest diagonal entry if the plain
+    /// factorization fails (nearly redundant markers); `None` if that does
+    /// not help either.
+    fn jittered(a: Vec<f64>, m: usize) -> Option<Self> {
+        let dmax = (0..m).fold(0.0f64, |x, i| x.max(a[i * m + i].abs()));
+        for jitter in [0.0, 1e-14, 1e-12, 1e-10] {
+            let mut l = a.clone();
+            for i in 0..m {
+                l[i * m + i] += jitter * dmax;
+            }
+            if Self::factor_in_place(&mut l, m) {
+                return Some(SmallCholesky { m, l });
+            }
+        }
+        None
+    }
+
+    /// Cholesky in place (lower triangle; the upper is zeroed). False if a
+    /// pivot is not positive or not finite.
+    fn factor_in_place(l: &mut [f64], m: usize) -> bool {
+        for j in 0..m {
+            let mut d = l[j * m + j];
+            for k in 0..j {
+                d -= l[j * m + k] * l[j * m + k];
+            }
+            if !(d > 0.0 && d.is_finite()) {
+                return false;
+            }
+            let d = d.sqrt();
+            l[j * m + j] = d;
+            for i in j + 1..m {
+                let mut s = l[i * m + j];
+                for k in 0..j {
+                    s -= l[i * m + k] * l[j * m + k];
+                }
+                l[i * m + j] = s / d;
+                l[j * m + i] = 0.0;
+            }
+        }
+        true
+    }
+
+    /// Solves `A x = b` in place.
+    fn solve(&self, b: &mut [f64]) {
+        let (m, l) = (self.m, &self.l);
+        for i in 0..m {
+            let mut s = b[i];
+            for k in 0..i {
+                s -= l[i * m + k] * b[k];
+            }
+            b[i] = s / l[i * m + i];
+        }
+        for i in (0..m).rev() {
+            let mut s = b[i];
+            for k in i + 1..m {
+                s -= l[k * m + i] * b[k];
+            }
+            b[i] = s / l[i * m + i];
+        }
+    }
+
+    /// `A⁻¹` (row-major).
+    fn inverse(&self) -> Vec<f64> {
+        let m = self.m;
+        let mut inv = vec![0.0; m * m];
+        let mut col = vec![0.0; m];
+        for j in 0..m {
+            col.iter_mut()
+                .enumerate()
+                .for_each(|(i, v)| *v = f64::from(u8::from(i == j)));
+            self.solve(&mut col);
+            for i in 0..m {
+                inv[i * m + j] = col[i];
+            }
+        }
+        inv
+    }
+}
 
 /// Derivatives at an equilibrium for an observation.
+#[derive(Debug, Clone)]
 pub(crate) struct Derivs {
     /// Adjoint fields `z_i = M K⁻¹ Mᵀ a_iᵀ` (n_ob × n_q, row i = z_i).
     pub z: Vec<Vec<f64>>,
@@ -858,6 +963,7 @@ impl<E: Element> Core<E> {
             warm: None,
             lu_cache: None,
             eq_state: None,
+            derivs_cache: None,
         })
     }
 
@@ -1073,9 +1179,17 @@ impl<E: Element> Core<E> {
     /// solution for exact derivatives (kept for the next call). Each
     /// converged solve ends with a step below `1e-10 L`.
     pub fn equilibrium_opt(&mut self, f: &[f64], q0: &[f64], fallback: bool) -> Result<Equil> {
-        // asked again at the last solution (a warm start): nothing to solve
+        // asked again at the last solution (a warm start): nothing to solve.
+        // The cached factors may be those of a point up to 1e-8 L away (a
+        // last Gauss–Newton step keeps them, see Core::equilibrium_chord):
+        // the derivatives they give differ by about 1e-7 relative, which the
+        // next Gauss–Newton step absorbs.
         if let (Some(st), Some((q_lu, lu))) = (&self.eq_state, &self.lu_cache) {
-            if st.f == f && st.q == q0 && q_lu == q0 {
+            let near = q_lu
+                .iter()
+                .zip(q0)
+                .all(|(a, b)| (a - b).abs() <= 1e-8 * self.robot.length());
+            if st.f == f && st.q == q0 && near {
                 return Ok(Equil {
                     q: q0.to_vec(),
                     lu: lu.clone(),
@@ -1090,16 +1204,7 @@ impl<E: Element> Core<E> {
         let mut du = vec![0.0; n];
         let mut dq = vec![0.0; self.robot.n_q()];
         // the residual at q0 from the remembered one, if q0 is its shape
-        let known_residual = match &self.eq_state {
-            Some(st) if st.q == q0 && st.f.len() == f.len() => {
-                let df: Vec<f64> = f.iter().zip(&st.f).map(|(a, b)| a - b).collect();
-                let gdf = self.gen_force(&df)?;
-                self.robot.restrict_into(&gdf, &mut r)?;
-                r.iter_mut().zip(&st.r).for_each(|(a, b)| *a += b);
-                true
-            }
-            _ => false,
-        };
+        let known_residual = self.residual_from_state(f, q0, &mut r)?;
         if let Some((q_lu, lu)) = self.lu_cache.take() {
             let mut q = q0.to_vec();
             let mut prev = f64::INFINITY;
@@ -1180,6 +1285,68 @@ impl<E: Element> Core<E> {
         Ok(out)
     }
 
+    /// The equilibrium at `F` from `q0` by chord steps with the cached
+    /// factorization only, keeping that factorization (no refactorization
+    /// at the solution): for a last, tiny Gauss–Newton step. `None` (and no
+    /// change) if there is no cached factorization or the steps do not
+    /// converge below `1e-10 L`; else the shape and its residual norm.
+    pub fn equilibrium_chord(&mut self, f: &[f64], q0: &[f64]) -> Result<Option<(Vec<f64>, f64)>> {
+        let Some((q_lu, lu)) = self.lu_cache.take() else {
+            return Ok(None);
+        };
+        let dead = self.dead_with(f)?;
+        let n = self.robot.n_free();
+        let len = self.robot.length();
+        let mut r = vec![0.0; n];
+        let mut du = vec![0.0; n];
+        let mut dq = vec![0.0; self.robot.n_q()];
+        let known_residual = self.residual_from_state(f, q0, &mut r)?;
+        let mut q = q0.to_vec();
+        let mut prev = f64::INFINITY;
+        let mut done = false;
+        for it in 0..12 {
+            if it > 0 || !known_residual {
+                self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+            }
+            let Some(step) = self.plain_step(&mut q, &lu, &r, &mut du, &mut dq, 0.5 * prev)? else {
+                break;
+            };
+            prev = step;
+            if step <= 1e-10 * len {
+                done = true;
+                break;
+            }
+        }
+        self.lu_cache = Some((q_lu, lu));
+        if !done {
+            return Ok(None);
+        }
+        self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+        let residual_n = norm2(&r);
+        self.eq_state = Some(EqState {
+            f: f.to_vec(),
+            q: q.clone(),
+            r,
+            residual_n,
+        });
+        Ok(Some((q, residual_n)))
+    }
+
+    /// `Q(q0, F)` into `r` from the remembered equilibrium if `q0` is its
+    /// shape (`Q(q, F) = Q(q, F_s) + Mᵀ G (F − F_s)`); false otherwise.
+    fn residual_from_state(&self, f: &[f64], q0: &[f64], r: &mut [f64]) -> Result<bool> {
+        match &self.eq_state {
+            Some(st) if st.q == q0 && st.f.len() == f.len() => {
+                let df: Vec<f64> = f.iter().zip(&st.f).map(|(a, b)| a - b).collect();
+                let gdf = self.gen_force(&df)?;
+                self.robot.restrict_into(&gdf, r)?;
+                r.iter_mut().zip(&st.r).for_each(|(a, b)| *a += b);
+                Ok(true)
+            }
+            _ => Ok(false),
+        }
+    }
+
     /// Records a solved equilibrium (`r` its residual, `lu` the factors
     /// at `q`) in the caches and returns it.
     fn solved(&mut self, f: &[f64], q: Vec<f64>, lu: BandedLu, r: Vec<f64>) -> Equil {
@@ -1234,6 +1401,23 @@ impl<E: Element> Core<E> {
             z.push(zi);
         }
         Ok(Derivs { z, jm })
+    }
+
+    /// The derivatives at `q` for `op`'s rows: the cached ones if they were
+    /// taken at this very shape for the same rows, else [`Core::derivs`].
+    pub fn derivs_at(&mut self, q: &[f64], lu: &BandedLu, op: &ObsOp) -> Result<Derivs> {
+        if let Some((qc, rows, dv)) = self.derivs_cache.take() {
+            if qc == q && rows == op.rows {
+                return Ok(dv);
+            }
+        }
+        self.derivs(lu, op)
+    }
+
+    /// Remembers the derivatives at a converged estimate (see
+    /// [`Core::derivs_at`]).
+    pub fn keep_derivs(&mut self, q: &[f64], op: &ObsOp, dv: &Derivs) {
+        self.derivs_cache = Some((q.to_vec(), op.rows.clone(), dv.clone()));
     }
 
     /// The objective parts at `(q, F)`: `(eᵀWe, α FᵀHF, e)`.
@@ -1306,38 +1490,42 @@ impl<E: Element> Core<E> {
         match self.settings.load_model {
             LoadModel::Distributed => {
                 // S = Zᵀ B Z + α W⁻¹ (symmetric: the upper triangle, mirrored)
-                let mut s = DMatrix::zeros(m, m);
+                let mut s = vec![0.0; m * m];
                 for i in 0..m {
                     for j in i..m {
                         let v = dot(&dv.z[i], &dv.jm[j]);
-                        s[(i, j)] = v;
-                        s[(j, i)] = v;
+                        s[i * m + j] = v;
+                        s[j * m + i] = v;
                     }
-                    s[(i, i)] += alpha / op.wt[i];
+                    s[i * m + i] += alpha / op.wt[i];
                 }
-                let chol = cholesky_jittered(s).ok_or_else(not_spd)?;
-                let t = DVector::from_fn(m, |i, _| dot(&dv.jm[i], f) - e[i]);
-                let c = chol.solve(&t);
+                let chol = SmallCholesky::jittered(s, m).ok_or_else(not_spd)?;
+                let mut c: Vec<f64> = (0..m).map(|i| dot(&dv.jm[i], f) - e[i]).collect();
+                chol.solve(&mut c);
                 let mut step: Vec<f64> = f.iter().map(|v| -v).collect();
-                for (i, zi) in dv.z.iter().enumerate() {
-                    let ci = c[i];
+                for (zi, ci) in dv.z.iter().zip(&c) {
                     step.iter_mut().zip(zi).for_each(|(a, b)| *a += ci * b);
                 }
                 Ok((step, GnFactor(chol)))
             }
             LoadModel::Concentrated { .. } => {
-                let n = DMatrix::from_fn(nf, nf, |a, b| {
-                    (0..m)
-                        .map(|i| op.wt[i] * dv.jm[i][a] * dv.jm[i][b])
-                        .sum::<f64>()
-                        + if a == b { alpha } else { 0.0 }
-                });
-                let chol = cholesky_jittered(n).ok_or_else(not_spd)?;
-                let rhs = DVector::from_fn(nf, |a, _| {
-                    -(0..m).map(|i| op.wt[i] * dv.jm[i][a] * e[i]).sum::<f64>() - alpha * f[a]
-                });
-                let step = chol.solve(&rhs);
-                Ok((step.iter().copied().collect(), GnFactor(chol)))
+                let mut n = vec![0.0; nf * nf];
+                for a in 0..nf {
+                    for b in 0..nf {
+                        n[a * nf + b] = (0..m)
+                            .map(|i| op.wt[i] * dv.jm[i][a] * dv.jm[i][b])
+                            .sum::<f64>()
+                            + if a == b { alpha } else { 0.0 };
+                    }
+                }
+                let chol = SmallCholesky::jittered(n, nf).ok_or_else(not_spd)?;
+                let mut step: Vec<f64> = (0..nf)
+                    .map(|a| {
+                        -(0..m).map(|i| op.wt[i] * dv.jm[i][a] * e[i]).sum::<f64>() - alpha * f[a]
+                    })
+                    .collect();
+                chol.solve(&mut step);
+                Ok((step, GnFactor(chol)))
             }
         }
     }
@@ -1354,13 +1542,18 @@ impl<E: Element> Core<E> {
         let mut l = vec![0.0; nf * m];
         match self.settings.load_model {
             LoadModel::Distributed => {
-                // L[k, j] = σ Σ_i z_i[k] S⁻¹[i, j]: accumulated row of S⁻¹ at a time
-                for (i, zi) in dv.z.iter().enumerate() {
-                    let srow: Vec<f64> = (0..m).map(|j| sigma * inv[(i, j)]).collect();
-                    for (lk, zik) in l.chunks_exact_mut(m).zip(zi) {
-                        for (v, sij) in lk.iter_mut().zip(&srow) {
-                            *v += zik * sij;
-                        }
+                // column j of L = σ Σ_i S⁻¹[i, j] z_i (contiguous axpys,
+                // into Lᵀ), then transposed
+                let mut lt = vec![0.0; m * nf];
+                for (j, ltj) in lt.chunks_exact_mut(nf).enumerate() {
+                    for (i, zi) in dv.z.iter().enumerate() {
+                        let c = sigma * inv[i * m + j];
+                        ltj.iter_mut().zip(zi).for_each(|(v, z)| *v += c * z);
+                    }
+                }
+                for (k, lk) in l.chunks_exact_mut(m).enumerate() {
+                    for (j, v) in lk.iter_mut().enumerate() {
+                        *v = lt[j * nf + k];
                     }
                 }
             }
@@ -1368,7 +1561,7 @@ impl<E: Element> Core<E> {
                 for a in 0..nf {
                     for j in 0..m {
                         l[a * m + j] = sigma
-                            * (0..nf).map(|b| inv[(a, b)] * dv.jm[j][b]).sum::<f64>()
+                            * (0..nf).map(|b| inv[a * nf + b] * dv.jm[j][b]).sum::<f64>()
                             * op.wt[j];
                     }
                 }
@@ -1394,17 +1587,18 @@ impl<E: Element> Core<E> {
         let nf = self.n_f;
         // resultant force weights: c_i = ∫ (row i of w) dX, and moment
         let (resultant_force_n, resultant_moment_nm, fw) = self.resultants(&q, &f)?;
+        // Lᵀ (n_ob × n_F): its rows are contiguous for the products below
+        let mut lt = vec![0.0; m * nf];
+        for (k, lk) in cov_factor.chunks_exact(m).enumerate() {
+            for (j, v) in lk.iter().enumerate() {
+                lt[j * nf + k] = *v;
+            }
+        }
         // Cov(resultant) = (C L)(C L)ᵀ with C the d × n_F map F → ∫w
         let mut cl = vec![0.0; d * m];
         for a in 0..d {
-            let cla = &mut cl[a * m..(a + 1) * m];
-            for (fwk, lk) in fw[a * nf..(a + 1) * nf]
-                .iter()
-                .zip(cov_factor.chunks_exact(m))
-            {
-                if *fwk != 0.0 {
-                    cla.iter_mut().zip(lk).for_each(|(c, l)| *c += fwk * l);
-                }
+            for j in 0..m {
+                cl[a * m + j] = dot(&fw[a * nf..(a + 1) * nf], &lt[j * nf..(j + 1) * nf]);
             }
         }
         let mut resultant_force_cov = vec![0.0; d * d];
@@ -1417,11 +1611,8 @@ impl<E: Element> Core<E> {
         // marker-space shape covariance: (J L)(J L)ᵀ
         let mut jl = vec![0.0; m * m];
         for i in 0..m {
-            let jli = &mut jl[i * m..(i + 1) * m];
-            for (jik, lk) in dv.jm[i].iter().zip(cov_factor.chunks_exact(m)) {
-                if *jik != 0.0 {
-                    jli.iter_mut().zip(lk).for_each(|(c, l)| *c += jik * l);
-                }
+            for j in 0..m {
+                jl[i * m + j] = dot(&dv.jm[i], &lt[j * nf..(j + 1) * nf]);
             }
         }
         let mut marker_cov = vec![0.0; m * m];
@@ -1626,23 +1817,6 @@ pub(crate) fn step_cap(jm: &[Vec<f64>], step: &[f64], cap: f64) -> f64 {
     }
 }
 
-/// Cholesky factor of a symmetric positive semi-definite matrix, with a
-/// diagonal jitter of 1e-14 … 1e-10 of the largest diagonal entry if the
-/// plain factorization fails.
-fn cholesky_jittered(m: DMatrix<f64>) -> Option<nalgebra::Cholesky<f64, nalgebra::Dyn>> {
-    let dmax = m.diagonal().iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    for jitter in [0.0, 1e-14, 1e-12, 1e-10] {
-        let mut a = m.clone();
-        for i in 0..a.nrows() {
-            a[(i, i)] += jitter * dmax;
-        }
-        if let Some(c) = a.cholesky() {
-            return Some(c);
-        }
-    }
-    None
-}
-
 /// The cross product: scalar (as a 1-vector) in 2-D, vector in 3-D.
 fn cross(a: &[f64], b: &[f64]) -> Vec<f64> {
     if a.len() == 2 {
@@ -1661,7 +1835,7 @@ pub(crate) fn norm2(v: &[f64]) -> f64 {
 }
 
 pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+    crate::banded::dot(a, b)
 }
 
 /// The direct solution (24) for the Fig. 3 comparison: the distributed load
