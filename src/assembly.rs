@@ -1216,6 +1216,79 @@ impl<E: Element> Robot<E> {
         Ok(d)
     }
 
+    /// The elastic energy of every element at `q` into `out` (J; one entry
+    /// per element), for [`Robot::potential_change_from`].
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `q` or `out` has the wrong size.
+    pub fn element_energies_into(&self, q: &[f64], out: &mut [f64]) -> Result<()> {
+        let nd = E::NODE_DOFS;
+        check_len("q", self.n_q(), q.len())?;
+        check_len("energies", self.elements.len(), out.len())?;
+        for ((e, el), u) in self.elements.iter().enumerate().zip(out.iter_mut()) {
+            *u = el.energy(&q[e * nd..(e + 2) * nd]);
+        }
+        Ok(())
+    }
+
+    /// [`Robot::potential_change`] with the element energies at `from`
+    /// given ([`Robot::element_energies_into`]): a line search evaluates
+    /// many trials from one point. The same arithmetic, term by term.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for wrong sizes.
+    pub fn potential_change_from(
+        &self,
+        from: &[f64],
+        from_energies: &[f64],
+        to: &[f64],
+        dead: &[f64],
+        loads: &Loads,
+    ) -> Result<f64> {
+        let nd = E::NODE_DOFS;
+        check_len("q", self.n_q(), from.len())?;
+        check_len("q", self.n_q(), to.len())?;
+        check_len("energies", self.elements.len(), from_energies.len())?;
+        check_len("dead force", self.n_q(), dead.len())?;
+        self.check_load_structure(loads)?;
+        let mut d = 0.0;
+        for ((e, el), u0) in self.elements.iter().enumerate().zip(from_energies) {
+            d += el.energy(&to[e * nd..(e + 2) * nd]) - u0;
+        }
+        for i in nd..self.n_q() {
+            d -= dead[i] * (to[i] - from[i]);
+        }
+        self.for_each_node_moment(loads, |node, m| {
+            let r = node * nd..(node + 1) * nd;
+            d -= E::moment_work_between(&from[r.clone()], &to[r], m);
+            Ok(())
+        })?;
+        Ok(d)
+    }
+
+    /// The generalized force of the actuation and the concentrated moments,
+    /// `∂W/∂q` over the free coordinates, into `out` (`n_free`; O(number of
+    /// moments) besides clearing `out`).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for wrong sizes.
+    pub fn moment_force_into(&self, q: &[f64], loads: &Loads, out: &mut [f64]) -> Result<()> {
+        let nd = E::NODE_DOFS;
+        check_len("q", self.n_q(), q.len())?;
+        check_len("out", self.n_free(), out.len())?;
+        self.check_load_structure(loads)?;
+        out.iter_mut().for_each(|v| *v = 0.0);
+        let mut mg = [0.0; MAX_EDOF];
+        let mut mh = vec![0.0; nd * nd];
+        self.for_each_node_moment(loads, |node, m| {
+            let mg = &mut mg[..nd];
+            mg.fill(0.0);
+            E::add_moment_work(&q[node * nd..(node + 1) * nd], m, mg, &mut mh);
+            self.scatter_force(node * nd, mg, 1.0, out);
+            Ok(())
+        })
+    }
+
     /// Node positions `r_i` (m), one `DIM` vector per node of `q` (a
     /// trailing partial node is ignored, so this never panics).
     pub fn node_positions(&self, q: &[f64]) -> Vec<Vec<f64>> {
@@ -1389,5 +1462,70 @@ mod tests {
         assert_eq!(e, 1);
         assert!((xi - 0.5).abs() < 1e-12);
         assert!(r.locate("s", 0.3).is_err());
+    }
+
+    #[test]
+    fn fused_and_cached_kernels_equal_the_plain_ones() {
+        let r = robot(3);
+        let loads = Loads {
+            pressures_pa: vec![4e4, 2e4],
+            node_moments: vec![crate::loads::NodeMoment {
+                node: 4,
+                moment_nm: vec![0.01],
+            }],
+            ..Loads::default()
+        };
+        let dead = r.dead_force(&loads).unwrap();
+        let q = perturbed(&r, 11);
+        // residual and tangent in one pass: bit for bit the separate ones
+        let (mut r1, mut r2) = (vec![0.0; r.n_free()], vec![0.0; r.n_free()]);
+        let mut k1 = BandedMatrix::zeros(1, 0, 0);
+        let mut k2 = BandedMatrix::zeros(1, 0, 0);
+        r.residual_into(&q, &dead, &loads, &mut r1).unwrap();
+        r.tangent_into(&q, &loads, &mut k1).unwrap();
+        r.residual_and_tangent_into(&q, &dead, &loads, &mut r2, &mut k2)
+            .unwrap();
+        assert_eq!(r1, r2);
+        assert_eq!(k1, k2);
+        assert!(k1.is_symmetric());
+        // the element-wise Gram product against the banded one
+        let f: Vec<f64> = (0..r.n_q()).map(|i| (i as f64 * 0.37).sin()).collect();
+        let a = r.apply_load_gram(&f).unwrap();
+        let b = r.load_gram().mul_vec(&f).unwrap();
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() <= 1e-15 * (1.0 + y.abs()));
+        }
+        // the potential change from cached energies: the same number
+        let to = perturbed(&r, 12);
+        let mut u = vec![0.0; r.n_elements()];
+        r.element_energies_into(&q, &mut u).unwrap();
+        assert_eq!(
+            r.potential_change(&q, &to, &dead, &loads).unwrap(),
+            r.potential_change_from(&q, &u, &to, &dead, &loads).unwrap()
+        );
+        // the moment force: residual with and without the moments
+        let mut m = vec![0.0; r.n_free()];
+        r.moment_force_into(&q, &loads, &mut m).unwrap();
+        let zero = vec![0.0; r.n_q()];
+        let none = Loads {
+            pressures_pa: vec![0.0, 0.0],
+            ..Loads::default()
+        };
+        let (mut with, mut without) = (vec![0.0; r.n_free()], vec![0.0; r.n_free()]);
+        r.residual_into(&q, &zero, &loads, &mut with).unwrap();
+        r.residual_into(&q, &zero, &none, &mut without).unwrap();
+        let scale = m.iter().fold(0.0f64, |x, v| x.max(v.abs()));
+        assert!(scale > 0.0);
+        for ((a, b), c) in m.iter().zip(&with).zip(&without) {
+            assert!((a - (b - c)).abs() <= 1e-9 * scale);
+        }
+        // and the allocation-free maps equal the allocating ones
+        let du: Vec<f64> = (0..r.n_free()).map(|i| i as f64).collect();
+        let mut dq = vec![0.0; r.n_q()];
+        r.expand_step_into(&du, &mut dq).unwrap();
+        assert_eq!(dq, r.expand_step(&du).unwrap());
+        let mut uu = vec![0.0; r.n_free()];
+        r.restrict_into(&f, &mut uu).unwrap();
+        assert_eq!(uu, r.restrict(&f).unwrap());
     }
 }

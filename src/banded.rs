@@ -92,7 +92,12 @@ impl BandedMatrix {
 
     /// Sets every entry to zero (keeps the allocation).
     pub fn fill_zero(&mut self) {
-        self.data.iter_mut().for_each(|v| *v = 0.0);
+        // only the band: the fill-in room right of it is written by the LU
+        // factorization alone, which consumes its matrix, so it is zero
+        let (kl, ku, w) = (self.kl, self.ku, self.width);
+        for row in self.data.chunks_exact_mut(w) {
+            row[..kl + ku + 1].iter_mut().for_each(|v| *v = 0.0);
+        }
     }
 
     /// Whether `(i, j)` lies in the band.
@@ -216,7 +221,11 @@ impl BandedMatrix {
 
     /// Largest absolute entry.
     pub fn max_abs(&self) -> f64 {
-        self.data.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+        let (kl, ku, w) = (self.kl, self.ku, self.width);
+        self.data
+            .chunks_exact(w)
+            .flat_map(|row| &row[..kl + ku + 1])
+            .fold(0.0f64, |m, v| m.max(v.abs()))
     }
 
     /// LU factorization with partial pivoting, in place.
