@@ -284,52 +284,58 @@ fn derivs(qe: &[f64; 8], d1: &[f64; 4], d2: &[f64; 4]) -> ([f64; 2], [f64; 2]) {
 /// first two results of [`curvature`], without the Hessian).
 #[inline]
 fn curvature_gradient(a: [f64; 2], b: [f64; 2]) -> (f64, [f64; 4]) {
+    // one division: the rest multiplies by 1/d
     let c = a[0] * b[1] - a[1] * b[0];
-    let d = a[0] * a[0] + a[1] * a[1];
-    let d2 = d * d;
+    let id = 1.0 / (a[0] * a[0] + a[1] * a[1]);
+    let kappa = c * id;
+    let k2 = 2.0 * kappa;
     (
-        c / d,
+        kappa,
         [
-            b[1] / d - c * 2.0 * a[0] / d2,
-            -b[0] / d - c * 2.0 * a[1] / d2,
-            -a[1] / d,
-            a[0] / d,
+            (b[1] - k2 * a[0]) * id,
+            (-b[0] - k2 * a[1]) * id,
+            -a[1] * id,
+            a[0] * id,
         ],
     )
 }
 
 /// Bending strain `κ = c/d` with `c = a × b`, `d = a·a`, and its first and
-/// second derivatives with respect to `z = (a, b)`: returns `(κ, ∇κ, ∇²κ)`.
+/// second derivatives with respect to `z = (a, b)`: returns `(κ, ∇κ, ∇²κ)`
+/// (`κ` is linear in `b`: the `(b, b)` block of `∇²κ` is zero).
+///
+/// With `c_a = (b₁, −b₀)`, `c_b = (−a₁, a₀)`, `d_a = 2a`:
+/// `κ_a = (c_a − κ d_a)/d`, `κ_b = c_b/d`,
+/// `κ_aa = −(c_a d_aᵀ + d_a c_aᵀ)/d² − 2κ I/d + 2κ d_a d_aᵀ/d²`,
+/// `κ_ab = C/d − d_a c_bᵀ/d²`, `C = [[0, 1], [−1, 0]]`.
 #[inline]
 #[allow(clippy::needless_range_loop)]
 fn curvature(a: [f64; 2], b: [f64; 2]) -> (f64, [f64; 4], [[f64; 4]; 4]) {
     let c = a[0] * b[1] - a[1] * b[0];
-    let d = a[0] * a[0] + a[1] * a[1];
-    let kappa = c / d;
+    let id = 1.0 / (a[0] * a[0] + a[1] * a[1]);
+    let kappa = c * id;
     let ca = [b[1], -b[0]];
     let cb = [-a[1], a[0]];
     let da = [2.0 * a[0], 2.0 * a[1]];
-    let d2 = d * d;
-    let d3 = d2 * d;
+    let id2 = id * id;
     let mut g = [0.0; 4];
     for i in 0..2 {
-        g[i] = ca[i] / d - c * da[i] / d2;
-        g[2 + i] = cb[i] / d;
+        g[i] = (ca[i] - kappa * da[i]) * id;
+        g[2 + i] = cb[i] * id;
     }
     let mut h = [[0.0; 4]; 4];
     // κ_aa
     for i in 0..2 {
         for j in 0..2 {
-            let daa = if i == j { 2.0 } else { 0.0 };
-            h[i][j] =
-                -(ca[i] * da[j] + da[i] * ca[j]) / d2 - c * daa / d2 + 2.0 * c * da[i] * da[j] / d3;
+            let diag = if i == j { 2.0 * kappa * id } else { 0.0 };
+            h[i][j] = (2.0 * kappa * da[i] * da[j] - (ca[i] * da[j] + da[i] * ca[j])) * id2 - diag;
         }
     }
-    // κ_ab = C_ab/d - d_a c_b^T/d², C_ab = [[0, 1], [-1, 0]]
+    // κ_ab
     let cab = [[0.0, 1.0], [-1.0, 0.0]];
     for i in 0..2 {
         for j in 0..2 {
-            let v = cab[i][j] / d - da[i] * cb[j] / d2;
+            let v = cab[i][j] * id - da[i] * cb[j] * id2;
             h[i][2 + j] = v;
             h[2 + j][i] = v;
         }
@@ -345,8 +351,10 @@ impl PlanarCable {
         let mut gz = [0.0; 4];
         if gp.ca != 0.0 {
             // dU/da = EA ε a/|a|
+            // (the same operations as point_derivatives: bit for bit)
             let n = (a[0] * a[0] + a[1] * a[1]).sqrt();
-            let f = gp.ca * (n - 1.0) / n;
+            let inv_n = 1.0 / n;
+            let f = gp.ca * (n - 1.0) * inv_n;
             gz[0] = f * a[0];
             gz[1] = f * a[1];
         }
@@ -373,18 +381,20 @@ impl PlanarCable {
         let mut gz = [0.0; 4];
         let mut hz = [[0.0; 4]; 4];
         if gp.ca != 0.0 {
-            let n = (a[0] * a[0] + a[1] * a[1]).sqrt();
+            let aa = a[0] * a[0] + a[1] * a[1];
+            let n = aa.sqrt();
+            let inv_n = 1.0 / n;
             let eps = n - 1.0;
-            let f = gp.ca * eps / n;
+            let f = gp.ca * eps * inv_n;
             gz[0] = f * a[0];
             gz[1] = f * a[1];
-            // EA [t tᵀ + ε (I − t tᵀ)/|a|]
-            let t = [a[0] / n, a[1] / n];
-            let c = gp.ca;
-            hz[0][0] = c * (t[0] * t[0] + eps * (1.0 - t[0] * t[0]) / n);
-            hz[0][1] = c * (t[0] * t[1] - eps * t[0] * t[1] / n);
+            // EA [t tᵀ + ε (I − t tᵀ)/|a|] = EA/|a| [a aᵀ/|a|² + ε I]
+            let c = gp.ca * inv_n;
+            let w = inv_n * inv_n;
+            hz[0][0] = c * (a[0] * a[0] * w + eps);
+            hz[0][1] = c * (a[0] * a[1] * w);
             hz[1][0] = hz[0][1];
-            hz[1][1] = c * (t[1] * t[1] + eps * (1.0 - t[1] * t[1]) / n);
+            hz[1][1] = c * (a[1] * a[1] * w + eps);
         }
         if gp.cb != 0.0 {
             let (kappa, g, hk) = curvature(a, b);
