@@ -339,6 +339,9 @@ pub struct Robot<E: Element> {
     gravity_force: Vec<f64>,
     chambers: Vec<ChamberRef>,
     gram: BandedMatrix,
+    /// Each element's `∫ s_k s_l dX` (4 × 4 over the node slots), the
+    /// blocks `gram` is assembled from (applied element by element).
+    elem_gram: Vec<[[f64; 4]; 4]>,
     line_rule: GaussRule,
 }
 
@@ -494,6 +497,7 @@ impl<E: Element> Robot<E> {
             gravity_force: vec![0.0; n_q],
             chambers,
             gram: BandedMatrix::zeros(n_q, kb, kb),
+            elem_gram: Vec::new(),
             line_rule,
         };
         robot.assemble_gram();
@@ -523,6 +527,7 @@ impl<E: Element> Robot<E> {
         let nd = E::NODE_DOFS;
         let d = E::DIM;
         let rule = GaussRule::new(4).unwrap_or_else(|_| self.line_rule.clone());
+        let mut blocks = Vec::with_capacity(self.elements.len());
         for (e, el) in self.elements.iter().enumerate() {
             let le = el.length();
             let mut m = [[0.0; 4]; 4];
@@ -542,7 +547,73 @@ impl<E: Element> Robot<E> {
                     }
                 }
             }
+            blocks.push(m);
         }
+        self.elem_gram = blocks;
+    }
+
+    /// `J_QF F = ∫ Sᵀ S dX F` ([`Robot::load_gram`] times `f`) into `out`,
+    /// element by element (`O(n)`, no allocation); the same map as
+    /// `load_gram().mul_vec(f)` up to round-off.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `f` or `out` does not have `n_q` entries.
+    pub fn apply_load_gram_into(&self, f: &[f64], out: &mut [f64]) -> Result<()> {
+        check_len("f", self.n_q(), f.len())?;
+        check_len("out", self.n_q(), out.len())?;
+        let nd = E::NODE_DOFS;
+        let d = E::DIM;
+        out.iter_mut().for_each(|v| *v = 0.0);
+        if d == 2 && nd == 4 {
+            // the planar cable: pairs of components, unrolled
+            for (e, m) in self.elem_gram.iter().enumerate() {
+                let Ok(fe) = <&[f64; 8]>::try_from(&f[e * 4..e * 4 + 8]) else {
+                    continue;
+                };
+                let Ok(oe) = <&mut [f64; 8]>::try_from(&mut out[e * 4..e * 4 + 8]) else {
+                    continue;
+                };
+                for k in 0..4 {
+                    let (mut x, mut y) = (0.0, 0.0);
+                    for l in 0..4 {
+                        x += m[k][l] * fe[2 * l];
+                        y += m[k][l] * fe[2 * l + 1];
+                    }
+                    oe[2 * k] += x;
+                    oe[2 * k + 1] += y;
+                }
+            }
+            return Ok(());
+        }
+        for (e, m) in self.elem_gram.iter().enumerate() {
+            for k in 0..4 {
+                for i in 0..d {
+                    let v: f64 = (0..4).map(|l| m[k][l] * f[e * nd + l * d + i]).sum();
+                    out[e * nd + k * d + i] += v;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// As [`Robot::apply_load_gram_into`], into a new vector.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `f` does not have `n_q` entries.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 8)]).build_planar().unwrap();
+    /// let f: Vec<f64> = (0..robot.n_q()).map(|i| (i % 5) as f64).collect();
+    /// let a = robot.apply_load_gram(&f).unwrap();
+    /// let b = robot.load_gram().mul_vec(&f).unwrap();
+    /// assert!(a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-15));
+    /// ```
+    pub fn apply_load_gram(&self, f: &[f64]) -> Result<Vec<f64>> {
+        let mut out = vec![0.0; self.n_q()];
+        self.apply_load_gram_into(f, &mut out)?;
+        Ok(out)
     }
 
     /// The robot's definition.
@@ -571,6 +642,24 @@ impl<E: Element> Robot<E> {
     /// [`Clamp::PositionAndDirection`], 0 with [`Clamp::Full`]).
     pub fn n_base_free(&self) -> usize {
         self.base_free.len()
+    }
+
+    /// As [`Robot::dof_map`] into a fixed buffer; returns the count.
+    fn dof_map_into(&self, gi: usize, out: &mut [(usize, f64); MAX_EDOF]) -> usize {
+        let nd = E::NODE_DOFS;
+        let nb = self.base_free.len();
+        if gi >= nd {
+            out[0] = (nb + gi - nd, 1.0);
+            return 1;
+        }
+        let mut n = 0;
+        for (j, t) in self.base_free.iter().enumerate() {
+            if t[gi] != 0.0 && n < MAX_EDOF {
+                out[n] = (j, t[gi]);
+                n += 1;
+            }
+        }
+        n
     }
 
     /// The free coordinates that a global coordinate `gi` depends on, with
@@ -607,6 +696,41 @@ impl<E: Element> Robot<E> {
         }
         dq[nd..].copy_from_slice(&du[nb..]);
         Ok(dq)
+    }
+
+    /// As [`Robot::expand_step`], into `dq` (`n_q` entries; no allocation).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `du` or `dq` has the wrong size.
+    pub fn expand_step_into(&self, du: &[f64], dq: &mut [f64]) -> Result<()> {
+        check_len("du", self.n_free(), du.len())?;
+        check_len("dq", self.n_q(), dq.len())?;
+        let nd = E::NODE_DOFS;
+        let nb = self.base_free.len();
+        dq[..nd].iter_mut().for_each(|v| *v = 0.0);
+        for (j, t) in self.base_free.iter().enumerate() {
+            for k in 0..nd {
+                dq[k] += t[k] * du[j];
+            }
+        }
+        dq[nd..].copy_from_slice(&du[nb..]);
+        Ok(())
+    }
+
+    /// As [`Robot::restrict`], into `u` (`n_free` entries; no allocation).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `f` or `u` has the wrong size.
+    pub fn restrict_into(&self, f: &[f64], u: &mut [f64]) -> Result<()> {
+        check_len("f", self.n_q(), f.len())?;
+        check_len("u", self.n_free(), u.len())?;
+        let nd = E::NODE_DOFS;
+        let nb = self.base_free.len();
+        for (j, t) in self.base_free.iter().enumerate() {
+            u[j] = t.iter().zip(&f[..nd]).map(|(a, b)| a * b).sum();
+        }
+        u[nb..].copy_from_slice(&f[nd..]);
+        Ok(())
     }
 
     /// Restricts a generalized force over all `n_q` coordinates to the free
@@ -823,13 +947,19 @@ impl<E: Element> Robot<E> {
     /// lie outside their bounds.
     fn check_load_structure(&self, loads: &Loads) -> Result<()> {
         check_len("pressures_pa", self.n_pressures(), loads.pressures_pa.len())?;
+        // (names are formatted only for an error: this runs on every
+        // residual and tangent)
         for (i, m) in loads.node_moments.iter().enumerate() {
-            check_len(
-                &format!("node_moments[{i}].moment_nm"),
-                E::MOMENT_DIM,
-                m.moment_nm.len(),
-            )?;
-            check_index(&format!("node_moments[{i}].node"), m.node, self.n_nodes())?;
+            if m.moment_nm.len() != E::MOMENT_DIM {
+                check_len(
+                    &format!("node_moments[{i}].moment_nm"),
+                    E::MOMENT_DIM,
+                    m.moment_nm.len(),
+                )?;
+            }
+            if m.node >= self.n_nodes() {
+                check_index(&format!("node_moments[{i}].node"), m.node, self.n_nodes())?;
+            }
         }
         Ok(())
     }
@@ -865,7 +995,7 @@ impl<E: Element> Robot<E> {
             );
         }
         if !loads.distributed_f.is_empty() {
-            let jf = self.gram.mul_vec(&loads.distributed_f)?;
+            let jf = self.apply_load_gram(&loads.distributed_f)?;
             f.iter_mut().zip(jf).for_each(|(a, b)| *a += b);
         }
         // finite inputs can still overflow (huge loads, a Gaussian narrower
@@ -889,25 +1019,40 @@ impl<E: Element> Robot<E> {
         m
     }
 
-    /// Node moments of the actuation and the known concentrated moments.
-    fn node_moment_list(&self, loads: &Loads) -> Vec<(usize, Vec<f64>)> {
-        let mut list = Vec::new();
-        for (s, m) in self
-            .section_torques(&loads.pressures_pa)
-            .into_iter()
-            .enumerate()
-        {
-            if m.iter().all(|v| *v == 0.0) {
-                continue;
+    /// Calls `f(node, moment)` for the node moments of the actuation (each
+    /// section's torque at its last node, its opposite at its first, in
+    /// section order) and then the known concentrated moments, without
+    /// allocating. `loads` must have passed `check_load_structure`.
+    fn for_each_node_moment(
+        &self,
+        loads: &Loads,
+        mut f: impl FnMut(usize, &[f64]) -> Result<()>,
+    ) -> Result<()> {
+        const MAX_MOMENT_DIM: usize = 3;
+        let md = E::MOMENT_DIM.min(MAX_MOMENT_DIM);
+        if !loads.pressures_pa.is_empty() {
+            for (s, &(a, b)) in self.section_nodes.iter().enumerate() {
+                // M_s = Σ_c G_c P_c over the section's chambers, in order
+                let mut m = [0.0; MAX_MOMENT_DIM];
+                for (c, p) in self.chambers.iter().zip(&loads.pressures_pa) {
+                    if c.section == s {
+                        for (mi, g) in m.iter_mut().zip(&c.gain) {
+                            *mi += g * p;
+                        }
+                    }
+                }
+                if m[..md].iter().all(|v| *v == 0.0) {
+                    continue;
+                }
+                f(b, &m[..md])?;
+                let neg = m.map(|v| -v);
+                f(a, &neg[..md])?;
             }
-            let (a, b) = self.section_nodes[s];
-            list.push((b, m.clone()));
-            list.push((a, m.iter().map(|v| -v).collect()));
         }
         for nm in &loads.node_moments {
-            list.push((nm.node, nm.moment_nm.clone()));
+            f(nm.node, &nm.moment_nm)?;
         }
-        list
+        Ok(())
     }
 
     /// Generalized force `Q(q)` over the free coordinates (17): the dead
@@ -933,52 +1078,11 @@ impl<E: Element> Robot<E> {
         loads: &Loads,
         out: &mut [f64],
     ) -> Result<()> {
-        let nd = E::NODE_DOFS;
         check_len("q", self.n_q(), q.len())?;
         check_len("dead force", self.n_q(), dead.len())?;
         check_len("residual", self.n_free(), out.len())?;
         self.check_load_structure(loads)?;
-        let nb = self.base_free.len();
-        for (j, t) in self.base_free.iter().enumerate() {
-            out[j] = t.iter().zip(&dead[..nd]).map(|(a, b)| a * b).sum();
-        }
-        out[nb..].copy_from_slice(&dead[nd..]);
-        let edof = 2 * nd;
-        for (e, el) in self.elements.iter().enumerate() {
-            let mut g = [0.0; MAX_EDOF];
-            el.add_energy_gradient(&q[e * nd..(e + 2) * nd], &mut g[..edof]);
-            for (k, gk) in g[..edof].iter().enumerate() {
-                let gi = e * nd + k;
-                if gi >= nd {
-                    out[nb + gi - nd] -= gk;
-                } else {
-                    for (j, t) in self.base_free.iter().enumerate() {
-                        out[j] -= t[gi] * gk;
-                    }
-                }
-            }
-        }
-        let mut scratch = [0.0; MAX_EDOF * MAX_EDOF];
-        for (node, m) in self.node_moment_list(loads) {
-            let mut g = [0.0; MAX_EDOF];
-            E::add_moment_work(
-                &q[node * nd..(node + 1) * nd],
-                &m,
-                &mut g[..nd],
-                &mut scratch[..nd * nd],
-            );
-            for (k, gk) in g[..nd].iter().enumerate() {
-                let gi = node * nd + k;
-                if gi >= nd {
-                    out[nb + gi - nd] += gk;
-                } else {
-                    for (j, t) in self.base_free.iter().enumerate() {
-                        out[j] += t[gi] * gk;
-                    }
-                }
-            }
-        }
-        Ok(())
+        self.assemble(q, Some((dead, out)), None, loads)
     }
 
     /// Tangent stiffness `K = −∂Q/∂q` over the free coordinates, banded with
@@ -987,60 +1091,159 @@ impl<E: Element> Robot<E> {
     /// # Errors
     /// [`Error::DimensionMismatch`] for wrong sizes.
     pub fn tangent_into(&self, q: &[f64], loads: &Loads, k: &mut BandedMatrix) -> Result<()> {
-        let nd = E::NODE_DOFS;
         check_len("q", self.n_q(), q.len())?;
-        let kb = 2 * nd - 1;
         self.check_load_structure(loads)?;
-        if k.n() != self.n_free() {
-            *k = BandedMatrix::zeros(self.n_free(), kb, kb);
-        } else {
-            k.fill_zero();
-        }
+        self.assemble(q, None, Some(k), loads)
+    }
+
+    /// [`Robot::residual_into`] and [`Robot::tangent_into`] at the same `q`
+    /// in one pass over the elements (a Newton step needs both).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for wrong sizes.
+    pub fn residual_and_tangent_into(
+        &self,
+        q: &[f64],
+        dead: &[f64],
+        loads: &Loads,
+        out: &mut [f64],
+        k: &mut BandedMatrix,
+    ) -> Result<()> {
+        check_len("q", self.n_q(), q.len())?;
+        check_len("dead force", self.n_q(), dead.len())?;
+        check_len("residual", self.n_free(), out.len())?;
+        self.check_load_structure(loads)?;
+        self.assemble(q, Some((dead, out)), Some(k), loads)
+    }
+
+    /// The assembly loop behind the residual and the tangent (sizes and
+    /// load structure checked by the callers). Interior elements add their
+    /// gradient and Hessian at a plain offset; the first element's base
+    /// node maps through the clamp's free directions.
+    fn assemble(
+        &self,
+        q: &[f64],
+        mut residual: Option<(&[f64], &mut [f64])>,
+        mut k: Option<&mut BandedMatrix>,
+        loads: &Loads,
+    ) -> Result<()> {
+        let nd = E::NODE_DOFS;
+        let nb = self.base_free.len();
         let edof = 2 * nd;
-        let (mut mi, mut mj) = (Vec::new(), Vec::new());
+        if let Some((dead, out)) = residual.as_mut() {
+            for (j, t) in self.base_free.iter().enumerate() {
+                out[j] = t.iter().zip(&dead[..nd]).map(|(a, b)| a * b).sum();
+            }
+            out[nb..].copy_from_slice(&dead[nd..]);
+        }
+        if let Some(k) = k.as_mut() {
+            let kb = 2 * nd - 1;
+            if k.n() != self.n_free() || k.kl() != kb || k.ku() != kb {
+                **k = BandedMatrix::zeros(self.n_free(), kb, kb);
+            } else {
+                k.fill_zero();
+            }
+        }
+        let mut g = [0.0; MAX_EDOF];
+        let mut h = vec![0.0; if k.is_some() { edof * edof } else { 0 }];
         for (e, el) in self.elements.iter().enumerate() {
-            let mut h = [0.0; MAX_EDOF * MAX_EDOF];
-            el.add_energy_hessian(&q[e * nd..(e + 2) * nd], &mut h[..edof * edof]);
+            let qe = &q[e * nd..(e + 2) * nd];
+            let g = &mut g[..edof];
+            let h = &mut h[..];
+            g.fill(0.0);
+            match (residual.is_some(), k.is_some()) {
+                (true, true) => {
+                    h.fill(0.0);
+                    el.add_energy_gradient_and_hessian(qe, g, h);
+                }
+                (true, false) => el.add_energy_gradient(qe, g),
+                (false, true) => {
+                    h.fill(0.0);
+                    el.add_energy_hessian(qe, h);
+                }
+                (false, false) => {}
+            }
             if e > 0 {
                 // interior elements: a plain shift
-                let off = e * nd - nd + self.base_free.len();
-                k.add_block(off, edof, &h[..edof * edof])?;
+                let off = e * nd - nd + nb;
+                if let Some((_, out)) = residual.as_mut() {
+                    for (o, gk) in out[off..off + edof].iter_mut().zip(g.iter()) {
+                        *o -= gk;
+                    }
+                }
+                if let Some(k) = k.as_mut() {
+                    // off + edof <= n_free and edof - 1 <= kb: in the band
+                    k.add_block_unchecked(off, edof, h);
+                }
                 continue;
             }
-            for a in 0..edof {
-                self.dof_map(a, &mut mi);
-                for b in 0..edof {
-                    self.dof_map(b, &mut mj);
-                    for &(i, ci) in &mi {
-                        for &(j, cj) in &mj {
-                            k.add(i, j, ci * cj * h[a * edof + b]);
-                        }
+            if let Some((_, out)) = residual.as_mut() {
+                self.scatter_force(0, g, -1.0, out);
+            }
+            if let Some(k) = k.as_mut() {
+                self.scatter_stiffness(0, edof, h, 1.0, k);
+            }
+        }
+        let mut mg = [0.0; MAX_EDOF];
+        let mut mh = Vec::new();
+        self.for_each_node_moment(loads, |node, m| {
+            let mg = &mut mg[..nd];
+            mh.resize(nd * nd, 0.0);
+            let mh = &mut mh[..];
+            mg.fill(0.0);
+            mh.fill(0.0);
+            E::add_moment_work(&q[node * nd..(node + 1) * nd], m, mg, mh);
+            if let Some((_, out)) = residual.as_mut() {
+                self.scatter_force(node * nd, mg, 1.0, out);
+            }
+            if let Some(k) = k.as_mut() {
+                self.scatter_stiffness(node * nd, nd, mh, -1.0, k);
+            }
+            Ok(())
+        })
+    }
+
+    /// Adds `sign · Mᵀ g` for a vector `g` over the global coordinates
+    /// `start ..` into the free-coordinate vector `out`.
+    fn scatter_force(&self, start: usize, g: &[f64], sign: f64, out: &mut [f64]) {
+        let nd = E::NODE_DOFS;
+        let nb = self.base_free.len();
+        for (k, gk) in g.iter().enumerate() {
+            let gi = start + k;
+            if gi >= nd {
+                out[nb + gi - nd] += sign * gk;
+            } else {
+                for (j, t) in self.base_free.iter().enumerate() {
+                    out[j] += sign * t[gi] * gk;
+                }
+            }
+        }
+    }
+
+    /// Adds `sign · Mᵀ H M` for a `size × size` matrix `h` over the global
+    /// coordinates `start ..` into the banded free-coordinate matrix `k`.
+    fn scatter_stiffness(
+        &self,
+        start: usize,
+        size: usize,
+        h: &[f64],
+        sign: f64,
+        k: &mut BandedMatrix,
+    ) {
+        // at most NODE_DOFS base-free directions map one coordinate
+        let mut mi = [(0usize, 0.0f64); MAX_EDOF];
+        let mut mj = [(0usize, 0.0f64); MAX_EDOF];
+        for a in 0..size {
+            let na = self.dof_map_into(start + a, &mut mi);
+            for b in 0..size {
+                let nb = self.dof_map_into(start + b, &mut mj);
+                for &(i, ci) in &mi[..na] {
+                    for &(j, cj) in &mj[..nb] {
+                        k.add(i, j, sign * ci * cj * h[a * size + b]);
                     }
                 }
             }
         }
-        for (node, m) in self.node_moment_list(loads) {
-            let mut g = [0.0; MAX_EDOF];
-            let mut h = [0.0; MAX_EDOF * MAX_EDOF];
-            E::add_moment_work(
-                &q[node * nd..(node + 1) * nd],
-                &m,
-                &mut g[..nd],
-                &mut h[..nd * nd],
-            );
-            for a in 0..nd {
-                self.dof_map(node * nd + a, &mut mi);
-                for b in 0..nd {
-                    self.dof_map(node * nd + b, &mut mj);
-                    for &(i, ci) in &mi {
-                        for &(j, cj) in &mj {
-                            k.add(i, j, -ci * cj * h[a * nd + b]);
-                        }
-                    }
-                }
-            }
-        }
-        Ok(())
     }
 
     /// `∂Q/∂P` over the free coordinates: column `c` is the generalized force
@@ -1120,11 +1323,85 @@ impl<E: Element> Robot<E> {
         for i in nd..self.n_q() {
             d -= dead[i] * (to[i] - from[i]);
         }
-        for (node, m) in self.node_moment_list(loads) {
+        self.for_each_node_moment(loads, |node, m| {
             let r = node * nd..(node + 1) * nd;
-            d -= E::moment_work_between(&from[r.clone()], &to[r], &m);
-        }
+            d -= E::moment_work_between(&from[r.clone()], &to[r], m);
+            Ok(())
+        })?;
         Ok(d)
+    }
+
+    /// The elastic energy of every element at `q` into `out` (J; one entry
+    /// per element), for [`Robot::potential_change_from`].
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `q` or `out` has the wrong size.
+    pub fn element_energies_into(&self, q: &[f64], out: &mut [f64]) -> Result<()> {
+        let nd = E::NODE_DOFS;
+        check_len("q", self.n_q(), q.len())?;
+        check_len("energies", self.elements.len(), out.len())?;
+        for ((e, el), u) in self.elements.iter().enumerate().zip(out.iter_mut()) {
+            *u = el.energy(&q[e * nd..(e + 2) * nd]);
+        }
+        Ok(())
+    }
+
+    /// [`Robot::potential_change`] with the element energies at `from`
+    /// given ([`Robot::element_energies_into`]): a line search evaluates
+    /// many trials from one point. The same arithmetic, term by term.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for wrong sizes.
+    pub fn potential_change_from(
+        &self,
+        from: &[f64],
+        from_energies: &[f64],
+        to: &[f64],
+        dead: &[f64],
+        loads: &Loads,
+    ) -> Result<f64> {
+        let nd = E::NODE_DOFS;
+        check_len("q", self.n_q(), from.len())?;
+        check_len("q", self.n_q(), to.len())?;
+        check_len("energies", self.elements.len(), from_energies.len())?;
+        check_len("dead force", self.n_q(), dead.len())?;
+        self.check_load_structure(loads)?;
+        let mut d = 0.0;
+        for ((e, el), u0) in self.elements.iter().enumerate().zip(from_energies) {
+            d += el.energy(&to[e * nd..(e + 2) * nd]) - u0;
+        }
+        for i in nd..self.n_q() {
+            d -= dead[i] * (to[i] - from[i]);
+        }
+        self.for_each_node_moment(loads, |node, m| {
+            let r = node * nd..(node + 1) * nd;
+            d -= E::moment_work_between(&from[r.clone()], &to[r], m);
+            Ok(())
+        })?;
+        Ok(d)
+    }
+
+    /// The generalized force of the actuation and the concentrated moments,
+    /// `∂W/∂q` over the free coordinates, into `out` (`n_free`; O(number of
+    /// moments) besides clearing `out`).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for wrong sizes.
+    pub fn moment_force_into(&self, q: &[f64], loads: &Loads, out: &mut [f64]) -> Result<()> {
+        let nd = E::NODE_DOFS;
+        check_len("q", self.n_q(), q.len())?;
+        check_len("out", self.n_free(), out.len())?;
+        self.check_load_structure(loads)?;
+        out.iter_mut().for_each(|v| *v = 0.0);
+        let mut mg = [0.0; MAX_EDOF];
+        let mut mh = vec![0.0; nd * nd];
+        self.for_each_node_moment(loads, |node, m| {
+            let mg = &mut mg[..nd];
+            mg.fill(0.0);
+            E::add_moment_work(&q[node * nd..(node + 1) * nd], m, mg, &mut mh);
+            self.scatter_force(node * nd, mg, 1.0, out);
+            Ok(())
+        })
     }
 
     /// Node positions `r_i` (m), one `DIM` vector per node of `q` (a
@@ -1300,5 +1577,70 @@ mod tests {
         assert_eq!(e, 1);
         assert!((xi - 0.5).abs() < 1e-12);
         assert!(r.locate("s", 0.3).is_err());
+    }
+
+    #[test]
+    fn fused_and_cached_kernels_equal_the_plain_ones() {
+        let r = robot(3);
+        let loads = Loads {
+            pressures_pa: vec![4e4, 2e4],
+            node_moments: vec![crate::loads::NodeMoment {
+                node: 4,
+                moment_nm: vec![0.01],
+            }],
+            ..Loads::default()
+        };
+        let dead = r.dead_force(&loads).unwrap();
+        let q = perturbed(&r, 11);
+        // residual and tangent in one pass: bit for bit the separate ones
+        let (mut r1, mut r2) = (vec![0.0; r.n_free()], vec![0.0; r.n_free()]);
+        let mut k1 = BandedMatrix::zeros(1, 0, 0);
+        let mut k2 = BandedMatrix::zeros(1, 0, 0);
+        r.residual_into(&q, &dead, &loads, &mut r1).unwrap();
+        r.tangent_into(&q, &loads, &mut k1).unwrap();
+        r.residual_and_tangent_into(&q, &dead, &loads, &mut r2, &mut k2)
+            .unwrap();
+        assert_eq!(r1, r2);
+        assert_eq!(k1, k2);
+        assert!(k1.is_symmetric());
+        // the element-wise Gram product against the banded one
+        let f: Vec<f64> = (0..r.n_q()).map(|i| (i as f64 * 0.37).sin()).collect();
+        let a = r.apply_load_gram(&f).unwrap();
+        let b = r.load_gram().mul_vec(&f).unwrap();
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() <= 1e-15 * (1.0 + y.abs()));
+        }
+        // the potential change from cached energies: the same number
+        let to = perturbed(&r, 12);
+        let mut u = vec![0.0; r.n_elements()];
+        r.element_energies_into(&q, &mut u).unwrap();
+        assert_eq!(
+            r.potential_change(&q, &to, &dead, &loads).unwrap(),
+            r.potential_change_from(&q, &u, &to, &dead, &loads).unwrap()
+        );
+        // the moment force: residual with and without the moments
+        let mut m = vec![0.0; r.n_free()];
+        r.moment_force_into(&q, &loads, &mut m).unwrap();
+        let zero = vec![0.0; r.n_q()];
+        let none = Loads {
+            pressures_pa: vec![0.0, 0.0],
+            ..Loads::default()
+        };
+        let (mut with, mut without) = (vec![0.0; r.n_free()], vec![0.0; r.n_free()]);
+        r.residual_into(&q, &zero, &loads, &mut with).unwrap();
+        r.residual_into(&q, &zero, &none, &mut without).unwrap();
+        let scale = m.iter().fold(0.0f64, |x, v| x.max(v.abs()));
+        assert!(scale > 0.0);
+        for ((a, b), c) in m.iter().zip(&with).zip(&without) {
+            assert!((a - (b - c)).abs() <= 1e-9 * scale);
+        }
+        // and the allocation-free maps equal the allocating ones
+        let du: Vec<f64> = (0..r.n_free()).map(|i| i as f64).collect();
+        let mut dq = vec![0.0; r.n_q()];
+        r.expand_step_into(&du, &mut dq).unwrap();
+        assert_eq!(dq, r.expand_step(&du).unwrap());
+        let mut uu = vec![0.0; r.n_free()];
+        r.restrict_into(&f, &mut uu).unwrap();
+        assert_eq!(uu, r.restrict(&f).unwrap());
     }
 }

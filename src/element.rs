@@ -48,6 +48,13 @@ pub trait Element: Clone + std::fmt::Debug + Send + Sync {
     fn add_energy_gradient(&self, qe: &[f64], grad: &mut [f64]);
     /// Adds the tangent stiffness `d²U_E/dq_e²` into `hess` (row-major).
     fn add_energy_hessian(&self, qe: &[f64], hess: &mut [f64]);
+    /// Adds the gradient into `grad` and the Hessian into `hess` in one
+    /// pass (Newton's method needs both at the same point). The default
+    /// calls the two kernels; [`PlanarCable`] shares the work per Gauss point.
+    fn add_energy_gradient_and_hessian(&self, qe: &[f64], grad: &mut [f64], hess: &mut [f64]) {
+        self.add_energy_gradient(qe, grad);
+        self.add_energy_hessian(qe, hess);
+    }
     /// Interpolation weights of the node quantities at `ξ = X/L_e` (`S(X)` is
     /// `[w_0 I, w_1 I, ...]`): the cable's four Hermite functions.
     fn shape(&self, xi: f64) -> [f64; 4];
@@ -101,15 +108,21 @@ pub fn hermite(xi: f64, le: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
     (s, ds, dds)
 }
 
-/// Precomputed derivatives of the shape functions at one Gauss point.
+/// Precomputed derivatives of the shape functions at one Gauss point, with
+/// the point's weights in the two integrals (zero where the point belongs to
+/// one rule only).
 #[derive(Debug, Clone, Copy)]
 struct GaussPoint {
     /// `ds_k/dX`.
     d1: [f64; 4],
     /// `d²s_k/dX²`.
     d2: [f64; 4],
-    /// Quadrature weight times `L_e` (m).
-    w: f64,
+    /// Axial weight: quadrature weight × `L_e` × EA (N·m), 0 if not an
+    /// axial point.
+    ca: f64,
+    /// Bending weight: quadrature weight × `L_e` × EI (N·m³), 0 if not a
+    /// bending point.
+    cb: f64,
 }
 
 /// Planar ANCF cable element (2-D, 4 coordinates per node).
@@ -128,8 +141,10 @@ pub struct PlanarCable {
     ea: f64,
     ei: f64,
     kappa0: f64,
-    axial: Vec<GaussPoint>,
-    bending: Vec<GaussPoint>,
+    /// The Gauss points of both integrals: one list when the two rules
+    /// coincide (the default), else the axial points followed by the
+    /// bending points. The kernels evaluate `r'`, `r''` once per point.
+    points: Vec<GaussPoint>,
 }
 
 /// Default number of Gauss points for both the axial and the bending integral.
@@ -179,31 +194,41 @@ impl PlanarCable {
         check_positive("ea_n", ea)?;
         check_positive("ei_nm2", ei)?;
         check_finite("rest_curvature_per_m", kappa0)?;
-        let make = |n: usize, name: &str| -> Result<Vec<GaussPoint>> {
+        let rule = |n: usize, name: &str| -> Result<GaussRule> {
             // the rule's own error, under this parameter's name
-            let rule = GaussRule::new(n).map_err(|e| match e {
+            GaussRule::new(n).map_err(|e| match e {
                 Error::TooLarge { value, max, .. } => Error::TooLarge {
                     name: name.into(),
                     value,
                     max,
                 },
                 _ => Error::invalid(name, n, "must be >= 1"),
-            })?;
-            Ok(rule
+            })
+        };
+        let axial = rule(axial_points, "axial_gauss_points")?;
+        let bending = rule(bending_points, "bending_gauss_points")?;
+        let point = |xi: f64, ca: f64, cb: f64| {
+            let (_, d1, d2) = hermite(xi, le);
+            GaussPoint { d1, d2, ca, cb }
+        };
+        let points = if axial == bending {
+            axial
                 .iter()
-                .map(|(xi, w)| {
-                    let (_, d1, d2) = hermite(xi, le);
-                    GaussPoint { d1, d2, w: w * le }
-                })
-                .collect())
+                .map(|(xi, w)| point(xi, w * le * ea, w * le * ei))
+                .collect()
+        } else {
+            axial
+                .iter()
+                .map(|(xi, w)| point(xi, w * le * ea, 0.0))
+                .chain(bending.iter().map(|(xi, w)| point(xi, 0.0, w * le * ei)))
+                .collect()
         };
         Ok(PlanarCable {
             le,
             ea,
             ei,
             kappa0,
-            axial: make(axial_points, "axial_gauss_points")?,
-            bending: make(bending_points, "bending_gauss_points")?,
+            points,
         })
     }
 
@@ -259,57 +284,199 @@ fn derivs(qe: &[f64; 8], d1: &[f64; 4], d2: &[f64; 4]) -> ([f64; 2], [f64; 2]) {
 /// first two results of [`curvature`], without the Hessian).
 #[inline]
 fn curvature_gradient(a: [f64; 2], b: [f64; 2]) -> (f64, [f64; 4]) {
+    // one division: the rest multiplies by 1/d
     let c = a[0] * b[1] - a[1] * b[0];
-    let d = a[0] * a[0] + a[1] * a[1];
-    let d2 = d * d;
+    let id = 1.0 / (a[0] * a[0] + a[1] * a[1]);
+    let kappa = c * id;
+    let k2 = 2.0 * kappa;
     (
-        c / d,
+        kappa,
         [
-            b[1] / d - c * 2.0 * a[0] / d2,
-            -b[0] / d - c * 2.0 * a[1] / d2,
-            -a[1] / d,
-            a[0] / d,
+            (b[1] - k2 * a[0]) * id,
+            (-b[0] - k2 * a[1]) * id,
+            -a[1] * id,
+            a[0] * id,
         ],
     )
 }
 
 /// Bending strain `κ = c/d` with `c = a × b`, `d = a·a`, and its first and
-/// second derivatives with respect to `z = (a, b)`: returns `(κ, ∇κ, ∇²κ)`.
+/// second derivatives with respect to `z = (a, b)`: returns `(κ, ∇κ, ∇²κ)`
+/// (`κ` is linear in `b`: the `(b, b)` block of `∇²κ` is zero).
+///
+/// With `c_a = (b₁, −b₀)`, `c_b = (−a₁, a₀)`, `d_a = 2a`:
+/// `κ_a = (c_a − κ d_a)/d`, `κ_b = c_b/d`,
+/// `κ_aa = −(c_a d_aᵀ + d_a c_aᵀ)/d² − 2κ I/d + 2κ d_a d_aᵀ/d²`,
+/// `κ_ab = C/d − d_a c_bᵀ/d²`, `C = [[0, 1], [−1, 0]]`.
 #[inline]
 #[allow(clippy::needless_range_loop)]
 fn curvature(a: [f64; 2], b: [f64; 2]) -> (f64, [f64; 4], [[f64; 4]; 4]) {
     let c = a[0] * b[1] - a[1] * b[0];
-    let d = a[0] * a[0] + a[1] * a[1];
-    let kappa = c / d;
+    let id = 1.0 / (a[0] * a[0] + a[1] * a[1]);
+    let kappa = c * id;
     let ca = [b[1], -b[0]];
     let cb = [-a[1], a[0]];
     let da = [2.0 * a[0], 2.0 * a[1]];
-    let d2 = d * d;
-    let d3 = d2 * d;
+    let id2 = id * id;
     let mut g = [0.0; 4];
     for i in 0..2 {
-        g[i] = ca[i] / d - c * da[i] / d2;
-        g[2 + i] = cb[i] / d;
+        g[i] = (ca[i] - kappa * da[i]) * id;
+        g[2 + i] = cb[i] * id;
     }
     let mut h = [[0.0; 4]; 4];
     // κ_aa
     for i in 0..2 {
         for j in 0..2 {
-            let daa = if i == j { 2.0 } else { 0.0 };
-            h[i][j] =
-                -(ca[i] * da[j] + da[i] * ca[j]) / d2 - c * daa / d2 + 2.0 * c * da[i] * da[j] / d3;
+            let diag = if i == j { 2.0 * kappa * id } else { 0.0 };
+            h[i][j] = (2.0 * kappa * da[i] * da[j] - (ca[i] * da[j] + da[i] * ca[j])) * id2 - diag;
         }
     }
-    // κ_ab = C_ab/d - d_a c_b^T/d², C_ab = [[0, 1], [-1, 0]]
+    // κ_ab
     let cab = [[0.0, 1.0], [-1.0, 0.0]];
     for i in 0..2 {
         for j in 0..2 {
-            let v = cab[i][j] / d - da[i] * cb[j] / d2;
+            let v = cab[i][j] * id - da[i] * cb[j] * id2;
             h[i][2 + j] = v;
             h[2 + j][i] = v;
         }
     }
     (kappa, g, h)
+}
+
+impl PlanarCable {
+    /// Gradient of the energy density at a Gauss point with respect to
+    /// `z = (a, b) = (r', r'')`, weights included.
+    #[inline]
+    fn point_gradient(&self, gp: &GaussPoint, a: [f64; 2], b: [f64; 2]) -> [f64; 4] {
+        let mut gz = [0.0; 4];
+        if gp.ca != 0.0 {
+            // dU/da = EA ε a/|a|
+            // (the same operations as point_derivatives: bit for bit)
+            let n = (a[0] * a[0] + a[1] * a[1]).sqrt();
+            let inv_n = 1.0 / n;
+            let f = gp.ca * (n - 1.0) * inv_n;
+            gz[0] = f * a[0];
+            gz[1] = f * a[1];
+        }
+        if gp.cb != 0.0 {
+            let (kappa, g) = curvature_gradient(a, b);
+            let m = gp.cb * (kappa - self.kappa0);
+            for (gi, v) in gz.iter_mut().zip(g) {
+                *gi += m * v;
+            }
+        }
+        gz
+    }
+
+    /// Gradient and Hessian (4 × 4) of the energy density at a Gauss point
+    /// with respect to `z = (a, b)`, weights included.
+    #[inline]
+    #[allow(clippy::needless_range_loop)]
+    fn point_derivatives(
+        &self,
+        gp: &GaussPoint,
+        a: [f64; 2],
+        b: [f64; 2],
+    ) -> ([f64; 4], [[f64; 4]; 4]) {
+        let mut gz = [0.0; 4];
+        let mut hz = [[0.0; 4]; 4];
+        if gp.ca != 0.0 {
+            let aa = a[0] * a[0] + a[1] * a[1];
+            let n = aa.sqrt();
+            let inv_n = 1.0 / n;
+            let eps = n - 1.0;
+            let f = gp.ca * eps * inv_n;
+            gz[0] = f * a[0];
+            gz[1] = f * a[1];
+            // EA [t tᵀ + ε (I − t tᵀ)/|a|] = EA/|a| [a aᵀ/|a|² + ε I]
+            let c = gp.ca * inv_n;
+            let w = inv_n * inv_n;
+            hz[0][0] = c * (a[0] * a[0] * w + eps);
+            hz[0][1] = c * (a[0] * a[1] * w);
+            hz[1][0] = hz[0][1];
+            hz[1][1] = c * (a[1] * a[1] * w + eps);
+        }
+        if gp.cb != 0.0 {
+            let (kappa, g, hk) = curvature(a, b);
+            let dk = kappa - self.kappa0;
+            let c = gp.cb;
+            let m = c * dk;
+            for i in 0..4 {
+                gz[i] += m * g[i];
+                for j in i..4 {
+                    hz[i][j] += c * (g[i] * g[j] + dk * hk[i][j]);
+                }
+            }
+            for i in 1..4 {
+                for j in 0..i {
+                    hz[i][j] = hz[j][i];
+                }
+            }
+        }
+        (gz, hz)
+    }
+}
+
+/// Adds `Tᵀ g_z` to the element gradient, `T = [d1 ⊗ I; d2 ⊗ I]`.
+#[inline]
+fn scatter_gradient(gp: &GaussPoint, gz: &[f64; 4], grad: &mut [f64; 8]) {
+    for k in 0..4 {
+        grad[2 * k] += gp.d1[k] * gz[0] + gp.d2[k] * gz[2];
+        grad[2 * k + 1] += gp.d1[k] * gz[1] + gp.d2[k] * gz[3];
+    }
+}
+
+/// Adds the upper triangle of `Tᵀ H_z T` to `h` (row-major 8 × 8): `V = H_z
+/// T`, then `Tᵀ V`. An axial-only point maps its `(a, a)` block alone.
+#[inline]
+#[allow(clippy::needless_range_loop)]
+fn accumulate_hessian(gp: &GaussPoint, hz: &[[f64; 4]; 4], h: &mut [f64; 64]) {
+    let (d1, d2) = (&gp.d1, &gp.d2);
+    if gp.cb == 0.0 {
+        // H[(k,i),(l,j)] += d1_k d1_l H_aa[i][j]
+        for k in 0..4 {
+            for l in k..4 {
+                let f = d1[k] * d1[l];
+                let r0 = (2 * k) * 8 + 2 * l;
+                let r1 = r0 + 8;
+                h[r0] += f * hz[0][0];
+                h[r0 + 1] += f * hz[0][1];
+                h[r1] += f * hz[1][0];
+                h[r1 + 1] += f * hz[1][1];
+            }
+        }
+        return;
+    }
+    // V = H_z T: column (l, j) = d1_l H_z[:, j] + d2_l H_z[:, 2 + j]
+    let mut v = [[0.0; 8]; 4];
+    for i in 0..4 {
+        for l in 0..4 {
+            v[i][2 * l] = d1[l] * hz[i][0] + d2[l] * hz[i][2];
+            v[i][2 * l + 1] = d1[l] * hz[i][1] + d2[l] * hz[i][3];
+        }
+    }
+    // Tᵀ V: row (k, i) = d1_k V[i] + d2_k V[2 + i], upper triangle
+    for k in 0..4 {
+        for i in 0..2 {
+            let row = 2 * k + i;
+            let (p, q) = (d1[k], d2[k]);
+            for col in row..8 {
+                h[row * 8 + col] += p * v[i][col] + q * v[2 + i][col];
+            }
+        }
+    }
+}
+
+/// Adds the symmetric matrix whose upper triangle `h` holds into `hess`
+/// (the axial-only path also fills the lower halves of the 2 × 2 diagonal
+/// blocks; only the strict upper triangle is read for the lower one).
+#[inline]
+fn mirror_into(h: &[f64; 64], hess: &mut [f64; 64]) {
+    for r in 0..8 {
+        for c in 0..8 {
+            hess[r * 8 + c] += if c >= r { h[r * 8 + c] } else { h[c * 8 + r] };
+        }
+    }
 }
 
 impl Element for PlanarCable {
@@ -326,15 +493,17 @@ impl Element for PlanarCable {
             return f64::NAN;
         };
         let mut u = 0.0;
-        for gp in &self.axial {
-            let (a, _) = derivs(qe, &gp.d1, &gp.d2);
-            let eps = (a[0] * a[0] + a[1] * a[1]).sqrt() - 1.0;
-            u += 0.5 * gp.w * self.ea * eps * eps;
-        }
-        for gp in &self.bending {
+        for gp in &self.points {
             let (a, b) = derivs(qe, &gp.d1, &gp.d2);
-            let k = (a[0] * b[1] - a[1] * b[0]) / (a[0] * a[0] + a[1] * a[1]) - self.kappa0;
-            u += 0.5 * gp.w * self.ei * k * k;
+            let aa = a[0] * a[0] + a[1] * a[1];
+            if gp.ca != 0.0 {
+                let eps = aa.sqrt() - 1.0;
+                u += 0.5 * gp.ca * eps * eps;
+            }
+            if gp.cb != 0.0 {
+                let k = (a[0] * b[1] - a[1] * b[0]) / aa - self.kappa0;
+                u += 0.5 * gp.cb * k * k;
+            }
         }
         u
     }
@@ -344,103 +513,43 @@ impl Element for PlanarCable {
         else {
             return;
         };
-        for gp in &self.axial {
-            let (a, _) = derivs(qe, &gp.d1, &gp.d2);
-            let n = (a[0] * a[0] + a[1] * a[1]).sqrt();
-            let f = gp.w * self.ea * (n - 1.0) / n; // dU/da = EA ε a/|a|
-            for k in 0..4 {
-                grad[2 * k] += gp.d1[k] * f * a[0];
-                grad[2 * k + 1] += gp.d1[k] * f * a[1];
-            }
-        }
-        for gp in &self.bending {
+        for gp in &self.points {
             let (a, b) = derivs(qe, &gp.d1, &gp.d2);
-            let (kappa, g) = curvature_gradient(a, b);
-            let m = gp.w * self.ei * (kappa - self.kappa0);
-            for k in 0..4 {
-                grad[2 * k] += m * (gp.d1[k] * g[0] + gp.d2[k] * g[2]);
-                grad[2 * k + 1] += m * (gp.d1[k] * g[1] + gp.d2[k] * g[3]);
-            }
+            let gz = self.point_gradient(gp, a, b);
+            scatter_gradient(gp, &gz, grad);
         }
     }
 
-    #[allow(clippy::needless_range_loop)]
     fn add_energy_hessian(&self, qe: &[f64], hess: &mut [f64]) {
         let (Ok(qe), Ok(hess)) = (<&[f64; 8]>::try_from(qe), <&mut [f64; 64]>::try_from(hess))
         else {
             return;
         };
-        // At each Gauss point the Hessian in z = (a, b) = (r', r'') is mapped
-        // by T = [d1 ⊗ I; d2 ⊗ I] (4 × 8): H_e += Tᵀ H_z T, computed as
-        // V = H_z T, then Tᵀ V, upper triangle only, mirrored at the end.
         let mut h = [0.0; 64];
-        for gp in &self.axial {
-            // only the (a, a) block: H[(k,i),(l,j)] += d1_k d1_l H_aa[i][j]
-            let (a, _) = derivs(qe, &gp.d1, &gp.d2);
-            let n = (a[0] * a[0] + a[1] * a[1]).sqrt();
-            let eps = n - 1.0;
-            let t = [a[0] / n, a[1] / n];
-            let c = gp.w * self.ea;
-            let haa = [
-                c * (t[0] * t[0] + eps * (1.0 - t[0] * t[0]) / n),
-                c * (t[0] * t[1] - eps * t[0] * t[1] / n),
-                c * (t[1] * t[1] + eps * (1.0 - t[1] * t[1]) / n),
-            ];
-            for k in 0..4 {
-                for l in k..4 {
-                    let f = gp.d1[k] * gp.d1[l];
-                    let r0 = (2 * k) * 8 + 2 * l;
-                    let r1 = (2 * k + 1) * 8 + 2 * l;
-                    h[r0] += f * haa[0];
-                    h[r0 + 1] += f * haa[1];
-                    h[r1] += f * haa[1];
-                    h[r1 + 1] += f * haa[2];
-                }
-            }
-        }
-        for gp in &self.bending {
+        for gp in &self.points {
             let (a, b) = derivs(qe, &gp.d1, &gp.d2);
-            let (kappa, g, hk) = curvature(a, b);
-            let dk = kappa - self.kappa0;
-            let c = gp.w * self.ei;
-            let mut hz = [[0.0; 4]; 4];
-            for i in 0..4 {
-                for j in i..4 {
-                    let v = c * (g[i] * g[j] + dk * hk[i][j]);
-                    hz[i][j] = v;
-                    hz[j][i] = v;
-                }
-            }
-            // V = H_z T: column (l, j) = d1_l H_z[:, j] + d2_l H_z[:, 2 + j]
-            let mut v = [[0.0; 8]; 4];
-            for l in 0..4 {
-                for j in 0..2 {
-                    for i in 0..4 {
-                        v[i][2 * l + j] = gp.d1[l] * hz[i][j] + gp.d2[l] * hz[i][2 + j];
-                    }
-                }
-            }
-            // Tᵀ V: row (k, i) = d1_k V[i] + d2_k V[2 + i]
-            for k in 0..4 {
-                for i in 0..2 {
-                    let row = 2 * k + i;
-                    for col in row..8 {
-                        h[row * 8 + col] += gp.d1[k] * v[i][col] + gp.d2[k] * v[2 + i][col];
-                    }
-                }
-            }
+            let (_, hz) = self.point_derivatives(gp, a, b);
+            accumulate_hessian(gp, &hz, &mut h);
         }
-        // mirror the upper triangle (the axial loop filled whole 2×2 blocks
-        // on and above the block diagonal; only the strict upper part is copied)
-        for r in 0..8 {
-            for c in 0..8 {
-                if c >= r {
-                    hess[r * 8 + c] += h[r * 8 + c];
-                } else {
-                    hess[r * 8 + c] += h[c * 8 + r];
-                }
-            }
+        mirror_into(&h, hess);
+    }
+
+    fn add_energy_gradient_and_hessian(&self, qe: &[f64], grad: &mut [f64], hess: &mut [f64]) {
+        let (Ok(qe), Ok(grad), Ok(hess)) = (
+            <&[f64; 8]>::try_from(qe),
+            <&mut [f64; 8]>::try_from(grad),
+            <&mut [f64; 64]>::try_from(hess),
+        ) else {
+            return;
+        };
+        let mut h = [0.0; 64];
+        for gp in &self.points {
+            let (a, b) = derivs(qe, &gp.d1, &gp.d2);
+            let (gz, hz) = self.point_derivatives(gp, a, b);
+            scatter_gradient(gp, &gz, grad);
+            accumulate_hessian(gp, &hz, &mut h);
         }
+        mirror_into(&h, hess);
     }
 
     fn shape(&self, xi: f64) -> [f64; 4] {
@@ -666,5 +775,41 @@ mod tests {
             eps.abs() < 1e-6 && (kappa - k).abs() < 1e-4,
             "{eps} {kappa}"
         );
+    }
+
+    #[test]
+    fn fused_gradient_and_hessian_equal_the_separate_kernels() {
+        for (seed, (na, nb)) in [(5usize, 5usize), (5, 3), (2, 7)].into_iter().enumerate() {
+            let le = 0.07;
+            let e = PlanarCable::with_rules(le, 300.0, 0.025, 0.4, na, nb).unwrap();
+            let q = deformed(seed as u64 + 40, le);
+            let (mut g1, mut h1) = ([0.0; 8], [0.0; 64]);
+            e.add_energy_gradient(&q, &mut g1);
+            e.add_energy_hessian(&q, &mut h1);
+            let (mut g2, mut h2) = ([0.0; 8], [0.0; 64]);
+            e.add_energy_gradient_and_hessian(&q, &mut g2, &mut h2);
+            assert_eq!(g1, g2);
+            assert_eq!(h1, h2);
+            // wrong sizes add nothing
+            let mut g3 = [0.0; 8];
+            e.add_energy_gradient_and_hessian(&q[..7], &mut g3, &mut h2);
+            assert_eq!(g3, [0.0; 8]);
+        }
+    }
+
+    #[test]
+    fn coinciding_rules_give_the_energy_of_separate_integrals() {
+        // the merged 5/5 list against a 5/5 energy summed by hand
+        let le = 0.09;
+        let (ea, ei, k0) = (300.0, 0.025, 0.7);
+        let e = PlanarCable::with_rules(le, ea, ei, k0, 5, 5).unwrap();
+        let q = deformed(77, le);
+        let rule = GaussRule::new(5).unwrap();
+        let mut u = 0.0;
+        for (xi, w) in rule.iter() {
+            let (eps, kappa) = e.strains(&q, xi);
+            u += 0.5 * w * le * (ea * eps * eps + ei * (kappa - k0) * (kappa - k0));
+        }
+        assert!((e.energy(&q) - u).abs() <= 1e-14 * u.abs());
     }
 }

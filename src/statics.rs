@@ -413,6 +413,7 @@ impl StaticSolver {
         let mut trial = q.to_vec();
         let mut r_trial = vec![0.0; n];
         let mut dq = vec![0.0; n];
+        let mut energies = vec![0.0; robot.n_elements()];
         for _ in 0..self.settings.max_iterations {
             if !rn.is_finite() {
                 return Ok(Outcome::Failed(FailureCause::NonFinite));
@@ -441,14 +442,14 @@ impl StaticSolver {
             // slopes ∝ L_e). If the direction does not descend the potential
             // (Q·dq <= 0: an indefinite tangent far from equilibrium), shift
             // the scaled diagonal with growing μ until it does.
-            let kmat = std::mem::replace(&mut w.k, BandedMatrix::zeros(0, 0, 0));
+            // (the tangent is symmetric: L D Lᵀ when positive definite, the
+            // pivoted LU otherwise, neither consuming it)
             let mut found = false;
             for mu in [0.0, 1e-8, 1e-6, 1e-4, 1e-2, 1.0] {
-                let lu = match kmat.clone().factor_scaled(mu, "tangent stiffness") {
+                let lu = match w.k.factor_scaled_symmetric(mu, "tangent stiffness") {
                     Ok(lu) => lu,
                     Err(Error::Singular { .. }) => continue,
                     Err(Error::NonFinite { .. }) => {
-                        w.k = kmat;
                         return Ok(Outcome::Failed(FailureCause::NonFinite));
                     }
                     Err(e) => return Err(e),
@@ -461,7 +462,6 @@ impl StaticSolver {
                     break;
                 }
             }
-            w.k = kmat;
             if !found {
                 return Ok(Outcome::Failed(FailureCause::SingularTangent));
             }
@@ -491,6 +491,8 @@ impl StaticSolver {
                 }
                 return Ok(Outcome::Converged(Criterion::Floor));
             }
+            // the element energies at q, once for all trials
+            robot.element_energies_into(q, &mut energies)?;
             let offset_slope: f64 = offset.iter().zip(&dq).map(|(a, b)| a * b).sum();
             // Π decreases along dq when Q·dq > 0 (K positive along dq).
             let slope: f64 = w.r.iter().zip(&dq).map(|(a, b)| a * b).sum();
@@ -502,7 +504,8 @@ impl StaticSolver {
                 let rt = eval(&trial, &mut r_trial)?;
                 if rt.is_finite() {
                     let offset_work = t * offset_slope;
-                    let dpi = robot.potential_change(q, &trial, dead, loads)? + offset_work;
+                    let dpi = robot.potential_change_from(q, &energies, &trial, dead, loads)?
+                        + offset_work;
                     let energy_ok = dpi <= -1e-4 * t * slope;
                     let residual_ok = rt * rt <= (1.0 - 1e-4 * t) * rn * rn;
                     if energy_ok || residual_ok {
@@ -550,23 +553,10 @@ const FLOOR_SQRT_N: f64 = 0.05;
 /// and concentrated moments (N).
 fn load_scale<E: Element>(robot: &Robot<E>, dead: &[f64], loads: &Loads, q: &[f64]) -> Result<f64> {
     let mut applied = robot.restrict(dead)?;
-    // the moment terms: residual with zero elastic part = residual + elastic gradient
-    let zero = vec![0.0; robot.n_q()];
-    let mut r = vec![0.0; robot.n_free()];
-    robot.residual_into(q, &zero, loads, &mut r)?;
-    let mut elastic_only = vec![0.0; robot.n_free()];
-    robot.residual_into(
-        q,
-        &zero,
-        &Loads {
-            pressures_pa: vec![0.0; robot.n_pressures()],
-            ..Loads::default()
-        },
-        &mut elastic_only,
-    )?;
-    for ((a, r), e) in applied.iter_mut().zip(&r).zip(&elastic_only) {
-        *a += r - e;
-    }
+    // the moment terms (actuation and concentrated moments), directly
+    let mut m = vec![0.0; robot.n_free()];
+    robot.moment_force_into(q, loads, &mut m)?;
+    applied.iter_mut().zip(&m).for_each(|(a, b)| *a += b);
     Ok(norm2(&applied))
 }
 

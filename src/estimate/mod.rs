@@ -234,7 +234,10 @@ pub struct EstimatorSettings {
     /// Outer iterations per observation (default 100).
     pub max_iterations: usize,
     /// Convergence: the predicted decrease of the objective below
-    /// `tolerance × max(objective, n_ob)` (default 1e-15; a round-off floor also ends it).
+    /// `tolerance × max(objective, n_ob)` (default 1e-15; a round-off floor
+    /// also ends it). The Newton backend also stops after a step whose
+    /// predicted successor decrease, `dec²/dec_prev`, is below `1e-3 ×` that
+    /// (taken without confirming it by another linearization).
     pub tolerance: f64,
     /// Largest marker jump (m) between successive observations handled in
     /// one go; larger jumps are split into a sequence of intermediate
@@ -486,7 +489,11 @@ pub struct EstimateReport {
     pub weighted_residual: f64,
     /// Number of observed components `n_ob`.
     pub n_observations: usize,
-    /// Norm of the reduced gradient (29) of the objective with respect to `F`.
+    /// Norm of the reduced gradient (29) of the objective with respect to
+    /// `F` at the last linearization: the estimate itself, or, when the
+    /// Newton backend took its last step unconfirmed (the decrease predicted
+    /// after it far below the tolerance, see [`NewtonEstimator`]), the
+    /// iterate before that step.
     pub gradient_norm: f64,
     /// Final equilibrium residual `|Q|_2` (N).
     pub equilibrium_residual_n: f64,
@@ -538,7 +545,11 @@ pub struct Estimate {
     /// Marker residuals `A q − y` in observation order (m; tangents dimensionless).
     pub marker_residuals: Vec<f64>,
     /// Covariance factor `L` (`n_F × n_ob`, row-major): `Cov(F) = L Lᵀ`, see
-    /// [`Estimate::covariance_f`].
+    /// [`Estimate::covariance_f`]. Like the other covariances it is taken at
+    /// the last linearization (see [`EstimateReport::gradient_norm`]; after
+    /// an unconfirmed last step the two points differ by that step, whose
+    /// predicted decrease is below `1e-3 tolerance`: the covariances then
+    /// differ by about the square root of that, relatively).
     pub cov_factor: Vec<f64>,
     /// Covariance of the estimated marker-space shape `A q` (`n_ob × n_ob`,
     /// row-major; m²).
@@ -674,6 +685,8 @@ macro_rules! impl_estimator {
             fn reset(&mut self) {
                 self.core.warm = None;
                 self.core.lu_cache = None;
+                self.core.eq_state = None;
+                self.core.derivs_cache = None;
                 self.core.alpha = self.core.settings.alpha;
             }
         }
@@ -709,7 +722,7 @@ pub trait Estimator {
 // The shared core: observation operator, equilibrium, Jacobians.
 
 /// One observed scalar: `Σ_k w_k q_e[k·DIM + comp]`, element `e`.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct ObsRow {
     pub e: usize,
     pub w: [f64; 4],
@@ -784,6 +797,23 @@ pub(crate) struct Core<E: Element> {
     pub warm: Option<Warm>,
     /// The last factorization of `K` and the shape it was taken at.
     pub lu_cache: Option<(Vec<f64>, BandedLu)>,
+    /// The last solved equilibrium: its load, shape and residual.
+    pub eq_state: Option<EqState>,
+    /// The derivatives at the last converged estimate's shape for its
+    /// observation rows: a warm step's first iteration starts there.
+    pub derivs_cache: Option<(Vec<f64>, Vec<ObsRow>, Derivs)>,
+}
+
+/// A solved equilibrium [`Core::equilibrium_opt`] remembers: asked again at
+/// the same `(F, q)` it returns at once, and a trial load `F'` from the same
+/// shape starts from `Q(q, F') = Q(q, F) + Mᵀ G (F' − F)` (the unknown load
+/// enters linearly) instead of a new residual evaluation.
+#[derive(Debug, Clone)]
+pub(crate) struct EqState {
+    f: Vec<f64>,
+    q: Vec<f64>,
+    r: Vec<f64>,
+    residual_n: f64,
 }
 
 /// The solved equilibrium at some `F`: configuration and the factored tangent.
@@ -793,7 +823,100 @@ pub(crate) struct Equil {
     pub residual_n: f64,
 }
 
+/// The Cholesky factor of a Gauss–Newton system ([`Core::gn_solve`]).
+pub(crate) struct GnFactor(SmallCholesky);
+
+/// `A = L Lᵀ` of a small dense symmetric positive definite matrix
+/// (row-major `L`; the Gauss–Newton systems are `n_ob × n_ob` or
+/// `n_F × n_F` with a concentrated load).
+pub(crate) struct SmallCholesky {
+    m: usize,
+    l: Vec<f64>,
+}
+
+impl SmallCholesky {
+    /// The factor of `a` (row-major `m × m`, symmetric), with a diagonal
+    /// jitter of 1e-14 … 1e-10 of the largest diagonal entry if the plain
+    /// factorization fails (nearly redundant markers); `None` if that does
+    /// not help either.
+    fn jittered(a: Vec<f64>, m: usize) -> Option<Self> {
+        let dmax = (0..m).fold(0.0f64, |x, i| x.max(a[i * m + i].abs()));
+        for jitter in [0.0, 1e-14, 1e-12, 1e-10] {
+            let mut l = a.clone();
+            for i in 0..m {
+                l[i * m + i] += jitter * dmax;
+            }
+            if Self::factor_in_place(&mut l, m) {
+                return Some(SmallCholesky { m, l });
+            }
+        }
+        None
+    }
+
+    /// Cholesky in place (lower triangle; the upper is zeroed). False if a
+    /// pivot is not positive or not finite.
+    fn factor_in_place(l: &mut [f64], m: usize) -> bool {
+        for j in 0..m {
+            let mut d = l[j * m + j];
+            for k in 0..j {
+                d -= l[j * m + k] * l[j * m + k];
+            }
+            if !(d > 0.0 && d.is_finite()) {
+                return false;
+            }
+            let d = d.sqrt();
+            l[j * m + j] = d;
+            for i in j + 1..m {
+                let mut s = l[i * m + j];
+                for k in 0..j {
+                    s -= l[i * m + k] * l[j * m + k];
+                }
+                l[i * m + j] = s / d;
+                l[j * m + i] = 0.0;
+            }
+        }
+        true
+    }
+
+    /// Solves `A x = b` in place.
+    fn solve(&self, b: &mut [f64]) {
+        let (m, l) = (self.m, &self.l);
+        for i in 0..m {
+            let mut s = b[i];
+            for k in 0..i {
+                s -= l[i * m + k] * b[k];
+            }
+            b[i] = s / l[i * m + i];
+        }
+        for i in (0..m).rev() {
+            let mut s = b[i];
+            for k in i + 1..m {
+                s -= l[k * m + i] * b[k];
+            }
+            b[i] = s / l[i * m + i];
+        }
+    }
+
+    /// `A⁻¹` (row-major).
+    fn inverse(&self) -> Vec<f64> {
+        let m = self.m;
+        let mut inv = vec![0.0; m * m];
+        let mut col = vec![0.0; m];
+        for j in 0..m {
+            col.iter_mut()
+                .enumerate()
+                .for_each(|(i, v)| *v = f64::from(u8::from(i == j)));
+            self.solve(&mut col);
+            for i in 0..m {
+                inv[i * m + j] = col[i];
+            }
+        }
+        inv
+    }
+}
+
 /// Derivatives at an equilibrium for an observation.
+#[derive(Debug, Clone)]
 pub(crate) struct Derivs {
     /// Adjoint fields `z_i = M K⁻¹ Mᵀ a_iᵀ` (n_ob × n_q, row i = z_i).
     pub z: Vec<Vec<f64>>,
@@ -839,6 +962,8 @@ impl<E: Element> Core<E> {
             n_f,
             warm: None,
             lu_cache: None,
+            eq_state: None,
+            derivs_cache: None,
         })
     }
 
@@ -928,7 +1053,7 @@ impl<E: Element> Core<E> {
     /// `G F` over all coordinates (N).
     pub fn gen_force(&self, f: &[f64]) -> Result<Vec<f64>> {
         match self.settings.load_model {
-            LoadModel::Distributed => self.robot.load_gram().mul_vec(f),
+            LoadModel::Distributed => self.robot.apply_load_gram(f),
             LoadModel::Concentrated { node } => {
                 let nd = E::NODE_DOFS;
                 let mut g = vec![0.0; self.robot.n_q()];
@@ -941,7 +1066,7 @@ impl<E: Element> Core<E> {
     /// `Gᵀ v` (`v` over all coordinates).
     pub fn gen_force_t(&self, v: &[f64]) -> Result<Vec<f64>> {
         match self.settings.load_model {
-            LoadModel::Distributed => self.robot.load_gram().mul_vec(v),
+            LoadModel::Distributed => self.robot.apply_load_gram(v),
             LoadModel::Concentrated { node } => {
                 let nd = E::NODE_DOFS;
                 Ok(v[node * nd..node * nd + E::DIM].to_vec())
@@ -952,7 +1077,7 @@ impl<E: Element> Core<E> {
     /// `H F`.
     pub fn penalty_grad(&self, f: &[f64]) -> Result<Vec<f64>> {
         match self.settings.load_model {
-            LoadModel::Distributed => self.robot.load_gram().mul_vec(f),
+            LoadModel::Distributed => self.robot.apply_load_gram(f),
             LoadModel::Concentrated { .. } => Ok(f.to_vec()),
         }
     }
@@ -999,10 +1124,13 @@ impl<E: Element> Core<E> {
         loads
     }
 
-    /// Factors the tangent at `q`.
+    /// Factors the tangent at `q`: `L D Lᵀ` of the Jacobi-scaled tangent
+    /// (it is symmetric, and positive definite near a stable equilibrium),
+    /// the pivoted LU if it is not positive definite.
     pub fn factor(&mut self, q: &[f64]) -> Result<BandedLu> {
         self.robot.tangent_into(q, &self.known, &mut self.kmat)?;
-        self.kmat.clone().factor_scaled(0.0, "tangent stiffness")
+        debug_assert!(self.kmat.is_symmetric());
+        self.kmat.factor_scaled_symmetric(0.0, "tangent stiffness")
     }
 
     /// The residual `Q` over the free coordinates at `(q, F)`.
@@ -1012,26 +1140,28 @@ impl<E: Element> Core<E> {
     }
 
     /// One plain Newton (or, with old factors, chord) step at `q` with the
-    /// factors `lu`: the residual goes into `r`, and the step is applied
-    /// unless it is not finite, longer than a quarter of the robot, or not
-    /// shorter than `limit` (m). Returns the step's size (m) if applied.
+    /// factors `lu` for the residual `r` at `q` (computed by the caller):
+    /// the step is applied unless it is not finite, longer than a quarter
+    /// of the robot, or not shorter than `limit` (m). Returns the step's
+    /// size (m) if applied. `du` (`n_free`) and `dq` (`n_q`) are scratch.
+    #[allow(clippy::too_many_arguments)]
     fn plain_step(
         &self,
         q: &mut [f64],
-        dead: &[f64],
         lu: &BandedLu,
-        r: &mut [f64],
+        r: &[f64],
+        du: &mut [f64],
+        dq: &mut [f64],
         limit: f64,
     ) -> Result<Option<f64>> {
-        self.robot.residual_into(q, dead, &self.known, r)?;
-        let mut du = r.to_vec();
-        lu.solve_in_place(&mut du)?;
+        du.copy_from_slice(r);
+        lu.solve_in_place(du)?;
         let step = du.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         if !step.is_finite() || step > 0.25 * self.robot.length() || step > limit {
             return Ok(None);
         }
-        let dq = self.robot.expand_step(&du)?;
-        q.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
+        self.robot.expand_step_into(du, dq)?;
+        q.iter_mut().zip(dq.iter()).for_each(|(a, b)| *a += b);
         Ok(Some(step))
     }
 
@@ -1043,21 +1173,49 @@ impl<E: Element> Core<E> {
 
     /// As [`Core::equilibrium`]; without `fallback` a failure of the plain
     /// Newton steps is an error at once (cheap, for line-search trials).
+    ///
+    /// Warm starts take chord (modified Newton) steps with the cached
+    /// factorization: a few residuals, then one fresh factorization at the
+    /// solution for exact derivatives (kept for the next call). Each
+    /// converged solve ends with a step below `1e-10 L`.
     pub fn equilibrium_opt(&mut self, f: &[f64], q0: &[f64], fallback: bool) -> Result<Equil> {
+        // asked again at the last solution (a warm start): nothing to solve.
+        // The cached factors may be those of a point up to 1e-8 L away (a
+        // last Gauss–Newton step keeps them, see Core::equilibrium_chord):
+        // the derivatives they give differ by about 1e-7 relative, which the
+        // next Gauss–Newton step absorbs.
+        if let (Some(st), Some((q_lu, lu))) = (&self.eq_state, &self.lu_cache) {
+            let near = q_lu
+                .iter()
+                .zip(q0)
+                .all(|(a, b)| (a - b).abs() <= 1e-8 * self.robot.length());
+            if st.f == f && st.q == q0 && near {
+                return Ok(Equil {
+                    q: q0.to_vec(),
+                    lu: lu.clone(),
+                    residual_n: st.residual_n,
+                });
+            }
+        }
         let dead = self.dead_with(f)?;
         let n = self.robot.n_free();
         let len = self.robot.length();
         let mut r = vec![0.0; n];
-        // chord (modified Newton) steps with the last factorization: warm
-        // starts need a few residuals and one fresh factorization (for exact
-        // derivatives at the solution) instead of one per Newton step
+        let mut du = vec![0.0; n];
+        let mut dq = vec![0.0; self.robot.n_q()];
+        // the residual at q0 from the remembered one, if q0 is its shape
+        let known_residual = self.residual_from_state(f, q0, &mut r)?;
         if let Some((q_lu, lu)) = self.lu_cache.take() {
             let mut q = q0.to_vec();
             let mut prev = f64::INFINITY;
             let mut done = false;
             let mut moved = false;
-            for _ in 0..12 {
-                let Some(step) = self.plain_step(&mut q, &dead, &lu, &mut r, 0.5 * prev)? else {
+            for it in 0..12 {
+                if it > 0 || !known_residual {
+                    self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+                }
+                let Some(step) = self.plain_step(&mut q, &lu, &r, &mut du, &mut dq, 0.5 * prev)?
+                else {
                     break;
                 };
                 prev = step;
@@ -1068,38 +1226,44 @@ impl<E: Element> Core<E> {
                 moved = true;
             }
             if done {
-                self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
                 // the cached factors are exact if q has not left their point
                 let same = !moved && q_lu.iter().zip(q0).all(|(a, b)| a == b);
-                let lu = if same { lu } else { self.factor(&q)? };
-                self.lu_cache = Some((q.clone(), lu.clone()));
-                return Ok(Equil {
-                    q,
-                    lu,
-                    residual_n: norm2(&r),
-                });
+                let lu = if same {
+                    self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+                    lu
+                } else {
+                    // fresh factors at the solution, with its residual
+                    self.robot.residual_and_tangent_into(
+                        &q,
+                        &dead,
+                        &self.known,
+                        &mut r,
+                        &mut self.kmat,
+                    )?;
+                    self.kmat
+                        .factor_scaled_symmetric(0.0, "tangent stiffness")?
+                };
+                return Ok(self.solved(f, q, lu, r));
             }
             self.lu_cache = Some((q_lu, lu));
         }
         let mut q = q0.to_vec();
         let mut prev = f64::INFINITY;
         for _ in 0..12 {
-            let lu = match self.factor(&q) {
+            // Newton: residual and tangent at q in one pass
+            self.robot
+                .residual_and_tangent_into(&q, &dead, &self.known, &mut r, &mut self.kmat)?;
+            let lu = match self.kmat.factor_scaled_symmetric(0.0, "tangent stiffness") {
                 Ok(lu) => lu,
                 Err(_) => break,
             };
-            let Some(step) = self.plain_step(&mut q, &dead, &lu, &mut r, 0.9 * prev)? else {
+            let Some(step) = self.plain_step(&mut q, &lu, &r, &mut du, &mut dq, 0.9 * prev)? else {
                 break;
             };
             prev = step;
             if step <= 1e-10 * len {
                 self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
-                self.lu_cache = Some((q.clone(), lu.clone()));
-                return Ok(Equil {
-                    q,
-                    lu,
-                    residual_n: norm2(&r),
-                });
+                return Ok(self.solved(f, q, lu, r));
             }
         }
         if !fallback {
@@ -1111,32 +1275,149 @@ impl<E: Element> Core<E> {
         let solver = StaticSolver::new(self.settings.statics.clone())?;
         let loads = self.loads_with(f);
         let eq = solver.solve(&self.robot, &loads, Some(q0))?;
-        let lu = self.factor(&eq.q)?;
-        self.lu_cache = Some((eq.q.clone(), lu.clone()));
-        Ok(Equil {
-            q: eq.q,
-            lu,
-            residual_n: eq.report.residual_norm_n,
-        })
+        self.robot
+            .residual_and_tangent_into(&eq.q, &dead, &self.known, &mut r, &mut self.kmat)?;
+        let lu = self
+            .kmat
+            .factor_scaled_symmetric(0.0, "tangent stiffness")?;
+        let mut out = self.solved(f, eq.q, lu, r);
+        out.residual_n = eq.report.residual_norm_n;
+        Ok(out)
+    }
+
+    /// The equilibrium at `F` from `q0` by chord steps with the cached
+    /// factorization only, keeping that factorization (no refactorization
+    /// at the solution): for a last, tiny Gauss–Newton step. `None` (and no
+    /// change) if there is no cached factorization or the steps do not
+    /// converge below `1e-10 L`; else the shape and its residual norm.
+    pub fn equilibrium_chord(&mut self, f: &[f64], q0: &[f64]) -> Result<Option<(Vec<f64>, f64)>> {
+        let Some((q_lu, lu)) = self.lu_cache.take() else {
+            return Ok(None);
+        };
+        let dead = self.dead_with(f)?;
+        let n = self.robot.n_free();
+        let len = self.robot.length();
+        let mut r = vec![0.0; n];
+        let mut du = vec![0.0; n];
+        let mut dq = vec![0.0; self.robot.n_q()];
+        let known_residual = self.residual_from_state(f, q0, &mut r)?;
+        let mut q = q0.to_vec();
+        let mut prev = f64::INFINITY;
+        let mut done = false;
+        for it in 0..12 {
+            if it > 0 || !known_residual {
+                self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+            }
+            let Some(step) = self.plain_step(&mut q, &lu, &r, &mut du, &mut dq, 0.5 * prev)? else {
+                break;
+            };
+            prev = step;
+            if step <= 1e-10 * len {
+                done = true;
+                break;
+            }
+        }
+        self.lu_cache = Some((q_lu, lu));
+        if !done {
+            return Ok(None);
+        }
+        self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+        let residual_n = norm2(&r);
+        self.eq_state = Some(EqState {
+            f: f.to_vec(),
+            q: q.clone(),
+            r,
+            residual_n,
+        });
+        Ok(Some((q, residual_n)))
+    }
+
+    /// `Q(q0, F)` into `r` from the remembered equilibrium if `q0` is its
+    /// shape (`Q(q, F) = Q(q, F_s) + Mᵀ G (F − F_s)`); false otherwise.
+    fn residual_from_state(&self, f: &[f64], q0: &[f64], r: &mut [f64]) -> Result<bool> {
+        match &self.eq_state {
+            Some(st) if st.q == q0 && st.f.len() == f.len() => {
+                let df: Vec<f64> = f.iter().zip(&st.f).map(|(a, b)| a - b).collect();
+                let gdf = self.gen_force(&df)?;
+                self.robot.restrict_into(&gdf, r)?;
+                r.iter_mut().zip(&st.r).for_each(|(a, b)| *a += b);
+                Ok(true)
+            }
+            _ => Ok(false),
+        }
+    }
+
+    /// Records a solved equilibrium (`r` its residual, `lu` the factors
+    /// at `q`) in the caches and returns it.
+    fn solved(&mut self, f: &[f64], q: Vec<f64>, lu: BandedLu, r: Vec<f64>) -> Equil {
+        let residual_n = norm2(&r);
+        self.lu_cache = Some((q.clone(), lu.clone()));
+        self.eq_state = Some(EqState {
+            f: f.to_vec(),
+            q: q.clone(),
+            r,
+            residual_n,
+        });
+        Equil { q, lu, residual_n }
     }
 
     /// Adjoint fields and the marker Jacobian at an equilibrium (28): row
-    /// `i` of `∂(Aq)/∂F` is `Gᵀ M K⁻¹ Mᵀ a_iᵀ` (K symmetric), one solve per
-    /// observed component.
+    /// `i` of `∂(Aq)/∂F` is `Gᵀ M K⁻¹ Mᵀ a_iᵀ` (K symmetric). The `n_ob`
+    /// adjoint systems share one factorization and one sweep over it.
     pub fn derivs(&self, lu: &BandedLu, op: &ObsOp) -> Result<Derivs> {
         let nq = self.robot.n_q();
+        let nfree = self.robot.n_free();
         let (nd, d) = (E::NODE_DOFS, E::DIM);
-        let mut z = Vec::with_capacity(op.n());
-        let mut jm = Vec::with_capacity(op.n());
-        for i in 0..op.n() {
-            let a = op.dense_row(i, nq, nd, d);
-            let mut u = self.robot.restrict(&a)?;
-            lu.solve_in_place(&mut u)?;
-            let zi = self.robot.expand_step(&u)?;
+        let m = op.n();
+        // right-hand sides Mᵀ a_iᵀ, row-major n_free × m
+        let mut b = vec![0.0; nfree * m];
+        let mut u = vec![0.0; nfree];
+        for (i, row) in op.rows.iter().enumerate() {
+            if row.e == 0 {
+                // touches the base node: restrict through the clamp
+                let ai = op.dense_row(i, nq, nd, d);
+                self.robot.restrict_into(&ai, &mut u)?;
+                for (k, v) in u.iter().enumerate() {
+                    b[k * m + i] = *v;
+                }
+            } else {
+                let nb = self.robot.n_base_free();
+                for k in 0..4 {
+                    let gi = row.e * nd + k * d + row.comp;
+                    b[(nb + gi - nd) * m + i] += row.w[k];
+                }
+            }
+        }
+        lu.solve_many_in_place(&mut b, m)?;
+        let mut z = Vec::with_capacity(m);
+        let mut jm = Vec::with_capacity(m);
+        for i in 0..m {
+            for (k, uk) in u.iter_mut().enumerate() {
+                *uk = b[k * m + i];
+            }
+            let mut zi = vec![0.0; nq];
+            self.robot.expand_step_into(&u, &mut zi)?;
             jm.push(self.gen_force_t(&zi)?);
             z.push(zi);
         }
         Ok(Derivs { z, jm })
+    }
+
+    /// The derivatives at `q` for `op`'s rows: the cached ones if they were
+    /// taken at this very shape for the same rows, else [`Core::derivs`].
+    pub fn derivs_at(&mut self, q: &[f64], lu: &BandedLu, op: &ObsOp) -> Result<Derivs> {
+        if let Some((qc, rows, dv)) = self.derivs_cache.take() {
+            if qc == q && rows == op.rows {
+                return Ok(dv);
+            }
+        }
+        self.derivs(lu, op)
+    }
+
+    /// Remembers the derivatives at a converged estimate (see
+    /// [`Core::derivs_at`]).
+    pub fn keep_derivs(&mut self, q: &[f64], op: &ObsOp, dv: &Derivs) {
+        self.derivs_cache = Some((q.to_vec(), op.rows.clone(), dv.clone()));
     }
 
     /// The objective parts at `(q, F)`: `(eᵀWe, α FᵀHF, e)`.
@@ -1185,65 +1466,108 @@ impl<E: Element> Core<E> {
         f: &[f64],
         alpha: f64,
     ) -> Result<(Vec<f64>, Vec<f64>)> {
+        let (step, fac) = self.gn_solve(dv, op, e, f, alpha)?;
+        let l = self.cov_factor(dv, op, &fac);
+        Ok((step, l))
+    }
+
+    /// The step of [`Core::gn_step`] and the Cholesky factor of its system
+    /// (for [`Core::cov_factor`]), without the covariance factor: an
+    /// iteration needs only the step.
+    pub fn gn_solve(
+        &self,
+        dv: &Derivs,
+        op: &ObsOp,
+        e: &[f64],
+        f: &[f64],
+        alpha: f64,
+    ) -> Result<(Vec<f64>, GnFactor)> {
         let m = op.n();
         let nf = self.n_f;
-        let sigma = self.settings.noise_sigma_m;
         let not_spd = || Error::NonFinite {
             context: "Gauss-Newton matrix of the estimator (not positive definite)".into(),
         };
         match self.settings.load_model {
             LoadModel::Distributed => {
-                let s = DMatrix::from_fn(m, m, |i, j| {
-                    let v: f64 = dv.z[i].iter().zip(&dv.jm[j]).map(|(a, b)| a * b).sum();
-                    v + if i == j { alpha / op.wt[i] } else { 0.0 }
-                });
-                // symmetrize (round-off); a tiny relative jitter if the
-                // markers are (nearly) redundant and α W⁻¹ is below round-off
-                let s = (&s + s.transpose()) * 0.5;
-                let chol = cholesky_jittered(s).ok_or_else(not_spd)?;
-                let t = DVector::from_fn(m, |i, _| {
-                    dv.jm[i].iter().zip(f).map(|(a, b)| a * b).sum::<f64>() - e[i]
-                });
-                let c = chol.solve(&t);
-                let mut step: Vec<f64> = f.iter().map(|v| -v).collect();
-                for (i, zi) in dv.z.iter().enumerate() {
-                    step.iter_mut().zip(zi).for_each(|(a, b)| *a += c[i] * b);
-                }
-                // L = σ Z S⁻¹
-                let sinv = chol.inverse();
-                let mut l = vec![0.0; nf * m];
-                for k in 0..nf {
-                    for j in 0..m {
-                        l[k * m + j] =
-                            sigma * (0..m).map(|i| dv.z[i][k] * sinv[(i, j)]).sum::<f64>();
+                // S = Zᵀ B Z + α W⁻¹ (symmetric: the upper triangle, mirrored)
+                let mut s = vec![0.0; m * m];
+                for i in 0..m {
+                    for j in i..m {
+                        let v = dot(&dv.z[i], &dv.jm[j]);
+                        s[i * m + j] = v;
+                        s[j * m + i] = v;
                     }
+                    s[i * m + i] += alpha / op.wt[i];
                 }
-                Ok((step, l))
+                let chol = SmallCholesky::jittered(s, m).ok_or_else(not_spd)?;
+                let mut c: Vec<f64> = (0..m).map(|i| dot(&dv.jm[i], f) - e[i]).collect();
+                chol.solve(&mut c);
+                let mut step: Vec<f64> = f.iter().map(|v| -v).collect();
+                for (zi, ci) in dv.z.iter().zip(&c) {
+                    step.iter_mut().zip(zi).for_each(|(a, b)| *a += ci * b);
+                }
+                Ok((step, GnFactor(chol)))
             }
             LoadModel::Concentrated { .. } => {
-                let n = DMatrix::from_fn(nf, nf, |a, b| {
-                    (0..m)
-                        .map(|i| op.wt[i] * dv.jm[i][a] * dv.jm[i][b])
-                        .sum::<f64>()
-                        + if a == b { alpha } else { 0.0 }
-                });
-                let chol = cholesky_jittered(n).ok_or_else(not_spd)?;
-                let rhs = DVector::from_fn(nf, |a, _| {
-                    -(0..m).map(|i| op.wt[i] * dv.jm[i][a] * e[i]).sum::<f64>() - alpha * f[a]
-                });
-                let step = chol.solve(&rhs);
-                let ninv = chol.inverse();
-                let mut l = vec![0.0; nf * m];
+                let mut n = vec![0.0; nf * nf];
+                for a in 0..nf {
+                    for b in 0..nf {
+                        n[a * nf + b] = (0..m)
+                            .map(|i| op.wt[i] * dv.jm[i][a] * dv.jm[i][b])
+                            .sum::<f64>()
+                            + if a == b { alpha } else { 0.0 };
+                    }
+                }
+                let chol = SmallCholesky::jittered(n, nf).ok_or_else(not_spd)?;
+                let mut step: Vec<f64> = (0..nf)
+                    .map(|a| {
+                        -(0..m).map(|i| op.wt[i] * dv.jm[i][a] * e[i]).sum::<f64>() - alpha * f[a]
+                    })
+                    .collect();
+                chol.solve(&mut step);
+                Ok((step, GnFactor(chol)))
+            }
+        }
+    }
+
+    /// The covariance factor `L = σ (JᵀWJ + αH)⁻¹ JᵀW` (`n_F × n_ob`,
+    /// row-major) from the factor of [`Core::gn_solve`] at the same
+    /// derivatives: `σ Z S⁻¹` for the distributed load, `σ N⁻¹ JᵀW` for a
+    /// concentrated one (`O(n_F n_ob²)`).
+    pub fn cov_factor(&self, dv: &Derivs, op: &ObsOp, fac: &GnFactor) -> Vec<f64> {
+        let m = op.n();
+        let nf = self.n_f;
+        let sigma = self.settings.noise_sigma_m;
+        let inv = fac.0.inverse();
+        let mut l = vec![0.0; nf * m];
+        match self.settings.load_model {
+            LoadModel::Distributed => {
+                // column j of L = σ Σ_i S⁻¹[i, j] z_i (contiguous axpys,
+                // into Lᵀ), then transposed
+                let mut lt = vec![0.0; m * nf];
+                for (j, ltj) in lt.chunks_exact_mut(nf).enumerate() {
+                    for (i, zi) in dv.z.iter().enumerate() {
+                        let c = sigma * inv[i * m + j];
+                        ltj.iter_mut().zip(zi).for_each(|(v, z)| *v += c * z);
+                    }
+                }
+                for (k, lk) in l.chunks_exact_mut(m).enumerate() {
+                    for (j, v) in lk.iter_mut().enumerate() {
+                        *v = lt[j * nf + k];
+                    }
+                }
+            }
+            LoadModel::Concentrated { .. } => {
                 for a in 0..nf {
                     for j in 0..m {
                         l[a * m + j] = sigma
-                            * (0..nf).map(|b| ninv[(a, b)] * dv.jm[j][b]).sum::<f64>()
+                            * (0..nf).map(|b| inv[a * nf + b] * dv.jm[j][b]).sum::<f64>()
                             * op.wt[j];
                     }
                 }
-                Ok((step.iter().copied().collect(), l))
             }
         }
+        l
     }
 
     /// Assembles the [`Estimate`] at a converged `(q, F)`.
@@ -1259,41 +1583,44 @@ impl<E: Element> Core<E> {
         report: EstimateReport,
     ) -> Result<Estimate> {
         let d = E::DIM;
-        let nd = E::NODE_DOFS;
         let m = op.n();
         let nf = self.n_f;
         // resultant force weights: c_i = ∫ (row i of w) dX, and moment
         let (resultant_force_n, resultant_moment_nm, fw) = self.resultants(&q, &f)?;
+        // Lᵀ (n_ob × n_F): its rows are contiguous for the products below
+        let mut lt = vec![0.0; m * nf];
+        for (k, lk) in cov_factor.chunks_exact(m).enumerate() {
+            for (j, v) in lk.iter().enumerate() {
+                lt[j * nf + k] = *v;
+            }
+        }
         // Cov(resultant) = (C L)(C L)ᵀ with C the d × n_F map F → ∫w
         let mut cl = vec![0.0; d * m];
         for a in 0..d {
             for j in 0..m {
-                cl[a * m + j] = (0..nf)
-                    .map(|k| fw[a * nf + k] * cov_factor[k * m + j])
-                    .sum();
+                cl[a * m + j] = dot(&fw[a * nf..(a + 1) * nf], &lt[j * nf..(j + 1) * nf]);
             }
         }
         let mut resultant_force_cov = vec![0.0; d * d];
         for a in 0..d {
             for b in 0..d {
                 resultant_force_cov[a * d + b] =
-                    (0..m).map(|j| cl[a * m + j] * cl[b * m + j]).sum();
+                    dot(&cl[a * m..(a + 1) * m], &cl[b * m..(b + 1) * m]);
             }
         }
         // marker-space shape covariance: (J L)(J L)ᵀ
         let mut jl = vec![0.0; m * m];
         for i in 0..m {
             for j in 0..m {
-                jl[i * m + j] = (0..nf).map(|k| dv.jm[i][k] * cov_factor[k * m + j]).sum();
+                jl[i * m + j] = dot(&dv.jm[i], &lt[j * nf..(j + 1) * nf]);
             }
         }
         let mut marker_cov = vec![0.0; m * m];
         for i in 0..m {
             for j in 0..m {
-                marker_cov[i * m + j] = (0..m).map(|k| jl[i * m + k] * jl[j * m + k]).sum();
+                marker_cov[i * m + j] = dot(&jl[i * m..(i + 1) * m], &jl[j * m..(j + 1) * m]);
             }
         }
-        let _ = nd;
         Ok(Estimate {
             q,
             f,
@@ -1333,29 +1660,43 @@ impl<E: Element> Core<E> {
                 }
             }
             LoadModel::Distributed => {
+                const MAX_DIM: usize = 3;
                 let rule = crate::quadrature::GaussRule::new(5)?;
+                // the shape functions at the rule's points (elements of a
+                // section share a length: recomputed only when it changes)
+                let mut le_prev = f64::NAN;
+                let mut shapes = [[0.0; 4]; 5];
                 for (e, el) in self.robot.elements().iter().enumerate() {
                     let le = el.length();
-                    for (xi, wt) in rule.iter() {
-                        let sh = el.shape(xi);
-                        let mut w = vec![0.0; d];
-                        let mut r = vec![0.0; d];
+                    if le != le_prev {
+                        for (sh, (xi, _)) in shapes.iter_mut().zip(rule.iter()) {
+                            *sh = el.shape(xi);
+                        }
+                        le_prev = le;
+                    }
+                    for (sh, (_, wt)) in shapes.iter().zip(rule.iter()) {
+                        let mut w = [0.0; MAX_DIM];
+                        let mut r = [0.0; MAX_DIM];
                         for (k, sk) in sh.iter().enumerate() {
-                            for i in 0..d {
+                            for i in 0..d.min(MAX_DIM) {
                                 w[i] += sk * f[e * nd + k * d + i];
                                 r[i] += sk * q[e * nd + k * d + i];
                                 fw[i * nf + e * nd + k * d + i] += wt * le * sk;
                             }
                         }
-                        for i in 0..d {
+                        for i in 0..d.min(MAX_DIM) {
                             force[i] += wt * le * w[i];
                             r[i] -= r0[i];
                         }
-                        let mm = cross(&r, &w);
-                        moment
-                            .iter_mut()
-                            .zip(mm)
-                            .for_each(|(a, b)| *a += wt * le * b);
+                        if d == 2 {
+                            moment[0] += wt * le * (r[0] * w[1] - r[1] * w[0]);
+                        } else {
+                            let mm = cross(&r[..d], &w[..d]);
+                            moment
+                                .iter_mut()
+                                .zip(mm)
+                                .for_each(|(a, b)| *a += wt * le * b);
+                        }
                     }
                 }
             }
@@ -1476,23 +1817,6 @@ pub(crate) fn step_cap(jm: &[Vec<f64>], step: &[f64], cap: f64) -> f64 {
     }
 }
 
-/// Cholesky factor of a symmetric positive semi-definite matrix, with a
-/// diagonal jitter of 1e-14 … 1e-10 of the largest diagonal entry if the
-/// plain factorization fails.
-fn cholesky_jittered(m: DMatrix<f64>) -> Option<nalgebra::Cholesky<f64, nalgebra::Dyn>> {
-    let dmax = m.diagonal().iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    for jitter in [0.0, 1e-14, 1e-12, 1e-10] {
-        let mut a = m.clone();
-        for i in 0..a.nrows() {
-            a[(i, i)] += jitter * dmax;
-        }
-        if let Some(c) = a.cholesky() {
-            return Some(c);
-        }
-    }
-    None
-}
-
 /// The cross product: scalar (as a 1-vector) in 2-D, vector in 3-D.
 fn cross(a: &[f64], b: &[f64]) -> Vec<f64> {
     if a.len() == 2 {
@@ -1511,7 +1835,7 @@ pub(crate) fn norm2(v: &[f64]) -> f64 {
 }
 
 pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+    crate::banded::dot(a, b)
 }
 
 /// The direct solution (24) for the Fig. 3 comparison: the distributed load
