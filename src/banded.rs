@@ -1,10 +1,17 @@
-//! Banded matrices and their LU factorization with partial pivoting.
+//! Banded matrices, their `L D Lᵀ` factorization (symmetric) and their LU
+//! factorization with partial pivoting.
 //!
 //! The tangent stiffness of a cable is block-tridiagonal in the nodes: with
-//! `b` coordinates per node it is banded with `kl = ku = 2b - 1`. Factoring
-//! and solving cost `O(n kl (kl + ku))`, linear in the number of elements.
-//! Partial pivoting keeps the factorization usable when the tangent is
-//! indefinite (compression, buckling, iterates far from equilibrium).
+//! `b` coordinates per node it is banded with `kl = ku = 2b - 1`. It is
+//! symmetric, and positive definite near a stable equilibrium: there the
+//! Jacobi-scaled `L D Lᵀ` without pivoting ([`BandedMatrix::factor_scaled`],
+//! [`BandedMatrix::factor_scaled_symmetric`]) costs `O(n kl²/2)` and is
+//! stable. Partial pivoting (`O(n kl (kl + ku))`) keeps the factorization
+//! usable when the tangent is indefinite (compression, buckling, iterates
+//! far from equilibrium): a symmetric matrix whose `L D Lᵀ` meets a pivot
+//! that is not clearly positive is refactored that way. Both are linear in
+//! the number of elements; [`BandedLu::solve_many_in_place`] solves several
+//! right-hand sides in one sweep (the estimator's adjoint systems).
 
 use crate::error::{check_len, Error, Result};
 
