@@ -1884,6 +1884,47 @@ pub fn direct_solution<E: Element>(robot: &Robot<E>, known: &Loads, q: &[f64]) -
     Ok(f.iter().copied().collect())
 }
 
+/// Where the cold start of the `newton` backend at a given small `α` begins
+/// its continuation (m/N² with whitened weights; the discrepancy search
+/// starts there too).
+pub const ALPHA_CONTINUATION_START: f64 = 100.0;
+
+/// The cold start of the reduced Gauss–Newton method at a small fixed `α`:
+/// from the unloaded start, the Gauss–Newton iteration on a nearly
+/// unregularized problem takes many short line-search steps, or stalls (the
+/// stability map's "line search failed" at α ≤ 1 m/N² before this). The
+/// solution is instead followed from [`ALPHA_CONTINUATION_START`] down by
+/// decades to `α`, each solve starting from the last converged one (the path
+/// the discrepancy search takes); the last one becomes the warm start of the
+/// solve at `α`. A solve of the path that fails or does not converge is
+/// skipped (the next one starts from the last converged point), so the
+/// result at `α` is the same minimizer, reached from a closer start.
+fn alpha_continuation<E: Element, S>(
+    core_of: &mut S,
+    op: &ObsOp,
+    alpha: f64,
+    get_core: fn(&mut S) -> &mut Core<E>,
+    solve_one: fn(&mut S, &ObsOp, Vec<f64>, Vec<f64>, f64) -> Result<Solved>,
+) -> Result<()> {
+    let (mut f0, mut q0) = get_core(core_of).start()?;
+    let mut b = ALPHA_CONTINUATION_START;
+    while b > 1.5 * alpha {
+        if let Ok(s) = solve_one(core_of, op, f0.clone(), q0.clone(), b) {
+            if s.report.converged {
+                f0 = s.f;
+                q0 = s.q;
+            }
+        }
+        b /= 10.0;
+    }
+    get_core(core_of).warm = Some(Warm {
+        f: f0,
+        q: q0,
+        y: op.y.clone(),
+    });
+    Ok(())
+}
+
 /// Runs one observation through a sequence of intermediate targets and the
 /// backend's `solve_one`, shared by both backends.
 pub(crate) fn run_step<E: Element, S>(
@@ -1896,7 +1937,15 @@ pub(crate) fn run_step<E: Element, S>(
     let start = Instant::now();
     let op = get_core(core_of).obs_op(observation)?;
     let alpha = match get_core(core_of).alpha {
-        Some(a) => a,
+        Some(a) => {
+            if backend == Backend::Newton
+                && get_core(core_of).warm.is_none()
+                && a < ALPHA_CONTINUATION_START
+            {
+                alpha_continuation(core_of, &op, a, get_core, solve_one)?;
+            }
+            a
+        }
         None => {
             // continuation in α: each solve starts from the last converged one
             let (mut f0, mut q0) = get_core(core_of).start()?;
