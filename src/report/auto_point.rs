@@ -15,7 +15,7 @@ use serde_json::json;
 
 use super::pareto::{LabelledPoint, ParetoGrid};
 use super::reference::Reference;
-use super::sweep::{marker_arcs, median, observe, run_guarded, CaseSpec};
+use super::sweep::{marker_arcs, median, observe, run_guarded};
 use super::ReportOptions;
 use crate::error::Result;
 use crate::estimate::Backend;
@@ -97,19 +97,12 @@ pub fn auto_points(
                     continue 'markers;
                 }
             };
-            let spec = CaseSpec {
-                backend: Backend::Newton,
-                reference: r.clone(),
-                elements: refinement.total_elements,
+            let spec = grid.case(
+                Backend::Newton,
+                r.clone(),
+                refinement.total_elements,
                 markers,
-                noise_m: grid.noise_m,
-                declared_noise_m: grid.noise_m,
-                alpha: None,
-                jump_m: 0.0,
-                warm_frames: grid.warm_frames,
-                seed: 7,
-                max_iterations: 100,
-            };
+            );
             let out = run_guarded(&spec, opts.case_cap);
             match (out.converged, out.errors) {
                 (true, Some(e)) => {

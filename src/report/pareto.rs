@@ -83,6 +83,31 @@ pub struct ParetoGrid {
 }
 
 impl ParetoGrid {
+    /// The sweep's case of one configuration on `reference`: the grid's
+    /// noise (declared as it is), α by the discrepancy principle, no jump,
+    /// the grid's warm frames, seed 7, 100 iterations.
+    pub fn case(
+        &self,
+        backend: Backend,
+        reference: Arc<Reference>,
+        elements: usize,
+        markers: usize,
+    ) -> CaseSpec {
+        CaseSpec {
+            backend,
+            reference,
+            elements,
+            markers,
+            noise_m: self.noise_m,
+            declared_noise_m: self.noise_m,
+            alpha: None,
+            jump_m: 0.0,
+            warm_frames: self.warm_frames,
+            seed: 7,
+            max_iterations: 100,
+        }
+    }
+
     /// The full grid (`quick = false`, a few minutes) or the test grid.
     pub fn new(quick: bool) -> Self {
         if quick {
@@ -197,19 +222,7 @@ pub fn run(opts: &ReportOptions, _extra: &[LabelledPoint]) -> Result<ParetoRepor
         for &elements in &grid.elements {
             for &markers in &grid.markers {
                 for r in &refs {
-                    specs.push(CaseSpec {
-                        backend,
-                        reference: r.clone(),
-                        elements,
-                        markers,
-                        noise_m: grid.noise_m,
-                        declared_noise_m: grid.noise_m,
-                        alpha: None,
-                        jump_m: 0.0,
-                        warm_frames: grid.warm_frames,
-                        seed: 7,
-                        max_iterations: 100,
-                    });
+                    specs.push(grid.case(backend, r.clone(), elements, markers));
                 }
             }
         }

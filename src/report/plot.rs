@@ -321,7 +321,7 @@ fn pareto_draw<DB: DrawingBackend>(
             .map_err(ms)?;
         legend_area
             .draw(&Text::new(
-                "extra labelled points",
+                "elements: \"auto\" (marked points)",
                 (x + 415, y - 9),
                 style(&BLACK),
             ))
