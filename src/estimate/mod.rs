@@ -1884,6 +1884,26 @@ pub fn direct_solution<E: Element>(robot: &Robot<E>, known: &Loads, q: &[f64]) -
     Ok(f.iter().copied().collect())
 }
 
+/// One solve of a continuation path in `α` (the discrepancy search, the
+/// cold start at a small `α`): from `(f0, q0)` at `alpha`; a converged solve
+/// becomes the next start. Its weighted residual, or `None` when the solve
+/// failed.
+fn path_solve<S>(
+    core_of: &mut S,
+    op: &ObsOp,
+    alpha: f64,
+    f0: &mut Vec<f64>,
+    q0: &mut Vec<f64>,
+    solve_one: fn(&mut S, &ObsOp, Vec<f64>, Vec<f64>, f64) -> Result<Solved>,
+) -> Option<f64> {
+    let s = solve_one(core_of, op, f0.clone(), q0.clone(), alpha).ok()?;
+    if s.report.converged {
+        *f0 = s.f;
+        *q0 = s.q;
+    }
+    Some(s.report.weighted_residual)
+}
+
 /// Where the cold start of the `newton` backend at a given small `α` begins
 /// its continuation (m/N² with whitened weights; the discrepancy search
 /// starts there too).
@@ -1909,12 +1929,7 @@ fn alpha_continuation<E: Element, S>(
     let (mut f0, mut q0) = get_core(core_of).start()?;
     let mut b = ALPHA_CONTINUATION_START;
     while b > 1.5 * alpha {
-        if let Ok(s) = solve_one(core_of, op, f0.clone(), q0.clone(), b) {
-            if s.report.converged {
-                f0 = s.f;
-                q0 = s.q;
-            }
-        }
+        path_solve(core_of, op, b, &mut f0, &mut q0, solve_one);
         b /= 10.0;
     }
     get_core(core_of).warm = Some(Warm {
@@ -1953,16 +1968,7 @@ pub(crate) fn run_step<E: Element, S>(
             let a = Core::<E>::discrepancy_alpha(n_ob, |a| {
                 // a failure (at an extreme α) counts as a perfect fit: the
                 // search then moves to larger α
-                match solve_one(core_of, &op, f0.clone(), q0.clone(), a) {
-                    Ok(s) => {
-                        if s.report.converged {
-                            f0.clone_from(&s.f);
-                            q0.clone_from(&s.q);
-                        }
-                        Ok(s.report.weighted_residual)
-                    }
-                    Err(_) => Ok(0.0),
-                }
+                Ok(path_solve(core_of, &op, a, &mut f0, &mut q0, solve_one).unwrap_or(0.0))
             })?;
             let core = get_core(core_of);
             core.alpha = Some(a);
