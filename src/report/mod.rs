@@ -190,7 +190,7 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
     std::fs::create_dir_all(&opts.out_dir).map_err(|e| io_error(&opts.out_dir, e))?;
     let mut files = Vec::new();
     let pareto = if opts.only != Some(Part::Stability) {
-        let mut r = pareto::run(opts, extra)?;
+        let mut r = pareto::run(opts)?;
         let pb = progress(1, opts.quiet, "auto");
         pb.set_message("elements: \"auto\" on the Pareto references");
         let (auto, notes) = auto_point::auto_points(opts, &r.grid)?;

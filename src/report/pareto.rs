@@ -208,7 +208,7 @@ pub const FRONT_TOLERANCE: f64 = 1e-3;
 ///
 /// # Errors
 /// [`crate::Error::Io`] when an embedded reference is malformed.
-pub fn run(opts: &ReportOptions, _extra: &[LabelledPoint]) -> Result<ParetoReport> {
+pub fn run(opts: &ReportOptions) -> Result<ParetoReport> {
     let start = std::time::Instant::now();
     let grid = ParetoGrid::new(opts.quick);
     let refs: Vec<Arc<Reference>> = grid
