@@ -10,18 +10,15 @@
 //! base, the backbone and the bump's location can all be checked.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use serde_json::Value;
+mod common;
+use common::reference;
+
 use softrod::element::hermite;
 use softrod::estimate::{Backend, EstimatorSettings, MarkerObservation, Observation};
 use softrod::loads::{LineLoad, Loads};
 use softrod::scene::{Scene, SceneLoad};
 
 const L: f64 = 0.24;
-
-fn reference(name: &str) -> Value {
-    let path = format!("{}/reference/{name}.json", env!("CARGO_MANIFEST_DIR"));
-    serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap()
-}
 
 /// The reference's shape as a function of the undeformed arc coordinate.
 enum Shape {

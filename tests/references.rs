@@ -4,18 +4,15 @@
 //! reference JSON is committed under `reference/`; `validation/` regenerates it.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+mod common;
+use common::reference;
+
 use serde_json::Value;
 use softrod::assembly::Clamp;
 use softrod::scene::{Scene, SceneLoad};
 use softrod::statics::StaticSolver;
 
 const L: f64 = 0.24;
-
-fn reference(name: &str) -> Value {
-    let path = format!("{}/reference/{name}.json", env!("CARGO_MANIFEST_DIR"));
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    serde_json::from_str(&text).unwrap()
-}
 
 /// A softrod scene with the reference's sections, base and loads.
 fn scene(r: &Value, elements: usize, bending_gauss: usize, clamp: Clamp) -> Scene {
