@@ -18,7 +18,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::banded::BandedMatrix;
-use crate::element::{Element, PlanarCable, DEFAULT_GAUSS_POINTS};
+use crate::element::{ArcPoint, Element, PlanarCable, SpatialCable, DEFAULT_GAUSS_POINTS};
 use crate::error::{
     check_all_finite, check_at_most, check_finite, check_index, check_len, check_positive, Error,
     Result,
@@ -226,18 +226,31 @@ pub enum Clamp {
 
 /// Pose of the clamped base.
 ///
+/// The base tangent is `direction` when given (any non-zero length, `DIM`
+/// components; the way to point a spatial robot anywhere), else
+/// `(cos α, sin α)` in the plane, `(cos α, sin α, 0)` in space, `α = angle_rad`.
+///
 /// # Example
 /// ```
 /// let b = softrod::assembly::Base::default();
 /// assert_eq!(b.position_m, vec![0.0, 0.0]);
+/// // a spatial robot hanging down along -z
+/// let down: softrod::assembly::Base = serde_json::from_str(
+///     r#"{"position_m": [0, 0, 0], "angle_rad": 0, "direction": [0, 0, -1]}"#).unwrap();
+/// assert_eq!(down.direction, Some(vec![0.0, 0.0, -1.0]));
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Base {
     /// Base position (m).
     pub position_m: Vec<f64>,
-    /// Angle of the base tangent from the x axis (rad).
+    /// Angle of the base tangent from the x axis (rad); not used when
+    /// `direction` is given.
     pub angle_rad: f64,
+    /// Direction of the base tangent (dimensionless, normalized on use);
+    /// `None`: from `angle_rad`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction: Option<Vec<f64>>,
     /// What the clamp prescribes (default `position_and_direction`).
     #[serde(default)]
     pub clamp: Clamp,
@@ -248,6 +261,7 @@ impl Default for Base {
         Base {
             position_m: vec![0.0, 0.0],
             angle_rad: 0.0,
+            direction: None,
             clamp: Clamp::default(),
         }
     }
@@ -307,6 +321,50 @@ impl RobotSpec {
     pub fn build_planar(&self) -> Result<Robot<PlanarCable>> {
         Robot::new(self.clone(), |s, le, ax, be| {
             PlanarCable::with_rules(le, s.ea_n, s.ei_nm2, s.rest_curvature_per_m, ax, be)
+        })
+    }
+
+    /// A spatial spec: base at the origin pointing along +x, gravity
+    /// `[0, 0, -9.81]`, 5-point rules.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// let robot = RobotSpec::spatial(vec![Section::uniform(0.24, 300.0, 0.025, 8)]).build_spatial()?;
+    /// assert_eq!(robot.n_q(), 9 * 6);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn spatial(sections: Vec<Section>) -> Self {
+        RobotSpec {
+            sections,
+            base: Base {
+                position_m: vec![0.0; 3],
+                direction: Some(vec![1.0, 0.0, 0.0]),
+                ..Base::default()
+            },
+            gravity_m_per_s2: vec![0.0, 0.0, -9.81],
+            axial_gauss_points: DEFAULT_GAUSS_POINTS,
+            bending_gauss_points: DEFAULT_GAUSS_POINTS,
+        }
+    }
+
+    /// Builds the spatial robot (3-D vectors: base position, gravity,
+    /// chamber gains and moments in world axes).
+    ///
+    /// # Errors
+    /// See [`Robot::new`]; [`Error::InvalidParameter`] naming
+    /// `robot.sections[i].rest_curvature_per_m` for a non-zero rest curvature
+    /// (the spatial cable has none: it has no section frame to bend in).
+    pub fn build_spatial(&self) -> Result<Robot<SpatialCable>> {
+        Robot::new(self.clone(), |s, le, ax, be| {
+            if s.rest_curvature_per_m != 0.0 {
+                return Err(Error::invalid(
+                    "rest_curvature_per_m",
+                    s.rest_curvature_per_m,
+                    "the spatial cable has no rest curvature: must be 0",
+                ));
+            }
+            SpatialCable::with_rules(le, s.ea_n, s.ei_nm2, ax, be)
         })
     }
 
@@ -473,8 +531,7 @@ impl<E: Element> Robot<E> {
             s0 += sec.length_m;
             section_nodes.push((start, node_s.len() - 1));
         }
-        let (c, s) = (spec.base.angle_rad.cos(), spec.base.angle_rad.sin());
-        let dir: Vec<f64> = if d == 2 { vec![c, s] } else { vec![c, s, 0.0] };
+        let dir = base_direction(&spec.base, d)?;
         let base_node = E::straight_node(&spec.base.position_m, &dir);
         check_len("element straight_node", nd, base_node.len())?;
         let base_free = match spec.base.clamp {
@@ -816,11 +873,11 @@ impl<E: Element> Robot<E> {
         let nd = E::NODE_DOFS;
         let torques = self.section_torques(pressures);
         let mut q = Vec::with_capacity(self.n_q());
-        let (mut x, mut y, mut th) = (
-            self.base_node[0],
-            self.base_node[1],
-            self.spec.base.angle_rad,
-        );
+        let th0 = match self.spec.base.direction {
+            None => self.spec.base.angle_rad,
+            Some(_) => self.base_node[3].atan2(self.base_node[2]),
+        };
+        let (mut x, mut y, mut th) = (self.base_node[0], self.base_node[1], th0);
         let mut s_prev = 0.0;
         for (i, &s) in self.node_s.iter().enumerate() {
             if i > 0 {
@@ -874,14 +931,32 @@ impl<E: Element> Robot<E> {
     /// [`Error::DimensionMismatch`] if `q` does not have `n_q` entries.
     pub fn position_at(&self, q: &[f64], s: f64) -> Result<Vec<f64>> {
         check_len("q", self.n_q(), q.len())?;
-        let (e, xi) = self.locate("s_m", s)?;
-        let nd = E::NODE_DOFS;
-        let d = E::DIM;
-        let w = self.elements[e].shape(xi);
-        let qe = &q[e * nd..(e + 2) * nd];
-        Ok((0..d)
-            .map(|i| (0..4).map(|k| w[k] * qe[k * d + i]).sum())
-            .collect())
+        let p = self.arc_point("s_m", s)?;
+        let mut r = vec![0.0; E::DIM];
+        p.value_into(q, &mut r)?;
+        Ok(r)
+    }
+
+    /// The element, `ξ` and Hermite weights at arc coordinate `s` (m): the
+    /// interpolation of any cable field (`q`, `F`) there, by
+    /// [`ArcPoint::value_into`] and [`ArcPoint::slope_into`].
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] named `name` if `s` is not on the robot.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 8)]).build_planar()?;
+    /// let p = robot.arc_point("marker.s_m", 0.1)?;
+    /// let mut t = [0.0; 2];
+    /// p.slope_into(&robot.reference_configuration(), &mut t)?;
+    /// assert!((t[0] - 1.0).abs() < 1e-14 && t[1].abs() < 1e-14);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn arc_point(&self, name: &str, s: f64) -> Result<ArcPoint> {
+        let (e, xi) = self.locate(name, s)?;
+        Ok(ArcPoint::new(e, xi, self.elements[e].length()))
     }
 
     /// The matrix `∫ Sᵀ S dX` over the whole robot (`n_q × n_q`, banded): the
@@ -1192,7 +1267,7 @@ impl<E: Element> Robot<E> {
             let mh = &mut mh[..];
             mg.fill(0.0);
             mh.fill(0.0);
-            E::add_moment_work(&q[node * nd..(node + 1) * nd], m, mg, mh);
+            E::add_moment_work(&self.base_node, &q[node * nd..(node + 1) * nd], m, mg, mh);
             if let Some((_, out)) = residual.as_mut() {
                 self.scatter_force(node * nd, mg, 1.0, out);
             }
@@ -1265,6 +1340,7 @@ impl<E: Element> Robot<E> {
                 let m: Vec<f64> = ch.gain.iter().map(|g| sign * g).collect();
                 let mut g = [0.0; MAX_EDOF];
                 E::add_moment_work(
+                    &self.base_node,
                     &q[node * nd..(node + 1) * nd],
                     &m,
                     &mut g[..nd],
@@ -1325,7 +1401,7 @@ impl<E: Element> Robot<E> {
         }
         self.for_each_node_moment(loads, |node, m| {
             let r = node * nd..(node + 1) * nd;
-            d -= E::moment_work_between(&from[r.clone()], &to[r], m);
+            d -= E::moment_work_between(&self.base_node, &from[r.clone()], &to[r], m);
             Ok(())
         })?;
         Ok(d)
@@ -1375,7 +1451,7 @@ impl<E: Element> Robot<E> {
         }
         self.for_each_node_moment(loads, |node, m| {
             let r = node * nd..(node + 1) * nd;
-            d -= E::moment_work_between(&from[r.clone()], &to[r], m);
+            d -= E::moment_work_between(&self.base_node, &from[r.clone()], &to[r], m);
             Ok(())
         })?;
         Ok(d)
@@ -1398,7 +1474,13 @@ impl<E: Element> Robot<E> {
         self.for_each_node_moment(loads, |node, m| {
             let mg = &mut mg[..nd];
             mg.fill(0.0);
-            E::add_moment_work(&q[node * nd..(node + 1) * nd], m, mg, &mut mh);
+            E::add_moment_work(
+                &self.base_node,
+                &q[node * nd..(node + 1) * nd],
+                m,
+                mg,
+                &mut mh,
+            );
             self.scatter_force(node * nd, mg, 1.0, out);
             Ok(())
         })
@@ -1412,6 +1494,25 @@ impl<E: Element> Robot<E> {
             .map(|c| c.iter().take(E::DIM).copied().collect())
             .collect()
     }
+}
+
+/// The unit base tangent of `base` in `d` dimensions (see [`Base`]).
+fn base_direction(base: &Base, d: usize) -> Result<Vec<f64>> {
+    let Some(v) = &base.direction else {
+        let (c, s) = (base.angle_rad.cos(), base.angle_rad.sin());
+        return Ok(if d == 2 { vec![c, s] } else { vec![c, s, 0.0] });
+    };
+    check_len("base.direction", d, v.len())?;
+    check_all_finite("base.direction", v)?;
+    let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if !(n > 0.0 && n.is_finite()) {
+        return Err(Error::invalid(
+            "base.direction",
+            format!("{v:?}"),
+            "must be a non-zero vector of finite length",
+        ));
+    }
+    Ok(v.iter().map(|x| x / n).collect())
 }
 
 /// Adds `scale · S(ξ)ᵀ f` into the element vector `out` (cable layout).

@@ -18,7 +18,7 @@ use clap::{Parser, Subcommand};
 use serde::Serialize;
 
 use softrod::assembly::Robot;
-use softrod::element::{Element, PlanarCable};
+use softrod::element::{Element, NodeKinematics, PlanarCable};
 use softrod::estimate::{Backend, Estimate, EstimateReport, MarkerObservation, Observation};
 use softrod::loads::{LineLoad, PointForce};
 use softrod::refine::{Quantity, Refinement};

@@ -93,7 +93,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::element::{Element, PlanarCable};
+use crate::element::{NodeKinematics, PlanarCable};
 use crate::error::{Error, Result};
 use crate::estimate::Observation;
 use crate::scene::{RefinementTarget, Scene, UnknownLoad, NODE_MATCH};

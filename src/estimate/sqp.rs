@@ -974,7 +974,7 @@ crate::estimate::impl_estimator!(SqpEstimator, Backend::Sqp);
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
-    use crate::element::PlanarCable;
+    use crate::element::{NodeKinematics, PlanarCable};
     use crate::loads::LineLoad;
     use crate::scene::Scene;
     use crate::statics::StaticSolver;

@@ -1,129 +1,11 @@
-//! ANCF cable elements: shape functions (14), elastic energy, its gradient and
-//! tangent stiffness.
-//!
-//! An element joins two nodes. The planar cable's node coordinates are
-//! `q_i = [r_i, r_i']` (4 per node, eq. (15)), the element's `q_e = [q_1; q_2]`
-//! (8 numbers), and the centreline is `r(X) = S(X) q_e` (16) with the cubic
-//! Hermite functions (14), `ξ = X / L_e`:
-//!
-//! `s1 = 1 - 3ξ² + 2ξ³`, `s2 = L_e (ξ - 2ξ² + ξ³)`, `s3 = 3ξ² - 2ξ³`, `s4 = L_e (ξ³ - ξ²)`.
-//!
-//! The elastic energy (19) is `U_E = ½ ∫ (EA ε² + EI (κ - κ0)²) dX` with the axial
-//! strain `ε = |r'| - 1` and the bending strain `κ = (r' × r'') / (r'·r')`, the
-//! rate of the tangent angle per undeformed length. Both integrals use
-//! Gauss–Legendre rules that can differ (exudyn's `ObjectANCFCable2D` uses 5
-//! points for the axial and 3 for the bending term).
-//!
-//! The [`Element`] trait is generic over the dimension and the node layout: a
-//! spatial cable or the full 3-D element are new implementations, not a rewrite.
+//! The planar ANCF cable (2-D, 4 coordinates per node, `q_i = [r_i, r_i']`):
+//! energy (19) with the scalar bending strain `κ = (r' × r'')_z / (r'·r')`, the
+//! rate of the tangent angle per undeformed length, and an optional rest
+//! curvature `κ0`.
 
-use crate::error::{check_finite, check_positive, Error, Result};
-use crate::quadrature::GaussRule;
-
-/// A finite element of a slender body: energy, gradient and Hessian in its
-/// element coordinates, and the interpolation the loads need.
-///
-/// Slices named `qe` hold `2 * NODE_DOFS` element coordinates; Hessians are
-/// written row-major, `(2 NODE_DOFS)²` numbers. `_into` methods write into the
-/// caller's buffer.
-///
-/// These are low-level, infallible kernels ([`crate::assembly::Robot`] checks
-/// every size before calling them). Implementations must not panic on slices
-/// of the wrong length: [`PlanarCable`] then returns NaN for scalar results
-/// (NaN coordinates for `straight_node`, no directions for
-/// `clamp_free_directions`) and adds nothing to the buffers.
-pub trait Element: Clone + std::fmt::Debug + Send + Sync {
-    /// Spatial dimension of the centreline (2 or 3).
-    const DIM: usize;
-    /// Coordinates per node.
-    const NODE_DOFS: usize;
-    /// Components of a concentrated moment (1 in 2-D, 3 in 3-D).
-    const MOMENT_DIM: usize;
-
-    /// Undeformed length `L_e` (m).
-    fn length(&self) -> f64;
-    /// Elastic energy `U_E` of the element (J).
-    fn energy(&self, qe: &[f64]) -> f64;
-    /// Adds `dU_E/dq_e` (N, generalized) into `grad`.
-    fn add_energy_gradient(&self, qe: &[f64], grad: &mut [f64]);
-    /// Adds the tangent stiffness `d²U_E/dq_e²` into `hess` (row-major).
-    fn add_energy_hessian(&self, qe: &[f64], hess: &mut [f64]);
-    /// Adds the gradient into `grad` and the Hessian into `hess` in one
-    /// pass (Newton's method needs both at the same point). The default
-    /// calls the two kernels; [`PlanarCable`] shares the work per Gauss point.
-    fn add_energy_gradient_and_hessian(&self, qe: &[f64], grad: &mut [f64], hess: &mut [f64]) {
-        self.add_energy_gradient(qe, grad);
-        self.add_energy_hessian(qe, hess);
-    }
-    /// Interpolation weights of the node quantities at `ξ = X/L_e` (`S(X)` is
-    /// `[w_0 I, w_1 I, ...]`): the cable's four Hermite functions.
-    fn shape(&self, xi: f64) -> [f64; 4];
-    /// Node coordinates of the stress-free straight element's node at
-    /// `position` with unit tangent `direction` (length `DIM` each).
-    fn straight_node(position: &[f64], direction: &[f64]) -> Vec<f64>;
-    /// Work `M · θ` of a concentrated moment `moment` at a node with coordinates
-    /// `node`, and its gradient and Hessian (row-major) with respect to the node
-    /// coordinates, added into `grad` and `hess`. `θ` is the node's rotation.
-    fn add_moment_work(node: &[f64], moment: &[f64], grad: &mut [f64], hess: &mut [f64]);
-    /// Rotation angle of a node's section, `atan2(r'_y, r'_x)` in 2-D (rad).
-    fn node_angle(node: &[f64]) -> f64;
-    /// Directions in node-coordinate space that a clamp leaves free at a node
-    /// with coordinates `node`: for a cable, the stretch along the prescribed
-    /// tangent (a clamp fixes position and direction, not the axial strain).
-    fn clamp_free_directions(node: &[f64]) -> Vec<Vec<f64>>;
-    /// Work `M · Δθ` of a constant moment while a node turns from the
-    /// coordinates `from` to `to` (no wrap-around for turns below π).
-    fn moment_work_between(from: &[f64], to: &[f64], moment: &[f64]) -> f64;
-}
-
-/// Cubic Hermite shape functions (14) at `ξ`, for an element of length `le`:
-/// values, first and second derivatives with respect to `X`.
-///
-/// # Example
-/// ```
-/// let (s, _, _) = softrod::element::hermite(0.5, 2.0);
-/// assert!((s[0] - 0.5).abs() < 1e-15 && (s[2] - 0.5).abs() < 1e-15);
-/// ```
-pub fn hermite(xi: f64, le: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
-    let x2 = xi * xi;
-    let x3 = x2 * xi;
-    let s = [
-        1.0 - 3.0 * x2 + 2.0 * x3,
-        le * (xi - 2.0 * x2 + x3),
-        3.0 * x2 - 2.0 * x3,
-        le * (x3 - x2),
-    ];
-    let ds = [
-        (-6.0 * xi + 6.0 * x2) / le,
-        1.0 - 4.0 * xi + 3.0 * x2,
-        (6.0 * xi - 6.0 * x2) / le,
-        3.0 * x2 - 2.0 * xi,
-    ];
-    let dds = [
-        (-6.0 + 12.0 * xi) / (le * le),
-        (-4.0 + 6.0 * xi) / le,
-        (6.0 - 12.0 * xi) / (le * le),
-        (6.0 * xi - 2.0) / le,
-    ];
-    (s, ds, dds)
-}
-
-/// Precomputed derivatives of the shape functions at one Gauss point, with
-/// the point's weights in the two integrals (zero where the point belongs to
-/// one rule only).
-#[derive(Debug, Clone, Copy)]
-struct GaussPoint {
-    /// `ds_k/dX`.
-    d1: [f64; 4],
-    /// `d²s_k/dX²`.
-    d2: [f64; 4],
-    /// Axial weight: quadrature weight × `L_e` × EA (N·m), 0 if not an
-    /// axial point.
-    ca: f64,
-    /// Bending weight: quadrature weight × `L_e` × EI (N·m³), 0 if not a
-    /// bending point.
-    cb: f64,
-}
+use super::DEFAULT_GAUSS_POINTS;
+use super::{check_cable, gauss_points, hermite, Element, GaussPoint, NodeKinematics};
+use crate::error::{check_finite, Result};
 
 /// Planar ANCF cable element (2-D, 4 coordinates per node).
 ///
@@ -147,16 +29,13 @@ pub struct PlanarCable {
     points: Vec<GaussPoint>,
 }
 
-/// Default number of Gauss points for both the axial and the bending integral.
-pub const DEFAULT_GAUSS_POINTS: usize = 5;
-
 impl PlanarCable {
     /// A cable element of length `le` (m), axial stiffness `ea` (N) and bending
     /// stiffness `ei` (N·m²), with 5-point rules for both integrals and no rest
     /// curvature.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] if a value is not finite and positive.
+    /// [`crate::Error::InvalidParameter`] if a value is not finite and positive.
     pub fn new(le: f64, ea: f64, ei: f64) -> Result<Self> {
         Self::with_rules(le, ea, ei, 0.0, DEFAULT_GAUSS_POINTS, DEFAULT_GAUSS_POINTS)
     }
@@ -165,8 +44,8 @@ impl PlanarCable {
     /// numbers of Gauss points of the axial and the bending integrals.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] for non-positive or non-finite `le`, `ea`,
-    /// `ei`, a non-finite `kappa0`, or a rule of 0 points; [`Error::TooLarge`]
+    /// [`crate::Error::InvalidParameter`] for non-positive or non-finite `le`, `ea`,
+    /// `ei`, a non-finite `kappa0`, or a rule of 0 points; [`crate::Error::TooLarge`]
     /// for a rule above [`crate::quadrature::MAX_POINTS`] points.
     ///
     /// # Example
@@ -182,47 +61,9 @@ impl PlanarCable {
         axial_points: usize,
         bending_points: usize,
     ) -> Result<Self> {
-        check_positive("length_m", le)?;
-        if !(1.0 / (le * le)).is_finite() {
-            // the shape functions' second derivatives (∝ 1/L_e²) overflow
-            return Err(Error::invalid(
-                "length_m",
-                le,
-                "element too short: 1/L_e² overflows",
-            ));
-        }
-        check_positive("ea_n", ea)?;
-        check_positive("ei_nm2", ei)?;
+        check_cable(le, ea, ei)?;
         check_finite("rest_curvature_per_m", kappa0)?;
-        let rule = |n: usize, name: &str| -> Result<GaussRule> {
-            // the rule's own error, under this parameter's name
-            GaussRule::new(n).map_err(|e| match e {
-                Error::TooLarge { value, max, .. } => Error::TooLarge {
-                    name: name.into(),
-                    value,
-                    max,
-                },
-                _ => Error::invalid(name, n, "must be >= 1"),
-            })
-        };
-        let axial = rule(axial_points, "axial_gauss_points")?;
-        let bending = rule(bending_points, "bending_gauss_points")?;
-        let point = |xi: f64, ca: f64, cb: f64| {
-            let (_, d1, d2) = hermite(xi, le);
-            GaussPoint { d1, d2, ca, cb }
-        };
-        let points = if axial == bending {
-            axial
-                .iter()
-                .map(|(xi, w)| point(xi, w * le * ea, w * le * ei))
-                .collect()
-        } else {
-            axial
-                .iter()
-                .map(|(xi, w)| point(xi, w * le * ea, 0.0))
-                .chain(bending.iter().map(|(xi, w)| point(xi, 0.0, w * le * ei)))
-                .collect()
-        };
+        let points = gauss_points(le, ea, ei, axial_points, bending_points)?;
         Ok(PlanarCable {
             le,
             ea,
@@ -253,6 +94,22 @@ impl PlanarCable {
             (a[0] * a[0] + a[1] * a[1]).sqrt() - 1.0,
             c / (a[0] * a[0] + a[1] * a[1]),
         )
+    }
+
+    /// Rotation angle of a node's section, `atan2(r'_y, r'_x)` (rad), from
+    /// the node's coordinates `[x, y, x', y']`; NaN for another length.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::element::PlanarCable;
+    /// let th = PlanarCable::node_angle(&[0.0, 0.0, 0.0, 2.0]);
+    /// assert!((th - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+    /// ```
+    pub fn node_angle(node: &[f64]) -> f64 {
+        match node {
+            [_, _, x, y] => y.atan2(*x),
+            _ => f64::NAN,
+        }
     }
 
     /// Axial stiffness EA (N).
@@ -480,10 +337,6 @@ fn mirror_into(h: &[f64; 64], hess: &mut [f64; 64]) {
 }
 
 impl Element for PlanarCable {
-    const DIM: usize = 2;
-    const NODE_DOFS: usize = 4;
-    const MOMENT_DIM: usize = 1;
-
     fn length(&self) -> f64 {
         self.le
     }
@@ -555,6 +408,14 @@ impl Element for PlanarCable {
     fn shape(&self, xi: f64) -> [f64; 4] {
         hermite(xi, self.le).0
     }
+}
+
+/// The node's rotation is the angle of its tangent, `θ = atan2(r'_y, r'_x)`;
+/// a moment `M` (N·m, counter-clockwise positive) does the work `M θ`.
+impl NodeKinematics for PlanarCable {
+    const DIM: usize = 2;
+    const NODE_DOFS: usize = 4;
+    const MOMENT_DIM: usize = 1;
 
     fn straight_node(position: &[f64], direction: &[f64]) -> Vec<f64> {
         match (position, direction) {
@@ -563,8 +424,32 @@ impl Element for PlanarCable {
         }
     }
 
-    fn add_moment_work(node: &[f64], moment: &[f64], grad: &mut [f64], hess: &mut [f64]) {
-        // θ = atan2(y, x) of the slope (x, y) = r'; ∂θ = (-y, x)/ρ²,
+    fn node_tangent(node: &[f64]) -> Vec<f64> {
+        match node {
+            [_, _, x, y] => {
+                let n = (x * x + y * y).sqrt();
+                vec![x / n, y / n]
+            }
+            _ => vec![f64::NAN; 2],
+        }
+    }
+
+    fn node_rotation(reference: &[f64], node: &[f64]) -> Vec<f64> {
+        match (reference, node) {
+            ([_, _, ax, ay], [_, _, bx, by]) => vec![(ax * by - ay * bx).atan2(ax * bx + ay * by)],
+            _ => vec![f64::NAN],
+        }
+    }
+
+    fn add_moment_work(
+        _reference: &[f64],
+        node: &[f64],
+        moment: &[f64],
+        grad: &mut [f64],
+        hess: &mut [f64],
+    ) {
+        // θ = atan2(y, x) of the slope (x, y) = r' (the reference only shifts
+        // θ by a constant); ∂θ = (-y, x)/ρ²,
         // ∂²θ = [[2xy, y² - x²], [y² - x², -2xy]]/ρ⁴.
         let (Some(&[x, y]), Some(&m), Some(grad), Some(hess)) = (
             node.get(2..4).and_then(|s| <&[f64; 2]>::try_from(s).ok()),
@@ -588,13 +473,6 @@ impl Element for PlanarCable {
         hess[3 * n + 3] += m * -2.0 * x * y / r4;
     }
 
-    fn node_angle(node: &[f64]) -> f64 {
-        match node {
-            [_, _, x, y] => y.atan2(*x),
-            _ => f64::NAN,
-        }
-    }
-
     fn clamp_free_directions(node: &[f64]) -> Vec<Vec<f64>> {
         match node {
             [_, _, x, y] => {
@@ -605,7 +483,8 @@ impl Element for PlanarCable {
         }
     }
 
-    fn moment_work_between(from: &[f64], to: &[f64], moment: &[f64]) -> f64 {
+    fn moment_work_between(_reference: &[f64], from: &[f64], to: &[f64], moment: &[f64]) -> f64 {
+        // the turn from `from` to `to` (no wrap-around below π)
         match (from, to, moment) {
             ([_, _, ax, ay], [_, _, bx, by], [m]) => {
                 m * (ax * by - ay * bx).atan2(ax * bx + ay * by)
@@ -618,6 +497,7 @@ impl Element for PlanarCable {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::quadrature::GaussRule;
 
     /// A deterministic pseudo-random deformed element.
     fn deformed(seed: u64, le: f64) -> [f64; 8] {
@@ -732,7 +612,7 @@ mod tests {
         let m = [0.7];
         let mut g = [0.0; 4];
         let mut h = [0.0; 16];
-        PlanarCable::add_moment_work(&node, &m, &mut g, &mut h);
+        PlanarCable::add_moment_work(&node, &node, &m, &mut g, &mut h);
         let work = |n: &[f64; 4]| m[0] * PlanarCable::node_angle(n);
         for j in 0..4 {
             let d = 1e-6;
@@ -744,8 +624,8 @@ mod tests {
             let mut gp = [0.0; 4];
             let mut gm = [0.0; 4];
             let mut scratch = [0.0; 16];
-            PlanarCable::add_moment_work(&p, &m, &mut gp, &mut scratch);
-            PlanarCable::add_moment_work(&q, &m, &mut gm, &mut scratch);
+            PlanarCable::add_moment_work(&node, &p, &m, &mut gp, &mut scratch);
+            PlanarCable::add_moment_work(&node, &q, &m, &mut gm, &mut scratch);
             for i in 0..4 {
                 assert!(((gp[i] - gm[i]) / (2.0 * d) - h[i * 4 + j]).abs() < 1e-7);
             }
