@@ -1,14 +1,15 @@
 """Regenerate (or check) every reference file under reference/.
 
-    python validation/make_references.py [--venv] [--only cheap|exudyn|family|elastica|skfem]
+    python validation/make_references.py [--venv] [--only cheap|exudyn|family|spatial|elastica|skfem]
                                          [--out-dir DIR] [--check]
 
 --venv     create validation/.venv if absent, pip-install validation/requirements.txt
            into it (again whenever requirements.txt changes) and re-run this script
            with the venv's Python.
---only     cheap: one exudyn case and one scikit-fem case (what CI runs);
-           exudyn / elastica / skfem: that generator only (exudyn includes the load
-           family of exudyn_load_family.py; family: that family only).
+--only     cheap: one planar exudyn case, one spatial exudyn case and one scikit-fem
+           case (what CI runs); exudyn / elastica / skfem: that generator only (exudyn
+           includes the load family of exudyn_load_family.py and the spatial cable of
+           exudyn_spatial_cable.py; family, spatial: those only).
 --out-dir  where to write the JSON files (default: reference/).
 --check    generate into a temporary directory and compare with the committed files
            in --out-dir: every number (outside "versions" and "timing_s") must agree to
@@ -100,6 +101,12 @@ def generate(only, out_dir):
         import exudyn_load_family
 
         rows += exudyn_load_family.run_all(out_dir)
+    if only in (None, "exudyn", "spatial", "cheap"):
+        import exudyn_spatial_cable
+
+        names = exudyn_spatial_cable.CHEAP if only == "cheap" else list(exudyn_spatial_cable.CASES)
+        for name in names:
+            rows += exudyn_spatial_cable.run_case(name, out_dir)
     if only in (None, "skfem", "cheap"):
         import skfem_strip
 
@@ -199,7 +206,7 @@ def check(rows, tmp_dir, ref_dir, full, strict=False):
 def main():
     ap = argparse.ArgumentParser(description="Regenerate or check the reference/*.json files.")
     ap.add_argument("--venv", action="store_true", help="run inside validation/.venv (created/updated as needed)")
-    ap.add_argument("--only", choices=["cheap", "exudyn", "family", "elastica", "skfem"], default=None)
+    ap.add_argument("--only", choices=["cheap", "exudyn", "family", "spatial", "elastica", "skfem"], default=None)
     ap.add_argument("--out-dir", default=DEFAULT_OUT)
     ap.add_argument("--check", action="store_true")
     ap.add_argument("--strict", action="store_true", help="with --check: compare solver diagnostics too")
