@@ -6,6 +6,9 @@
 //! planar robot on planar load cases.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+mod common;
+
+use common::reference;
 use serde_json::Value;
 use softrod::assembly::{Base, Chamber, Clamp, Robot, RobotSpec, Section};
 use softrod::banded::BandedMatrix;
@@ -27,12 +30,6 @@ const CASES: [&str; 7] = [
     "uniform_large",
     "twisted_large",
 ];
-
-fn reference(name: &str) -> Value {
-    let path = format!("{}/reference/{name}.json", env!("CARGO_MANIFEST_DIR"));
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    serde_json::from_str(&text).unwrap()
-}
 
 fn vec3(v: &Value) -> Vec<f64> {
     let v: Vec<f64> = serde_json::from_value(v.clone()).unwrap();
