@@ -49,6 +49,19 @@ pub const DEFAULT_GAUSS_POINTS: usize = 5;
 /// NaN for scalar results (NaN coordinates for `straight_node` and the vector
 /// results, no directions for `clamp_free_directions`) and add nothing to the
 /// buffers ([`crate::assembly::Robot`] checks every size first).
+///
+/// # Example
+/// ```
+/// use softrod::element::{NodeKinematics, SpatialCable};
+/// // a node turned by 90° about z from a reference along x
+/// let reference = SpatialCable::straight_node(&[0.0; 3], &[1.0, 0.0, 0.0]);
+/// let node = [0.1, 0.0, 0.0, 0.0, 2.0, 0.0];
+/// let phi = SpatialCable::node_rotation(&reference, &node);
+/// assert!((phi[2] - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+/// // a moment about z does the work M φ_z; about x (the reference tangent) none
+/// let w = SpatialCable::moment_work_between(&reference, &reference, &node, &[0.5, 0.0, 0.0]);
+/// assert_eq!(w, 0.0);
+/// ```
 pub trait NodeKinematics {
     /// Spatial dimension of the centreline (2 or 3).
     const DIM: usize;
@@ -96,6 +109,19 @@ pub trait NodeKinematics {
 /// every size before calling them). Implementations must not panic on slices
 /// of the wrong length: they then return NaN for scalar results and add
 /// nothing to the buffers.
+///
+/// # Example
+/// ```
+/// use softrod::element::{Element, PlanarCable};
+/// let e = PlanarCable::new(0.1, 300.0, 0.025)?;
+/// // stretched by 1 %: U = ½ EA ε² L_e
+/// let qe = [0.0, 0.0, 1.01, 0.0, 0.101, 0.0, 1.01, 0.0];
+/// assert!((e.energy(&qe) - 0.5 * 300.0 * 1e-4 * 0.1).abs() < 1e-15);
+/// let mut g = [0.0; 8];
+/// e.add_energy_gradient(&qe, &mut g);
+/// assert!((g[4] - 300.0 * 0.01).abs() < 1e-12); // the axial force at node 2
+/// # Ok::<(), softrod::Error>(())
+/// ```
 pub trait Element: NodeKinematics + Clone + std::fmt::Debug + Send + Sync {
     /// Undeformed length `L_e` (m).
     fn length(&self) -> f64;
@@ -237,6 +263,16 @@ impl ArcPoint {
     /// # Errors
     /// [`Error::DimensionMismatch`] if `field` ends before the element's
     /// second node.
+    ///
+    /// # Example
+    /// ```
+    /// // a spatial field: 6 numbers per node; the midpoint of a straight element along z
+    /// let q = [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.4, 0.0, 0.0, 1.0];
+    /// let mut r = [0.0; 3];
+    /// softrod::element::ArcPoint::new(0, 0.5, 0.4).value_into(&q, &mut r)?;
+    /// assert!((r[2] - 0.2).abs() < 1e-15);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn value_into(&self, field: &[f64], out: &mut [f64]) -> Result<()> {
         self.combine(&self.values, field, out)
     }
