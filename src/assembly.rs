@@ -42,7 +42,10 @@ const MAX_EDOF: usize = 24;
 #[serde(deny_unknown_fields)]
 pub struct Chamber {
     /// Column of the calibration matrix `G`: torque on the section per unit
-    /// pressure (N·m/Pa; one component in 2-D, positive bends counter-clockwise).
+    /// pressure (N·m/Pa; one component in 2-D, positive bends counter-clockwise;
+    /// three in 3-D, world axes: a spatial cable has no section frame, and
+    /// the torque works through the rotation of the section's end tangents
+    /// from the base direction, see [`crate::element::SpatialCable`]).
     pub gain_nm_per_pa: Vec<f64>,
     /// Lower pressure bound (Pa).
     pub pressure_min_pa: f64,
