@@ -2,7 +2,7 @@
 feature points, both backends.
 
 Reads validation/figures/fig4_feature_points.json (written by
-`cargo test --release --test estimate_figures`) and writes
+`SOFTROD_WRITE_FIGURES=1 cargo test --release --test estimate_figures`) and writes
 validation/figures/fig4_feature_points.{png,svg}.
 
 Run: validation/.venv/bin/python validation/plot_fig4.py
