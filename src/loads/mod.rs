@@ -2,8 +2,13 @@
 //! moments, the pressures of the actuation, and the unknown distributed load
 //! field `w(X) = S(X) F` (8), (16).
 //!
-//! Every load is dead (fixed in world axes). Self-weight comes from the
-//! sections' mass per length and the scene's gravity, not from here.
+//! Every load here is dead (fixed in world axes). Self-weight comes from
+//! the sections' mass per length and the scene's gravity, not from here.
+//! Forces that depend on the configuration (a spring holding a point, later
+//! contact) are [`force_field::ForceField`]s: energy, force and stiffness at
+//! `q`.
+
+pub mod force_field;
 
 use serde::{Deserialize, Serialize};
 
