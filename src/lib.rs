@@ -10,6 +10,8 @@
 //! - [`element`]: the cable element (14)–(16), energy, gradient, tangent.
 //! - [`assembly`]: a multi-section robot, loads (22), actuation (18).
 //! - [`statics`]: Newton's method on the equilibrium (17).
+//! - [`structure`]: rods, rigid bodies and joints; the map `q = φ(u)` from free
+//!   to all coordinates.
 //! - [`estimate`]: shape and load estimation (25)–(30), backends `newton` and `sqp`.
 //! - [`scene`]: JSON scene files; [`params`]: the values the paper leaves open.
 //! - [`refine`]: `"elements": "auto"`, the smallest mesh meeting a tolerance.
@@ -42,5 +44,6 @@ pub mod refine;
 pub mod report;
 pub mod scene;
 pub mod statics;
+pub mod structure;
 
 pub use error::{Error, Result};
