@@ -11,9 +11,12 @@
 //! axial tip force stretch a 6-element cantilever 2 % too little (exudyn's
 //! cantilevers likewise constrain only x, y and y' of the base). So the
 //! unknowns of a static solve, the *free coordinates* `u`, are the base
-//! stretch `b` (with `r_0' = (1 + b) t_0`) followed by `q_1 … q_N`;
-//! [`Robot::expand_step`] and [`Robot::restrict`] map between `u` and `q`. Equilibrium (17) is `Q(F, q, P) = 0` with
-//! `Q = Q_F + Q_E + Q_A` and the tangent stiffness is `K = −∂Q/∂q`.
+//! stretch `b` (with `r_0' = (1 + b) t_0`) followed by `q_1 … q_N`: the
+//! robot is a structure of one rod clamped at its base, and its
+//! [`DofMap`] (one affine block `q_0 = q̄_0 + b t`, then free blocks) maps
+//! between `u` and `q` ([`Robot::expand_step`], [`Robot::restrict`]).
+//! Equilibrium (17) is `Q(F, q, P) = 0` with `Q = Q_F + Q_E + Q_A` and the
+//! tangent stiffness is `K = −∂Q/∂q`.
 
 use serde::{Deserialize, Serialize};
 
@@ -25,6 +28,7 @@ use crate::error::{
 };
 use crate::loads::{outside, Loads};
 use crate::quadrature::GaussRule;
+use crate::structure::{BlockRule, DofMap};
 
 /// The largest number of elements a robot may have; larger requests are
 /// refused before anything is allocated.
@@ -396,7 +400,9 @@ pub struct Robot<E: Element> {
     node_s: Vec<f64>,
     section_nodes: Vec<(usize, usize)>,
     base_node: Vec<f64>,
-    base_free: Vec<Vec<f64>>,
+    /// The map from the free coordinates to all coordinates: the clamped
+    /// base node an affine block (its stretch free), nodes 1 … N free.
+    dofs: DofMap,
     gravity_force: Vec<f64>,
     chambers: Vec<ChamberRef>,
     gram: BandedMatrix,
@@ -545,6 +551,13 @@ impl<E: Element> Robot<E> {
             check_len("element clamp_free_directions", nd, t.len())?;
         }
         let n_q = node_s.len() * nd;
+        let mut blocks = Vec::with_capacity(node_s.len());
+        blocks.push(BlockRule::Affine {
+            offset: base_node.clone(),
+            directions: base_free,
+        });
+        blocks.resize(node_s.len(), BlockRule::Free { len: nd });
+        let dofs = DofMap::new(blocks).map_err(|e| e.with_prefix("element clamp: "))?;
         let kb = 2 * nd - 1;
         let line_rule = GaussRule::new(5)?;
         let mut robot = Robot {
@@ -553,7 +566,7 @@ impl<E: Element> Robot<E> {
             node_s,
             section_nodes,
             base_node,
-            base_free,
+            dofs,
             gravity_force: vec![0.0; n_q],
             chambers,
             gram: BandedMatrix::zeros(n_q, kb, kb),
@@ -695,66 +708,31 @@ impl<E: Element> Robot<E> {
     /// Number of free coordinates: the base's free directions (its stretch)
     /// and the coordinates of nodes 1 … N.
     pub fn n_free(&self) -> usize {
-        self.base_free.len() + self.n_q() - E::NODE_DOFS
+        self.dofs.n_u()
     }
 
     /// Number of free coordinates at the clamped base (1 for a cable with
     /// [`Clamp::PositionAndDirection`], 0 with [`Clamp::Full`]).
     pub fn n_base_free(&self) -> usize {
-        self.base_free.len()
+        self.dofs.free(0).map_or(0, |r| r.len())
     }
 
-    /// As [`Robot::dof_map`] into a fixed buffer; returns the count.
-    fn dof_map_into(&self, gi: usize, out: &mut [(usize, f64); MAX_EDOF]) -> usize {
-        let nd = E::NODE_DOFS;
-        let nb = self.base_free.len();
-        if gi >= nd {
-            out[0] = (nb + gi - nd, 1.0);
-            return 1;
-        }
-        let mut n = 0;
-        for (j, t) in self.base_free.iter().enumerate() {
-            if t[gi] != 0.0 && n < MAX_EDOF {
-                out[n] = (j, t[gi]);
-                n += 1;
-            }
-        }
-        n
-    }
-
-    /// The free coordinates that a global coordinate `gi` depends on, with
-    /// coefficients: `dq[gi] = Σ coef · du[index]`.
-    fn dof_map(&self, gi: usize, out: &mut Vec<(usize, f64)>) {
-        out.clear();
-        let nd = E::NODE_DOFS;
-        let nb = self.base_free.len();
-        if gi >= nd {
-            out.push((nb + gi - nd, 1.0));
-        } else {
-            for (j, t) in self.base_free.iter().enumerate() {
-                if t[gi] != 0.0 {
-                    out.push((j, t[gi]));
-                }
-            }
-        }
+    /// The map from the free coordinates to all coordinates (one affine
+    /// block for the clamped base, then one free block per node): the
+    /// single chain as a structure.
+    pub fn dof_map(&self) -> &DofMap {
+        &self.dofs
     }
 
     /// Maps a step `du` of the free coordinates to the step of all `n_q`
-    /// coordinates, `dq = M du`.
+    /// coordinates, `dq = T du` ([`DofMap::expand_into`]).
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] if `du` has the wrong size.
     pub fn expand_step(&self, du: &[f64]) -> Result<Vec<f64>> {
         check_len("du", self.n_free(), du.len())?;
-        let nd = E::NODE_DOFS;
-        let nb = self.base_free.len();
         let mut dq = vec![0.0; self.n_q()];
-        for (j, t) in self.base_free.iter().enumerate() {
-            for k in 0..nd {
-                dq[k] += t[k] * du[j];
-            }
-        }
-        dq[nd..].copy_from_slice(&du[nb..]);
+        self.dofs.expand_into(&[], du, &mut dq)?;
         Ok(dq)
     }
 
@@ -763,18 +741,7 @@ impl<E: Element> Robot<E> {
     /// # Errors
     /// [`Error::DimensionMismatch`] if `du` or `dq` has the wrong size.
     pub fn expand_step_into(&self, du: &[f64], dq: &mut [f64]) -> Result<()> {
-        check_len("du", self.n_free(), du.len())?;
-        check_len("dq", self.n_q(), dq.len())?;
-        let nd = E::NODE_DOFS;
-        let nb = self.base_free.len();
-        dq[..nd].iter_mut().for_each(|v| *v = 0.0);
-        for (j, t) in self.base_free.iter().enumerate() {
-            for k in 0..nd {
-                dq[k] += t[k] * du[j];
-            }
-        }
-        dq[nd..].copy_from_slice(&du[nb..]);
-        Ok(())
+        self.dofs.expand_into(&[], du, dq)
     }
 
     /// As [`Robot::restrict`], into `u` (`n_free` entries; no allocation).
@@ -782,30 +749,19 @@ impl<E: Element> Robot<E> {
     /// # Errors
     /// [`Error::DimensionMismatch`] if `f` or `u` has the wrong size.
     pub fn restrict_into(&self, f: &[f64], u: &mut [f64]) -> Result<()> {
-        check_len("f", self.n_q(), f.len())?;
-        check_len("u", self.n_free(), u.len())?;
-        let nd = E::NODE_DOFS;
-        let nb = self.base_free.len();
-        for (j, t) in self.base_free.iter().enumerate() {
-            u[j] = t.iter().zip(&f[..nd]).map(|(a, b)| a * b).sum();
-        }
-        u[nb..].copy_from_slice(&f[nd..]);
-        Ok(())
+        self.dofs.restrict_into(&[], f, u)
     }
 
     /// Restricts a generalized force over all `n_q` coordinates to the free
-    /// coordinates, `Mᵀ f` (the work-conjugate of [`Robot::expand_step`]).
+    /// coordinates, `Tᵀ f` (the work-conjugate of [`Robot::expand_step`];
+    /// [`DofMap::restrict_into`]).
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] if `f` has the wrong size.
     pub fn restrict(&self, f: &[f64]) -> Result<Vec<f64>> {
         check_len("f", self.n_q(), f.len())?;
-        let nd = E::NODE_DOFS;
-        let mut u = Vec::with_capacity(self.n_free());
-        for t in &self.base_free {
-            u.push(t.iter().zip(&f[..nd]).map(|(a, b)| a * b).sum());
-        }
-        u.extend_from_slice(&f[nd..]);
+        let mut u = vec![0.0; self.n_free()];
+        self.dofs.restrict_into(&[], f, &mut u)?;
         Ok(u)
     }
     /// Undeformed arc coordinate of every node (m).
@@ -1206,13 +1162,9 @@ impl<E: Element> Robot<E> {
         loads: &Loads,
     ) -> Result<()> {
         let nd = E::NODE_DOFS;
-        let nb = self.base_free.len();
         let edof = 2 * nd;
         if let Some((dead, out)) = residual.as_mut() {
-            for (j, t) in self.base_free.iter().enumerate() {
-                out[j] = t.iter().zip(&dead[..nd]).map(|(a, b)| a * b).sum();
-            }
-            out[nb..].copy_from_slice(&dead[nd..]);
+            self.dofs.restrict_into(&[], dead, out)?;
         }
         if let Some(k) = k.as_mut() {
             let kb = 2 * nd - 1;
@@ -1241,9 +1193,8 @@ impl<E: Element> Robot<E> {
                 }
                 (false, false) => {}
             }
-            if e > 0 {
-                // interior elements: a plain shift
-                let off = e * nd - nd + nb;
+            if let Some(off) = self.dofs.contiguous_free(e * nd, edof) {
+                // elements between free nodes: a plain shift
                 if let Some((_, out)) = residual.as_mut() {
                     for (o, gk) in out[off..off + edof].iter_mut().zip(g.iter()) {
                         *o -= gk;
@@ -1256,10 +1207,10 @@ impl<E: Element> Robot<E> {
                 continue;
             }
             if let Some((_, out)) = residual.as_mut() {
-                self.scatter_force(0, g, -1.0, out);
+                self.scatter_force(e * nd, g, -1.0, out)?;
             }
             if let Some(k) = k.as_mut() {
-                self.scatter_stiffness(0, edof, h, 1.0, k);
+                self.scatter_stiffness(e * nd, edof, h, 1.0, k)?;
             }
         }
         let mut mg = [0.0; MAX_EDOF];
@@ -1272,34 +1223,26 @@ impl<E: Element> Robot<E> {
             mh.fill(0.0);
             E::add_moment_work(&self.base_node, &q[node * nd..(node + 1) * nd], m, mg, mh);
             if let Some((_, out)) = residual.as_mut() {
-                self.scatter_force(node * nd, mg, 1.0, out);
+                self.scatter_force(node * nd, mg, 1.0, out)?;
             }
             if let Some(k) = k.as_mut() {
-                self.scatter_stiffness(node * nd, nd, mh, -1.0, k);
+                self.scatter_stiffness(node * nd, nd, mh, -1.0, k)?;
             }
             Ok(())
         })
     }
 
-    /// Adds `sign · Mᵀ g` for a vector `g` over the global coordinates
-    /// `start ..` into the free-coordinate vector `out`.
-    fn scatter_force(&self, start: usize, g: &[f64], sign: f64, out: &mut [f64]) {
-        let nd = E::NODE_DOFS;
-        let nb = self.base_free.len();
-        for (k, gk) in g.iter().enumerate() {
-            let gi = start + k;
-            if gi >= nd {
-                out[nb + gi - nd] += sign * gk;
-            } else {
-                for (j, t) in self.base_free.iter().enumerate() {
-                    out[j] += sign * t[gi] * gk;
-                }
-            }
-        }
+    /// Adds `sign · Tᵀ g` for a vector `g` over the coordinates
+    /// `start .. start + g.len()` into the free-coordinate vector `out`.
+    fn scatter_force(&self, start: usize, g: &[f64], sign: f64, out: &mut [f64]) -> Result<()> {
+        let dofs = range_dofs(start, g.len());
+        self.dofs
+            .add_force(&[], &dofs[..g.len().min(MAX_EDOF)], g, sign, out)
     }
 
-    /// Adds `sign · Mᵀ H M` for a `size × size` matrix `h` over the global
-    /// coordinates `start ..` into the banded free-coordinate matrix `k`.
+    /// Adds `sign · Tᵀ H T` for a `size × size` matrix `h` over the
+    /// coordinates `start .. start + size` into the banded free-coordinate
+    /// matrix `k`.
     fn scatter_stiffness(
         &self,
         start: usize,
@@ -1307,21 +1250,10 @@ impl<E: Element> Robot<E> {
         h: &[f64],
         sign: f64,
         k: &mut BandedMatrix,
-    ) {
-        // at most NODE_DOFS base-free directions map one coordinate
-        let mut mi = [(0usize, 0.0f64); MAX_EDOF];
-        let mut mj = [(0usize, 0.0f64); MAX_EDOF];
-        for a in 0..size {
-            let na = self.dof_map_into(start + a, &mut mi);
-            for b in 0..size {
-                let nb = self.dof_map_into(start + b, &mut mj);
-                for &(i, ci) in &mi[..na] {
-                    for &(j, cj) in &mj[..nb] {
-                        k.add(i, j, sign * ci * cj * h[a * size + b]);
-                    }
-                }
-            }
-        }
+    ) -> Result<()> {
+        let dofs = range_dofs(start, size);
+        self.dofs
+            .add_stiffness(&[], &dofs[..size.min(MAX_EDOF)], h, sign, k)
     }
 
     /// `∂Q/∂P` over the free coordinates: column `c` is the generalized force
@@ -1336,8 +1268,9 @@ impl<E: Element> Robot<E> {
         let np = self.n_pressures();
         let mut jac = vec![0.0; self.n_free() * np];
         let mut scratch = [0.0; MAX_EDOF * MAX_EDOF];
-        let mut map = Vec::new();
+        let mut col = vec![0.0; self.n_free()];
         for (c, ch) in self.chambers.iter().enumerate() {
+            col.iter_mut().for_each(|v| *v = 0.0);
             let (a, b) = self.section_nodes[ch.section];
             for (node, sign) in [(b, 1.0), (a, -1.0)] {
                 let m: Vec<f64> = ch.gain.iter().map(|g| sign * g).collect();
@@ -1349,12 +1282,10 @@ impl<E: Element> Robot<E> {
                     &mut g[..nd],
                     &mut scratch[..nd * nd],
                 );
-                for (k, gk) in g[..nd].iter().enumerate() {
-                    self.dof_map(node * nd + k, &mut map);
-                    for &(i, ci) in &map {
-                        jac[i * np + c] += ci * gk;
-                    }
-                }
+                self.scatter_force(node * nd, &g[..nd], 1.0, &mut col)?;
+            }
+            for (i, v) in col.iter().enumerate() {
+                jac[i * np + c] = *v;
             }
         }
         Ok(jac)
@@ -1484,8 +1415,7 @@ impl<E: Element> Robot<E> {
                 mg,
                 &mut mh,
             );
-            self.scatter_force(node * nd, mg, 1.0, out);
-            Ok(())
+            self.scatter_force(node * nd, mg, 1.0, out)
         })
     }
 
@@ -1516,6 +1446,16 @@ fn base_direction(base: &Base, d: usize) -> Result<Vec<f64>> {
         ));
     }
     Ok(v.iter().map(|x| x / n).collect())
+}
+
+/// The coordinate indices `start .. start + len` (at most [`MAX_EDOF`]) in
+/// a fixed buffer.
+fn range_dofs(start: usize, len: usize) -> [usize; MAX_EDOF] {
+    let mut d = [0usize; MAX_EDOF];
+    for (k, x) in d.iter_mut().enumerate().take(len) {
+        *x = start + k;
+    }
+    d
 }
 
 /// Adds `scale · S(ξ)ᵀ f` into the element vector `out` (cable layout).

@@ -108,6 +108,8 @@ impl BlockRule {
 struct Block {
     /// First coordinate.
     q0: usize,
+    /// Number of coordinates.
+    len: usize,
     /// First free coordinate the block adds.
     u0: usize,
     /// First free coordinate of the body pose (rigid ends only).
@@ -135,6 +137,9 @@ struct Block {
 #[derive(Debug, Clone, PartialEq)]
 pub struct DofMap {
     blocks: Vec<Block>,
+    /// The leading run of blocks of equal length: `(length, count)` (the
+    /// nodes of the rods), where the block of a coordinate is a division.
+    uniform: (usize, usize),
     n_q: usize,
     n_u: usize,
     linear: bool,
@@ -201,6 +206,7 @@ impl DofMap {
             let (len, nf) = (rule.len(), rule.n_free());
             blocks.push(Block {
                 q0,
+                len,
                 u0,
                 pose_u: 0,
                 rule,
@@ -217,8 +223,11 @@ impl DofMap {
                 linear = false;
             }
         }
+        let first = blocks.first().map_or(1, |b| b.len);
+        let run = blocks.iter().take_while(|b| b.len == first).count();
         Ok(DofMap {
             blocks,
+            uniform: (first, run),
             n_q: q0,
             n_u: u0,
             linear,
@@ -248,7 +257,7 @@ impl DofMap {
     }
     /// The coordinates of block `b` (a range of `q` indices).
     pub fn coordinates(&self, b: usize) -> Option<Range<usize>> {
-        self.blocks.get(b).map(|x| x.q0..x.q0 + x.rule.len())
+        self.blocks.get(b).map(|x| x.q0..x.q0 + x.len)
     }
     /// The free coordinates block `b` adds (a range of `u` indices: its own
     /// coordinates, its free directions, or a rigid end's stretch).
@@ -282,7 +291,11 @@ impl DofMap {
 
     /// The block holding coordinate `qi`.
     fn block_at(&self, qi: usize) -> Option<usize> {
-        let i = self.blocks.partition_point(|b| b.q0 + b.rule.len() <= qi);
+        let (len, run) = self.uniform;
+        if qi < len * run {
+            return Some(qi / len);
+        }
+        let i = run + self.blocks[run..].partition_point(|b| b.q0 + b.len <= qi);
         (i < self.blocks.len()).then_some(i)
     }
 
@@ -362,7 +375,7 @@ impl DofMap {
         check_len("u", self.n_u, u.len())?;
         check_len("q", self.n_q, q.len())?;
         for b in &self.blocks {
-            let len = b.rule.len();
+            let len = b.len;
             let qb = &mut q[b.q0..b.q0 + len];
             match &b.rule {
                 BlockRule::Free { .. } => qb.copy_from_slice(&u[b.u0..b.u0 + len]),
@@ -404,7 +417,7 @@ impl DofMap {
         check_len("du", self.n_u, du.len())?;
         check_len("dq", self.n_q, dq.len())?;
         for b in &self.blocks {
-            let len = b.rule.len();
+            let len = b.len;
             let qb = &mut dq[b.q0..b.q0 + len];
             match &b.rule {
                 BlockRule::Free { .. } => qb.copy_from_slice(&du[b.u0..b.u0 + len]),
@@ -443,7 +456,7 @@ impl DofMap {
         // blocks own disjoint free coordinates except rigid ends, which add
         // to their body's pose: write owned entries first, then add
         for b in &self.blocks {
-            let len = b.rule.len();
+            let len = b.len;
             let fb = &f[b.q0..b.q0 + len];
             match &b.rule {
                 BlockRule::Free { .. } => out[b.u0..b.u0 + len].copy_from_slice(fb),
