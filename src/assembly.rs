@@ -1,8 +1,8 @@
-//! Assembly of a multi-section robot from cable elements: the dof layout, the
-//! elastic forces and the tangent stiffness, self-weight, known loads, the
-//! distributed-load matrix `J_QF = B = ∫ Sᵀ S dX` (22), (23), (26), and the
-//! pneumatic actuation as end torques of each section, `Q_A = ∂W_A/∂q` (18),
-//! `W_A = Σ_s M_s · (θ_end(s) − θ_start(s))`, `M_s = G_s P`.
+//! A multi-section robot clamped at its base: one [`Rod`] (its sections,
+//! elastic energy, self-weight, known loads, the distributed-load matrix
+//! `J_QF = B = ∫ Sᵀ S dX` (22), (23), (26), and the pneumatic actuation as
+//! end torques of each section, `Q_A = ∂W_A/∂q` (18)) held by a clamp; the
+//! residual and the banded tangent stiffness over its free coordinates.
 //!
 //! Layout: node-major, `q = [q_0; q_1; …; q_N]`, `NODE_DOFS` numbers per node.
 //! Node 0 is the clamped base. A clamp fixes the base position and the base
@@ -22,214 +22,14 @@ use serde::{Deserialize, Serialize};
 
 use crate::banded::BandedMatrix;
 use crate::element::{ArcPoint, Element, PlanarCable, SpatialCable, DEFAULT_GAUSS_POINTS};
-use crate::error::{
-    check_all_finite, check_at_most, check_finite, check_index, check_len, check_positive, Error,
-    Result,
-};
-use crate::loads::{outside, Loads};
-use crate::quadrature::GaussRule;
-use crate::structure::{BlockRule, DofMap};
+use crate::error::{check_all_finite, check_finite, check_len, Error, Result};
+use crate::loads::Loads;
+use crate::structure::rod::MAX_EDOF;
+use crate::structure::{BlockRule, DofMap, Rod};
 
-/// The largest number of elements a robot may have; larger requests are
-/// refused before anything is allocated.
-pub const MAX_ELEMENTS: usize = 200_000;
-/// Largest element dof count any element type has (full 3-D ANCF: 24).
-const MAX_EDOF: usize = 24;
-
-/// One pneumatic chamber: its torque per pressure and its pressure bounds.
-///
-/// # Example
-/// ```
-/// let c = softrod::assembly::Chamber { gain_nm_per_pa: vec![3e-6], pressure_min_pa: 0.0, pressure_max_pa: 100e3 };
-/// ```
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Chamber {
-    /// Column of the calibration matrix `G`: torque on the section per unit
-    /// pressure (N·m/Pa; one component in 2-D, positive bends counter-clockwise;
-    /// three in 3-D, world axes: a spatial cable has no section frame, and
-    /// the torque works through the rotation of the section's end tangents
-    /// from the base direction, see [`crate::element::SpatialCable`]).
-    pub gain_nm_per_pa: Vec<f64>,
-    /// Lower pressure bound (Pa).
-    pub pressure_min_pa: f64,
-    /// Upper pressure bound (Pa).
-    pub pressure_max_pa: f64,
-}
-
-/// One section of the robot: a uniform piece with its own stiffness, weight,
-/// discretization and chambers.
-///
-/// In JSON, `"elements"` is a positive integer or `"auto"`; `"auto"` sets
-/// [`Section::auto_elements`] (and `elements` to 0), and a number clears it.
-///
-/// # Example
-/// ```
-/// use softrod::assembly::Section;
-/// let s = Section::uniform(0.12, 300.0, 0.025, 10);
-/// assert_eq!(s.elements, 10);
-/// let auto: Section = serde_json::from_str(
-///     r#"{"length_m": 0.12, "ea_n": 300, "ei_nm2": 0.025, "elements": "auto"}"#).unwrap();
-/// assert!(auto.auto_elements);
-/// assert!(serde_json::to_string(&auto).unwrap().contains(r#""elements":"auto""#));
-/// ```
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(from = "SectionJson", into = "SectionJson")]
-pub struct Section {
-    /// Undeformed length (m).
-    pub length_m: f64,
-    /// Axial stiffness EA (N).
-    pub ea_n: f64,
-    /// Bending stiffness EI (N·m²).
-    pub ei_nm2: f64,
-    /// Mass per undeformed length (kg/m); zero is a weightless section.
-    #[serde(default)]
-    pub mass_per_length_kg_per_m: f64,
-    /// Number of elements.
-    pub elements: usize,
-    /// Whether the scene asked for `"elements": "auto"`: the count is then
-    /// chosen by [`crate::refine::auto_elements`], and `elements` is not
-    /// used until the refinement fills it in. A scene refuses to build a
-    /// robot from such a section ([`crate::scene::Scene::robot`]); a
-    /// [`RobotSpec`] ignores the flag and builds with `elements`.
-    pub auto_elements: bool,
-    /// Rest curvature `κ0` (1/m).
-    pub rest_curvature_per_m: f64,
-    /// Pneumatic chambers acting on this section.
-    pub chambers: Vec<Chamber>,
-}
-
-/// A section's element count as written in JSON: a number or `"auto"`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum ElementCount {
-    Fixed(usize),
-    Auto,
-}
-
-impl Serialize for ElementCount {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        match self {
-            ElementCount::Fixed(n) => s.serialize_u64(*n as u64),
-            ElementCount::Auto => s.serialize_str("auto"),
-        }
-    }
-}
-
-impl<'de> Deserialize<'de> for ElementCount {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        struct Visitor;
-        impl serde::de::Visitor<'_> for Visitor {
-            type Value = ElementCount;
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str(r#"a positive integer or "auto""#)
-            }
-            fn visit_u64<E: serde::de::Error>(self, v: u64) -> std::result::Result<Self::Value, E> {
-                usize::try_from(v)
-                    .map(ElementCount::Fixed)
-                    .map_err(|_| E::invalid_value(serde::de::Unexpected::Unsigned(v), &self))
-            }
-            fn visit_i64<E: serde::de::Error>(self, v: i64) -> std::result::Result<Self::Value, E> {
-                u64::try_from(v)
-                    .map_err(|_| E::invalid_value(serde::de::Unexpected::Signed(v), &self))
-                    .and_then(|v| self.visit_u64(v))
-            }
-            fn visit_str<E: serde::de::Error>(
-                self,
-                v: &str,
-            ) -> std::result::Result<Self::Value, E> {
-                if v == "auto" {
-                    Ok(ElementCount::Auto)
-                } else {
-                    Err(E::invalid_value(serde::de::Unexpected::Str(v), &self))
-                }
-            }
-        }
-        d.deserialize_any(Visitor)
-    }
-}
-
-/// The JSON form of [`Section`].
-#[derive(Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct SectionJson {
-    length_m: f64,
-    ea_n: f64,
-    ei_nm2: f64,
-    #[serde(default)]
-    mass_per_length_kg_per_m: f64,
-    elements: ElementCount,
-    #[serde(default)]
-    rest_curvature_per_m: f64,
-    #[serde(default)]
-    chambers: Vec<Chamber>,
-}
-
-impl From<SectionJson> for Section {
-    fn from(j: SectionJson) -> Self {
-        let (elements, auto_elements) = match j.elements {
-            ElementCount::Fixed(n) => (n, false),
-            ElementCount::Auto => (0, true),
-        };
-        Section {
-            length_m: j.length_m,
-            ea_n: j.ea_n,
-            ei_nm2: j.ei_nm2,
-            mass_per_length_kg_per_m: j.mass_per_length_kg_per_m,
-            elements,
-            auto_elements,
-            rest_curvature_per_m: j.rest_curvature_per_m,
-            chambers: j.chambers,
-        }
-    }
-}
-
-impl From<Section> for SectionJson {
-    fn from(s: Section) -> Self {
-        SectionJson {
-            length_m: s.length_m,
-            ea_n: s.ea_n,
-            ei_nm2: s.ei_nm2,
-            mass_per_length_kg_per_m: s.mass_per_length_kg_per_m,
-            elements: if s.auto_elements {
-                ElementCount::Auto
-            } else {
-                ElementCount::Fixed(s.elements)
-            },
-            rest_curvature_per_m: s.rest_curvature_per_m,
-            chambers: s.chambers,
-        }
-    }
-}
-
-impl Section {
-    /// A weightless section with no chambers and no rest curvature.
-    pub fn uniform(length_m: f64, ea_n: f64, ei_nm2: f64, elements: usize) -> Self {
-        Section {
-            length_m,
-            ea_n,
-            ei_nm2,
-            mass_per_length_kg_per_m: 0.0,
-            elements,
-            auto_elements: false,
-            rest_curvature_per_m: 0.0,
-            chambers: Vec::new(),
-        }
-    }
-}
-
-/// What the base clamp prescribes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Clamp {
-    /// Position and direction of the base; the axial strain at the base is
-    /// free (the physical clamp; default).
-    #[default]
-    PositionAndDirection,
-    /// Position and the whole slope vector `r_0' = t_0` (MODEL.md's literal
-    /// reading, and exudyn's cantilevers that fix all four base coordinates):
-    /// forbids axial strain at the base, a boundary layer one element long.
-    Full,
-}
+pub use crate::structure::rod::MAX_ELEMENTS;
+pub use crate::structure::section::{Chamber, Section};
+pub use crate::structure::Clamp;
 
 /// Pose of the clamped base.
 ///
@@ -383,33 +183,16 @@ impl RobotSpec {
     }
 }
 
-/// A flattened chamber: section index, gain, bounds.
-#[derive(Debug, Clone)]
-struct ChamberRef {
-    section: usize,
-    gain: Vec<f64>,
-    min: f64,
-    max: f64,
-}
-
 /// A robot assembled from elements of type `E`.
 #[derive(Debug, Clone)]
 pub struct Robot<E: Element> {
     spec: RobotSpec,
-    elements: Vec<E>,
-    node_s: Vec<f64>,
-    section_nodes: Vec<(usize, usize)>,
+    /// The chain: elements, sections, loads in its own coordinates.
+    rod: Rod<E>,
     base_node: Vec<f64>,
     /// The map from the free coordinates to all coordinates: the clamped
     /// base node an affine block (its stretch free), nodes 1 … N free.
     dofs: DofMap,
-    gravity_force: Vec<f64>,
-    chambers: Vec<ChamberRef>,
-    gram: BandedMatrix,
-    /// Each element's `∫ s_k s_l dX` (4 × 4 over the node slots), the
-    /// blocks `gram` is assembled from (applied element by element).
-    elem_gram: Vec<[[f64; 4]; 4]>,
-    line_rule: GaussRule,
 }
 
 impl<E: Element> Robot<E> {
@@ -417,14 +200,14 @@ impl<E: Element> Robot<E> {
     /// a section from `(section, element length, axial points, bending points)`.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] naming the field at fault
+    /// [`crate::Error::InvalidParameter`] naming the field at fault
     /// (`robot.sections[i].ei_nm2`, …) for empty robots, zero elements,
     /// non-positive lengths or stiffnesses, negative mass, non-finite
     /// numbers, inverted pressure bounds, or an element type whose constants
-    /// do not fit the assembly; [`Error::TooLarge`] for more than
+    /// do not fit the assembly; [`crate::Error::TooLarge`] for more than
     /// [`MAX_ELEMENTS`] elements or Gauss rules above
     /// [`crate::quadrature::MAX_POINTS`] points (both refused before anything
-    /// proportional is allocated); [`Error::DimensionMismatch`] for vectors
+    /// proportional is allocated); [`crate::Error::DimensionMismatch`] for vectors
     /// of the wrong size. Errors of `make` are returned with the section's
     /// path prefixed to the field name.
     pub fn new(
@@ -433,113 +216,20 @@ impl<E: Element> Robot<E> {
     ) -> Result<Self> {
         let d = E::DIM;
         let nd = E::NODE_DOFS;
-        if spec.sections.is_empty() {
-            return Err(Error::invalid(
-                "robot.sections",
-                "[]",
-                "a robot needs at least one section",
-            ));
-        }
-        // the assembly's fixed-size scratch buffers and node layout
-        if d == 0 || E::MOMENT_DIM == 0 || nd < 2 * d || 2 * nd > MAX_EDOF {
-            return Err(Error::invalid(
-                "element",
-                format!("DIM = {d}, NODE_DOFS = {nd}"),
-                format!("needs 2 DIM <= NODE_DOFS <= {}", MAX_EDOF / 2),
-            ));
-        }
-        let mut total = 0usize;
-        for (i, s) in spec.sections.iter().enumerate() {
-            // `total <= MAX_ELEMENTS` here, so the subtraction cannot underflow
-            check_at_most(
-                &format!("robot.sections[{i}].elements"),
-                s.elements,
-                MAX_ELEMENTS - total,
-            )?;
-            total += s.elements;
-        }
+        Rod::<E>::check_layout(&spec.sections, "robot")?;
         check_len("base.position_m", d, spec.base.position_m.len())?;
         check_all_finite("base.position_m", &spec.base.position_m)?;
         check_finite("base.angle_rad", spec.base.angle_rad)?;
         check_len("gravity_m_per_s2", d, spec.gravity_m_per_s2.len())?;
         check_all_finite("gravity_m_per_s2", &spec.gravity_m_per_s2)?;
-        for (name, n) in [
-            ("robot.axial_gauss_points", spec.axial_gauss_points),
-            ("robot.bending_gauss_points", spec.bending_gauss_points),
-        ] {
-            if n == 0 {
-                return Err(Error::invalid(name, n, "must be >= 1"));
-            }
-            check_at_most(name, n, crate::quadrature::MAX_POINTS)?;
-        }
-        let mut chambers = Vec::new();
-        for (i, s) in spec.sections.iter().enumerate() {
-            let p = |f: &str| format!("robot.sections[{i}].{f}");
-            check_positive(&p("length_m"), s.length_m)?;
-            check_positive(&p("ea_n"), s.ea_n)?;
-            check_positive(&p("ei_nm2"), s.ei_nm2)?;
-            if !(s.mass_per_length_kg_per_m.is_finite() && s.mass_per_length_kg_per_m >= 0.0) {
-                return Err(Error::invalid(
-                    p("mass_per_length_kg_per_m"),
-                    s.mass_per_length_kg_per_m,
-                    "must be finite and >= 0",
-                ));
-            }
-            if s.elements == 0 {
-                return Err(Error::invalid(
-                    p("elements"),
-                    0,
-                    "a section needs at least one element",
-                ));
-            }
-            check_finite(&p("rest_curvature_per_m"), s.rest_curvature_per_m)?;
-            for (c, ch) in s.chambers.iter().enumerate() {
-                let pc = |f: &str| format!("robot.sections[{i}].chambers[{c}].{f}");
-                check_len(
-                    &pc("gain_nm_per_pa"),
-                    E::MOMENT_DIM,
-                    ch.gain_nm_per_pa.len(),
-                )?;
-                check_all_finite(&pc("gain_nm_per_pa"), &ch.gain_nm_per_pa)?;
-                check_finite(&pc("pressure_min_pa"), ch.pressure_min_pa)?;
-                check_finite(&pc("pressure_max_pa"), ch.pressure_max_pa)?;
-                if ch.pressure_min_pa > ch.pressure_max_pa {
-                    return Err(Error::invalid(
-                        pc("pressure_max_pa"),
-                        ch.pressure_max_pa,
-                        format!("must be >= pressure_min_pa = {}", ch.pressure_min_pa),
-                    ));
-                }
-                chambers.push(ChamberRef {
-                    section: i,
-                    gain: ch.gain_nm_per_pa.clone(),
-                    min: ch.pressure_min_pa,
-                    max: ch.pressure_max_pa,
-                });
-            }
-        }
-        // elements and nodes
-        let mut elements = Vec::with_capacity(total);
-        let mut node_s = Vec::with_capacity(total + 1);
-        let mut section_nodes = Vec::with_capacity(spec.sections.len());
-        node_s.push(0.0);
-        let mut s0 = 0.0;
-        for (i, sec) in spec.sections.iter().enumerate() {
-            let le = sec.length_m / sec.elements as f64;
-            let start = node_s.len() - 1;
-            let proto = make(sec, le, spec.axial_gauss_points, spec.bending_gauss_points)
-                .map_err(|e| e.with_prefix(&format!("robot.sections[{i}].")))?;
-            for k in 0..sec.elements {
-                elements.push(proto.clone());
-                node_s.push(if k + 1 == sec.elements {
-                    s0 + sec.length_m
-                } else {
-                    s0 + (k + 1) as f64 * le
-                });
-            }
-            s0 += sec.length_m;
-            section_nodes.push((start, node_s.len() - 1));
-        }
+        let rod = Rod::new(
+            &spec.sections,
+            &spec.gravity_m_per_s2,
+            spec.axial_gauss_points,
+            spec.bending_gauss_points,
+            "robot",
+            make,
+        )?;
         let dir = base_direction(&spec.base, d)?;
         let base_node = E::straight_node(&spec.base.position_m, &dir);
         check_len("element straight_node", nd, base_node.len())?;
@@ -550,79 +240,24 @@ impl<E: Element> Robot<E> {
         for t in &base_free {
             check_len("element clamp_free_directions", nd, t.len())?;
         }
-        let n_q = node_s.len() * nd;
-        let mut blocks = Vec::with_capacity(node_s.len());
+        let mut blocks = Vec::with_capacity(rod.n_nodes());
         blocks.push(BlockRule::Affine {
             offset: base_node.clone(),
             directions: base_free,
         });
-        blocks.resize(node_s.len(), BlockRule::Free { len: nd });
+        blocks.resize(rod.n_nodes(), BlockRule::Free { len: nd });
         let dofs = DofMap::new(blocks).map_err(|e| e.with_prefix("element clamp: "))?;
-        let kb = 2 * nd - 1;
-        let line_rule = GaussRule::new(5)?;
-        let mut robot = Robot {
+        Ok(Robot {
             spec,
-            elements,
-            node_s,
-            section_nodes,
+            rod,
             base_node,
             dofs,
-            gravity_force: vec![0.0; n_q],
-            chambers,
-            gram: BandedMatrix::zeros(n_q, kb, kb),
-            elem_gram: Vec::new(),
-            line_rule,
-        };
-        robot.assemble_gram();
-        // self-weight: uniform line load m g per section
-        let mut gravity = vec![0.0; n_q];
-        for (e, el) in robot.elements.iter().enumerate() {
-            let m = robot.spec.sections[robot.section_of_element(e)].mass_per_length_kg_per_m;
-            if m == 0.0 {
-                continue;
-            }
-            let w: Vec<f64> = robot.spec.gravity_m_per_s2.iter().map(|g| m * g).collect();
-            for (xi, wt) in robot.line_rule.iter() {
-                add_shape_force(
-                    el,
-                    xi,
-                    &w,
-                    wt * el.length(),
-                    &mut gravity[e * nd..(e + 2) * nd],
-                );
-            }
-        }
-        robot.gravity_force = gravity;
-        Ok(robot)
+        })
     }
 
-    fn assemble_gram(&mut self) {
-        let nd = E::NODE_DOFS;
-        let d = E::DIM;
-        let rule = GaussRule::new(4).unwrap_or_else(|_| self.line_rule.clone());
-        let mut blocks = Vec::with_capacity(self.elements.len());
-        for (e, el) in self.elements.iter().enumerate() {
-            let le = el.length();
-            let mut m = [[0.0; 4]; 4];
-            for (xi, w) in rule.iter() {
-                let s = el.shape(xi);
-                for k in 0..4 {
-                    for l in 0..4 {
-                        m[k][l] += w * le * s[k] * s[l];
-                    }
-                }
-            }
-            // S = [s_1 I, s_2 I, s_3 I, s_4 I]; component k of q_e block = s_k
-            for (k, mk) in m.iter().enumerate() {
-                for (l, mkl) in mk.iter().enumerate() {
-                    for i in 0..d {
-                        self.gram.add(e * nd + k * d + i, e * nd + l * d + i, *mkl);
-                    }
-                }
-            }
-            blocks.push(m);
-        }
-        self.elem_gram = blocks;
+    /// The chain: elements, sections and loads in the robot's coordinates.
+    pub fn rod(&self) -> &Rod<E> {
+        &self.rod
     }
 
     /// `J_QF F = ∫ Sᵀ S dX F` ([`Robot::load_gram`] times `f`) into `out`,
@@ -630,49 +265,15 @@ impl<E: Element> Robot<E> {
     /// `load_gram().mul_vec(f)` up to round-off.
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] if `f` or `out` does not have `n_q` entries.
+    /// [`crate::Error::DimensionMismatch`] if `f` or `out` does not have `n_q` entries.
     pub fn apply_load_gram_into(&self, f: &[f64], out: &mut [f64]) -> Result<()> {
-        check_len("f", self.n_q(), f.len())?;
-        check_len("out", self.n_q(), out.len())?;
-        let nd = E::NODE_DOFS;
-        let d = E::DIM;
-        out.iter_mut().for_each(|v| *v = 0.0);
-        if d == 2 && nd == 4 {
-            // the planar cable: pairs of components, unrolled
-            for (e, m) in self.elem_gram.iter().enumerate() {
-                let Ok(fe) = <&[f64; 8]>::try_from(&f[e * 4..e * 4 + 8]) else {
-                    continue;
-                };
-                let Ok(oe) = <&mut [f64; 8]>::try_from(&mut out[e * 4..e * 4 + 8]) else {
-                    continue;
-                };
-                for k in 0..4 {
-                    let (mut x, mut y) = (0.0, 0.0);
-                    for l in 0..4 {
-                        x += m[k][l] * fe[2 * l];
-                        y += m[k][l] * fe[2 * l + 1];
-                    }
-                    oe[2 * k] += x;
-                    oe[2 * k + 1] += y;
-                }
-            }
-            return Ok(());
-        }
-        for (e, m) in self.elem_gram.iter().enumerate() {
-            for k in 0..4 {
-                for i in 0..d {
-                    let v: f64 = (0..4).map(|l| m[k][l] * f[e * nd + l * d + i]).sum();
-                    out[e * nd + k * d + i] += v;
-                }
-            }
-        }
-        Ok(())
+        self.rod.apply_load_gram_into(f, out)
     }
 
     /// As [`Robot::apply_load_gram_into`], into a new vector.
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] if `f` does not have `n_q` entries.
+    /// [`crate::Error::DimensionMismatch`] if `f` does not have `n_q` entries.
     ///
     /// # Example
     /// ```
@@ -684,9 +285,7 @@ impl<E: Element> Robot<E> {
     /// assert!(a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-15));
     /// ```
     pub fn apply_load_gram(&self, f: &[f64]) -> Result<Vec<f64>> {
-        let mut out = vec![0.0; self.n_q()];
-        self.apply_load_gram_into(f, &mut out)?;
-        Ok(out)
+        self.rod.apply_load_gram(f)
     }
 
     /// The robot's definition.
@@ -695,15 +294,15 @@ impl<E: Element> Robot<E> {
     }
     /// Number of elements.
     pub fn n_elements(&self) -> usize {
-        self.elements.len()
+        self.rod.n_elements()
     }
     /// Number of nodes (elements + 1).
     pub fn n_nodes(&self) -> usize {
-        self.node_s.len()
+        self.rod.n_nodes()
     }
     /// Number of coordinates `n_q`, base node included.
     pub fn n_q(&self) -> usize {
-        self.node_s.len() * E::NODE_DOFS
+        self.rod.n_q()
     }
     /// Number of free coordinates: the base's free directions (its stretch)
     /// and the coordinates of nodes 1 … N.
@@ -728,7 +327,7 @@ impl<E: Element> Robot<E> {
     /// coordinates, `dq = T du` ([`DofMap::expand_into`]).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] if `du` has the wrong size.
+    /// [`crate::Error::DimensionMismatch`] if `du` has the wrong size.
     pub fn expand_step(&self, du: &[f64]) -> Result<Vec<f64>> {
         check_len("du", self.n_free(), du.len())?;
         let mut dq = vec![0.0; self.n_q()];
@@ -739,7 +338,7 @@ impl<E: Element> Robot<E> {
     /// As [`Robot::expand_step`], into `dq` (`n_q` entries; no allocation).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] if `du` or `dq` has the wrong size.
+    /// [`crate::Error::DimensionMismatch`] if `du` or `dq` has the wrong size.
     pub fn expand_step_into(&self, du: &[f64], dq: &mut [f64]) -> Result<()> {
         self.dofs.expand_into(&[], du, dq)
     }
@@ -747,7 +346,7 @@ impl<E: Element> Robot<E> {
     /// As [`Robot::restrict`], into `u` (`n_free` entries; no allocation).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] if `f` or `u` has the wrong size.
+    /// [`crate::Error::DimensionMismatch`] if `f` or `u` has the wrong size.
     pub fn restrict_into(&self, f: &[f64], u: &mut [f64]) -> Result<()> {
         self.dofs.restrict_into(&[], f, u)
     }
@@ -757,7 +356,7 @@ impl<E: Element> Robot<E> {
     /// [`DofMap::restrict_into`]).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] if `f` has the wrong size.
+    /// [`crate::Error::DimensionMismatch`] if `f` has the wrong size.
     pub fn restrict(&self, f: &[f64]) -> Result<Vec<f64>> {
         check_len("f", self.n_q(), f.len())?;
         let mut u = vec![0.0; self.n_free()];
@@ -766,37 +365,34 @@ impl<E: Element> Robot<E> {
     }
     /// Undeformed arc coordinate of every node (m).
     pub fn node_arc(&self) -> &[f64] {
-        &self.node_s
+        self.rod.node_arc()
     }
     /// Total undeformed length (m).
     pub fn length(&self) -> f64 {
-        self.node_s.last().copied().unwrap_or(0.0)
+        self.rod.length()
     }
     /// The elements, base to tip.
     pub fn elements(&self) -> &[E] {
-        &self.elements
+        self.rod.elements()
     }
     /// First and last node of every section.
     pub fn section_nodes(&self) -> &[(usize, usize)] {
-        &self.section_nodes
+        self.rod.section_nodes()
     }
     /// Number of chambers (pressures).
     pub fn n_pressures(&self) -> usize {
-        self.chambers.len()
+        self.rod.n_pressures()
     }
     /// `(min, max)` bounds of every pressure (Pa).
     pub fn pressure_bounds(&self) -> Vec<(f64, f64)> {
-        self.chambers.iter().map(|c| (c.min, c.max)).collect()
+        self.rod.pressure_bounds()
     }
 
     /// Index of the section that holds element `e`; an `e` beyond the last
     /// element gives the last section (never panics: a robot has at least
     /// one section).
     pub fn section_of_element(&self, e: usize) -> usize {
-        self.section_nodes
-            .iter()
-            .position(|&(_, end)| e < end)
-            .unwrap_or(self.section_nodes.len().saturating_sub(1))
+        self.rod.section_of_element(e)
     }
 
     /// The clamped base node's coordinates.
@@ -808,15 +404,8 @@ impl<E: Element> Robot<E> {
     /// (exact equilibrium without loads, actuation and rest curvature).
     pub fn reference_configuration(&self) -> Vec<f64> {
         let d = E::DIM;
-        let nd = E::NODE_DOFS;
-        let mut q = Vec::with_capacity(self.n_q());
-        let dir: Vec<f64> = self.base_node[d..2 * d].to_vec();
-        for &s in &self.node_s {
-            let p: Vec<f64> = (0..d).map(|i| self.base_node[i] + s * dir[i]).collect();
-            let node = E::straight_node(&p, &dir);
-            q.extend(node.iter().take(nd));
-        }
-        q
+        self.rod
+            .straight_configuration(&self.base_node[..d], &self.base_node[d..2 * d])
     }
 
     /// The configuration the section torques of `pressures` (plus rest
@@ -838,10 +427,10 @@ impl<E: Element> Robot<E> {
         };
         let (mut x, mut y, mut th) = (self.base_node[0], self.base_node[1], th0);
         let mut s_prev = 0.0;
-        for (i, &s) in self.node_s.iter().enumerate() {
+        for (i, &s) in self.rod.node_arc().iter().enumerate() {
             if i > 0 {
                 let sec = self.section_of_element(i - 1);
-                let spec = &self.spec.sections[sec];
+                let spec = &self.rod.sections()[sec];
                 let k = torques[sec].first().copied().unwrap_or(0.0) / spec.ei_nm2
                     + spec.rest_curvature_per_m;
                 let ds = s - s_prev;
@@ -865,35 +454,18 @@ impl<E: Element> Robot<E> {
     /// Element holding arc coordinate `s` and the local coordinate `ξ` in it.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] if `s` is not on the robot.
+    /// [`crate::Error::InvalidParameter`] if `s` is not on the robot.
     pub fn locate(&self, name: &str, s: f64) -> Result<(usize, f64)> {
-        let total = self.length();
-        let tol = 1e-12 * total;
-        if !s.is_finite() || s < -tol || s > total + tol {
-            return Err(outside(name, s, total));
-        }
-        let n = self.elements.len();
-        // first node with arc > s
-        let e = self
-            .node_s
-            .partition_point(|&x| x <= s)
-            .saturating_sub(1)
-            .min(n - 1);
-        let xi = ((s - self.node_s[e]) / self.elements[e].length()).clamp(0.0, 1.0);
-        Ok((e, xi))
+        self.rod.locate(name, s)
     }
 
     /// Position `r(s)` of the backbone at arc coordinate `s` (m).
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] if `s` is off the robot,
-    /// [`Error::DimensionMismatch`] if `q` does not have `n_q` entries.
+    /// [`crate::Error::InvalidParameter`] if `s` is off the robot,
+    /// [`crate::Error::DimensionMismatch`] if `q` does not have `n_q` entries.
     pub fn position_at(&self, q: &[f64], s: f64) -> Result<Vec<f64>> {
-        check_len("q", self.n_q(), q.len())?;
-        let p = self.arc_point("s_m", s)?;
-        let mut r = vec![0.0; E::DIM];
-        p.value_into(q, &mut r)?;
-        Ok(r)
+        self.rod.position_at(q, s)
     }
 
     /// The element, `ξ` and Hermite weights at arc coordinate `s` (m): the
@@ -914,179 +486,46 @@ impl<E: Element> Robot<E> {
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn arc_point(&self, name: &str, s: f64) -> Result<ArcPoint> {
-        let (e, xi) = self.locate(name, s)?;
-        Ok(ArcPoint::new(e, xi, self.elements[e].length()))
+        self.rod.arc_point(name, s)
     }
 
     /// The matrix `∫ Sᵀ S dX` over the whole robot (`n_q × n_q`, banded): the
     /// map `J_QF` from load parameters `F` to generalized forces (23) and the
     /// penalty matrix `B` of (26).
     pub fn load_gram(&self) -> &BandedMatrix {
-        &self.gram
+        self.rod.load_gram()
     }
 
     /// Generalized self-weight over all coordinates (N).
     pub fn gravity_force(&self) -> &[f64] {
-        &self.gravity_force
+        self.rod.gravity_force()
     }
 
     /// Checks that `loads` fit this robot.
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] for wrong sizes, [`Error::InvalidParameter`]
+    /// [`crate::Error::DimensionMismatch`] for wrong sizes, [`crate::Error::InvalidParameter`]
     /// for non-finite values, points off the robot, moments at the clamped
-    /// base, and pressures outside their bounds; [`Error::IndexOutOfRange`]
+    /// base, and pressures outside their bounds; [`crate::Error::IndexOutOfRange`]
     /// for moments beyond the tip node.
     pub fn validate_loads(&self, loads: &Loads) -> Result<()> {
-        let d = E::DIM;
-        self.check_load_structure(loads)?;
-        check_all_finite("pressures_pa", &loads.pressures_pa)?;
-        for (i, (p, c)) in loads.pressures_pa.iter().zip(&self.chambers).enumerate() {
-            if *p < c.min || *p > c.max {
-                return Err(Error::invalid(
-                    format!("pressures_pa[{i}]"),
-                    p,
-                    format!("must lie in [{}, {}] Pa", c.min, c.max),
-                ));
-            }
-        }
-        if !loads.distributed_f.is_empty() {
-            check_len("distributed_f", self.n_q(), loads.distributed_f.len())?;
-            check_all_finite("distributed_f", &loads.distributed_f)?;
-        }
-        for (i, l) in loads.line_loads.iter().enumerate() {
-            l.validate(&format!("line_loads[{i}]"), d)?;
-        }
-        for (i, p) in loads.point_forces.iter().enumerate() {
-            check_len(&format!("point_forces[{i}].force_n"), d, p.force_n.len())?;
-            check_all_finite(&format!("point_forces[{i}].force_n"), &p.force_n)?;
-            self.locate(&format!("point_forces[{i}].s_m"), p.s_m)?;
-        }
-        for (i, m) in loads.node_moments.iter().enumerate() {
-            check_all_finite(&format!("node_moments[{i}].moment_nm"), &m.moment_nm)?;
-            if m.node == 0 {
-                return Err(Error::invalid(
-                    format!("node_moments[{i}].node"),
-                    m.node,
-                    "the clamped base takes no moment: must be a free node, >= 1",
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    /// The checks of [`Robot::validate_loads`] that indexing depends on (the
-    /// pressure count, the nodes and sizes of the moments), without the
-    /// value checks: the solver evaluates scaled loads whose pressures may
-    /// lie outside their bounds.
-    fn check_load_structure(&self, loads: &Loads) -> Result<()> {
-        check_len("pressures_pa", self.n_pressures(), loads.pressures_pa.len())?;
-        // (names are formatted only for an error: this runs on every
-        // residual and tangent)
-        for (i, m) in loads.node_moments.iter().enumerate() {
-            if m.moment_nm.len() != E::MOMENT_DIM {
-                check_len(
-                    &format!("node_moments[{i}].moment_nm"),
-                    E::MOMENT_DIM,
-                    m.moment_nm.len(),
-                )?;
-            }
-            if m.node >= self.n_nodes() {
-                check_index(&format!("node_moments[{i}].node"), m.node, self.n_nodes())?;
-            }
-        }
-        Ok(())
+        self.rod.validate_loads_with(loads, true)
     }
 
     /// The dead (configuration-independent) generalized forces over all
     /// coordinates: self-weight, line loads, point forces and `J_QF F` (N).
     ///
     /// # Errors
-    /// As [`Robot::validate_loads`]; [`Error::NonFinite`] if the forces
+    /// As [`Robot::validate_loads`]; [`crate::Error::NonFinite`] if the forces
     /// overflow.
     pub fn dead_force(&self, loads: &Loads) -> Result<Vec<f64>> {
         self.validate_loads(loads)?;
-        let nd = E::NODE_DOFS;
-        let mut f = self.gravity_force.clone();
-        let total = self.length();
-        for l in &loads.line_loads {
-            for (e, el) in self.elements.iter().enumerate() {
-                let le = el.length();
-                for (xi, wt) in self.line_rule.iter() {
-                    let w = l.at(self.node_s[e] + xi * le, total);
-                    add_shape_force(el, xi, &w, wt * le, &mut f[e * nd..(e + 2) * nd]);
-                }
-            }
-        }
-        for p in &loads.point_forces {
-            let (e, xi) = self.locate("s_m", p.s_m)?;
-            add_shape_force(
-                &self.elements[e],
-                xi,
-                &p.force_n,
-                1.0,
-                &mut f[e * nd..(e + 2) * nd],
-            );
-        }
-        if !loads.distributed_f.is_empty() {
-            let jf = self.apply_load_gram(&loads.distributed_f)?;
-            f.iter_mut().zip(jf).for_each(|(a, b)| *a += b);
-        }
-        // finite inputs can still overflow (huge loads, a Gaussian narrower
-        // than the floating-point range resolves)
-        if f.iter().any(|v| !v.is_finite()) {
-            return Err(Error::NonFinite {
-                context: "dead forces (loads too large or too narrow)".into(),
-            });
-        }
-        Ok(f)
+        self.rod.dead_force(loads)
     }
 
     /// The section torques `M_s = Σ_c G_c P_c` (N·m), one `MOMENT_DIM` vector per section.
     pub fn section_torques(&self, pressures: &[f64]) -> Vec<Vec<f64>> {
-        let mut m = vec![vec![0.0; E::MOMENT_DIM]; self.spec.sections.len()];
-        for (c, p) in self.chambers.iter().zip(pressures) {
-            for (mi, g) in m[c.section].iter_mut().zip(&c.gain) {
-                *mi += g * p;
-            }
-        }
-        m
-    }
-
-    /// Calls `f(node, moment)` for the node moments of the actuation (each
-    /// section's torque at its last node, its opposite at its first, in
-    /// section order) and then the known concentrated moments, without
-    /// allocating. `loads` must have passed `check_load_structure`.
-    fn for_each_node_moment(
-        &self,
-        loads: &Loads,
-        mut f: impl FnMut(usize, &[f64]) -> Result<()>,
-    ) -> Result<()> {
-        const MAX_MOMENT_DIM: usize = 3;
-        let md = E::MOMENT_DIM.min(MAX_MOMENT_DIM);
-        if !loads.pressures_pa.is_empty() {
-            for (s, &(a, b)) in self.section_nodes.iter().enumerate() {
-                // M_s = Σ_c G_c P_c over the section's chambers, in order
-                let mut m = [0.0; MAX_MOMENT_DIM];
-                for (c, p) in self.chambers.iter().zip(&loads.pressures_pa) {
-                    if c.section == s {
-                        for (mi, g) in m.iter_mut().zip(&c.gain) {
-                            *mi += g * p;
-                        }
-                    }
-                }
-                if m[..md].iter().all(|v| *v == 0.0) {
-                    continue;
-                }
-                f(b, &m[..md])?;
-                let neg = m.map(|v| -v);
-                f(a, &neg[..md])?;
-            }
-        }
-        for nm in &loads.node_moments {
-            f(nm.node, &nm.moment_nm)?;
-        }
-        Ok(())
+        self.rod.section_torques(pressures)
     }
 
     /// Generalized force `Q(q)` over the free coordinates (17): the dead
@@ -1094,7 +533,7 @@ impl<E: Element> Robot<E> {
     /// plus the actuation and the concentrated moments `∂W/∂q`.
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] for wrong sizes.
+    /// [`crate::Error::DimensionMismatch`] for wrong sizes.
     pub fn residual(&self, q: &[f64], dead: &[f64], loads: &Loads) -> Result<Vec<f64>> {
         let mut out = vec![0.0; self.n_free()];
         self.residual_into(q, dead, loads, &mut out)?;
@@ -1104,7 +543,7 @@ impl<E: Element> Robot<E> {
     /// As [`Robot::residual`], into `out` (`n_free` entries).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] for wrong sizes.
+    /// [`crate::Error::DimensionMismatch`] for wrong sizes.
     pub fn residual_into(
         &self,
         q: &[f64],
@@ -1115,7 +554,7 @@ impl<E: Element> Robot<E> {
         check_len("q", self.n_q(), q.len())?;
         check_len("dead force", self.n_q(), dead.len())?;
         check_len("residual", self.n_free(), out.len())?;
-        self.check_load_structure(loads)?;
+        self.rod.check_load_structure(loads)?;
         self.assemble(q, Some((dead, out)), None, loads)
     }
 
@@ -1123,10 +562,10 @@ impl<E: Element> Robot<E> {
     /// `kl = ku = 2 NODE_DOFS − 1`, written into `k` (resized if needed).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] for wrong sizes.
+    /// [`crate::Error::DimensionMismatch`] for wrong sizes.
     pub fn tangent_into(&self, q: &[f64], loads: &Loads, k: &mut BandedMatrix) -> Result<()> {
         check_len("q", self.n_q(), q.len())?;
-        self.check_load_structure(loads)?;
+        self.rod.check_load_structure(loads)?;
         self.assemble(q, None, Some(k), loads)
     }
 
@@ -1134,7 +573,7 @@ impl<E: Element> Robot<E> {
     /// in one pass over the elements (a Newton step needs both).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] for wrong sizes.
+    /// [`crate::Error::DimensionMismatch`] for wrong sizes.
     pub fn residual_and_tangent_into(
         &self,
         q: &[f64],
@@ -1146,7 +585,7 @@ impl<E: Element> Robot<E> {
         check_len("q", self.n_q(), q.len())?;
         check_len("dead force", self.n_q(), dead.len())?;
         check_len("residual", self.n_free(), out.len())?;
-        self.check_load_structure(loads)?;
+        self.rod.check_load_structure(loads)?;
         self.assemble(q, Some((dead, out)), Some(k), loads)
     }
 
@@ -1176,7 +615,7 @@ impl<E: Element> Robot<E> {
         }
         let mut g = [0.0; MAX_EDOF];
         let mut h = vec![0.0; if k.is_some() { edof * edof } else { 0 }];
-        for (e, el) in self.elements.iter().enumerate() {
+        for (e, el) in self.rod.elements().iter().enumerate() {
             let qe = &q[e * nd..(e + 2) * nd];
             let g = &mut g[..edof];
             let h = &mut h[..];
@@ -1215,7 +654,7 @@ impl<E: Element> Robot<E> {
         }
         let mut mg = [0.0; MAX_EDOF];
         let mut mh = Vec::new();
-        self.for_each_node_moment(loads, |node, m| {
+        self.rod.for_each_node_moment(loads, |node, m| {
             let mg = &mut mg[..nd];
             mh.resize(nd * nd, 0.0);
             let mh = &mut mh[..];
@@ -1261,7 +700,7 @@ impl<E: Element> Robot<E> {
     /// `n_free × n_pressures`).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] if `q` has the wrong size.
+    /// [`crate::Error::DimensionMismatch`] if `q` has the wrong size.
     pub fn pressure_jacobian(&self, q: &[f64]) -> Result<Vec<f64>> {
         let nd = E::NODE_DOFS;
         check_len("q", self.n_q(), q.len())?;
@@ -1269,9 +708,9 @@ impl<E: Element> Robot<E> {
         let mut jac = vec![0.0; self.n_free() * np];
         let mut scratch = [0.0; MAX_EDOF * MAX_EDOF];
         let mut col = vec![0.0; self.n_free()];
-        for (c, ch) in self.chambers.iter().enumerate() {
+        for (c, ch) in self.rod.chamber_refs().iter().enumerate() {
             col.iter_mut().for_each(|v| *v = 0.0);
-            let (a, b) = self.section_nodes[ch.section];
+            let (a, b) = self.rod.section_nodes()[ch.section];
             for (node, sign) in [(b, 1.0), (a, -1.0)] {
                 let m: Vec<f64> = ch.gain.iter().map(|g| sign * g).collect();
                 let mut g = [0.0; MAX_EDOF];
@@ -1294,16 +733,9 @@ impl<E: Element> Robot<E> {
     /// Elastic energy `U_E(q)` (J).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] if `q` has the wrong size.
+    /// [`crate::Error::DimensionMismatch`] if `q` has the wrong size.
     pub fn elastic_energy(&self, q: &[f64]) -> Result<f64> {
-        let nd = E::NODE_DOFS;
-        check_len("q", self.n_q(), q.len())?;
-        Ok(self
-            .elements
-            .iter()
-            .enumerate()
-            .map(|(e, el)| el.energy(&q[e * nd..(e + 2) * nd]))
-            .sum())
+        self.rod.elastic_energy(q)
     }
 
     /// Change of the total potential `Π = U_E − W` from `from` to `to` (J):
@@ -1312,7 +744,7 @@ impl<E: Element> Robot<E> {
     /// function of the static solver's line search.
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] for wrong sizes.
+    /// [`crate::Error::DimensionMismatch`] for wrong sizes.
     pub fn potential_change(
         &self,
         from: &[f64],
@@ -1324,16 +756,16 @@ impl<E: Element> Robot<E> {
         check_len("q", self.n_q(), from.len())?;
         check_len("q", self.n_q(), to.len())?;
         check_len("dead force", self.n_q(), dead.len())?;
-        self.check_load_structure(loads)?;
+        self.rod.check_load_structure(loads)?;
         let mut d = 0.0;
-        for (e, el) in self.elements.iter().enumerate() {
+        for (e, el) in self.rod.elements().iter().enumerate() {
             let r = e * nd..(e + 2) * nd;
             d += el.energy(&to[r.clone()]) - el.energy(&from[r]);
         }
         for i in nd..self.n_q() {
             d -= dead[i] * (to[i] - from[i]);
         }
-        self.for_each_node_moment(loads, |node, m| {
+        self.rod.for_each_node_moment(loads, |node, m| {
             let r = node * nd..(node + 1) * nd;
             d -= E::moment_work_between(&self.base_node, &from[r.clone()], &to[r], m);
             Ok(())
@@ -1345,15 +777,9 @@ impl<E: Element> Robot<E> {
     /// per element), for [`Robot::potential_change_from`].
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] if `q` or `out` has the wrong size.
+    /// [`crate::Error::DimensionMismatch`] if `q` or `out` has the wrong size.
     pub fn element_energies_into(&self, q: &[f64], out: &mut [f64]) -> Result<()> {
-        let nd = E::NODE_DOFS;
-        check_len("q", self.n_q(), q.len())?;
-        check_len("energies", self.elements.len(), out.len())?;
-        for ((e, el), u) in self.elements.iter().enumerate().zip(out.iter_mut()) {
-            *u = el.energy(&q[e * nd..(e + 2) * nd]);
-        }
-        Ok(())
+        self.rod.element_energies_into(q, out)
     }
 
     /// [`Robot::potential_change`] with the element energies at `from`
@@ -1361,7 +787,7 @@ impl<E: Element> Robot<E> {
     /// many trials from one point. The same arithmetic, term by term.
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] for wrong sizes.
+    /// [`crate::Error::DimensionMismatch`] for wrong sizes.
     pub fn potential_change_from(
         &self,
         from: &[f64],
@@ -1373,17 +799,17 @@ impl<E: Element> Robot<E> {
         let nd = E::NODE_DOFS;
         check_len("q", self.n_q(), from.len())?;
         check_len("q", self.n_q(), to.len())?;
-        check_len("energies", self.elements.len(), from_energies.len())?;
+        check_len("energies", self.rod.n_elements(), from_energies.len())?;
         check_len("dead force", self.n_q(), dead.len())?;
-        self.check_load_structure(loads)?;
+        self.rod.check_load_structure(loads)?;
         let mut d = 0.0;
-        for ((e, el), u0) in self.elements.iter().enumerate().zip(from_energies) {
+        for ((e, el), u0) in self.rod.elements().iter().enumerate().zip(from_energies) {
             d += el.energy(&to[e * nd..(e + 2) * nd]) - u0;
         }
         for i in nd..self.n_q() {
             d -= dead[i] * (to[i] - from[i]);
         }
-        self.for_each_node_moment(loads, |node, m| {
+        self.rod.for_each_node_moment(loads, |node, m| {
             let r = node * nd..(node + 1) * nd;
             d -= E::moment_work_between(&self.base_node, &from[r.clone()], &to[r], m);
             Ok(())
@@ -1396,16 +822,16 @@ impl<E: Element> Robot<E> {
     /// moments) besides clearing `out`).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] for wrong sizes.
+    /// [`crate::Error::DimensionMismatch`] for wrong sizes.
     pub fn moment_force_into(&self, q: &[f64], loads: &Loads, out: &mut [f64]) -> Result<()> {
         let nd = E::NODE_DOFS;
         check_len("q", self.n_q(), q.len())?;
         check_len("out", self.n_free(), out.len())?;
-        self.check_load_structure(loads)?;
+        self.rod.check_load_structure(loads)?;
         out.iter_mut().for_each(|v| *v = 0.0);
         let mut mg = [0.0; MAX_EDOF];
         let mut mh = vec![0.0; nd * nd];
-        self.for_each_node_moment(loads, |node, m| {
+        self.rod.for_each_node_moment(loads, |node, m| {
             let mg = &mut mg[..nd];
             mg.fill(0.0);
             E::add_moment_work(
@@ -1422,10 +848,7 @@ impl<E: Element> Robot<E> {
     /// Node positions `r_i` (m), one `DIM` vector per node of `q` (a
     /// trailing partial node is ignored, so this never panics).
     pub fn node_positions(&self, q: &[f64]) -> Vec<Vec<f64>> {
-        let nd = E::NODE_DOFS;
-        q.chunks_exact(nd)
-            .map(|c| c.iter().take(E::DIM).copied().collect())
-            .collect()
+        self.rod.node_positions(q)
     }
 }
 
@@ -1456,17 +879,6 @@ fn range_dofs(start: usize, len: usize) -> [usize; MAX_EDOF] {
         *x = start + k;
     }
     d
-}
-
-/// Adds `scale · S(ξ)ᵀ f` into the element vector `out` (cable layout).
-fn add_shape_force<E: Element>(el: &E, xi: f64, f: &[f64], scale: f64, out: &mut [f64]) {
-    let d = E::DIM;
-    let s = el.shape(xi);
-    for k in 0..4 {
-        for i in 0..d {
-            out[k * d + i] += scale * s[k] * f[i];
-        }
-    }
 }
 
 #[cfg(test)]

@@ -10,7 +10,12 @@
 
 pub mod dofmap;
 pub mod rigid;
+pub mod rod;
+pub mod section;
+mod spec;
 mod triplets;
 
 pub use dofmap::{BlockRule, DofMap};
+pub use rod::Rod;
+pub use spec::Clamp;
 pub use triplets::Triplets;
