@@ -551,6 +551,36 @@ impl DofMap {
         Ok(())
     }
 
+    /// Adds `value · T_iᵀ T_j` into `sink` (`T_i` row `i` of `T(u)`): one
+    /// entry of a stiffness over all coordinates, mapped to the free ones
+    /// (how a force field's stiffness reaches the tangent).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for a nonlinear map and a `u` of the
+    /// wrong size, [`Error::IndexOutOfRange`] for a coordinate `>= n_q`.
+    pub fn add_stiffness_entry<S: StiffnessSink + ?Sized>(
+        &self,
+        u: &[f64],
+        i: usize,
+        j: usize,
+        value: f64,
+        sink: &mut S,
+    ) -> Result<()> {
+        self.check_u(u)?;
+        check_index("i", i, self.n_q)?;
+        check_index("j", j, self.n_q)?;
+        let mut ri = [(0usize, 0.0f64); MAX_TERMS];
+        let mut rj = [(0usize, 0.0f64); MAX_TERMS];
+        let ni = self.row_at(i, u, &mut ri);
+        let nj = self.row_at(j, u, &mut rj);
+        for &(a, ca) in &ri[..ni] {
+            for &(b, cb) in &rj[..nj] {
+                sink.add(a, b, ca * cb * value);
+            }
+        }
+        Ok(())
+    }
+
     /// Adds `Σ_i g_i ∂²φ_i/∂u²` into `sink` for a vector `g` over all
     /// coordinates: with `g = ∂Π/∂q` the gradient of the total potential,
     /// the term of the tangent `K_u = Tᵀ K T + Σ_i g_i ∂²φ_i/∂u²` that a

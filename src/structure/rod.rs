@@ -106,31 +106,16 @@ impl<E: Element> Rod<E> {
         Ok(total)
     }
 
-    /// Validates the sections and builds the rod; `make` builds one element
-    /// of a section from `(section, element length, axial points, bending
-    /// points)`. Field names start with `path` (`robot` gives
-    /// `robot.sections[1].ei_nm2`); gravity is `gravity_m_per_s2` (m/s²).
-    ///
-    /// # Errors
-    /// [`Error::InvalidParameter`] naming the field at fault for no
-    /// sections, zero elements, non-positive lengths or stiffnesses,
-    /// negative mass, non-finite numbers, inverted pressure bounds, Gauss
-    /// rules of no points, or an element type whose constants do not fit;
-    /// [`Error::TooLarge`] for more than [`MAX_ELEMENTS`] elements or Gauss
-    /// rules above [`crate::quadrature::MAX_POINTS`] points (both refused
-    /// before anything proportional is allocated);
-    /// [`Error::DimensionMismatch`] for vectors of the wrong size. Errors of
-    /// `make` come back with the section's path prefixed to the field name.
-    pub fn new(
+    /// All checks of [`Rod::new`], without building anything: returns the
+    /// number of elements.
+    pub(crate) fn check_sections(
         sections: &[Section],
         gravity_m_per_s2: &[f64],
         axial_gauss_points: usize,
         bending_gauss_points: usize,
         path: &str,
-        make: impl Fn(&Section, f64, usize, usize) -> Result<E>,
-    ) -> Result<Self> {
+    ) -> Result<usize> {
         let d = E::DIM;
-        let nd = E::NODE_DOFS;
         let total = Self::check_layout(sections, path)?;
         check_len("gravity_m_per_s2", d, gravity_m_per_s2.len())?;
         check_all_finite("gravity_m_per_s2", gravity_m_per_s2)?;
@@ -143,7 +128,6 @@ impl<E: Element> Rod<E> {
             }
             check_at_most(&name, n, crate::quadrature::MAX_POINTS)?;
         }
-        let mut chambers = Vec::new();
         for (i, s) in sections.iter().enumerate() {
             let p = |f: &str| format!("{path}.sections[{i}].{f}");
             check_positive(&p("length_m"), s.length_m)?;
@@ -181,14 +165,54 @@ impl<E: Element> Rod<E> {
                         format!("must be >= pressure_min_pa = {}", ch.pressure_min_pa),
                     ));
                 }
-                chambers.push(ChamberRef {
+            }
+        }
+        Ok(total)
+    }
+
+    /// Validates the sections and builds the rod; `make` builds one element
+    /// of a section from `(section, element length, axial points, bending
+    /// points)`. Field names start with `path` (`robot` gives
+    /// `robot.sections[1].ei_nm2`); gravity is `gravity_m_per_s2` (m/s²).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the field at fault for no
+    /// sections, zero elements, non-positive lengths or stiffnesses,
+    /// negative mass, non-finite numbers, inverted pressure bounds, Gauss
+    /// rules of no points, or an element type whose constants do not fit;
+    /// [`Error::TooLarge`] for more than [`MAX_ELEMENTS`] elements or Gauss
+    /// rules above [`crate::quadrature::MAX_POINTS`] points (both refused
+    /// before anything proportional is allocated);
+    /// [`Error::DimensionMismatch`] for vectors of the wrong size. Errors of
+    /// `make` come back with the section's path prefixed to the field name.
+    pub fn new(
+        sections: &[Section],
+        gravity_m_per_s2: &[f64],
+        axial_gauss_points: usize,
+        bending_gauss_points: usize,
+        path: &str,
+        make: impl Fn(&Section, f64, usize, usize) -> Result<E>,
+    ) -> Result<Self> {
+        let nd = E::NODE_DOFS;
+        let total = Self::check_sections(
+            sections,
+            gravity_m_per_s2,
+            axial_gauss_points,
+            bending_gauss_points,
+            path,
+        )?;
+        let chambers: Vec<ChamberRef> = sections
+            .iter()
+            .enumerate()
+            .flat_map(|(i, s)| {
+                s.chambers.iter().map(move |ch| ChamberRef {
                     section: i,
                     gain: ch.gain_nm_per_pa.clone(),
                     min: ch.pressure_min_pa,
                     max: ch.pressure_max_pa,
-                });
-            }
-        }
+                })
+            })
+            .collect();
         // elements and nodes
         let mut elements = Vec::with_capacity(total);
         let mut node_s = Vec::with_capacity(total + 1);

@@ -50,6 +50,12 @@ impl Triplets {
         &self.entries
     }
 
+    /// The largest `|value|` of the entries as added (before repeated
+    /// entries are summed): the scale of the matrix.
+    pub fn max_abs(&self) -> f64 {
+        self.entries.iter().fold(0.0f64, |m, e| m.max(e.2.abs()))
+    }
+
     /// The dense matrix (repeated entries summed).
     pub fn to_dense(&self) -> nalgebra::DMatrix<f64> {
         let mut m = nalgebra::DMatrix::zeros(self.n, self.n);
