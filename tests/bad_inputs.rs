@@ -22,6 +22,9 @@ use softrod::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use softrod::quadrature::GaussRule;
 use softrod::scene::{Marker, RefinementTarget, Scene, SceneLoad};
 use softrod::statics::{FailureCause, StaticSettings, StaticSolver};
+use softrod::structure::{
+    BodyLoad, EndSupport, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec,
+};
 use softrod::Error;
 
 /// The error variant a case must produce.
@@ -122,6 +125,45 @@ fn default_loads() -> Loads {
 
 fn settings(f: impl FnOnce(&mut StaticSettings)) -> Result<(), Error> {
     scene(|s| f(&mut s.solver.statics))
+}
+
+/// Two legs clamped at x = ±0.05 m whose tips are fixed to a 50 g
+/// platform, after `f` changed the spec; built as a planar structure.
+fn structure(f: impl FnOnce(&mut StructureSpec)) -> Result<(), Error> {
+    let mut spec = two_legs();
+    f(&mut spec);
+    spec.build_planar().map(|_| ())
+}
+
+fn two_legs() -> StructureSpec {
+    let leg = |x: f64| {
+        RodSpec::clamped(
+            vec![Section::uniform(0.2, 300.0, 0.02, 4)],
+            vec![x, 0.0],
+            vec![0.0, 1.0],
+        )
+    };
+    let joint = |rod| JointSpec::RodToBody {
+        rod,
+        end: RodEnd::End,
+        body: 0,
+        point_m: None,
+        direction: None,
+    };
+    StructureSpec::new(
+        vec![leg(-0.05), leg(0.05)],
+        vec![RigidBodySpec {
+            mass_kg: 0.05,
+            position_m: vec![0.0, 0.2],
+            orientation_rad: vec![0.0],
+        }],
+        vec![joint(0), joint(1)],
+    )
+}
+
+/// The dead forces of the two-leg platform under `loads`.
+fn structure_loads(loads: StructureLoads) -> Result<(), Error> {
+    two_legs().build_planar()?.dead_force(&loads).map(|_| ())
 }
 
 type Case = (
@@ -1392,6 +1434,210 @@ fn cases() -> Vec<Case> {
             },
             Invalid,
             "estimator.bounds[0].direction",
+        ),
+        // --- structures: rods, rigid bodies, joints ---
+        case(
+            "structure without rods",
+            || structure(|s| s.rods.clear()),
+            Invalid,
+            "structure.rods",
+        ),
+        case(
+            "joint naming a missing body",
+            || {
+                structure(|s| {
+                    if let JointSpec::RodToBody { body, .. } = &mut s.joints[1] {
+                        *body = 3;
+                    }
+                })
+            },
+            Index,
+            "structure.joints[1].body",
+        ),
+        case(
+            "joint naming a missing rod",
+            || {
+                structure(|s| {
+                    if let JointSpec::RodToBody { rod, .. } = &mut s.joints[0] {
+                        *rod = 7;
+                    }
+                })
+            },
+            Index,
+            "structure.joints[0].rod",
+        ),
+        case(
+            "rod end joined twice",
+            || structure(|s| s.joints.push(s.joints[1].clone())),
+            Invalid,
+            "structure.joints[2].end",
+        ),
+        case(
+            "clamped rod end also joined",
+            || {
+                structure(|s| {
+                    s.joints.push(JointSpec::RodToBody {
+                        rod: 0,
+                        end: RodEnd::Start,
+                        body: 0,
+                        point_m: None,
+                        direction: None,
+                    })
+                })
+            },
+            Invalid,
+            "structure.joints[2].end",
+        ),
+        case(
+            "rigid body fixed to the ground twice",
+            || {
+                structure(|s| {
+                    s.joints.push(JointSpec::BodyToGround { body: 0 });
+                    s.joints.push(JointSpec::BodyToGround { body: 0 });
+                })
+            },
+            Invalid,
+            "structure.joints[3].body",
+        ),
+        case(
+            "rigid body with no mass and no joint",
+            || {
+                structure(|s| {
+                    s.rigid_bodies.push(RigidBodySpec {
+                        mass_kg: 0.0,
+                        position_m: vec![1.0, 1.0],
+                        orientation_rad: vec![0.0],
+                    })
+                })
+            },
+            Invalid,
+            "structure.rigid_bodies[1].mass_kg",
+        ),
+        case(
+            "floating structure: no rod end clamped",
+            || {
+                structure(|s| {
+                    for r in &mut s.rods {
+                        r.start = EndSupport::Free;
+                    }
+                })
+            },
+            Invalid,
+            "structure.rods[0]",
+        ),
+        case(
+            "floating rigid body with a mass and no joint",
+            || {
+                structure(|s| {
+                    s.rigid_bodies.push(RigidBodySpec {
+                        mass_kg: 0.1,
+                        position_m: vec![1.0, 1.0],
+                        orientation_rad: vec![0.0],
+                    })
+                })
+            },
+            Invalid,
+            "structure.rigid_bodies[1]",
+        ),
+        case(
+            "structure with more elements than the limit, over all rods",
+            || structure(|s| s.rods[1].sections[0].elements = MAX_ELEMENTS),
+            TooLarge,
+            "structure.rods[1].sections[0].elements",
+        ),
+        case(
+            "joint point off the rod's end",
+            || {
+                structure(|s| {
+                    if let JointSpec::RodToBody { point_m, .. } = &mut s.joints[0] {
+                        *point_m = Some(vec![-0.05, 0.01]);
+                    }
+                })
+            },
+            Invalid,
+            "structure.joints[0].point_m",
+        ),
+        case(
+            "zero joint direction",
+            || {
+                structure(|s| {
+                    if let JointSpec::RodToBody { direction, .. } = &mut s.joints[1] {
+                        *direction = Some(vec![0.0, 0.0]);
+                    }
+                })
+            },
+            Invalid,
+            "structure.joints[1].direction",
+        ),
+        case(
+            "NaN rigid body mass",
+            move || structure(|s| s.rigid_bodies[0].mass_kg = nan),
+            Invalid,
+            "structure.rigid_bodies[0].mass_kg",
+        ),
+        case(
+            "rigid body orientation of the wrong size",
+            || structure(|s| s.rigid_bodies[0].orientation_rad = vec![0.0, 0.0, 0.0]),
+            Dim,
+            "structure.rigid_bodies[0].orientation_rad",
+        ),
+        case(
+            "zero rod direction",
+            || structure(|s| s.rods[0].direction = vec![0.0, 0.0]),
+            Invalid,
+            "structure.rods[0].direction",
+        ),
+        case(
+            "negative EI in a structure's rod",
+            || structure(|s| s.rods[1].sections[0].ei_nm2 = -1.0),
+            Invalid,
+            "structure.rods[1].sections[0].ei_nm2",
+        ),
+        case(
+            "load on a missing rigid body",
+            || {
+                structure_loads(StructureLoads {
+                    bodies: vec![BodyLoad {
+                        body: 2,
+                        force_n: vec![0.0, 1.0],
+                        moment_nm: vec![],
+                    }],
+                    ..StructureLoads::default()
+                })
+            },
+            Index,
+            "loads.bodies[0].body",
+        ),
+        case(
+            "loads for one rod of two",
+            || {
+                structure_loads(StructureLoads {
+                    rods: vec![Loads::default()],
+                    ..StructureLoads::default()
+                })
+            },
+            Dim,
+            "loads.rods",
+        ),
+        case(
+            "moment at a clamped rod start",
+            || {
+                structure_loads(StructureLoads {
+                    rods: vec![
+                        Loads {
+                            node_moments: vec![NodeMoment {
+                                node: 0,
+                                moment_nm: vec![0.1],
+                            }],
+                            ..Loads::default()
+                        },
+                        Loads::default(),
+                    ],
+                    ..StructureLoads::default()
+                })
+            },
+            Invalid,
+            "loads.rods[0].node_moments[0].node",
         ),
         case(
             "unknown estimator setting",
