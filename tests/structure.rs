@@ -463,3 +463,86 @@ fn joint_reactions_balance_the_platform_and_the_legs() {
         );
     }
 }
+
+/// A two-finger gripper: a palm (a rigid body fixed to the ground, turned
+/// by 0.2 rad) carries two fingers of two actuated sections each, joined at
+/// their starts, free at their tips. A joint to a fixed body is a clamp at
+/// the joint's pose, so each finger must settle exactly as a robot clamped
+/// at that pose does (the static solver of wave 1), under its weight and
+/// its chamber pressures.
+#[test]
+fn a_gripper_on_a_fixed_palm_holds_each_finger_like_a_clamp() {
+    let th = 0.2f64;
+    let finger_sections = || {
+        let mut s = Section::uniform(0.06, EA, 0.01, 5);
+        s.mass_per_length_kg_per_m = 0.1;
+        s.chambers = vec![Chamber {
+            gain_nm_per_pa: vec![2e-6],
+            pressure_min_pa: -1e5,
+            pressure_max_pa: 1e5,
+        }];
+        vec![s.clone(), s]
+    };
+    // finger roots at (±0.02, 0) on the palm, pointing along the palm's y
+    let dir = [-th.sin(), th.cos()];
+    let root = |x: f64| [x * th.cos(), x * th.sin()];
+    let finger = |x: f64| RodSpec {
+        sections: finger_sections(),
+        start_m: root(x).to_vec(),
+        direction: dir.to_vec(),
+        start: softrod::structure::EndSupport::Free,
+        end: softrod::structure::EndSupport::Free,
+    };
+    let joint = |rod| JointSpec::RodToBody {
+        rod,
+        end: RodEnd::Start,
+        body: 0,
+        point_m: Some(vec![if rod == 0 { -0.02 } else { 0.02 }, 0.0]),
+        direction: Some(vec![0.0, 1.0]),
+    };
+    let spec = StructureSpec::new(
+        vec![finger(-0.02), finger(0.02)],
+        vec![RigidBodySpec {
+            mass_kg: 0.0,
+            position_m: vec![0.0, 0.0],
+            orientation_rad: vec![th],
+        }],
+        vec![joint(0), joint(1), JointSpec::BodyToGround { body: 0 }],
+    );
+    let s = spec.build_planar().unwrap();
+    // the fixed palm has no free coordinates; each finger root only its stretch
+    assert!(s.body_free_coordinates(0).unwrap().is_empty());
+    assert_eq!(s.n_free(), 2 * (1 + 10 * 4));
+    let pressures = [vec![6e4, 3e4], vec![-6e4, -2e4]];
+    let loads = StructureLoads {
+        rods: pressures
+            .iter()
+            .map(|p| Loads {
+                pressures_pa: p.clone(),
+                ..Loads::default()
+            })
+            .collect(),
+        ..StructureLoads::default()
+    };
+    let u = solve(&s, &loads, 4);
+    let q = s.configuration(&u).unwrap();
+    for (rod, x) in [(0usize, -0.02), (1, 0.02)] {
+        let mut rs = softrod::assembly::RobotSpec::new(finger_sections());
+        rs.base.position_m = root(x).to_vec();
+        rs.base.angle_rad = th + std::f64::consts::FRAC_PI_2;
+        let robot = rs.build_planar().unwrap();
+        let l = &loads.rods[rod];
+        let eq = StaticSolver::default().solve(&robot, l, None).unwrap();
+        assert!(eq.report.converged);
+        let r = s.node_coordinates(rod, 0).unwrap().start;
+        let d =
+            eq.q.iter()
+                .zip(&q[r..r + robot.n_q()])
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        println!(
+            "gripper finger {rod}: tip {:?}, differs from the clamped robot by {d:.1e}",
+            &eq.q[robot.n_q() - 4..robot.n_q() - 2]
+        );
+        assert!(d < 1e-10, "finger {rod}: {d}");
+    }
+}
