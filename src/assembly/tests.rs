@@ -1,0 +1,220 @@
+//! Unit tests of the robot's assembly: tangent against finite differences,
+//! the pressure Jacobian, the load Gram matrix, fused and cached kernels.
+
+use super::*;
+use crate::element::PlanarCable;
+
+fn robot(n: usize) -> Robot<PlanarCable> {
+    let mut s1 = Section::uniform(0.12, 300.0, 0.025, n);
+    s1.mass_per_length_kg_per_m = 0.15;
+    s1.chambers = vec![Chamber {
+        gain_nm_per_pa: vec![3e-6],
+        pressure_min_pa: 0.0,
+        pressure_max_pa: 1e5,
+    }];
+    let mut s2 = s1.clone();
+    s2.ei_nm2 = 0.02;
+    RobotSpec::new(vec![s1, s2]).build_planar().unwrap()
+}
+
+fn perturbed(r: &Robot<PlanarCable>, seed: u64) -> Vec<f64> {
+    let mut q = r.reference_configuration();
+    let mut s = seed;
+    q[2] *= 1.003; // a stretched base
+    for v in q.iter_mut().skip(4) {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        *v += 0.02 * (((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5);
+    }
+    q
+}
+
+/// The assembled tangent equals the central-difference Jacobian of
+/// `−Q` along every free coordinate (step 1e-7), to 1e-6 of its largest entry.
+fn assert_tangent_is_the_fd_jacobian(
+    r: &Robot<PlanarCable>,
+    q: &[f64],
+    dead: &[f64],
+    loads: &Loads,
+) {
+    let mut k = BandedMatrix::zeros(1, 0, 0);
+    r.tangent_into(q, loads, &mut k).unwrap();
+    let scale = k.max_abs();
+    let h = 1e-7;
+    for j in 0..r.n_free() {
+        let mut du = vec![0.0; r.n_free()];
+        du[j] = h;
+        let dq = r.expand_step(&du).unwrap();
+        let qp: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
+        let qm: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a - b).collect();
+        let rp = r.residual(&qp, dead, loads).unwrap();
+        let rm = r.residual(&qm, dead, loads).unwrap();
+        for i in 0..r.n_free() {
+            let fd = -(rp[i] - rm[i]) / (2.0 * h);
+            assert!(
+                (fd - k.get(i, j)).abs() < 1e-6 * scale,
+                "({i},{j}) {fd} vs {}",
+                k.get(i, j)
+            );
+        }
+    }
+}
+
+#[test]
+fn full_clamp_has_no_free_base_coordinate_and_a_consistent_tangent() {
+    let mut spec = robot(2).spec().clone();
+    spec.base.clamp = Clamp::Full;
+    let r = spec.build_planar().unwrap();
+    assert_eq!(r.n_base_free(), 0);
+    assert_eq!(r.n_free(), r.n_q() - 4);
+    let loads = Loads {
+        pressures_pa: vec![3e4, 1e4],
+        ..Loads::default()
+    };
+    let dead = r.dead_force(&loads).unwrap();
+    assert_tangent_is_the_fd_jacobian(&r, &perturbed(&r, 9), &dead, &loads);
+}
+
+#[test]
+fn tangent_is_the_finite_difference_jacobian_of_the_residual() {
+    let r = robot(3);
+    let loads = Loads {
+        pressures_pa: vec![4e4, 2e4],
+        node_moments: vec![crate::loads::NodeMoment {
+            node: 4,
+            moment_nm: vec![0.01],
+        }],
+        ..Loads::default()
+    };
+    let dead = r.dead_force(&loads).unwrap();
+    assert_tangent_is_the_fd_jacobian(&r, &perturbed(&r, 3), &dead, &loads);
+}
+
+#[test]
+fn pressure_jacobian_matches_finite_differences() {
+    let r = robot(2);
+    let q = perturbed(&r, 5);
+    let jac = r.pressure_jacobian(&q).unwrap();
+    let base = Loads {
+        pressures_pa: vec![1e4, 1e4],
+        ..Loads::default()
+    };
+    let dead = r.dead_force(&base).unwrap();
+    for c in 0..2 {
+        let mut lp = base.clone();
+        let mut lm = base.clone();
+        lp.pressures_pa[c] += 100.0;
+        lm.pressures_pa[c] -= 100.0;
+        let rp = r.residual(&q, &dead, &lp).unwrap();
+        let rm = r.residual(&q, &dead, &lm).unwrap();
+        for i in 0..r.n_free() {
+            let fd = (rp[i] - rm[i]) / 200.0;
+            assert!((fd - jac[i * 2 + c]).abs() < 1e-9, "{i} {c}");
+        }
+    }
+}
+
+#[test]
+fn gram_integrates_products_of_fields() {
+    // F describing w = (1, 2) uniform: F_i = [1, 2, 0, 0]; q = straight line
+    // r = (s, 0); then q·J F = ∫ r·w ds = ∫ s ds = L²/2.
+    let r = robot(4);
+    let n = r.n_nodes();
+    let f: Vec<f64> = (0..n).flat_map(|_| [1.0, 2.0, 0.0, 0.0]).collect();
+    let q = r.reference_configuration();
+    let jf = r.load_gram().mul_vec(&f).unwrap();
+    let work: f64 = q.iter().zip(&jf).map(|(a, b)| a * b).sum();
+    let l = r.length();
+    assert!((work - l * l / 2.0).abs() < 1e-14);
+    // total force of a uniform load = w L in each component
+    let fx: f64 = (0..n).map(|i| jf[4 * i]).sum();
+    let fy: f64 = (0..n).map(|i| jf[4 * i + 1]).sum();
+    assert!((fx - l).abs() < 1e-14 && (fy - 2.0 * l).abs() < 1e-14);
+}
+
+#[test]
+fn self_weight_sums_to_the_weight() {
+    let r = robot(5);
+    let g = r.gravity_force();
+    let fy: f64 = (0..r.n_nodes()).map(|i| g[4 * i + 1]).sum();
+    assert!((fy - (-9.81 * 0.15 * 0.24)).abs() < 1e-14);
+}
+
+#[test]
+fn locate_finds_the_element() {
+    let r = robot(2);
+    assert_eq!(r.locate("s", 0.0).unwrap(), (0, 0.0));
+    let (e, xi) = r.locate("s", 0.24).unwrap();
+    assert_eq!(e, 3);
+    assert!((xi - 1.0).abs() < 1e-12);
+    let (e, xi) = r.locate("s", 0.09).unwrap();
+    assert_eq!(e, 1);
+    assert!((xi - 0.5).abs() < 1e-12);
+    assert!(r.locate("s", 0.3).is_err());
+}
+
+#[test]
+fn fused_and_cached_kernels_equal_the_plain_ones() {
+    let r = robot(3);
+    let loads = Loads {
+        pressures_pa: vec![4e4, 2e4],
+        node_moments: vec![crate::loads::NodeMoment {
+            node: 4,
+            moment_nm: vec![0.01],
+        }],
+        ..Loads::default()
+    };
+    let dead = r.dead_force(&loads).unwrap();
+    let q = perturbed(&r, 11);
+    // residual and tangent in one pass: bit for bit the separate ones
+    let (mut r1, mut r2) = (vec![0.0; r.n_free()], vec![0.0; r.n_free()]);
+    let mut k1 = BandedMatrix::zeros(1, 0, 0);
+    let mut k2 = BandedMatrix::zeros(1, 0, 0);
+    r.residual_into(&q, &dead, &loads, &mut r1).unwrap();
+    r.tangent_into(&q, &loads, &mut k1).unwrap();
+    r.residual_and_tangent_into(&q, &dead, &loads, &mut r2, &mut k2)
+        .unwrap();
+    assert_eq!(r1, r2);
+    assert_eq!(k1, k2);
+    assert!(k1.is_symmetric());
+    // the element-wise Gram product against the banded one
+    let f: Vec<f64> = (0..r.n_q()).map(|i| (i as f64 * 0.37).sin()).collect();
+    let a = r.apply_load_gram(&f).unwrap();
+    let b = r.load_gram().mul_vec(&f).unwrap();
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x - y).abs() <= 1e-15 * (1.0 + y.abs()));
+    }
+    // the potential change from cached energies: the same number
+    let to = perturbed(&r, 12);
+    let mut u = vec![0.0; r.n_elements()];
+    r.element_energies_into(&q, &mut u).unwrap();
+    assert_eq!(
+        r.potential_change(&q, &to, &dead, &loads).unwrap(),
+        r.potential_change_from(&q, &u, &to, &dead, &loads).unwrap()
+    );
+    // the moment force: residual with and without the moments
+    let mut m = vec![0.0; r.n_free()];
+    r.moment_force_into(&q, &loads, &mut m).unwrap();
+    let zero = vec![0.0; r.n_q()];
+    let none = Loads {
+        pressures_pa: vec![0.0, 0.0],
+        ..Loads::default()
+    };
+    let (mut with, mut without) = (vec![0.0; r.n_free()], vec![0.0; r.n_free()]);
+    r.residual_into(&q, &zero, &loads, &mut with).unwrap();
+    r.residual_into(&q, &zero, &none, &mut without).unwrap();
+    let scale = m.iter().fold(0.0f64, |x, v| x.max(v.abs()));
+    assert!(scale > 0.0);
+    for ((a, b), c) in m.iter().zip(&with).zip(&without) {
+        assert!((a - (b - c)).abs() <= 1e-9 * scale);
+    }
+    // and the allocation-free maps equal the allocating ones
+    let du: Vec<f64> = (0..r.n_free()).map(|i| i as f64).collect();
+    let mut dq = vec![0.0; r.n_q()];
+    r.expand_step_into(&du, &mut dq).unwrap();
+    assert_eq!(dq, r.expand_step(&du).unwrap());
+    let mut uu = vec![0.0; r.n_free()];
+    r.restrict_into(&f, &mut uu).unwrap();
+    assert_eq!(uu, r.restrict(&f).unwrap());
+}
