@@ -322,6 +322,25 @@ impl<E: Element> Structure<E> {
     /// # Errors
     /// [`Error::DimensionMismatch`] for wrong sizes, the structural errors
     /// of [`Structure::validate_loads`].
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::Section;
+    /// use softrod::structure::{BodyLoad, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec};
+    /// let spec = StructureSpec::new(
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
+    ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
+    /// );
+    /// let s = spec.build_planar().unwrap();
+    /// let loads = StructureLoads::default();
+    /// let dead = s.dead_force(&loads).unwrap();
+    /// let u = s.reference_free_coordinates();
+    /// // straight and unstressed: only the body's weight is unbalanced
+    /// let r = s.residual(u, &dead, &loads).unwrap();
+    /// let y = s.body_free_coordinates(0).unwrap().start + 1;
+    /// assert!((r[y] + 0.1 * 9.81).abs() < 1e-12);
+    /// ```
     pub fn residual(&self, u: &[f64], dead: &[f64], loads: &StructureLoads) -> Result<Vec<f64>> {
         self.check_sizes(u, dead, loads)?;
         let q = self.dofs.configuration(u)?;
@@ -362,6 +381,25 @@ impl<E: Element> Structure<E> {
     ///
     /// # Errors
     /// As [`Structure::residual`].
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::Section;
+    /// use softrod::structure::{BodyLoad, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec};
+    /// let spec = StructureSpec::new(
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
+    ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
+    /// );
+    /// let s = spec.build_planar().unwrap();
+    /// let loads = StructureLoads::default();
+    /// let dead = s.dead_force(&loads).unwrap();
+    /// let u = s.reference_free_coordinates();
+    /// let (r, k) = s.residual_and_tangent(u, &dead, &loads).unwrap();
+    /// let k = k.to_dense();
+    /// assert_eq!(k.nrows(), s.n_free());
+    /// assert!((k.clone() - k.transpose()).amax() < 1e-9 * k.amax());
+    /// ```
     pub fn residual_and_tangent(
         &self,
         u: &[f64],
@@ -381,6 +419,29 @@ impl<E: Element> Structure<E> {
     ///
     /// # Errors
     /// As [`Structure::residual`].
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::Section;
+    /// use softrod::structure::{BodyLoad, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec};
+    /// let spec = StructureSpec::new(
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
+    ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
+    /// );
+    /// let s = spec.build_planar().unwrap();
+    /// let loads = StructureLoads::default();
+    /// let dead = s.dead_force(&loads).unwrap();
+    /// let u = s.reference_free_coordinates();
+    /// // lowering the body by δ = 1 mm (its joined end with it) releases m g δ
+    /// // ≈ 1 mJ and squeezes the rod's last element, whose end slopes stay
+    /// // (strain −6 (δ/L_e) ξ (1 − ξ)): ½ EA L_e (6 δ/L_e)² / 30 = 3.6 mJ
+    /// let mut down = u.to_vec();
+    /// down[s.body_free_coordinates(0).unwrap().start + 1] -= 1e-3;
+    /// let d = s.potential_change(u, &down, &dead, &loads).unwrap();
+    /// let expected = 0.5 * 300.0 * 0.05 * (6.0 * 1e-3 / 0.05f64).powi(2) / 30.0 - 0.1 * 9.81 * 1e-3;
+    /// assert!((d - expected).abs() < 1e-12);
+    /// ```
     pub fn potential_change(
         &self,
         from: &[f64],
@@ -430,6 +491,25 @@ impl<E: Element> Structure<E> {
     ///
     /// # Errors
     /// As [`Structure::residual`].
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::Section;
+    /// use softrod::structure::{BodyLoad, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec};
+    /// let spec = StructureSpec::new(
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
+    ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
+    /// );
+    /// let s = spec.build_planar().unwrap();
+    /// let loads = StructureLoads::default();
+    /// let dead = s.dead_force(&loads).unwrap();
+    /// let u = s.reference_free_coordinates();
+    /// // the straight reference: only the weight acts, on the body's y
+    /// let f = s.generalized_force(u, &dead, &loads).unwrap();
+    /// let b = s.body_coordinates(0).unwrap();
+    /// assert!((f[b.start + 1] + 0.1 * 9.81).abs() < 1e-12 && f[0].abs() < 1e-12);
+    /// ```
     pub fn generalized_force(
         &self,
         u: &[f64],
@@ -448,6 +528,26 @@ impl<E: Element> Structure<E> {
     ///
     /// # Errors
     /// As [`Structure::residual`].
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::structure::solve::{solve_equilibrium, NewtonSettings};
+    /// use softrod::assembly::Section;
+    /// use softrod::structure::{BodyLoad, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec};
+    /// let spec = StructureSpec::new(
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
+    ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
+    /// );
+    /// let s = spec.build_planar().unwrap();
+    /// let loads = StructureLoads::default();
+    /// let dead = s.dead_force(&loads).unwrap();
+    /// let u = s.reference_free_coordinates();
+    /// let eq = solve_equilibrium(&s, &loads, None, &NewtonSettings::default()).unwrap();
+    /// let r = s.joint_reactions(&eq.u, &dead, &loads).unwrap();
+    /// // the rod holds the body up: its reaction carries the weight
+    /// assert!((r[0].force_n[1] - 0.1 * 9.81).abs() < 1e-9);
+    /// ```
     pub fn joint_reactions(
         &self,
         u: &[f64],

@@ -267,6 +267,17 @@ impl DofMap {
 
     /// If the coordinates `q_start .. q_start + len` are free coordinates
     /// that follow each other in `u`, the first of them.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::structure::{BlockRule, DofMap};
+    /// let map = DofMap::new(vec![
+    ///     BlockRule::Affine { offset: vec![0.0, 0.0, 1.0, 0.0], directions: vec![vec![0.0, 0.0, 1.0, 0.0]] },
+    ///     BlockRule::Free { len: 4 },
+    /// ]).unwrap();
+    /// assert_eq!(map.contiguous_free(4, 4), Some(1)); // node 1: u[1..5]
+    /// assert_eq!(map.contiguous_free(0, 8), None); // the clamped node is not free
+    /// ```
     pub fn contiguous_free(&self, q_start: usize, len: usize) -> Option<usize> {
         let first = self.block_at(q_start)?;
         let b = &self.blocks[first];
@@ -412,6 +423,19 @@ impl DofMap {
     /// # Errors
     /// [`Error::DimensionMismatch`] if `du` or `dq` (or, for a nonlinear
     /// map, `u`) has the wrong size.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::structure::{BlockRule, DofMap};
+    /// let map = DofMap::new(vec![
+    ///     BlockRule::Affine { offset: vec![0.0, 0.0, 1.0, 0.0], directions: vec![vec![0.0, 0.0, 1.0, 0.0]] },
+    ///     BlockRule::Free { len: 4 },
+    /// ]).unwrap();
+    /// // a stretch step moves only the base slope; a linear map reads no `u`
+    /// let mut dq = vec![0.0; 8];
+    /// map.expand_into(&[], &[0.5, 0.0, 0.0, 0.0, 0.0], &mut dq).unwrap();
+    /// assert_eq!(dq, vec![0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    /// ```
     pub fn expand_into(&self, u: &[f64], du: &[f64], dq: &mut [f64]) -> Result<()> {
         self.check_u(u)?;
         check_len("du", self.n_u, du.len())?;
@@ -449,6 +473,20 @@ impl DofMap {
     /// # Errors
     /// [`Error::DimensionMismatch`] if `f` or `out` (or, for a nonlinear
     /// map, `u`) has the wrong size.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::structure::{BlockRule, DofMap};
+    /// let map = DofMap::new(vec![
+    ///     BlockRule::Affine { offset: vec![0.0, 0.0, 1.0, 0.0], directions: vec![vec![0.0, 0.0, 1.0, 0.0]] },
+    ///     BlockRule::Free { len: 4 },
+    /// ]).unwrap();
+    /// // a force on the clamped position does no work; on its slope, along the stretch
+    /// let f = [7.0, 7.0, 2.0, 9.0, 1.0, 2.0, 3.0, 4.0];
+    /// let mut out = vec![0.0; 5];
+    /// map.restrict_into(&[], &f, &mut out).unwrap();
+    /// assert_eq!(out, vec![2.0, 1.0, 2.0, 3.0, 4.0]);
+    /// ```
     pub fn restrict_into(&self, u: &[f64], f: &[f64], out: &mut [f64]) -> Result<()> {
         self.check_u(u)?;
         check_len("f", self.n_q, f.len())?;
@@ -490,6 +528,18 @@ impl DofMap {
     /// # Errors
     /// [`Error::DimensionMismatch`] for sizes that do not fit,
     /// [`Error::IndexOutOfRange`] for a coordinate `>= n_q`.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::structure::{BlockRule, DofMap};
+    /// let map = DofMap::new(vec![
+    ///     BlockRule::Affine { offset: vec![0.0, 0.0, 1.0, 0.0], directions: vec![vec![0.0, 0.0, 1.0, 0.0]] },
+    ///     BlockRule::Free { len: 4 },
+    /// ]).unwrap();
+    /// let mut out = vec![0.0; 5];
+    /// map.add_force(&[], &[2, 4], &[3.0, 1.0], -1.0, &mut out).unwrap();
+    /// assert_eq!(out, vec![-3.0, -1.0, 0.0, 0.0, 0.0]);
+    /// ```
     pub fn add_force(
         &self,
         u: &[f64],
@@ -519,6 +569,20 @@ impl DofMap {
     /// # Errors
     /// [`Error::DimensionMismatch`] for sizes that do not fit,
     /// [`Error::IndexOutOfRange`] for a coordinate `>= n_q`.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::structure::{BlockRule, DofMap, Triplets};
+    /// let map = DofMap::new(vec![
+    ///     BlockRule::Affine { offset: vec![0.0, 0.0, 1.0, 0.0], directions: vec![vec![0.0, 0.0, 1.0, 0.0]] },
+    ///     BlockRule::Free { len: 4 },
+    /// ]).unwrap();
+    /// // a 2 × 2 matrix over the base slope x and node 1's x
+    /// let mut k = Triplets::new(map.n_u());
+    /// map.add_stiffness(&[], &[2, 4], &[2.0, -1.0, -1.0, 2.0], 1.0, &mut k).unwrap();
+    /// let k = k.to_dense();
+    /// assert_eq!((k[(0, 0)], k[(0, 1)], k[(1, 1)]), (2.0, -1.0, 2.0));
+    /// ```
     pub fn add_stiffness<S: StiffnessSink + ?Sized>(
         &self,
         u: &[f64],
@@ -588,6 +652,23 @@ impl DofMap {
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] if `u` or `g` has the wrong size.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::structure::{rigid::PlanarAttachment, BlockRule, DofMap};
+    /// // a node on a free planar body: a force g on the node's position
+    /// // stiffens the body's turn by −g·n (n = R(θ) p)
+    /// let map = DofMap::new(vec![
+    ///     BlockRule::PlanarRigidEnd { body_block: 1,
+    ///         attachment: PlanarAttachment { point_m: [0.1, 0.0], direction: [0.0, 1.0] } },
+    ///     BlockRule::Free { len: 3 },
+    /// ]).unwrap();
+    /// let u = [0.0, 0.0, 0.0, 0.0]; // stretch, x, y, θ
+    /// let g = [-2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    /// let mut k = nalgebra::DMatrix::zeros(4, 4);
+    /// map.add_geometric_stiffness(&u, &g, &mut k).unwrap();
+    /// assert!((k[(3, 3)] - 0.2).abs() < 1e-15);
+    /// ```
     pub fn add_geometric_stiffness<S: StiffnessSink + ?Sized>(
         &self,
         u: &[f64],

@@ -267,6 +267,19 @@ impl<E: Element> Structure<E> {
     ///
     /// # Errors
     /// [`crate::Error::IndexOutOfRange`] for `e >= n_elements`.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::Section;
+    /// use softrod::structure::{JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureSpec};
+    /// let spec = StructureSpec::new(
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
+    ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
+    /// );
+    /// let s = spec.build_planar().unwrap();
+    /// assert_eq!(s.element_nodes(3).unwrap(), [3, 4]);
+    /// ```
     pub fn element_nodes(&self, e: usize) -> Result<[usize; 2]> {
         check_index("element", e, self.connectivity.len())?;
         Ok(self.connectivity[e].nodes)
@@ -276,6 +289,20 @@ impl<E: Element> Structure<E> {
     ///
     /// # Errors
     /// [`crate::Error::IndexOutOfRange`] for a rod or node that does not exist.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::Section;
+    /// use softrod::structure::{JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureSpec};
+    /// let spec = StructureSpec::new(
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
+    ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
+    /// );
+    /// let s = spec.build_planar().unwrap();
+    /// assert_eq!(s.node_coordinates(0, 4).unwrap(), 16..20);
+    /// assert!(s.node_coordinates(1, 0).is_err());
+    /// ```
     pub fn node_coordinates(&self, rod: usize, node: usize) -> Result<Range<usize>> {
         check_index("rod", rod, self.rods.len())?;
         check_index("node", node, self.rods[rod].n_nodes())?;
@@ -287,6 +314,20 @@ impl<E: Element> Structure<E> {
     ///
     /// # Errors
     /// [`crate::Error::IndexOutOfRange`] for a body that does not exist.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::Section;
+    /// use softrod::structure::{JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureSpec};
+    /// let spec = StructureSpec::new(
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
+    ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
+    /// );
+    /// let s = spec.build_planar().unwrap();
+    /// // after the rod's 5 nodes: x, y, θ
+    /// assert_eq!(s.body_coordinates(0).unwrap(), 20..23);
+    /// ```
     pub fn body_coordinates(&self, body: usize) -> Result<Range<usize>> {
         check_index("body", body, self.spec.rigid_bodies.len())?;
         self.dofs
@@ -299,6 +340,20 @@ impl<E: Element> Structure<E> {
     ///
     /// # Errors
     /// [`crate::Error::IndexOutOfRange`] for a body that does not exist.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::Section;
+    /// use softrod::structure::{JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureSpec};
+    /// let spec = StructureSpec::new(
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
+    ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
+    /// );
+    /// let s = spec.build_planar().unwrap();
+    /// // base stretch, nodes 1 … 3, the joint's stretch, then the pose
+    /// assert_eq!(s.body_free_coordinates(0).unwrap(), 14..17);
+    /// ```
     pub fn body_free_coordinates(&self, body: usize) -> Result<Range<usize>> {
         check_index("body", body, self.spec.rigid_bodies.len())?;
         let b = self.n_rod_nodes + body;
@@ -310,6 +365,21 @@ impl<E: Element> Structure<E> {
 
     /// The free coordinates of the straight reference: every rod straight
     /// as its spec says, every body at its pose, every stretch zero.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::Section;
+    /// use softrod::structure::{JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureSpec};
+    /// let spec = StructureSpec::new(
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
+    ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
+    /// );
+    /// let s = spec.build_planar().unwrap();
+    /// let q = s.configuration(s.reference_free_coordinates()).unwrap();
+    /// // the joined tip sits where the body says: (0, 0.2), pointing up
+    /// assert!((q[17] - 0.2).abs() < 1e-15 && (q[19] - 1.0).abs() < 1e-15);
+    /// ```
     pub fn reference_free_coordinates(&self) -> &[f64] {
         &self.u_reference
     }
@@ -327,6 +397,25 @@ impl<E: Element> Structure<E> {
     ///
     /// # Errors
     /// The field's [`ForceField::check`] against `n_q`.
+    ///
+    /// # Example
+    /// ```
+    /// use std::sync::Arc;
+    /// use softrod::loads::force_field::PointSpring;
+    /// use softrod::assembly::Section;
+    /// use softrod::structure::{JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureSpec};
+    /// let spec = StructureSpec::new(
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
+    ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
+    /// );
+    /// let mut s = spec.build_planar().unwrap();
+    /// let pose = s.body_coordinates(0).unwrap();
+    /// let spring = PointSpring::new(vec![pose.start, pose.start + 1], vec![0.0, 0.3], 5.0, 0.0).unwrap();
+    /// s.add_force_field(Arc::new(spring)).unwrap();
+    /// let outside = PointSpring::new(vec![99, 100], vec![0.0, 0.0], 5.0, 0.0).unwrap();
+    /// assert!(s.add_force_field(Arc::new(outside)).is_err());
+    /// ```
     pub fn add_force_field(&mut self, field: Arc<dyn ForceField>) -> Result<()> {
         field.check(self.n_q())?;
         self.fields.push(field);

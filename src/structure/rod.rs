@@ -425,6 +425,18 @@ impl<E: Element> Rod<E> {
     /// `position` (m) along the unit tangent `direction` (exact equilibrium
     /// without loads, actuation and rest curvature). Entries missing from
     /// `position` or `direction` count as 0.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::Section;
+    /// use softrod::element::PlanarCable;
+    /// use softrod::structure::Rod;
+    /// let rod = Rod::new(&[Section::uniform(0.2, 300.0, 0.025, 4)], &[0.0, 0.0], 5, 5, "rod",
+    ///     |s, le, ax, be| PlanarCable::with_rules(le, s.ea_n, s.ei_nm2, 0.0, ax, be)).unwrap();
+    /// let q = rod.straight_configuration(&[1.0, 0.0], &[0.0, 1.0]);
+    /// assert_eq!(&q[16..], &[1.0, 0.2, 0.0, 1.0]);
+    /// assert!(rod.elastic_energy(&q).unwrap() < 1e-20);
+    /// ```
     pub fn straight_configuration(&self, position: &[f64], direction: &[f64]) -> Vec<f64> {
         let d = E::DIM;
         let nd = E::NODE_DOFS;
@@ -478,6 +490,19 @@ impl<E: Element> Rod<E> {
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] named `name` if `s` is not on the rod.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::Section;
+    /// use softrod::element::PlanarCable;
+    /// use softrod::structure::Rod;
+    /// let rod = Rod::new(&[Section::uniform(0.2, 300.0, 0.025, 4)], &[0.0, 0.0], 5, 5, "rod",
+    ///     |s, le, ax, be| PlanarCable::with_rules(le, s.ea_n, s.ei_nm2, 0.0, ax, be)).unwrap();
+    /// let q = rod.straight_configuration(&[0.0, 0.0], &[1.0, 0.0]);
+    /// let mut r = [0.0; 2];
+    /// rod.arc_point("s_m", 0.13).unwrap().value_into(&q, &mut r).unwrap();
+    /// assert!((r[0] - 0.13).abs() < 1e-15);
+    /// ```
     pub fn arc_point(&self, name: &str, s: f64) -> Result<ArcPoint> {
         let (e, xi) = self.locate(name, s)?;
         Ok(ArcPoint::new(e, xi, self.elements[e].length()))
