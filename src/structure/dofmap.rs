@@ -140,6 +140,11 @@ pub struct DofMap {
     /// The leading run of blocks of equal length: `(length, count)` (the
     /// nodes of the rods), where the block of a coordinate is a division.
     uniform: (usize, usize),
+    /// Maximal runs of free blocks that follow each other in both `q` and
+    /// `u`: `(q0, u0, len)`, copied as one slice.
+    runs: Vec<(usize, usize, usize)>,
+    /// The blocks that are not free.
+    constrained: Vec<usize>,
     n_q: usize,
     n_u: usize,
     linear: bool,
@@ -225,9 +230,23 @@ impl DofMap {
         }
         let first = blocks.first().map_or(1, |b| b.len);
         let run = blocks.iter().take_while(|b| b.len == first).count();
+        let mut runs: Vec<(usize, usize, usize)> = Vec::new();
+        let mut constrained = Vec::new();
+        for (i, b) in blocks.iter().enumerate() {
+            if !matches!(b.rule, BlockRule::Free { .. }) {
+                constrained.push(i);
+                continue;
+            }
+            match runs.last_mut() {
+                Some((q0, u0, len)) if *q0 + *len == b.q0 && *u0 + *len == b.u0 => *len += b.len,
+                _ => runs.push((b.q0, b.u0, b.len)),
+            }
+        }
         Ok(DofMap {
             blocks,
             uniform: (first, run),
+            runs,
+            constrained,
             n_q: q0,
             n_u: u0,
             linear,
@@ -385,7 +404,10 @@ impl DofMap {
     pub fn configuration_into(&self, u: &[f64], q: &mut [f64]) -> Result<()> {
         check_len("u", self.n_u, u.len())?;
         check_len("q", self.n_q, q.len())?;
-        for b in &self.blocks {
+        for &(q0, u0, len) in &self.runs {
+            q[q0..q0 + len].copy_from_slice(&u[u0..u0 + len]);
+        }
+        for b in self.constrained.iter().filter_map(|&i| self.blocks.get(i)) {
             let len = b.len;
             let qb = &mut q[b.q0..b.q0 + len];
             match &b.rule {
@@ -440,7 +462,10 @@ impl DofMap {
         self.check_u(u)?;
         check_len("du", self.n_u, du.len())?;
         check_len("dq", self.n_q, dq.len())?;
-        for b in &self.blocks {
+        for &(q0, u0, len) in &self.runs {
+            dq[q0..q0 + len].copy_from_slice(&du[u0..u0 + len]);
+        }
+        for b in self.constrained.iter().filter_map(|&i| self.blocks.get(i)) {
             let len = b.len;
             let qb = &mut dq[b.q0..b.q0 + len];
             match &b.rule {
@@ -493,7 +518,10 @@ impl DofMap {
         check_len("u", self.n_u, out.len())?;
         // blocks own disjoint free coordinates except rigid ends, which add
         // to their body's pose: write owned entries first, then add
-        for b in &self.blocks {
+        for &(q0, u0, len) in &self.runs {
+            out[u0..u0 + len].copy_from_slice(&f[q0..q0 + len]);
+        }
+        for b in self.constrained.iter().filter_map(|&i| self.blocks.get(i)) {
             let len = b.len;
             let fb = &f[b.q0..b.q0 + len];
             match &b.rule {
@@ -506,7 +534,7 @@ impl DofMap {
                 BlockRule::PlanarRigidEnd { .. } => out[b.u0] = 0.0,
             }
         }
-        for b in &self.blocks {
+        for b in self.constrained.iter().filter_map(|&i| self.blocks.get(i)) {
             if let BlockRule::PlanarRigidEnd { attachment, .. } = &b.rule {
                 let (pose, s) = self.pose(b, u);
                 let jac = attachment.jacobian(pose, s);
