@@ -17,12 +17,12 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::banded::BandedMatrix;
 use crate::element::{ArcPoint, Element, PlanarCable, SpatialCable, DEFAULT_GAUSS_POINTS};
 use crate::error::{
     check_all_finite, check_at_most, check_finite, check_index, check_len, check_positive, Error,
     Result,
 };
+use crate::linsolve::BandedMatrix;
 use crate::loads::{outside, Loads};
 use crate::quadrature::GaussRule;
 
