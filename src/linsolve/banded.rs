@@ -20,6 +20,12 @@ mod ldlt;
 #[cfg(test)]
 mod tests;
 
+use std::sync::Arc;
+
+use crate::linsolve::{
+    check_factor_input, FactorOptions, LinsolveError, SymmetricMatrix, SymmetricPattern,
+    TangentSolver,
+};
 pub use factors::BandedLu;
 use factors::Kind;
 use ldlt::{Ldlt, LdltFailure};
@@ -328,6 +334,7 @@ impl BandedMatrix {
             min_pivot,
             negative_pivots: negative,
             scaling: None,
+            inertia: None,
         })
     }
 
@@ -503,6 +510,129 @@ impl BandedMatrix {
             for (d, v) in self.data[start..start + size].iter_mut().zip(brow) {
                 *d += v;
             }
+        }
+    }
+}
+
+/// The banded solver behind [`TangentSolver`]: the pattern's bandwidth
+/// `kb` fixes the band storage; a positive definite tangent is factored by
+/// the Jacobi-scaled `L D Lᵀ` straight from the pattern's values (kernels
+/// unrolled for the cable's bandwidths 7 and 11), anything else by the
+/// pivoted band LU ([`BandedMatrix::factor`]) after an `L D Lᵀ` without the
+/// positivity requirement has given the inertia, when it exists.
+///
+/// For patterns of small bandwidth (single chains); a pattern whose
+/// bandwidth grows with its size (joined chains) belongs to
+/// [`crate::linsolve::SparseSolver`].
+///
+/// # Example
+/// ```
+/// use std::sync::Arc;
+/// use softrod::linsolve::*;
+/// let elements: Vec<[usize; 2]> = (0..9).map(|e| [e, e + 1]).collect();
+/// let p = Arc::new(SymmetricPattern::from_elements(10, &elements)?);
+/// let mut k = SymmetricMatrix::zeros(p.clone());
+/// for e in 0..9 {
+///     k.add_element(e, &[1.0, -1.0, -1.0, 1.0])?;
+/// }
+/// k.add(0, 0, 1.0)?;
+/// let mut solver = BandedSolver::analyze(&p)?;
+/// assert_eq!(solver.bandwidth(), 1);
+/// let f = solver.factor(&k, FactorOptions::default())?;
+/// assert_eq!(f.method(), FactorMethod::Ldlt);
+/// // shifted far into the negative: indefinite, solved by the LU
+/// let mut neg = k.clone();
+/// neg.values_mut().iter_mut().for_each(|v| *v = -*v);
+/// neg.add(5, 5, 3.0)?;
+/// let f = solver.factor(&neg, FactorOptions::default())?;
+/// assert_eq!(f.method(), FactorMethod::Lu);
+/// assert!(!f.is_positive_definite());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct BandedSolver {
+    pattern: Arc<SymmetricPattern>,
+    kb: usize,
+}
+
+impl BandedSolver {
+    /// The half bandwidth of the band storage.
+    pub fn bandwidth(&self) -> usize {
+        self.kb
+    }
+}
+
+impl TangentSolver for BandedSolver {
+    type Factors = BandedLu;
+
+    fn analyze(pattern: &Arc<SymmetricPattern>) -> std::result::Result<Self, LinsolveError> {
+        let kb = pattern.bandwidth();
+        // the LU fallback stores n (3 kb + 1) numbers
+        let entries = kb
+            .checked_mul(3)
+            .and_then(|w| w.checked_add(1))
+            .and_then(|w| w.checked_mul(pattern.n()));
+        match entries {
+            Some(e) if e <= MAX_ENTRIES => Ok(BandedSolver {
+                pattern: pattern.clone(),
+                kb,
+            }),
+            _ => Err(LinsolveError::TooLarge {
+                what: "band storage",
+                entries: entries.unwrap_or(usize::MAX),
+                max: MAX_ENTRIES,
+            }),
+        }
+    }
+
+    fn pattern(&self) -> &Arc<SymmetricPattern> {
+        &self.pattern
+    }
+
+    fn factor(
+        &mut self,
+        matrix: &SymmetricMatrix,
+        options: FactorOptions,
+    ) -> std::result::Result<BandedLu, LinsolveError> {
+        check_factor_input(&self.pattern, matrix, &options)?;
+        let d = matrix.jacobi_scaling();
+        let shift = options.shift;
+        let not_pd = match Ldlt::from_symmetric(matrix, self.kb, &d, shift, true) {
+            Ok(f) => return Ok(f.into_factors(Some(d))),
+            Err(LdltFailure::Pivot { index, pivot, .. }) => (index, pivot),
+            Err(LdltFailure::NonFinite) => (0, f64::NAN),
+        };
+        if options.require_positive_definite {
+            return Err(LinsolveError::NotPositiveDefinite {
+                index: not_pd.0,
+                pivot: not_pd.1,
+            });
+        }
+        // the inertia, if an L D Lᵀ exists; the pivoted LU solves
+        let inertia = Ldlt::from_symmetric(matrix, self.kb, &d, shift, false)
+            .ok()
+            .map(|f| f.inertia());
+        let band = matrix.to_banded().map_err(|_| LinsolveError::TooLarge {
+            what: "band storage",
+            entries: matrix.n().saturating_mul(3 * self.kb + 1),
+            max: MAX_ENTRIES,
+        })?;
+        match band.factor_scaled_lu(shift, "tangent") {
+            Ok(mut lu) => {
+                lu.inertia = inertia;
+                Ok(lu)
+            }
+            Err(Error::Singular {
+                index,
+                pivot,
+                scale,
+                ..
+            }) => Err(LinsolveError::Singular {
+                index,
+                pivot,
+                scale,
+            }),
+            Err(_) => Err(LinsolveError::NonFinite { row: 0, col: 0 }),
         }
     }
 }

@@ -4,6 +4,7 @@
 use super::ldlt::Ldlt;
 use super::{axpy_neg, dot, BandedMatrix};
 use crate::error::{check_len, Result};
+use crate::linsolve::{check_rhs, FactorMethod, Factorization, Inertia, LinsolveError};
 
 /// Which factorization a [`BandedLu`] holds.
 #[derive(Debug, Clone)]
@@ -24,6 +25,10 @@ pub struct BandedLu {
     pub(super) min_pivot: f64,
     pub(super) negative_pivots: usize,
     pub(super) scaling: Option<Vec<f64>>,
+    /// The inertia, when an `L D Lᵀ` of the (scaled, shifted) matrix
+    /// exists: from the factors themselves, or from the `L D Lᵀ` a
+    /// [`super::BandedSolver`] took before its LU.
+    pub(super) inertia: Option<Inertia>,
 }
 
 impl BandedLu {
@@ -98,6 +103,42 @@ impl BandedLu {
         scale(b);
     }
 
+    /// The solve for `r >= 1` right-hand sides stored column after column
+    /// (sizes checked).
+    fn solve_columns(&self, b: &mut [f64], r: usize) {
+        let n = self.n();
+        let scale = |b: &mut [f64]| {
+            if let Some(d) = &self.scaling {
+                for col in b.chunks_exact_mut(n.max(1)) {
+                    col.iter_mut().zip(d).for_each(|(x, di)| *x *= di);
+                }
+            }
+        };
+        scale(b);
+        match &self.kind {
+            Kind::Ldlt(f) => f.solve_columns(b, r),
+            Kind::Lu { lu, piv } => {
+                if r == 1 {
+                    lu_solve(lu, piv, b, 1);
+                } else {
+                    let mut rows = vec![0.0; n * r];
+                    for (c, col) in b.chunks_exact(n).enumerate() {
+                        for (i, v) in col.iter().enumerate() {
+                            rows[i * r + c] = *v;
+                        }
+                    }
+                    lu_solve(lu, piv, &mut rows, r);
+                    for (c, col) in b.chunks_exact_mut(n).enumerate() {
+                        for (i, v) in col.iter_mut().enumerate() {
+                            *v = rows[i * r + c];
+                        }
+                    }
+                }
+            }
+        }
+        scale(b);
+    }
+
     /// Smallest ratio of a pivot to the largest original entry of its row: a
     /// cheap indicator of ill-conditioning (small means nearly singular).
     pub fn pivot_ratio(&self) -> f64 {
@@ -109,6 +150,45 @@ impl BandedLu {
     /// negative eigenvalues; with interchanges it is only an indicator.
     pub fn negative_pivots(&self) -> usize {
         self.negative_pivots
+    }
+}
+
+impl Factorization for BandedLu {
+    fn n(&self) -> usize {
+        BandedLu::n(self)
+    }
+
+    fn method(&self) -> FactorMethod {
+        match self.kind {
+            Kind::Ldlt(_) => FactorMethod::Ldlt,
+            Kind::Lu { .. } => FactorMethod::Lu,
+        }
+    }
+
+    fn inertia(&self) -> Option<Inertia> {
+        self.inertia
+    }
+
+    fn pivot_ratio(&self) -> f64 {
+        self.min_pivot
+    }
+
+    fn solve_in_place(&self, b: &mut [f64]) -> std::result::Result<(), LinsolveError> {
+        check_rhs("b", self.n(), b.len())?;
+        self.solve_rows(b, 1);
+        Ok(())
+    }
+
+    fn solve_columns_in_place(
+        &self,
+        b: &mut [f64],
+        nrhs: usize,
+    ) -> std::result::Result<(), LinsolveError> {
+        check_rhs("b", self.n().saturating_mul(nrhs), b.len())?;
+        if nrhs > 0 && self.n() > 0 {
+            self.solve_columns(b, nrhs);
+        }
+        Ok(())
     }
 }
 

@@ -4,6 +4,7 @@
 
 use super::factors::{BandedLu, Kind};
 use super::{axpy_neg, dot, BandedMatrix};
+use crate::linsolve::{Inertia, SymmetricMatrix};
 
 /// Why an `L D Lᵀ` factorization stopped.
 #[derive(Debug)]
@@ -83,6 +84,60 @@ impl Ldlt {
         if bad.is_nan() {
             return Err(LdltFailure::NonFinite);
         }
+        Self::factor_band(n, kb, ld, rowmax, require_pd)
+    }
+
+    /// Factors `S A S + shift I` of a symmetric matrix on a pattern whose
+    /// bandwidth is at most `kb` (`S = diag(scale)`): the band is filled
+    /// from the pattern's columns (column `i` of the upper triangle is row
+    /// `i` of the lower band), entries are assumed finite. The pivot test
+    /// as in [`Ldlt::new`], against the scaled matrix's rows.
+    pub(super) fn from_symmetric(
+        a: &SymmetricMatrix,
+        kb: usize,
+        scale: &[f64],
+        shift: f64,
+        require_pd: bool,
+    ) -> std::result::Result<Self, LdltFailure> {
+        let n = a.n();
+        let w = kb + 1;
+        let mut ld = vec![0.0; n * w];
+        let mut rowmax = vec![0.0f64; n];
+        let (col_ptr, row_idx) = (a.pattern().col_ptr(), a.pattern().row_idx());
+        let values = a.values();
+        for i in 0..n {
+            let si = scale[i];
+            for k in col_ptr[i]..col_ptr[i + 1] {
+                let j = row_idx[k]; // j <= i: entry (i, j) of the lower band
+                let mut v = values[k] * si * scale[j];
+                if i == j {
+                    v += shift;
+                }
+                if let Some(x) = (j + kb).checked_sub(i).and_then(|o| ld.get_mut(i * w + o)) {
+                    *x = v;
+                }
+                if require_pd {
+                    if i == j {
+                        rowmax[i] = v.abs();
+                    }
+                } else {
+                    rowmax[i] = rowmax[i].max(v.abs());
+                    rowmax[j] = rowmax[j].max(v.abs());
+                }
+            }
+        }
+        Self::factor_band(n, kb, ld, rowmax, require_pd)
+    }
+
+    /// Factors the lower band `ld` (compact storage, filled) in place; the
+    /// pivot of row `i` is tested against `rowmax[i]`.
+    fn factor_band(
+        n: usize,
+        kb: usize,
+        mut ld: Vec<f64>,
+        rowmax: Vec<f64>,
+        require_pd: bool,
+    ) -> std::result::Result<Self, LdltFailure> {
         let rel = (n.max(1) as f64) * f64::EPSILON;
         let mut st = PivotStats {
             rowmax,
@@ -113,8 +168,65 @@ impl Ldlt {
         BandedLu {
             min_pivot: self.min_pivot,
             negative_pivots: self.negative,
+            inertia: Some(self.inertia()),
             kind: Kind::Ldlt(self),
             scaling,
+        }
+    }
+
+    /// The inertia: the signs of the pivots (Sylvester's law of inertia).
+    pub(super) fn inertia(&self) -> Inertia {
+        Inertia {
+            positive: self.n - self.negative,
+            negative: self.negative,
+        }
+    }
+
+    /// Solves `L D Lᵀ X = B` for `r` right-hand sides stored column after
+    /// column (`b[c n + i]`).
+    pub(super) fn solve_columns(&self, b: &mut [f64], r: usize) {
+        let n = self.n;
+        if r == 1 {
+            self.solve(b, 1);
+            return;
+        }
+        if self.kb == 7 || self.kb == 11 {
+            // groups of four columns, gathered into rows of four
+            let mut scratch = vec![[0.0; 4]; n];
+            let mut c0 = 0;
+            while c0 < r {
+                let g = (r - c0).min(4);
+                let cols = &mut b[c0 * n..(c0 + g) * n];
+                for (i, x) in scratch.iter_mut().enumerate() {
+                    for c in 0..4 {
+                        x[c] = if c < g { cols[c * n + i] } else { 0.0 };
+                    }
+                }
+                if self.kb == 7 {
+                    ldlt_solve_group::<7, 8>(&self.ld, n, &mut scratch);
+                } else {
+                    ldlt_solve_group::<11, 12>(&self.ld, n, &mut scratch);
+                }
+                for (i, x) in scratch.iter().enumerate() {
+                    for (c, v) in x.iter().take(g).enumerate() {
+                        cols[c * n + i] = *v;
+                    }
+                }
+                c0 += g;
+            }
+            return;
+        }
+        let mut rows = vec![0.0; n * r];
+        for (c, col) in b.chunks_exact(n).enumerate() {
+            for (i, v) in col.iter().enumerate() {
+                rows[i * r + c] = *v;
+            }
+        }
+        self.solve(&mut rows, r);
+        for (c, col) in b.chunks_exact_mut(n).enumerate() {
+            for (i, v) in col.iter_mut().enumerate() {
+                *v = rows[i * r + c];
+            }
         }
     }
 
