@@ -600,7 +600,11 @@ impl TangentSolver for BandedSolver {
         let not_pd = match Ldlt::from_symmetric(matrix, self.kb, &d, shift, true) {
             Ok(f) => return Ok(f.into_factors(Some(d))),
             Err(LdltFailure::Pivot { index, pivot, .. }) => (index, pivot),
-            Err(LdltFailure::NonFinite) => (0, f64::NAN),
+            Err(LdltFailure::NonFinite) => {
+                // names the entry
+                matrix.check_finite()?;
+                (0, f64::NAN)
+            }
         };
         if options.require_positive_definite {
             return Err(LinsolveError::NotPositiveDefinite {

@@ -427,35 +427,6 @@ impl SymmetricMatrix {
             })
             .collect()
     }
-
-    #[allow(clippy::needless_range_loop)] // CSC loops read clearer indexed
-    /// The values of `D A D + shift I` (`D = diag(d)`) into `out`, and the
-    /// largest absolute entry of each of its rows into `rowmax`.
-    pub(crate) fn scaled_into(
-        &self,
-        d: &[f64],
-        shift: f64,
-        out: &mut Vec<f64>,
-        rowmax: &mut Vec<f64>,
-    ) {
-        let p = &self.pattern;
-        out.clear();
-        out.extend_from_slice(&self.values);
-        rowmax.clear();
-        rowmax.resize(p.n, 0.0);
-        for j in 0..p.n {
-            for k in p.col_ptr[j]..p.col_ptr[j + 1] {
-                let i = p.row_idx[k];
-                let mut v = out[k] * d[i] * d[j];
-                if i == j {
-                    v += shift;
-                }
-                out[k] = v;
-                rowmax[i] = rowmax[i].max(v.abs());
-                rowmax[j] = rowmax[j].max(v.abs());
-            }
-        }
-    }
 }
 
 #[cfg(test)]

@@ -9,7 +9,7 @@
 
 use std::sync::Arc;
 
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
 use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
 use faer::perm::PermRef;
@@ -23,7 +23,7 @@ use faer::sparse::linalg::lu::simplicial::{
     solve_in_place_scratch as lu_solve_scratch, SimplicialLu,
 };
 use faer::sparse::linalg::LuError;
-use faer::sparse::{FaerError, SparseColMatRef, SymbolicSparseColMatRef};
+use faer::sparse::{FaerError, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
 use super::{
@@ -82,15 +82,30 @@ pub struct SparseSettings {
     pub ordering: Ordering,
 }
 
-/// The full (both triangles) pattern the LU factors, the column ordering
-/// it uses, and where each of its entries comes from in the upper triangle.
+/// The matrix as faer factors it: symmetrically permuted by the
+/// fill-reducing ordering once, at analysis, so that each factorization
+/// writes the scaled values straight into the permuted storage (no copy
+/// of the matrix per factorization) and faer factors it in its own order.
 #[derive(Debug)]
-struct LuPattern {
-    col_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
-    from_upper: Vec<usize>,
-    col_fwd: Vec<usize>,
-    col_inv: Vec<usize>,
+struct Permuted {
+    /// Ordering: permuted index `k` is row `fwd[k]` of the given matrix.
+    fwd: Vec<usize>,
+    /// The triangle faer's factorization reads: upper for the simplicial
+    /// factors, lower for the supernodal ones.
+    side: Side,
+    /// That triangle of the permuted matrix, compressed columns, sorted
+    /// (checked once, here).
+    tri: SymbolicSparseColMat<usize>,
+    /// For each stored entry, its slot in the given pattern's values.
+    src: Vec<usize>,
+    /// Position of each (permuted) diagonal entry in the stored values.
+    diag: Vec<usize>,
+    /// The full permuted matrix (both triangles) for the LU, and for
+    /// each of its entries the stored entry it copies.
+    full: SymbolicSparseColMat<usize>,
+    full_src: Vec<usize>,
+    /// The identity permutation (the LU's column order: already permuted).
+    identity: Vec<usize>,
 }
 
 /// The faer sparse solver behind [`TangentSolver`], for any pattern.
@@ -127,9 +142,10 @@ pub struct SparseSolver {
     pattern: Arc<SymmetricPattern>,
     settings: SparseSettings,
     symbolic: Arc<SymbolicCholesky<usize>>,
-    lu: Arc<LuPattern>,
+    perm: Arc<Permuted>,
+    /// Scratch of one factorization: the scaled, shifted, permuted values
+    /// and the largest entry of each (permuted) row.
     scaled: Vec<f64>,
-    rowmax: Vec<f64>,
 }
 
 impl SparseSolver {
@@ -159,25 +175,57 @@ impl SparseSolver {
             Ordering::Amd => SymmetricOrdering::Amd,
             Ordering::Natural => SymmetricOrdering::Identity,
         };
-        let symbolic = factorize_symbolic_cholesky(
-            a,
-            Side::Upper,
-            ordering,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(faer_error)?;
-        let (col_fwd, col_inv) = match symbolic.perm() {
+        let params = CholeskySymbolicParams::default();
+        let (fwd, inv) = match factorize_symbolic_cholesky(a, Side::Upper, ordering, params)
+            .map_err(faer_error)?
+            .perm()
+        {
             Some(p) => (p.arrays().0.to_vec(), p.arrays().1.to_vec()),
             None => ((0..n).collect(), (0..n).collect()),
         };
-        let lu = full_pattern(pattern, col_fwd, col_inv);
+        // the permuted upper triangle, and the symbolic factorization of it
+        // in its own order
+        let (up_ptr, up_idx, up_src) = permuted_triangle(pattern, &inv, Side::Upper);
+        let a = SymbolicSparseColMatRef::new_checked(n, n, &up_ptr, None, &up_idx);
+        let symbolic =
+            factorize_symbolic_cholesky(a, Side::Upper, SymmetricOrdering::Identity, params)
+                .map_err(faer_error)?;
+        let side = match symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(_) => Side::Upper,
+            SymbolicCholeskyRaw::Supernodal(_) => Side::Lower,
+        };
+        let (col_ptr, row_idx, src) = match side {
+            Side::Upper => (up_ptr, up_idx, up_src),
+            Side::Lower => permuted_triangle(pattern, &inv, Side::Lower),
+        };
+        let (full_col_ptr, full_row_idx, full_src) = full_pattern(n, &col_ptr, &row_idx);
+        let diag = (0..n)
+            .map(|c| {
+                let (a, b) = (col_ptr[c], col_ptr[c + 1]);
+                // sorted rows: the diagonal is last (upper) or first (lower)
+                match side {
+                    Side::Upper => b.saturating_sub(1),
+                    Side::Lower => a,
+                }
+            })
+            .collect();
+        let tri = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        let full = SymbolicSparseColMat::new_checked(n, n, full_col_ptr, None, full_row_idx);
         Ok(SparseSolver {
             pattern: pattern.clone(),
             settings,
             symbolic: Arc::new(symbolic),
-            lu: Arc::new(lu),
+            perm: Arc::new(Permuted {
+                fwd,
+                side,
+                tri,
+                src,
+                diag,
+                full,
+                full_src,
+                identity: (0..n).collect(),
+            }),
             scaled: Vec::new(),
-            rowmax: Vec::new(),
         })
     }
 
@@ -204,16 +252,8 @@ impl SparseSolver {
     fn cholesky(&self, llt: bool) -> Result<CholeskyOutcome, LinsolveError> {
         let n = self.pattern.n();
         let sym = &self.symbolic;
-        let a = SparseColMatRef::new(
-            SymbolicSparseColMatRef::new_checked(
-                n,
-                n,
-                self.pattern.col_ptr(),
-                None,
-                self.pattern.row_idx(),
-            ),
-            &self.scaled[..],
-        );
+        let pm = &self.perm;
+        let a = SparseColMatRef::new(pm.tri.as_ref(), &self.scaled[..]);
         let mut values = try_zeros(sym.len_val())?;
         let req = if llt {
             sym.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
@@ -226,7 +266,7 @@ impl SparseSolver {
             match sym.factorize_numeric_llt(
                 &mut values,
                 a,
-                Side::Upper,
+                pm.side,
                 LltRegularization::default(),
                 Par::Seq,
                 stack,
@@ -239,7 +279,7 @@ impl SparseSolver {
             match sym.factorize_numeric_ldlt(
                 &mut values,
                 a,
-                Side::Upper,
+                pm.side,
                 LdltRegularization::default(),
                 Par::Seq,
                 stack,
@@ -256,7 +296,7 @@ impl SparseSolver {
                 SymbolicCholeskyRaw::Supernodal(_) => index,
             };
             return Ok(CholeskyOutcome::Failed {
-                index: self.lu.col_fwd.get(k).copied().unwrap_or(0),
+                index: pm.fwd.get(k).copied().unwrap_or(0),
             });
         }
         let mut pivots = Vec::with_capacity(n);
@@ -278,50 +318,71 @@ impl SparseSolver {
         Ok(CholeskyOutcome::Done { values, pivots })
     }
 
-    /// Classifies the pivots `d` (elimination order) of an `L D Lᵀ` or
-    /// `L Lᵀ`: the first that is not clearly positive (original row and
-    /// value), whether every pivot is clearly nonzero, the smallest ratio.
-    fn classify(&self, pivots: &[f64]) -> PivotClass {
+    /// Whether the pivots `d` (elimination order) of an `L D Lᵀ` or `L Lᵀ`
+    /// are all clearly positive: above `n ε` times their row's diagonal
+    /// in the scaled matrix (a positive definite matrix has no larger
+    /// entry). `Ok` with the smallest such ratio, else the first pivot
+    /// that is not (its original row and value).
+    fn positive_definite(&self, pivots: &[f64]) -> Result<f64, (usize, f64)> {
         let rel = pivot_tolerance(self.pattern.n());
-        let mut class = PivotClass {
-            first_not_positive: None,
-            all_nonzero: true,
-            negative: 0,
-            min_ratio: f64::INFINITY,
-        };
-        for (k, &d) in pivots.iter().enumerate() {
-            let row = self.lu.col_fwd[k];
-            let scale = self.rowmax[row];
-            if !exceeds(d, rel * scale) && class.first_not_positive.is_none() {
-                class.first_not_positive = Some((row, d));
+        let mut min_ratio = f64::INFINITY;
+        for ((&d, &at), &row) in pivots.iter().zip(&self.perm.diag).zip(&self.perm.fwd) {
+            let scale = self.scaled[at].abs();
+            if !exceeds(d, rel * scale) {
+                return Err((row, d));
             }
-            if !exceeds(d.abs(), rel * scale) {
-                class.all_nonzero = false;
-            }
-            if d < 0.0 {
-                class.negative += 1;
-            }
-            class.min_ratio = class.min_ratio.min(d.abs() / scale);
+            min_ratio = min_ratio.min(d / scale);
         }
-        class
+        Ok(min_ratio)
     }
 
-    /// The pivoted LU of the scaled matrix.
-    fn lu(&self) -> Result<(Numeric, f64), LinsolveError> {
+    /// The largest absolute entry of each row of the scaled, permuted
+    /// matrix (the scale of the pivot tests of indefinite matrices).
+    fn row_scales(&self) -> Vec<f64> {
+        let tri = self.perm.tri.as_ref();
+        let mut rowmax = vec![0.0f64; tri.ncols()];
+        for c in 0..tri.ncols() {
+            for (&r, v) in tri
+                .row_idx_of_col_raw(c)
+                .iter()
+                .zip(&self.scaled[tri.col_range(c)])
+            {
+                rowmax[r] = rowmax[r].max(v.abs());
+                rowmax[c] = rowmax[c].max(v.abs());
+            }
+        }
+        rowmax
+    }
+
+    /// The inertia from the pivots of an `L D Lᵀ`, if every pivot is
+    /// clearly nonzero (above `n ε` times its row's largest entry).
+    fn inertia_of(&self, pivots: &[f64], rowmax: &[f64]) -> Option<Inertia> {
+        let rel = pivot_tolerance(self.pattern.n());
+        let nonzero = pivots
+            .iter()
+            .zip(rowmax)
+            .all(|(d, m)| exceeds(d.abs(), rel * m));
+        let negative = pivots.iter().filter(|d| **d < 0.0).count();
+        nonzero.then_some(Inertia {
+            positive: pivots.len() - negative,
+            negative,
+        })
+    }
+
+    /// The pivoted LU of the scaled, permuted matrix (its columns already
+    /// in the fill-reducing order).
+    fn lu(&self, rowmax: &[f64]) -> Result<(Numeric, f64), LinsolveError> {
         let n = self.pattern.n();
-        let lp = &self.lu;
-        let full_values: Vec<f64> = lp.from_upper.iter().map(|&k| self.scaled[k]).collect();
-        let a = SparseColMatRef::new(
-            SymbolicSparseColMatRef::new_checked(n, n, &lp.col_ptr, None, &lp.row_idx),
-            &full_values[..],
-        );
+        let pm = &self.perm;
+        let full_values: Vec<f64> = pm.full_src.iter().map(|&k| self.scaled[k]).collect();
+        let a = SparseColMatRef::new(pm.full.as_ref(), &full_values[..]);
         let mut lu = SimplicialLu::new();
         let mut row_fwd = vec![0usize; n];
         let mut row_inv = vec![0usize; n];
         let mut mem =
             MemBuffer::try_new(factorize_simplicial_numeric_lu_scratch::<usize, f64>(n, n))
                 .map_err(|_| LinsolveError::OutOfMemory)?;
-        let col_perm = PermRef::new_checked(&lp.col_fwd, &lp.col_inv, n);
+        let col_perm = PermRef::new_checked(&pm.identity, &pm.identity, n);
         match factorize_simplicial_numeric_lu(
             &mut row_fwd,
             &mut row_inv,
@@ -333,7 +394,7 @@ impl SparseSolver {
             Ok(()) => {}
             Err(LuError::SymbolicSingular { index }) => {
                 return Err(LinsolveError::Singular {
-                    index: lp.col_fwd.get(index).copied().unwrap_or(0),
+                    index: pm.fwd.get(index).copied().unwrap_or(0),
                     pivot: 0.0,
                     scale: 0.0,
                 })
@@ -352,10 +413,10 @@ impl SparseSolver {
                     .zip(u.val_of_col(j))
                     .find(|(&i, _)| i == j)
                     .map_or(0.0, |(_, v)| *v);
-                let scale = self.rowmax[row];
+                let scale = rowmax[row];
                 if !exceeds(pivot.abs(), rel * scale) {
                     return Err(LinsolveError::Singular {
-                        index: lp.col_fwd[j],
+                        index: pm.fwd[j],
                         pivot,
                         scale,
                     });
@@ -368,10 +429,52 @@ impl SparseSolver {
                 lu,
                 row_fwd,
                 row_inv,
-                pattern: self.lu.clone(),
             },
             min_ratio,
         ))
+    }
+
+    /// The scaled, shifted values `d_i d_j k_ij + μ δ_ij` into the permuted
+    /// storage.
+    ///
+    /// # Errors
+    /// [`LinsolveError::NonFinite`] naming the first entry that is not
+    /// finite.
+    fn scale_and_permute(
+        &mut self,
+        matrix: &SymmetricMatrix,
+        d_perm: &[f64],
+        shift: f64,
+    ) -> Result<(), LinsolveError> {
+        let pm = &self.perm;
+        let tri = pm.tri.as_ref();
+        let values = matrix.values();
+        self.scaled.clear();
+        self.scaled.resize(pm.src.len(), 0.0);
+        // v − v is 0 for finite v, NaN for NaN and ±∞
+        let mut bad = 0.0f64;
+        for (c, &dc) in d_perm.iter().enumerate() {
+            let range = tri.col_range(c);
+            for ((out, &k), &r) in self.scaled[range.clone()]
+                .iter_mut()
+                .zip(&pm.src[range.clone()])
+                .zip(tri.row_idx_of_col_raw(c))
+            {
+                let v = values[k];
+                #[allow(clippy::eq_op)]
+                {
+                    bad += v - v;
+                }
+                *out = v * d_perm[r] * dc;
+            }
+        }
+        for &at in &pm.diag {
+            self.scaled[at] += shift;
+        }
+        if bad.is_nan() {
+            matrix.check_finite()?;
+        }
+        Ok(())
     }
 }
 
@@ -381,14 +484,6 @@ enum CholeskyOutcome {
     Failed { index: usize },
     /// The factor values and the pivots in elimination order.
     Done { values: Vec<f64>, pivots: Vec<f64> },
-}
-
-/// The pivots of an `L D Lᵀ` / `L Lᵀ` judged.
-struct PivotClass {
-    first_not_positive: Option<(usize, f64)>,
-    all_nonzero: bool,
-    negative: usize,
-    min_ratio: f64,
 }
 
 impl TangentSolver for SparseSolver {
@@ -410,59 +505,42 @@ impl TangentSolver for SparseSolver {
         check_factor_input(&self.pattern, matrix, &options)?;
         let n = matrix.n();
         let d = matrix.jacobi_scaling();
-        matrix.scaled_into(&d, options.shift, &mut self.scaled, &mut self.rowmax);
+        let d_perm: Vec<f64> = self.perm.fwd.iter().map(|&i| d[i]).collect();
+        self.scale_and_permute(matrix, &d_perm, options.shift)?;
+        let d_perm = Arc::new(d_perm);
         let factors = |numeric, inertia, min_pivot| SparseFactors {
             n,
             symbolic: self.symbolic.clone(),
+            perm: self.perm.clone(),
             numeric,
-            scaling: d.clone(),
+            scaling: d_perm.clone(),
             inertia,
             min_pivot,
         };
         let llt_first = self.settings.cholesky == CholeskyKind::Llt;
+        let all_positive = Some(Inertia {
+            positive: n,
+            negative: 0,
+        });
         let mut outcome = self.cholesky(llt_first)?;
         if llt_first {
             if let CholeskyOutcome::Done { values, pivots } = &outcome {
-                let class = self.classify(pivots);
-                if class.first_not_positive.is_none() {
-                    let inertia = Inertia {
-                        positive: n,
-                        negative: 0,
-                    };
-                    return Ok(factors(
-                        Numeric::Llt(values.clone()),
-                        Some(inertia),
-                        class.min_ratio,
-                    ));
+                if let Ok(ratio) = self.positive_definite(pivots) {
+                    return Ok(factors(Numeric::Llt(values.clone()), all_positive, ratio));
                 }
             }
             // not positive definite: L D Lᵀ for the pivot and the inertia
             outcome = self.cholesky(false)?;
         }
+        let rowmax = self.row_scales();
         let inertia = match outcome {
-            CholeskyOutcome::Done { values, pivots } => {
-                let class = self.classify(&pivots);
-                match class.first_not_positive {
-                    None => {
-                        let inertia = Inertia {
-                            positive: n,
-                            negative: 0,
-                        };
-                        return Ok(factors(
-                            Numeric::Ldlt(values),
-                            Some(inertia),
-                            class.min_ratio,
-                        ));
-                    }
-                    Some((index, pivot)) if options.require_positive_definite => {
-                        return Err(LinsolveError::NotPositiveDefinite { index, pivot });
-                    }
-                    Some(_) => class.all_nonzero.then_some(Inertia {
-                        positive: n - class.negative,
-                        negative: class.negative,
-                    }),
+            CholeskyOutcome::Done { values, pivots } => match self.positive_definite(&pivots) {
+                Ok(ratio) => return Ok(factors(Numeric::Ldlt(values), all_positive, ratio)),
+                Err((index, pivot)) if options.require_positive_definite => {
+                    return Err(LinsolveError::NotPositiveDefinite { index, pivot });
                 }
-            }
+                Err(_) => self.inertia_of(&pivots, &rowmax),
+            },
             CholeskyOutcome::Failed { index } => {
                 if options.require_positive_definite {
                     return Err(LinsolveError::NotPositiveDefinite { index, pivot: 0.0 });
@@ -470,7 +548,7 @@ impl TangentSolver for SparseSolver {
                 None
             }
         };
-        let (numeric, min_pivot) = self.lu()?;
+        let (numeric, min_pivot) = self.lu(&rowmax)?;
         Ok(factors(numeric, inertia, min_pivot))
     }
 }
@@ -484,7 +562,6 @@ enum Numeric {
         lu: SimplicialLu<usize, f64>,
         row_fwd: Vec<usize>,
         row_inv: Vec<usize>,
-        pattern: Arc<LuPattern>,
     },
 }
 
@@ -506,18 +583,25 @@ enum Numeric {
 pub struct SparseFactors {
     n: usize,
     symbolic: Arc<SymbolicCholesky<usize>>,
+    perm: Arc<Permuted>,
     numeric: Numeric,
-    scaling: Vec<f64>,
+    /// The Jacobi scaling in the permuted order.
+    scaling: Arc<Vec<f64>>,
     inertia: Option<Inertia>,
     min_pivot: f64,
 }
 
 impl SparseFactors {
-    /// The solve for `k >= 1` column-major right-hand sides (sizes checked).
+    /// The solve for `k >= 1` column-major right-hand sides (sizes checked):
+    /// permuted and scaled into a workspace, solved there, back.
     fn solve_cols(&self, b: &mut [f64], k: usize) -> Result<(), LinsolveError> {
         let n = self.n;
-        for col in b.chunks_exact_mut(n) {
-            col.iter_mut().zip(&self.scaling).for_each(|(x, d)| *x *= d);
+        let fwd = &self.perm.fwd;
+        let mut x = try_zeros(n * k)?;
+        for (xc, bc) in x.chunks_exact_mut(n).zip(b.chunks_exact(n)) {
+            for ((xi, &i), d) in xc.iter_mut().zip(fwd).zip(self.scaling.iter()) {
+                *xi = bc[i] * d;
+            }
         }
         let req = match &self.numeric {
             Numeric::Llt(_) | Numeric::Ldlt(_) => {
@@ -525,10 +609,9 @@ impl SparseFactors {
             }
             Numeric::Lu { .. } => lu_solve_scratch::<usize, f64>(n, k, Par::Seq),
         };
-        let mut mem =
-            MemBuffer::try_new(StackReq::any_of(&[req])).map_err(|_| LinsolveError::OutOfMemory)?;
+        let mut mem = MemBuffer::try_new(req).map_err(|_| LinsolveError::OutOfMemory)?;
         let stack = MemStack::new(&mut mem);
-        let rhs = MatMut::from_column_major_slice_mut(b, n, k);
+        let rhs = MatMut::from_column_major_slice_mut(&mut x, n, k);
         match &self.numeric {
             Numeric::Llt(values) => {
                 LltRef::new(&self.symbolic, values).solve_in_place_with_conj(
@@ -550,15 +633,17 @@ impl SparseFactors {
                 lu,
                 row_fwd,
                 row_inv,
-                pattern,
             } => {
+                let id = &self.perm.identity;
                 let row_perm = PermRef::new_checked(row_fwd, row_inv, n);
-                let col_perm = PermRef::new_checked(&pattern.col_fwd, &pattern.col_inv, n);
+                let col_perm = PermRef::new_checked(id, id, n);
                 lu.solve_in_place_with_conj(row_perm, col_perm, Conj::No, rhs, Par::Seq, stack);
             }
         }
-        for col in b.chunks_exact_mut(n) {
-            col.iter_mut().zip(&self.scaling).for_each(|(x, d)| *x *= d);
+        for (xc, bc) in x.chunks_exact(n).zip(b.chunks_exact_mut(n)) {
+            for ((xi, &i), d) in xc.iter().zip(fwd).zip(self.scaling.iter()) {
+                bc[i] = xi * d;
+            }
         }
         Ok(())
     }
@@ -598,58 +683,70 @@ impl Factorization for SparseFactors {
     }
 }
 
-#[allow(clippy::needless_range_loop)] // CSC loops read clearer indexed
-/// The full pattern of the LU from the upper triangle: column `j` holds
-/// the upper column `j` (rows `<= j`) followed by row `j` of the upper
-/// triangle (rows `> j`), both sorted.
-fn full_pattern(p: &SymmetricPattern, col_fwd: Vec<usize>, col_inv: Vec<usize>) -> LuPattern {
+/// One triangle of the symmetrically permuted pattern (`inv[i]` the new
+/// index of row `i`): column pointers, sorted row indices, and for each
+/// stored entry its slot in `p`'s values.
+fn permuted_triangle(
+    p: &SymmetricPattern,
+    inv: &[usize],
+    side: Side,
+) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
     let n = p.n();
     let (cp, ri) = (p.col_ptr(), p.row_idx());
-    let mut count = vec![0usize; n];
+    // (column, row, slot) in the permuted numbering
+    let mut entries: Vec<(usize, usize, usize)> = Vec::with_capacity(ri.len());
     for j in 0..n {
-        count[j] += cp[j + 1] - cp[j];
-        for &i in &ri[cp[j]..cp[j + 1]] {
-            if i != j {
-                count[i] += 1;
+        for (k, &i) in ri.iter().enumerate().take(cp[j + 1]).skip(cp[j]) {
+            let (a, b) = (inv[i], inv[j]);
+            let (lo, hi) = (a.min(b), a.max(b));
+            entries.push(match side {
+                Side::Upper => (hi, lo, k),
+                Side::Lower => (lo, hi, k),
+            });
+        }
+    }
+    entries.sort_unstable();
+    compress(n, &entries)
+}
+
+/// The full pattern (both triangles) of a symmetric matrix stored as one
+/// triangle (`col_ptr`, `row_idx`): its column pointers, sorted row
+/// indices, and for each entry the stored entry it copies.
+fn full_pattern(
+    n: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let mut entries: Vec<(usize, usize, usize)> = Vec::with_capacity(2 * row_idx.len());
+    for c in 0..n {
+        for (k, &r) in row_idx
+            .iter()
+            .enumerate()
+            .take(col_ptr[c + 1])
+            .skip(col_ptr[c])
+        {
+            entries.push((c, r, k));
+            if r != c {
+                entries.push((r, c, k));
             }
         }
     }
-    let mut col_ptr = vec![0usize; n + 1];
-    for j in 0..n {
-        col_ptr[j + 1] = col_ptr[j] + count[j];
+    entries.sort_unstable();
+    compress(n, &entries)
+}
+
+/// Compressed columns from sorted `(column, row, source)` triples.
+fn compress(n: usize, entries: &[(usize, usize, usize)]) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let mut ptr = vec![0usize; n + 1];
+    for &(c, _, _) in entries {
+        ptr[c + 1] += 1;
     }
-    let nnz = col_ptr[n];
-    let mut row_idx = vec![0usize; nnz];
-    let mut from_upper = vec![0usize; nnz];
-    let mut next = col_ptr[..n].to_vec();
-    // upper parts first (rows <= j), then the mirrored entries in
-    // increasing column order, which are rows > j of column i
-    for j in 0..n {
-        for k in cp[j]..cp[j + 1] {
-            let at = next[j];
-            row_idx[at] = ri[k];
-            from_upper[at] = k;
-            next[j] += 1;
-        }
+    for c in 0..n {
+        ptr[c + 1] += ptr[c];
     }
-    for j in 0..n {
-        for k in cp[j]..cp[j + 1] {
-            let i = ri[k];
-            if i != j {
-                let at = next[i];
-                row_idx[at] = j;
-                from_upper[at] = k;
-                next[i] += 1;
-            }
-        }
-    }
-    LuPattern {
-        col_ptr,
-        row_idx,
-        from_upper,
-        col_fwd,
-        col_inv,
-    }
+    let rows = entries.iter().map(|e| e.1).collect();
+    let src = entries.iter().map(|e| e.2).collect();
+    (ptr, rows, src)
 }
 
 /// `x > t`, false for a NaN.

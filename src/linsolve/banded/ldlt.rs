@@ -90,8 +90,8 @@ impl Ldlt {
     /// Factors `S A S + shift I` of a symmetric matrix on a pattern whose
     /// bandwidth is at most `kb` (`S = diag(scale)`): the band is filled
     /// from the pattern's columns (column `i` of the upper triangle is row
-    /// `i` of the lower band), entries are assumed finite. The pivot test
-    /// as in [`Ldlt::new`], against the scaled matrix's rows.
+    /// `i` of the lower band). The pivot test as in [`Ldlt::new`],
+    /// against the scaled matrix's rows.
     pub(super) fn from_symmetric(
         a: &SymmetricMatrix,
         kb: usize,
@@ -105,10 +105,16 @@ impl Ldlt {
         let mut rowmax = vec![0.0f64; n];
         let (col_ptr, row_idx) = (a.pattern().col_ptr(), a.pattern().row_idx());
         let values = a.values();
+        // v − v is 0 for finite v and NaN for NaN or ±∞
+        let mut bad = 0.0f64;
         for i in 0..n {
             let si = scale[i];
             for k in col_ptr[i]..col_ptr[i + 1] {
                 let j = row_idx[k]; // j <= i: entry (i, j) of the lower band
+                #[allow(clippy::eq_op)]
+                {
+                    bad += values[k] - values[k];
+                }
                 let mut v = values[k] * si * scale[j];
                 if i == j {
                     v += shift;
@@ -125,6 +131,9 @@ impl Ldlt {
                     rowmax[j] = rowmax[j].max(v.abs());
                 }
             }
+        }
+        if bad.is_nan() {
+            return Err(LdltFailure::NonFinite);
         }
         Self::factor_band(n, kb, ld, rowmax, require_pd)
     }
