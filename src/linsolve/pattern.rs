@@ -182,6 +182,15 @@ impl SymmetricPattern {
     }
 
     /// The global dofs of element `e` (as given), or `None` past the end.
+    ///
+    /// # Example
+    /// ```
+    /// let p = softrod::linsolve::SymmetricPattern::from_elements(4, [vec![3, 0], vec![1, 2]])?;
+    /// assert_eq!(p.n_elements(), 2);
+    /// assert_eq!(p.element_dofs(0), Some(&[3, 0][..]));
+    /// assert_eq!(p.element_dofs(2), None);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn element_dofs(&self, e: usize) -> Option<&[usize]> {
         let (a, b) = (*self.elem_ptr.get(e)?, *self.elem_ptr.get(e + 1)?);
         self.dofs.get(a..b)
@@ -206,6 +215,15 @@ impl SymmetricPattern {
     /// Slot of entry `(i, j)` (either triangle: `(i, j)` and `(j, i)` share
     /// one) in the value array, `None` outside the pattern. A binary
     /// search; assembly uses the precomputed element slots instead.
+    ///
+    /// # Example
+    /// ```
+    /// let p = softrod::linsolve::SymmetricPattern::from_elements(3, [[0, 2]])?;
+    /// assert_eq!(p.position(2, 0), p.position(0, 2));
+    /// assert!(p.position(1, 1).is_some()); // every diagonal entry is stored
+    /// assert_eq!(p.position(0, 1), None);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn position(&self, i: usize, j: usize) -> Option<usize> {
         let (r, c) = (i.min(j), i.max(j));
         if c >= self.n {
@@ -218,6 +236,15 @@ impl SymmetricPattern {
     /// The half bandwidth `max |i − j|` over the stored entries (0 for a
     /// diagonal pattern): a band matrix with `kl = ku` equal to it holds
     /// the pattern.
+    ///
+    /// # Example
+    /// ```
+    /// // a chain of two-node elements, 2 dofs per node: bandwidth 2·2 − 1
+    /// let els: Vec<Vec<usize>> = (0..5).map(|e| (2 * e..2 * e + 4).collect()).collect();
+    /// let p = softrod::linsolve::SymmetricPattern::from_elements(12, &els)?;
+    /// assert_eq!(p.bandwidth(), 3);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn bandwidth(&self) -> usize {
         (0..self.n)
             .filter(|&j| self.col_ptr[j + 1] > self.col_ptr[j])
@@ -328,6 +355,17 @@ impl SymmetricMatrix {
     /// [`Error::IndexOutOfRange`] (field `i` or `j`) for an index `>= n`;
     /// [`Error::InvalidParameter`] (field `j`) for an entry outside the
     /// pattern.
+    ///
+    /// # Example
+    /// ```
+    /// use std::sync::Arc;
+    /// use softrod::linsolve::{SymmetricMatrix, SymmetricPattern};
+    /// let mut k = SymmetricMatrix::zeros(Arc::new(SymmetricPattern::from_elements(3, [[0, 1]])?));
+    /// k.add(1, 0, 2.5)?;
+    /// assert_eq!(k.get(0, 1), 2.5);
+    /// assert!(k.add(0, 2, 1.0).is_err()); // not coupled
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn add(&mut self, i: usize, j: usize, v: f64) -> Result<()> {
         check_index("i", i, self.n())?;
         check_index("j", j, self.n())?;
@@ -351,6 +389,17 @@ impl SymmetricMatrix {
 
     /// The stored entries `(i, j, a_ij)` of the upper triangle (`i <= j`),
     /// column by column.
+    ///
+    /// # Example
+    /// ```
+    /// use std::sync::Arc;
+    /// use softrod::linsolve::{SymmetricMatrix, SymmetricPattern};
+    /// let mut k = SymmetricMatrix::zeros(Arc::new(SymmetricPattern::from_elements(2, [[0, 1]])?));
+    /// k.add_element(0, &[4.0, 1.0, 1.0, 3.0])?;
+    /// let e: Vec<_> = k.iter_upper().collect();
+    /// assert_eq!(e, vec![(0, 0, 4.0), (0, 1, 1.0), (1, 1, 3.0)]);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn iter_upper(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
         let p = &self.pattern;
         (0..p.n).flat_map(move |j| {
@@ -367,6 +416,18 @@ impl SymmetricMatrix {
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] if `x` or `y` does not have `n` entries.
+    ///
+    /// # Example
+    /// ```
+    /// use std::sync::Arc;
+    /// use softrod::linsolve::{SymmetricMatrix, SymmetricPattern};
+    /// let mut k = SymmetricMatrix::zeros(Arc::new(SymmetricPattern::from_elements(2, [[0, 1]])?));
+    /// k.add_element(0, &[4.0, 1.0, 1.0, 3.0])?;
+    /// let mut y = [0.0; 2];
+    /// k.mul_vec_into(&[1.0, 2.0], &mut y)?;
+    /// assert_eq!(y, [6.0, 7.0]);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn mul_vec_into(&self, x: &[f64], y: &mut [f64]) -> Result<()> {
         check_len("x", self.n(), x.len())?;
         check_len("y", self.n(), y.len())?;
@@ -386,6 +447,18 @@ impl SymmetricMatrix {
     /// # Errors
     /// [`Error::TooLarge`] if the band storage would exceed
     /// [`MAX_ENTRIES`](crate::linsolve::banded::MAX_ENTRIES).
+    ///
+    /// # Example
+    /// ```
+    /// use std::sync::Arc;
+    /// use softrod::linsolve::{SymmetricMatrix, SymmetricPattern};
+    /// let mut k = SymmetricMatrix::zeros(Arc::new(SymmetricPattern::from_elements(3, [[0, 1], [1, 2]])?));
+    /// k.add(2, 1, -1.0)?;
+    /// let b = k.to_banded()?;
+    /// assert_eq!((b.kl(), b.ku()), (1, 1));
+    /// assert_eq!(b.get(1, 2), -1.0);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn to_banded(&self) -> Result<BandedMatrix> {
         let kb = self.pattern.bandwidth();
         let mut b = BandedMatrix::try_zeros(self.n(), kb, kb)?;

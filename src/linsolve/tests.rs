@@ -552,3 +552,57 @@ fn llt_and_ldlt_first_give_the_same_solution() {
         assert!(diff <= 1e-8 * scale, "{name}: {diff:e}");
     }
 }
+
+#[test]
+fn the_robot_tangent_on_its_connectivity_pattern_solves_as_the_band_does() {
+    // the two-section robot's tangent at its loaded equilibrium, assembled
+    // into the band as today and copied onto the pattern built from the
+    // element connectivity in free coordinates (element 0: the base's free
+    // directions and node 1; element e: nodes e and e + 1)
+    let scene = crate::scene::Scene::two_section();
+    let robot = scene.robot().unwrap();
+    let loads = scene.loads().unwrap();
+    let eq = crate::statics::StaticSolver::default()
+        .solve(&robot, &loads, None)
+        .unwrap();
+    let nf = robot.n_free();
+    let mut kb = BandedMatrix::zeros(nf, 7, 7);
+    robot.tangent_into(&eq.q, &loads, &mut kb).unwrap();
+    let nb = robot.n_base_free();
+    let elements: Vec<Vec<usize>> = (0..robot.elements().len())
+        .map(|e| match e {
+            0 => (0..nb + 4).collect(),
+            _ => (nb + 4 * (e - 1)..nb + 4 * (e + 1)).collect(),
+        })
+        .collect();
+    let p = Arc::new(SymmetricPattern::from_elements(nf, &elements).unwrap());
+    let mut k = SymmetricMatrix::zeros(p.clone());
+    let entries: Vec<(usize, usize)> = k.iter_upper().map(|(i, j, _)| (i, j)).collect();
+    for (i, j) in entries {
+        k.add(i, j, kb.get(i, j)).unwrap();
+    }
+    // nothing of the assembled band lies outside the pattern
+    assert_eq!(k.to_banded().unwrap(), kb);
+    let b: Vec<f64> = (0..nf).map(|i| (i % 5) as f64 - 2.0).collect();
+    let mut reference = b.clone();
+    kb.factor_scaled_symmetric(0.0, "K")
+        .unwrap()
+        .solve_in_place(&mut reference)
+        .unwrap();
+    let scale = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (solver, mut factor) in solvers(&p) {
+        let f = factor(&k, FactorOptions::default()).unwrap();
+        assert_eq!(f.signs().map(|i| i.negative), Some(0), "{solver}");
+        let mut x = b.clone();
+        f.solve(&mut x).unwrap();
+        let diff = x
+            .iter()
+            .zip(&reference)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        // agreement to what the conditioning allows (the orderings round
+        // differently), and a backward error at round-off
+        assert!(diff <= 1e-10 * scale, "{solver}: {diff:e} of {scale:e}");
+        let be = backward_error(&k, &x, &b);
+        assert!(be < 1e-14, "{solver}: backward error {be:e}");
+    }
+}
