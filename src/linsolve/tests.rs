@@ -135,6 +135,11 @@ fn solvers(p: &Arc<SymmetricPattern>) -> Vec<(&'static str, Factor)> {
             Box::new(move |k, o| s.factor(k, o).map(|f| Box::new(f) as Box<dyn Solve>)),
         ));
     }
+    let mut a = AutoSolver::analyze(p).unwrap();
+    out.push((
+        "auto",
+        Box::new(move |k, o| a.factor(k, o).map(|f| Box::new(f) as Box<dyn Solve>)),
+    ));
     let mut b = BandedSolver::analyze(p).unwrap();
     out.push((
         "banded",
