@@ -22,7 +22,7 @@ use faer::sparse::linalg::lu::simplicial::{
     factorize_simplicial_numeric_lu, factorize_simplicial_numeric_lu_scratch,
     solve_in_place_scratch as lu_solve_scratch, SimplicialLu,
 };
-use faer::sparse::linalg::LuError;
+use faer::sparse::linalg::{amd, LuError};
 use faer::sparse::{FaerError, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
@@ -100,10 +100,6 @@ struct Permuted {
     src: Vec<usize>,
     /// Position of each (permuted) diagonal entry in the stored values.
     diag: Vec<usize>,
-    /// The full permuted matrix (both triangles) for the LU, and for
-    /// each of its entries the stored entry it copies.
-    full: SymbolicSparseColMat<usize>,
-    full_src: Vec<usize>,
     /// The identity permutation (the LU's column order: already permuted).
     identity: Vec<usize>,
 }
@@ -143,6 +139,10 @@ pub struct SparseSolver {
     settings: SparseSettings,
     symbolic: Arc<SymbolicCholesky<usize>>,
     perm: Arc<Permuted>,
+    /// The full permuted matrix (both triangles) the LU factors, and for
+    /// each of its entries the stored entry it copies: built when an LU is
+    /// first needed.
+    full: Option<Arc<(SymbolicSparseColMat<usize>, Vec<usize>)>>,
     /// Scratch of one factorization: the scaled, shifted, permuted values
     /// and the largest entry of each (permuted) row.
     scaled: Vec<f64>,
@@ -171,17 +171,24 @@ impl SparseSolver {
         let n = pattern.n();
         let a =
             SymbolicSparseColMatRef::new_checked(n, n, pattern.col_ptr(), None, pattern.row_idx());
-        let ordering = match settings.ordering {
-            Ordering::Amd => SymmetricOrdering::Amd,
-            Ordering::Natural => SymmetricOrdering::Identity,
-        };
         let params = CholeskySymbolicParams::default();
-        let (fwd, inv) = match factorize_symbolic_cholesky(a, Side::Upper, ordering, params)
-            .map_err(faer_error)?
-            .perm()
-        {
-            Some(p) => (p.arrays().0.to_vec(), p.arrays().1.to_vec()),
-            None => ((0..n).collect(), (0..n).collect()),
+        let (fwd, inv) = match settings.ordering {
+            Ordering::Amd => {
+                let (mut fwd, mut inv) = (vec![0usize; n], vec![0usize; n]);
+                let mut mem =
+                    MemBuffer::try_new(amd::order_scratch::<usize>(n, pattern.nnz_upper()))
+                        .map_err(|_| LinsolveError::OutOfMemory)?;
+                amd::order(
+                    &mut fwd,
+                    &mut inv,
+                    a,
+                    params.amd_params,
+                    MemStack::new(&mut mem),
+                )
+                .map_err(faer_error)?;
+                (fwd, inv)
+            }
+            Ordering::Natural => ((0..n).collect(), (0..n).collect()),
         };
         // the permuted upper triangle, and the symbolic factorization of it
         // in its own order
@@ -198,7 +205,6 @@ impl SparseSolver {
             Side::Upper => (up_ptr, up_idx, up_src),
             Side::Lower => permuted_triangle(pattern, &inv, Side::Lower),
         };
-        let (full_col_ptr, full_row_idx, full_src) = full_pattern(n, &col_ptr, &row_idx);
         let diag = (0..n)
             .map(|c| {
                 let (a, b) = (col_ptr[c], col_ptr[c + 1]);
@@ -210,7 +216,7 @@ impl SparseSolver {
             })
             .collect();
         let tri = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        let full = SymbolicSparseColMat::new_checked(n, n, full_col_ptr, None, full_row_idx);
+
         Ok(SparseSolver {
             pattern: pattern.clone(),
             settings,
@@ -221,10 +227,9 @@ impl SparseSolver {
                 tri,
                 src,
                 diag,
-                full,
-                full_src,
                 identity: (0..n).collect(),
             }),
+            full: None,
             scaled: Vec::new(),
         })
     }
@@ -371,11 +376,24 @@ impl SparseSolver {
 
     /// The pivoted LU of the scaled, permuted matrix (its columns already
     /// in the fill-reducing order).
-    fn lu(&self, rowmax: &[f64]) -> Result<(Numeric, f64), LinsolveError> {
+    fn lu(&mut self, rowmax: &[f64]) -> Result<(Numeric, f64), LinsolveError> {
         let n = self.pattern.n();
+        let full = match &self.full {
+            Some(f) => f.clone(),
+            None => {
+                let tri = self.perm.tri.as_ref();
+                let (ptr, rows, src) = full_pattern(n, tri.col_ptr(), tri.row_idx());
+                let f = Arc::new((
+                    SymbolicSparseColMat::new_checked(n, n, ptr, None, rows),
+                    src,
+                ));
+                self.full = Some(f.clone());
+                f
+            }
+        };
         let pm = &self.perm;
-        let full_values: Vec<f64> = pm.full_src.iter().map(|&k| self.scaled[k]).collect();
-        let a = SparseColMatRef::new(pm.full.as_ref(), &full_values[..]);
+        let full_values: Vec<f64> = full.1.iter().map(|&k| self.scaled[k]).collect();
+        let a = SparseColMatRef::new(full.0.as_ref(), &full_values[..]);
         let mut lu = SimplicialLu::new();
         let mut row_fwd = vec![0usize; n];
         let mut row_inv = vec![0usize; n];
@@ -508,10 +526,11 @@ impl TangentSolver for SparseSolver {
         let d_perm: Vec<f64> = self.perm.fwd.iter().map(|&i| d[i]).collect();
         self.scale_and_permute(matrix, &d_perm, options.shift)?;
         let d_perm = Arc::new(d_perm);
+        let (symbolic, perm) = (self.symbolic.clone(), self.perm.clone());
         let factors = |numeric, inertia, min_pivot| SparseFactors {
             n,
-            symbolic: self.symbolic.clone(),
-            perm: self.perm.clone(),
+            symbolic: symbolic.clone(),
+            perm: perm.clone(),
             numeric,
             scaling: d_perm.clone(),
             inertia,

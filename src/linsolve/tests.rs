@@ -249,6 +249,12 @@ fn the_inertia_is_found_on_simplicial_and_supernodal_factors() {
                 let i = Factorization::inertia(&f).unwrap();
                 assert_eq!((i.positive, i.negative), (n - neg, neg), "n={n} {kind:?}");
                 assert_eq!(f.is_positive_definite(), spd);
+                // the solve of either layout, through the LU when indefinite
+                let b: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
+                let mut x = b.clone();
+                f.solve_in_place(&mut x).unwrap();
+                let be = backward_error(&k, &x, &b);
+                assert!(be < 1e-12, "n={n} {kind:?} spd={spd}: {be:e}");
             }
         }
     }
@@ -609,5 +615,31 @@ fn the_robot_tangent_on_its_connectivity_pattern_solves_as_the_band_does() {
         assert!(diff <= 1e-10 * scale, "{solver}: {diff:e} of {scale:e}");
         let be = backward_error(&k, &x, &b);
         assert!(be < 1e-14, "{solver}: backward error {be:e}");
+    }
+}
+
+#[test]
+fn empty_and_one_dof_matrices_factor() {
+    for n in [0usize, 1] {
+        let p = Arc::new(SymmetricPattern::from_elements(n, Vec::<Vec<usize>>::new()).unwrap());
+        let mut k = SymmetricMatrix::zeros(p.clone());
+        if n == 1 {
+            k.add(0, 0, -4.0).unwrap();
+        }
+        for (solver, mut factor) in solvers(&p) {
+            let f = factor(&k, FactorOptions::default()).unwrap();
+            assert_eq!(
+                f.signs(),
+                Some(Inertia {
+                    positive: 0,
+                    negative: n
+                }),
+                "{solver}"
+            );
+            let mut x = vec![2.0; n];
+            f.solve(&mut x).unwrap();
+            assert!(x.iter().all(|v| *v == -0.5), "{solver}");
+            f.solve_cols(&mut vec![2.0; 3 * n], 3).unwrap();
+        }
     }
 }
