@@ -23,9 +23,9 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use softrod::assembly::Robot;
-use softrod::banded::BandedMatrix;
 use softrod::element::{Element, PlanarCable};
 use softrod::estimate::{EstimatorSettings, NewtonEstimator, Observation};
+use softrod::linsolve::BandedMatrix;
 use softrod::loads::Loads;
 use softrod::scene::Scene;
 use softrod::statics::StaticSolver;

@@ -18,8 +18,8 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use softrod::assembly::Robot;
-use softrod::banded::BandedMatrix;
 use softrod::element::PlanarCable;
+use softrod::linsolve::BandedMatrix;
 use softrod::loads::Loads;
 use softrod::params;
 use softrod::statics::StaticSolver;

@@ -15,7 +15,7 @@
 //! - [`estimate`]: shape and load estimation (25)–(30), backends `newton` and `sqp`.
 //! - [`scene`]: JSON scene files; [`params`]: the values the paper leaves open.
 //! - [`refine`]: `"elements": "auto"`, the smallest mesh meeting a tolerance.
-//! - [`banded`], [`quadrature`]: the numerical kernels.
+//! - [`linsolve`]: linear solvers for the tangent (banded, faer sparse); [`quadrature`]: Gauss rules.
 //! - [`report`]: `softrod report`, the speed–accuracy chart and the stability map.
 //!
 //! All quantities are SI (m, N, Pa, rad).
@@ -33,10 +33,10 @@
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
 
 pub mod assembly;
-pub mod banded;
 pub mod element;
 pub mod error;
 pub mod estimate;
+pub mod linsolve;
 pub mod loads;
 pub mod params;
 pub mod quadrature;

@@ -18,9 +18,9 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
-use crate::banded::BandedMatrix;
 use crate::element::Element;
 use crate::error::{check_len, Error, Result};
+use crate::linsolve::BandedMatrix;
 use crate::loads::Loads;
 
 /// Settings of the static solver; every field has a documented default.

@@ -13,11 +13,11 @@ use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
 use softrod::assembly::{RobotSpec, Section, MAX_ELEMENTS};
-use softrod::banded::BandedMatrix;
 use softrod::element::PlanarCable;
 use softrod::estimate::{
     Backend, BoundFrame, EstimatorSettings, LoadBound, MarkerObservation, Observation,
 };
+use softrod::linsolve::BandedMatrix;
 use softrod::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use softrod::quadrature::GaussRule;
 use softrod::scene::{Marker, RefinementTarget, Scene, SceneLoad};

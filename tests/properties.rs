@@ -8,8 +8,8 @@
 
 use proptest::prelude::*;
 use softrod::assembly::Robot;
-use softrod::banded::BandedMatrix;
 use softrod::element::PlanarCable;
+use softrod::linsolve::BandedMatrix;
 use softrod::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use softrod::scene::{Marker, Scene, SceneLoad};
 use softrod::statics::StaticSolver;

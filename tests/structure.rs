@@ -16,7 +16,7 @@
 use std::sync::Arc;
 
 use softrod::assembly::{Chamber, Section};
-use softrod::banded::BandedMatrix;
+use softrod::linsolve::BandedMatrix;
 use softrod::element::{Element, PlanarCable};
 use softrod::loads::force_field::PointSpring;
 use softrod::loads::{Loads, NodeMoment, PointForce};

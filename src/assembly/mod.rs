@@ -18,7 +18,7 @@
 //! Equilibrium (17) is `Q(F, q, P) = 0` with `Q = Q_F + Q_E + Q_A` and the
 //! tangent stiffness is `K = −∂Q/∂q`.
 
-use crate::banded::BandedMatrix;
+use crate::linsolve::BandedMatrix;
 use crate::element::{ArcPoint, Element};
 use crate::error::{check_all_finite, check_finite, check_len, Result};
 use crate::loads::Loads;

@@ -85,9 +85,9 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
-use crate::banded::{BandedLu, BandedMatrix};
 use crate::element::{hermite, Element, PlanarCable};
 use crate::error::{check_all_finite, check_len, check_positive, Error, Result};
+use crate::linsolve::{BandedLu, BandedMatrix};
 use crate::loads::{Loads, PointForce};
 use crate::statics::{StaticSettings, StaticSolver};
 
@@ -1835,7 +1835,7 @@ pub(crate) fn norm2(v: &[f64]) -> f64 {
 }
 
 pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
-    crate::banded::dot(a, b)
+    crate::linsolve::banded::dot(a, b)
 }
 
 /// The direct solution (24) for the Fig. 3 comparison: the distributed load

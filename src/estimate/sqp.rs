@@ -61,9 +61,9 @@ use clarabel::solver::{
 };
 
 use crate::assembly::Robot;
-use crate::banded::BandedLu;
 use crate::element::{hermite, Element};
 use crate::error::{Error, Result};
+use crate::linsolve::BandedLu;
 use crate::loads::Loads;
 
 use super::{

@@ -19,7 +19,7 @@ use crate::error::{check_all_finite, check_index, check_len, Error, Result};
 /// Where stiffness entries go: `add(i, j, v)` adds `v` to entry `(i, j)`.
 ///
 /// Implemented by [`crate::structure::Triplets`], by
-/// [`crate::banded::BandedMatrix`] (entries outside the band are dropped:
+/// [`crate::linsolve::BandedMatrix`] (entries outside the band are dropped:
 /// only band-limited contributions may be sent to it) and by a dense
 /// `nalgebra::DMatrix<f64>`.
 ///
@@ -44,10 +44,10 @@ impl StiffnessSink for nalgebra::DMatrix<f64> {
     }
 }
 
-impl StiffnessSink for crate::banded::BandedMatrix {
+impl StiffnessSink for crate::linsolve::BandedMatrix {
     fn add(&mut self, row: usize, col: usize, value: f64) {
         // `BandedMatrix::add` ignores entries outside the band
-        crate::banded::BandedMatrix::add(self, row, col, value);
+        crate::linsolve::BandedMatrix::add(self, row, col, value);
     }
 }
 

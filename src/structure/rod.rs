@@ -11,7 +11,7 @@
 //! a rod clamped at its start, a [`super::Structure`] places several rods
 //! and rigid bodies by its [`super::DofMap`].
 
-use crate::banded::BandedMatrix;
+use crate::linsolve::BandedMatrix;
 use crate::element::{ArcPoint, Element};
 use crate::error::{
     check_all_finite, check_at_most, check_finite, check_index, check_len, check_positive, Error,

@@ -1,0 +1,672 @@
+//! Banded matrices, their `L D Lᵀ` factorization (symmetric) and their LU
+//! factorization with partial pivoting.
+//!
+//! The tangent stiffness of a cable is block-tridiagonal in the nodes: with
+//! `b` coordinates per node it is banded with `kl = ku = 2b - 1`. It is
+//! symmetric, and positive definite near a stable equilibrium: there the
+//! Jacobi-scaled `L D Lᵀ` without pivoting ([`BandedMatrix::factor_scaled`],
+//! [`BandedMatrix::factor_scaled_symmetric`]) costs `O(n kl²/2)` and is
+//! stable. Partial pivoting (`O(n kl (kl + ku))`) keeps the factorization
+//! usable when the tangent is indefinite (compression, buckling, iterates
+//! far from equilibrium): a symmetric matrix whose `L D Lᵀ` meets a pivot
+//! that is not clearly positive is refactored that way. Both are linear in
+//! the number of elements; [`BandedLu::solve_many_in_place`] solves several
+//! right-hand sides in one sweep (the estimator's adjoint systems).
+
+use crate::error::{check_len, Error, Result};
+
+mod factors;
+mod ldlt;
+#[cfg(test)]
+mod tests;
+
+use std::sync::Arc;
+
+use crate::linsolve::{
+    check_factor_input, FactorOptions, LinsolveError, SymmetricMatrix, SymmetricPattern,
+    TangentSolver,
+};
+pub use factors::BandedLu;
+use factors::Kind;
+use ldlt::{Ldlt, LdltFailure};
+
+/// The most numbers [`BandedMatrix::try_zeros`] stores (2³⁰, 8 GiB).
+pub const MAX_ENTRIES: usize = 1 << 30;
+
+/// A square banded matrix with `kl` sub- and `ku` super-diagonals.
+///
+/// Storage is row-major with room for the fill-in of pivoting: row `i` holds
+/// columns `i - kl ..= i + ku + kl`.
+///
+/// # Example
+/// ```
+/// use softrod::linsolve::BandedMatrix;
+/// let mut a = BandedMatrix::zeros(3, 1, 1);
+/// for i in 0..3 { a.add(i, i, 2.0); }
+/// a.add(0, 1, -1.0); a.add(1, 0, -1.0); a.add(1, 2, -1.0); a.add(2, 1, -1.0);
+/// let lu = a.clone().factor("example").unwrap();
+/// let mut x = vec![1.0, 0.0, 1.0];
+/// lu.solve_in_place(&mut x).unwrap();
+/// assert!((x[0] - 1.0).abs() < 1e-14 && (x[1] - 1.0).abs() < 1e-14);
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct BandedMatrix {
+    n: usize,
+    kl: usize,
+    ku: usize,
+    width: usize,
+    data: Vec<f64>,
+}
+
+impl BandedMatrix {
+    /// An `n × n` zero matrix with bandwidths `kl`, `ku`.
+    ///
+    /// # Panics
+    /// Like `Vec::with_capacity`, if the storage `n (2 kl + ku + 1)` overflows
+    /// `usize` (an allocation failure aborts). [`BandedMatrix::try_zeros`]
+    /// returns an error instead; the library calls this only with sizes
+    /// bounded by [`crate::assembly::MAX_ELEMENTS`].
+    pub fn zeros(n: usize, kl: usize, ku: usize) -> Self {
+        let width = kl.saturating_mul(2).saturating_add(ku).saturating_add(1);
+        BandedMatrix {
+            n,
+            kl,
+            ku,
+            width,
+            data: vec![0.0; n.saturating_mul(width)],
+        }
+    }
+
+    /// As [`BandedMatrix::zeros`], refusing sizes above [`MAX_ENTRIES`]
+    /// stored numbers before allocating.
+    ///
+    /// # Errors
+    /// [`Error::TooLarge`] (field `n`) if `n (2 kl + ku + 1)` exceeds
+    /// [`MAX_ENTRIES`] or overflows.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{linsolve::BandedMatrix, Error};
+    /// assert!(BandedMatrix::try_zeros(10, 1, 1).is_ok());
+    /// let err = BandedMatrix::try_zeros(usize::MAX, 7, 7).unwrap_err();
+    /// assert!(matches!(err, Error::TooLarge { ref name, .. } if name == "n"));
+    /// ```
+    pub fn try_zeros(n: usize, kl: usize, ku: usize) -> Result<Self> {
+        let entries = kl
+            .checked_mul(2)
+            .and_then(|w| w.checked_add(ku))
+            .and_then(|w| w.checked_add(1))
+            .and_then(|w| w.checked_mul(n));
+        match entries {
+            Some(e) if e <= MAX_ENTRIES => Ok(Self::zeros(n, kl, ku)),
+            _ => Err(Error::TooLarge {
+                name: "n".into(),
+                value: n,
+                max: MAX_ENTRIES / (2 * kl.min(MAX_ENTRIES) + ku.min(MAX_ENTRIES) + 1),
+            }),
+        }
+    }
+
+    /// Order of the matrix.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Sets every entry to zero (keeps the allocation).
+    pub fn fill_zero(&mut self) {
+        // only the band: the fill-in room right of it is written by the LU
+        // factorization alone, which consumes its matrix, so it is zero
+        let (kl, ku, w) = (self.kl, self.ku, self.width);
+        for row in self.data.chunks_exact_mut(w) {
+            row[..kl + ku + 1].iter_mut().for_each(|v| *v = 0.0);
+        }
+    }
+
+    /// Whether `(i, j)` lies in the band.
+    pub fn in_band(&self, i: usize, j: usize) -> bool {
+        i < self.n && j < self.n && j + self.kl >= i && j <= i + self.ku
+    }
+
+    #[inline]
+    fn idx(&self, i: usize, j: usize) -> usize {
+        i * self.width + (j + self.kl - i)
+    }
+
+    /// Entry `(i, j)` (zero outside the band).
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        if self.in_band(i, j) {
+            self.data[self.idx(i, j)]
+        } else {
+            0.0
+        }
+    }
+
+    /// Adds `v` to entry `(i, j)`. Entries outside the band are ignored
+    /// (assembly code guarantees the band); [`BandedMatrix::try_add`] reports them.
+    #[inline]
+    pub fn add(&mut self, i: usize, j: usize, v: f64) {
+        if self.in_band(i, j) {
+            let k = self.idx(i, j);
+            if let Some(a) = self.data.get_mut(k) {
+                *a += v;
+            }
+        }
+    }
+
+    /// Adds the dense `size × size` block `block` (row-major) at rows and
+    /// columns `off .. off + size`. The block must lie in the band.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if the block is not `size²` long or does
+    /// not fit in the band.
+    pub fn add_block(&mut self, off: usize, size: usize, block: &[f64]) -> Result<()> {
+        crate::error::check_len("block", size * size, block.len())?;
+        if size == 0 {
+            return Ok(());
+        }
+        if off + size > self.n || size - 1 > self.kl.min(self.ku) {
+            return Err(Error::DimensionMismatch {
+                name: "block (outside the band)".into(),
+                expected: self.kl.min(self.ku) + 1,
+                got: size,
+            });
+        }
+        for r in 0..size {
+            let i = off + r;
+            let start = self.idx(i, off);
+            for (d, v) in self.data[start..start + size]
+                .iter_mut()
+                .zip(&block[r * size..(r + 1) * size])
+            {
+                *d += v;
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds `v` to entry `(i, j)`, which must lie in the band.
+    ///
+    /// # Errors
+    /// [`Error::IndexOutOfRange`] (field `i` or `j`) for an index `>= n`,
+    /// [`Error::InvalidParameter`] (field `j`) for an entry outside the band.
+    ///
+    /// # Example
+    /// ```
+    /// let mut a = softrod::linsolve::BandedMatrix::zeros(3, 1, 1);
+    /// a.try_add(0, 1, 2.0).unwrap();
+    /// assert!(a.try_add(0, 2, 1.0).is_err());
+    /// ```
+    pub fn try_add(&mut self, i: usize, j: usize, v: f64) -> Result<()> {
+        crate::error::check_index("i", i, self.n)?;
+        crate::error::check_index("j", j, self.n)?;
+        if !self.in_band(i, j) {
+            return Err(Error::invalid(
+                "j",
+                j,
+                format!(
+                    "row {i} of the band holds columns {}..={}",
+                    i.saturating_sub(self.kl),
+                    (i + self.ku).min(self.n - 1)
+                ),
+            ));
+        }
+        self.add(i, j, v);
+        Ok(())
+    }
+
+    /// `y = A x`.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `x` does not have `n` entries.
+    pub fn mul_vec(&self, x: &[f64]) -> Result<Vec<f64>> {
+        let mut y = vec![0.0; self.n];
+        self.mul_vec_into(x, &mut y)?;
+        Ok(y)
+    }
+
+    /// Replaces `A` by `D A D` with `D = diag(d)` (symmetric scaling).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `d` does not have `n` entries.
+    pub fn scale_symmetric(&mut self, d: &[f64]) -> Result<()> {
+        check_len("d", self.n, d.len())?;
+        for i in 0..self.n {
+            let lo = i.saturating_sub(self.kl);
+            let hi = (i + self.ku + 1).min(self.n);
+            for j in lo..hi {
+                let k = self.idx(i, j);
+                self.data[k] *= d[i] * d[j];
+            }
+        }
+        Ok(())
+    }
+
+    /// Largest absolute entry.
+    pub fn max_abs(&self) -> f64 {
+        let (kl, ku, w) = (self.kl, self.ku, self.width);
+        self.data
+            .chunks_exact(w)
+            .flat_map(|row| &row[..kl + ku + 1])
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+    }
+
+    /// LU factorization with partial pivoting, in place.
+    ///
+    /// The singularity test is row-relative: a pivot is refused when it is
+    /// below `n ε` times the largest original entry of its row (stiffness
+    /// matrices of fine cables span many orders of magnitude between rows).
+    ///
+    /// # Errors
+    /// [`Error::Singular`] when a pivot is zero or below `n ε max|row|`;
+    /// [`Error::NonFinite`] when the matrix holds a NaN or infinity.
+    pub fn factor(mut self, context: &str) -> Result<BandedLu> {
+        let (n, kl, ku) = (self.n, self.kl, self.ku);
+        let scale = self.max_abs();
+        if !scale.is_finite() || self.data.iter().any(|v| !v.is_finite()) {
+            return Err(Error::NonFinite {
+                context: context.to_string(),
+            });
+        }
+        let rel = (n.max(1) as f64) * f64::EPSILON;
+        let mut rowmax: Vec<f64> = self
+            .data
+            .chunks(self.width)
+            .map(|r| r.iter().fold(0.0f64, |m, v| m.max(v.abs())))
+            .collect();
+        let mut piv = vec![0usize; n];
+        let mut min_pivot = f64::INFINITY;
+        let mut negative = 0usize;
+        for k in 0..n {
+            let last_row = (k + kl).min(n - 1);
+            let mut p = k;
+            let mut best = self.data[self.idx(k, k)].abs();
+            for i in k + 1..=last_row {
+                let v = self.data[self.idx(i, k)].abs();
+                if v > best {
+                    best = v;
+                    p = i;
+                }
+            }
+            if best <= rel * rowmax[p] || best == 0.0 {
+                return Err(Error::Singular {
+                    context: context.to_string(),
+                    index: k,
+                    pivot: best,
+                    scale: rowmax[p],
+                });
+            }
+            piv[k] = p;
+            rowmax.swap(k, p);
+            let last_col = (k + ku + kl).min(n - 1);
+            if p != k {
+                for j in k..=last_col {
+                    let a = self.idx(k, j);
+                    let b = self.idx(p, j);
+                    self.data.swap(a, b);
+                }
+            }
+            let pivot = self.data[self.idx(k, k)];
+            min_pivot = min_pivot.min(pivot.abs() / rowmax[k]);
+            if pivot < 0.0 {
+                negative += 1;
+            }
+            let width = self.width;
+            let len = last_col - k; // entries right of the pivot in row k
+            let row_k = self.idx(k, k);
+            for i in k + 1..=last_row {
+                let ik = self.idx(i, k);
+                let l = self.data[ik] / pivot;
+                self.data[ik] = l;
+                if l != 0.0 {
+                    // rows i > k lie after row k in storage: split to borrow both
+                    let (head, tail) = self.data.split_at_mut(ik + 1);
+                    let src = &head[row_k + 1..row_k + 1 + len];
+                    let dst = &mut tail[..len];
+                    for (d, s) in dst.iter_mut().zip(src) {
+                        *d -= l * s;
+                    }
+                }
+                debug_assert!(ik + 1 + len <= (i + 1) * width);
+            }
+        }
+        Ok(BandedLu {
+            kind: Kind::Lu { lu: self, piv },
+            min_pivot,
+            negative_pivots: negative,
+            scaling: None,
+            inertia: None,
+        })
+    }
+
+    /// Factorization of the Jacobi-scaled, shifted matrix
+    /// `D A D + shift·I`, `D = diag(|a_ii|^-1/2)`; the returned factors solve
+    /// `(A + shift·diag|a_ii|) x = b`. Scaling makes the factorization of
+    /// stiffness matrices whose rows span many orders of magnitude accurate.
+    ///
+    /// A symmetric matrix (every band entry equal to its mirror, as the
+    /// assembled tangent stiffness is) whose scaled, shifted form is
+    /// positive definite is factored as `L D Lᵀ` without pivoting
+    /// ([`BandedMatrix::factor_scaled_symmetric`], a third of the work);
+    /// anything else, and a symmetric matrix that turns out indefinite or
+    /// nearly singular, by the pivoted LU of [`BandedMatrix::factor`]. Both
+    /// solve the same system; the LU is the authority on singularity.
+    ///
+    /// # Errors
+    /// As [`BandedMatrix::factor`].
+    pub fn factor_scaled(self, shift: f64, context: &str) -> Result<BandedLu> {
+        if self.is_symmetric() {
+            return self.factor_scaled_symmetric(shift, context);
+        }
+        self.factor_scaled_lu(shift, context)
+    }
+
+    /// The pivoted-LU path of [`BandedMatrix::factor_scaled`], whatever the
+    /// symmetry.
+    fn factor_scaled_lu(mut self, shift: f64, context: &str) -> Result<BandedLu> {
+        let d = self.jacobi_scaling();
+        self.scale_symmetric(&d)?;
+        if shift != 0.0 {
+            for i in 0..self.n {
+                let k = self.idx(i, i);
+                self.data[k] += shift;
+            }
+        }
+        let mut lu = self.factor(context)?;
+        lu.scaling = Some(d);
+        Ok(lu)
+    }
+
+    /// `|a_ii|^-1/2` (1 for a zero or non-finite diagonal).
+    fn jacobi_scaling(&self) -> Vec<f64> {
+        (0..self.n)
+            .map(|i| {
+                let a = self.data[self.idx(i, i)].abs();
+                if a > 0.0 && a.is_finite() {
+                    1.0 / a.sqrt()
+                } else {
+                    1.0
+                }
+            })
+            .collect()
+    }
+
+    /// Whether every entry of the band equals its mirror image (exactly;
+    /// `kl` must equal `ku`).
+    pub fn is_symmetric(&self) -> bool {
+        if self.kl != self.ku {
+            return false;
+        }
+        let (n, kb, w) = (self.n, self.kl, self.width);
+        for i in 0..n {
+            let row = i * w + kb; // (i, i)
+            let last = (i + kb).min(n.saturating_sub(1));
+            for j in i + 1..=last {
+                // (i, j) against (j, i)
+                if self.data[row + (j - i)] != self.data[j * w + kb - (j - i)] {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// As [`BandedMatrix::factor_scaled`] for a matrix known to be symmetric
+    /// (only its lower band is read): the Jacobi-scaled, shifted matrix is
+    /// factored as `L D Lᵀ` without pivoting when it is positive definite
+    /// (every pivot above `n ε` times its row's largest entry); otherwise a
+    /// copy is factored by the pivoted LU. Does not consume the matrix.
+    ///
+    /// # Errors
+    /// As [`BandedMatrix::factor`] (raised by the LU fallback).
+    pub fn factor_scaled_symmetric(&self, shift: f64, context: &str) -> Result<BandedLu> {
+        let d = self.jacobi_scaling();
+        match Ldlt::new(self, Some(&d), shift, true) {
+            Ok(f) => Ok(f.into_factors(Some(d))),
+            // not positive definite, nearly singular or non-finite: the
+            // pivoted LU decides (and reports)
+            Err(_) => self.clone().factor_scaled_lu(shift, context),
+        }
+    }
+
+    /// `L D Lᵀ` factorization of a symmetric matrix (its lower band is
+    /// read, `kl` sub-diagonals), without pivoting and without scaling. It
+    /// exists for any matrix whose leading principal minors do not vanish,
+    /// definite or not, and then the number of negative pivots is the
+    /// number of negative eigenvalues (Sylvester's law of inertia). Without
+    /// pivoting it is stable for positive definite matrices; for indefinite
+    /// ones prefer [`BandedMatrix::factor`].
+    ///
+    /// # Errors
+    /// [`Error::Singular`] when a pivot is zero or below `n ε` times the
+    /// largest entry of its row; [`Error::NonFinite`] when the band holds a
+    /// NaN or infinity.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::linsolve::BandedMatrix;
+    /// let mut a = BandedMatrix::zeros(3, 1, 1);
+    /// for i in 0..3 { a.add(i, i, 2.0); }
+    /// for i in 0..2 { a.add(i, i + 1, -1.0); a.add(i + 1, i, -1.0); }
+    /// let f = a.factor_ldlt("example").unwrap();
+    /// assert_eq!(f.negative_pivots(), 0);
+    /// let mut x = vec![1.0, 0.0, 1.0];
+    /// f.solve_in_place(&mut x).unwrap();
+    /// assert!((x[1] - 1.0).abs() < 1e-14);
+    /// ```
+    pub fn factor_ldlt(&self, context: &str) -> Result<BandedLu> {
+        match Ldlt::new(self, None, 0.0, false) {
+            Ok(f) => Ok(f.into_factors(None)),
+            Err(LdltFailure::NonFinite) => Err(Error::NonFinite {
+                context: context.to_string(),
+            }),
+            Err(LdltFailure::Pivot {
+                index,
+                pivot,
+                scale,
+            }) => Err(Error::Singular {
+                context: context.to_string(),
+                index,
+                pivot,
+                scale,
+            }),
+        }
+    }
+
+    /// `y = A x` into `y` (no allocation).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `x` or `y` does not have `n` entries.
+    pub fn mul_vec_into(&self, x: &[f64], y: &mut [f64]) -> Result<()> {
+        check_len("x", self.n, x.len())?;
+        check_len("y", self.n, y.len())?;
+        let (n, kl, ku, w) = (self.n, self.kl, self.ku, self.width);
+        for (i, yi) in y.iter_mut().enumerate() {
+            let lo = i.saturating_sub(kl);
+            let hi = (i + ku + 1).min(n);
+            let start = i * w + (lo + kl - i);
+            *yi = dot(&self.data[start..start + (hi - lo)], &x[lo..hi]);
+        }
+        Ok(())
+    }
+
+    /// Sub-diagonals `kl`.
+    pub fn kl(&self) -> usize {
+        self.kl
+    }
+
+    /// Super-diagonals `ku`.
+    pub fn ku(&self) -> usize {
+        self.ku
+    }
+
+    /// Adds the dense symmetric `size × size` block `block` (row-major) at
+    /// rows and columns `off .. off + size`, without checks: the caller
+    /// guarantees `off + size <= n` and `size <= min(kl, ku) + 1`.
+    #[inline]
+    pub(crate) fn add_block_unchecked(&mut self, off: usize, size: usize, block: &[f64]) {
+        let w = self.width;
+        for (r, brow) in block.chunks_exact(size).take(size).enumerate() {
+            let start = (off + r) * w + self.kl - r;
+            for (d, v) in self.data[start..start + size].iter_mut().zip(brow) {
+                *d += v;
+            }
+        }
+    }
+}
+
+/// The banded solver behind [`TangentSolver`]: the pattern's bandwidth
+/// `kb` fixes the band storage; a positive definite tangent is factored by
+/// the Jacobi-scaled `L D Lᵀ` straight from the pattern's values (kernels
+/// unrolled for the cable's bandwidths 7 and 11), anything else by the
+/// pivoted band LU ([`BandedMatrix::factor`]) after an `L D Lᵀ` without the
+/// positivity requirement has given the inertia, when it exists.
+///
+/// For patterns of small bandwidth (single chains); a pattern whose
+/// bandwidth grows with its size (joined chains) belongs to
+/// [`crate::linsolve::SparseSolver`].
+///
+/// # Example
+/// ```
+/// use std::sync::Arc;
+/// use softrod::linsolve::*;
+/// let elements: Vec<[usize; 2]> = (0..9).map(|e| [e, e + 1]).collect();
+/// let p = Arc::new(SymmetricPattern::from_elements(10, &elements)?);
+/// let mut k = SymmetricMatrix::zeros(p.clone());
+/// for e in 0..9 {
+///     k.add_element(e, &[1.0, -1.0, -1.0, 1.0])?;
+/// }
+/// k.add(0, 0, 1.0)?;
+/// let mut solver = BandedSolver::analyze(&p)?;
+/// assert_eq!(solver.bandwidth(), 1);
+/// let f = solver.factor(&k, FactorOptions::default())?;
+/// assert_eq!(f.method(), FactorMethod::Ldlt);
+/// // shifted far into the negative: indefinite, solved by the LU
+/// let mut neg = k.clone();
+/// neg.values_mut().iter_mut().for_each(|v| *v = -*v);
+/// neg.add(5, 5, 3.0)?;
+/// let f = solver.factor(&neg, FactorOptions::default())?;
+/// assert_eq!(f.method(), FactorMethod::Lu);
+/// assert!(!f.is_positive_definite());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct BandedSolver {
+    pattern: Arc<SymmetricPattern>,
+    kb: usize,
+}
+
+impl BandedSolver {
+    /// The half bandwidth of the band storage.
+    pub fn bandwidth(&self) -> usize {
+        self.kb
+    }
+}
+
+impl TangentSolver for BandedSolver {
+    type Factors = BandedLu;
+
+    fn analyze(pattern: &Arc<SymmetricPattern>) -> std::result::Result<Self, LinsolveError> {
+        let kb = pattern.bandwidth();
+        // the LU fallback stores n (3 kb + 1) numbers
+        let entries = kb
+            .checked_mul(3)
+            .and_then(|w| w.checked_add(1))
+            .and_then(|w| w.checked_mul(pattern.n()));
+        match entries {
+            Some(e) if e <= MAX_ENTRIES => Ok(BandedSolver {
+                pattern: pattern.clone(),
+                kb,
+            }),
+            _ => Err(LinsolveError::TooLarge {
+                what: "band storage",
+                entries: entries.unwrap_or(usize::MAX),
+                max: MAX_ENTRIES,
+            }),
+        }
+    }
+
+    fn pattern(&self) -> &Arc<SymmetricPattern> {
+        &self.pattern
+    }
+
+    fn factor(
+        &mut self,
+        matrix: &SymmetricMatrix,
+        options: FactorOptions,
+    ) -> std::result::Result<BandedLu, LinsolveError> {
+        check_factor_input(&self.pattern, matrix, &options)?;
+        let d = matrix.jacobi_scaling();
+        let shift = options.shift;
+        let not_pd = match Ldlt::from_symmetric(matrix, self.kb, &d, shift, true) {
+            Ok(f) => return Ok(f.into_factors(Some(d))),
+            Err(LdltFailure::Pivot { index, pivot, .. }) => (index, pivot),
+            Err(LdltFailure::NonFinite) => {
+                // names the entry
+                matrix.check_finite()?;
+                (0, f64::NAN)
+            }
+        };
+        if options.require_positive_definite {
+            return Err(LinsolveError::NotPositiveDefinite {
+                index: not_pd.0,
+                pivot: not_pd.1,
+            });
+        }
+        // the inertia, if an L D Lᵀ exists; the pivoted LU solves
+        let inertia = Ldlt::from_symmetric(matrix, self.kb, &d, shift, false)
+            .ok()
+            .map(|f| f.inertia());
+        let band = matrix.to_banded().map_err(|_| LinsolveError::TooLarge {
+            what: "band storage",
+            entries: matrix.n().saturating_mul(3 * self.kb + 1),
+            max: MAX_ENTRIES,
+        })?;
+        match band.factor_scaled_lu(shift, "tangent") {
+            Ok(mut lu) => {
+                lu.inertia = inertia;
+                Ok(lu)
+            }
+            Err(Error::Singular {
+                index,
+                pivot,
+                scale,
+                ..
+            }) => Err(LinsolveError::Singular {
+                index,
+                pivot,
+                scale,
+            }),
+            Err(_) => Err(LinsolveError::NonFinite { row: 0, col: 0 }),
+        }
+    }
+}
+
+/// `Σ a_i b_i` over the common length, in four independent partial sums
+/// (the compiler keeps them in registers and may vectorize).
+#[inline]
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut s = [0.0f64; 4];
+    let mut ca = a.chunks_exact(4);
+    let mut cb = b.chunks_exact(4);
+    for (x, y) in (&mut ca).zip(&mut cb) {
+        s[0] += x[0] * y[0];
+        s[1] += x[1] * y[1];
+        s[2] += x[2] * y[2];
+        s[3] += x[3] * y[3];
+    }
+    let mut t = (s[0] + s[2]) + (s[1] + s[3]);
+    for (x, y) in ca.remainder().iter().zip(cb.remainder()) {
+        t += x * y;
+    }
+    t
+}
+
+/// `y -= c x` over the common length.
+#[inline]
+fn axpy_neg(c: f64, x: &[f64], y: &mut [f64]) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi -= c * xi;
+    }
+}

@@ -1,0 +1,795 @@
+//! The sparse solver (faer): `L D Lᵀ` or Cholesky with a fill-reducing
+//! ordering whose symbolic analysis every factorization reuses, and a
+//! sparse LU with partial pivoting for tangents that are not positive
+//! definite.
+//!
+//! All faer calls run sequentially (`Par::Seq` is passed to each of them,
+//! so the process-wide setting is left to the application): the tangents
+//! of slender structures are too small for threads to pay.
+
+use std::sync::Arc;
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
+use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky,
+    SymbolicCholeskyRaw, SymmetricOrdering,
+};
+use faer::sparse::linalg::lu::simplicial::{
+    factorize_simplicial_numeric_lu, factorize_simplicial_numeric_lu_scratch,
+    solve_in_place_scratch as lu_solve_scratch, SimplicialLu,
+};
+use faer::sparse::linalg::{amd, LuError};
+use faer::sparse::{FaerError, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par, Side};
+
+use super::{
+    check_factor_input, check_rhs, pivot_tolerance, FactorMethod, FactorOptions, Factorization,
+    Inertia, LinsolveError, SymmetricMatrix, SymmetricPattern, TangentSolver,
+};
+
+/// The symmetric factorization [`SparseSolver`] tries first.
+///
+/// # Example
+/// ```
+/// use softrod::linsolve::CholeskyKind;
+/// assert_eq!(CholeskyKind::default(), CholeskyKind::Ldlt);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum CholeskyKind {
+    /// `L D Lᵀ`: as fast as Cholesky, and its pivots give the inertia
+    /// whatever the definiteness (the default).
+    #[default]
+    Ldlt,
+    /// Cholesky `L Lᵀ`; a tangent that is not positive definite is then
+    /// refactored by `L D Lᵀ` for its inertia before the LU.
+    Llt,
+}
+
+/// The fill-reducing ordering of [`SparseSolver`].
+///
+/// # Example
+/// ```
+/// use softrod::linsolve::sparse::Ordering;
+/// assert_eq!(Ordering::default(), Ordering::Amd);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Ordering {
+    /// Approximate minimum degree (the default).
+    #[default]
+    Amd,
+    /// The dofs' own order (a chain numbered node by node has no fill
+    /// outside its band in it).
+    Natural,
+}
+
+/// Settings of [`SparseSolver`].
+///
+/// # Example
+/// ```
+/// use softrod::linsolve::{CholeskyKind, SparseSettings};
+/// let s = SparseSettings { cholesky: CholeskyKind::Llt, ..SparseSettings::default() };
+/// assert_eq!(s.ordering, softrod::linsolve::sparse::Ordering::Amd);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SparseSettings {
+    /// The factorization tried first. Default [`CholeskyKind::Ldlt`].
+    pub cholesky: CholeskyKind,
+    /// The fill-reducing ordering. Default [`Ordering::Amd`].
+    pub ordering: Ordering,
+}
+
+/// The matrix as faer factors it: symmetrically permuted by the
+/// fill-reducing ordering once, at analysis, so that each factorization
+/// writes the scaled values straight into the permuted storage (no copy
+/// of the matrix per factorization) and faer factors it in its own order.
+#[derive(Debug)]
+struct Permuted {
+    /// Ordering: permuted index `k` is row `fwd[k]` of the given matrix.
+    fwd: Vec<usize>,
+    /// The triangle faer's factorization reads: upper for the simplicial
+    /// factors, lower for the supernodal ones.
+    side: Side,
+    /// That triangle of the permuted matrix, compressed columns, sorted
+    /// (checked once, here).
+    tri: SymbolicSparseColMat<usize>,
+    /// For each stored entry, its slot in the given pattern's values.
+    src: Vec<usize>,
+    /// Position of each (permuted) diagonal entry in the stored values.
+    diag: Vec<usize>,
+    /// The identity permutation (the LU's column order: already permuted).
+    identity: Vec<usize>,
+}
+
+/// The faer sparse solver behind [`TangentSolver`], for any pattern.
+///
+/// [`TangentSolver::analyze`] computes the fill-reducing ordering and the
+/// symbolic factorization once; [`TangentSolver::factor`] scales and
+/// shifts the matrix (see [`crate::linsolve`]) and factors it numerically
+/// with that symbolic structure: `L D Lᵀ` (or Cholesky, see
+/// [`SparseSettings`]) when positive definite, else faer's simplicial LU
+/// with partial pivoting, in the same column ordering.
+///
+/// # Example
+/// ```
+/// use std::sync::Arc;
+/// use softrod::linsolve::*;
+/// // two chains of springs joined at a shared dof 0 (not banded in this numbering)
+/// let elements = vec![vec![0, 1], vec![1, 2], vec![0, 3], vec![3, 4]];
+/// let p = Arc::new(SymmetricPattern::from_elements(5, &elements)?);
+/// let mut k = SymmetricMatrix::zeros(p.clone());
+/// for e in 0..4 {
+///     k.add_element(e, &[1.0, -1.0, -1.0, 1.0])?;
+/// }
+/// k.add(0, 0, 1.0)?;
+/// let mut solver = SparseSolver::analyze(&p)?;
+/// let f = solver.factor(&k, FactorOptions::default())?;
+/// assert_eq!(f.inertia(), Some(Inertia { positive: 5, negative: 0 }));
+/// let mut x = vec![0.0, 0.0, 1.0, 0.0, 0.0];
+/// f.solve_in_place(&mut x)?;
+/// assert!((x[2] - 3.0).abs() < 1e-12 && (x[4] - 1.0).abs() < 1e-12);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct SparseSolver {
+    pattern: Arc<SymmetricPattern>,
+    settings: SparseSettings,
+    symbolic: Arc<SymbolicCholesky<usize>>,
+    perm: Arc<Permuted>,
+    /// The full permuted matrix (both triangles) the LU factors, and for
+    /// each of its entries the stored entry it copies: built when an LU is
+    /// first needed.
+    full: Option<Arc<(SymbolicSparseColMat<usize>, Vec<usize>)>>,
+    /// Scratch of one factorization: the scaled, shifted, permuted values
+    /// and the largest entry of each (permuted) row.
+    scaled: Vec<f64>,
+}
+
+impl SparseSolver {
+    /// Analyzes `pattern` with the given settings.
+    ///
+    /// # Errors
+    /// [`LinsolveError::TooLarge`] or [`LinsolveError::OutOfMemory`] when
+    /// faer cannot index or allocate the symbolic factorization.
+    ///
+    /// # Example
+    /// ```
+    /// use std::sync::Arc;
+    /// use softrod::linsolve::{sparse::Ordering, SparseSettings, SparseSolver, SymmetricPattern};
+    /// let p = Arc::new(SymmetricPattern::from_elements(3, [[0, 1], [1, 2]])?);
+    /// let s = SparseSolver::with_settings(&p, SparseSettings { ordering: Ordering::Natural, ..Default::default() })?;
+    /// assert!(s.factor_entries() >= 5);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn with_settings(
+        pattern: &Arc<SymmetricPattern>,
+        settings: SparseSettings,
+    ) -> Result<Self, LinsolveError> {
+        let n = pattern.n();
+        let a =
+            SymbolicSparseColMatRef::new_checked(n, n, pattern.col_ptr(), None, pattern.row_idx());
+        let params = CholeskySymbolicParams::default();
+        let (fwd, inv) = match settings.ordering {
+            Ordering::Amd => {
+                let (mut fwd, mut inv) = (vec![0usize; n], vec![0usize; n]);
+                let mut mem =
+                    MemBuffer::try_new(amd::order_scratch::<usize>(n, pattern.nnz_upper()))
+                        .map_err(|_| LinsolveError::OutOfMemory)?;
+                amd::order(
+                    &mut fwd,
+                    &mut inv,
+                    a,
+                    params.amd_params,
+                    MemStack::new(&mut mem),
+                )
+                .map_err(faer_error)?;
+                (fwd, inv)
+            }
+            Ordering::Natural => ((0..n).collect(), (0..n).collect()),
+        };
+        // the permuted upper triangle, and the symbolic factorization of it
+        // in its own order
+        let (up_ptr, up_idx, up_src) = permuted_triangle(pattern, &inv, Side::Upper);
+        let a = SymbolicSparseColMatRef::new_checked(n, n, &up_ptr, None, &up_idx);
+        let symbolic =
+            factorize_symbolic_cholesky(a, Side::Upper, SymmetricOrdering::Identity, params)
+                .map_err(faer_error)?;
+        let side = match symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(_) => Side::Upper,
+            SymbolicCholeskyRaw::Supernodal(_) => Side::Lower,
+        };
+        let (col_ptr, row_idx, src) = match side {
+            Side::Upper => (up_ptr, up_idx, up_src),
+            Side::Lower => permuted_triangle(pattern, &inv, Side::Lower),
+        };
+        let diag = (0..n)
+            .map(|c| {
+                let (a, b) = (col_ptr[c], col_ptr[c + 1]);
+                // sorted rows: the diagonal is last (upper) or first (lower)
+                match side {
+                    Side::Upper => b.saturating_sub(1),
+                    Side::Lower => a,
+                }
+            })
+            .collect();
+        let tri = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+
+        Ok(SparseSolver {
+            pattern: pattern.clone(),
+            settings,
+            symbolic: Arc::new(symbolic),
+            perm: Arc::new(Permuted {
+                fwd,
+                side,
+                tri,
+                src,
+                diag,
+                identity: (0..n).collect(),
+            }),
+            full: None,
+            scaled: Vec::new(),
+        })
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> SparseSettings {
+        self.settings
+    }
+
+    /// Number of stored entries of the Cholesky factor `L` (a measure of
+    /// the fill the ordering leaves).
+    pub fn factor_entries(&self) -> usize {
+        self.symbolic.len_val()
+    }
+
+    /// Whether faer chose its supernodal (blocked) factorization for this
+    /// pattern rather than the simplicial one.
+    pub fn is_supernodal(&self) -> bool {
+        matches!(self.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
+    }
+
+    /// The numeric `L Lᵀ` (`llt`) or `L D Lᵀ` of the scaled matrix with the
+    /// shared symbolic structure; on success its pivots (`D`, or `L_kk²`)
+    /// in elimination order.
+    fn cholesky(&self, llt: bool) -> Result<CholeskyOutcome, LinsolveError> {
+        let n = self.pattern.n();
+        let sym = &self.symbolic;
+        let pm = &self.perm;
+        let a = SparseColMatRef::new(pm.tri.as_ref(), &self.scaled[..]);
+        let mut values = try_zeros(sym.len_val())?;
+        let req = if llt {
+            sym.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
+        } else {
+            sym.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default())
+        };
+        let mut mem = MemBuffer::try_new(req).map_err(|_| LinsolveError::OutOfMemory)?;
+        let stack = MemStack::new(&mut mem);
+        let failed_at = if llt {
+            match sym.factorize_numeric_llt(
+                &mut values,
+                a,
+                pm.side,
+                LltRegularization::default(),
+                Par::Seq,
+                stack,
+                Default::default(),
+            ) {
+                Ok(_) => None,
+                Err(LltError::NonPositivePivot { index }) => Some(index),
+            }
+        } else {
+            match sym.factorize_numeric_ldlt(
+                &mut values,
+                a,
+                pm.side,
+                LdltRegularization::default(),
+                Par::Seq,
+                stack,
+                Default::default(),
+            ) {
+                Ok(_) => None,
+                Err(LdltError::ZeroPivot { index }) => Some(index),
+            }
+        };
+        if let Some(index) = failed_at {
+            // faer counts the simplicial pivot from 1, the supernodal from 0
+            let k = match sym.raw() {
+                SymbolicCholeskyRaw::Simplicial(_) => index.saturating_sub(1),
+                SymbolicCholeskyRaw::Supernodal(_) => index,
+            };
+            return Ok(CholeskyOutcome::Failed {
+                index: pm.fwd.get(k).copied().unwrap_or(0),
+            });
+        }
+        let mut pivots = Vec::with_capacity(n);
+        match sym.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                pivots.extend(s.col_ptr()[..n].iter().map(|&p| values[p]));
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let f = SupernodalLdltRef::new(s, &values);
+                for sn in 0..s.n_supernodes() {
+                    let block = f.supernode(sn).val();
+                    pivots.extend((0..block.ncols()).map(|c| block[(c, c)]));
+                }
+            }
+        }
+        if llt {
+            pivots.iter_mut().for_each(|l| *l *= *l);
+        }
+        Ok(CholeskyOutcome::Done { values, pivots })
+    }
+
+    /// Whether the pivots `d` (elimination order) of an `L D Lᵀ` or `L Lᵀ`
+    /// are all clearly positive: above `n ε` times their row's diagonal
+    /// in the scaled matrix (a positive definite matrix has no larger
+    /// entry). `Ok` with the smallest such ratio, else the first pivot
+    /// that is not (its original row and value).
+    fn positive_definite(&self, pivots: &[f64]) -> Result<f64, (usize, f64)> {
+        let rel = pivot_tolerance(self.pattern.n());
+        let mut min_ratio = f64::INFINITY;
+        for ((&d, &at), &row) in pivots.iter().zip(&self.perm.diag).zip(&self.perm.fwd) {
+            let scale = self.scaled[at].abs();
+            if !exceeds(d, rel * scale) {
+                return Err((row, d));
+            }
+            min_ratio = min_ratio.min(d / scale);
+        }
+        Ok(min_ratio)
+    }
+
+    /// The largest absolute entry of each row of the scaled, permuted
+    /// matrix (the scale of the pivot tests of indefinite matrices).
+    fn row_scales(&self) -> Vec<f64> {
+        let tri = self.perm.tri.as_ref();
+        let mut rowmax = vec![0.0f64; tri.ncols()];
+        for c in 0..tri.ncols() {
+            for (&r, v) in tri
+                .row_idx_of_col_raw(c)
+                .iter()
+                .zip(&self.scaled[tri.col_range(c)])
+            {
+                rowmax[r] = rowmax[r].max(v.abs());
+                rowmax[c] = rowmax[c].max(v.abs());
+            }
+        }
+        rowmax
+    }
+
+    /// The inertia from the pivots of an `L D Lᵀ`, if every pivot is
+    /// clearly nonzero (above `n ε` times its row's largest entry).
+    fn inertia_of(&self, pivots: &[f64], rowmax: &[f64]) -> Option<Inertia> {
+        let rel = pivot_tolerance(self.pattern.n());
+        let nonzero = pivots
+            .iter()
+            .zip(rowmax)
+            .all(|(d, m)| exceeds(d.abs(), rel * m));
+        let negative = pivots.iter().filter(|d| **d < 0.0).count();
+        nonzero.then_some(Inertia {
+            positive: pivots.len() - negative,
+            negative,
+        })
+    }
+
+    /// The pivoted LU of the scaled, permuted matrix (its columns already
+    /// in the fill-reducing order).
+    fn lu(&mut self, rowmax: &[f64]) -> Result<(Numeric, f64), LinsolveError> {
+        let n = self.pattern.n();
+        let full = match &self.full {
+            Some(f) => f.clone(),
+            None => {
+                let tri = self.perm.tri.as_ref();
+                let (ptr, rows, src) = full_pattern(n, tri.col_ptr(), tri.row_idx());
+                let f = Arc::new((
+                    SymbolicSparseColMat::new_checked(n, n, ptr, None, rows),
+                    src,
+                ));
+                self.full = Some(f.clone());
+                f
+            }
+        };
+        let pm = &self.perm;
+        let full_values: Vec<f64> = full.1.iter().map(|&k| self.scaled[k]).collect();
+        let a = SparseColMatRef::new(full.0.as_ref(), &full_values[..]);
+        let mut lu = SimplicialLu::new();
+        let mut row_fwd = vec![0usize; n];
+        let mut row_inv = vec![0usize; n];
+        let mut mem =
+            MemBuffer::try_new(factorize_simplicial_numeric_lu_scratch::<usize, f64>(n, n))
+                .map_err(|_| LinsolveError::OutOfMemory)?;
+        let col_perm = PermRef::new_checked(&pm.identity, &pm.identity, n);
+        match factorize_simplicial_numeric_lu(
+            &mut row_fwd,
+            &mut row_inv,
+            &mut lu,
+            a,
+            col_perm,
+            MemStack::new(&mut mem),
+        ) {
+            Ok(()) => {}
+            Err(LuError::SymbolicSingular { index }) => {
+                return Err(LinsolveError::Singular {
+                    index: pm.fwd.get(index).copied().unwrap_or(0),
+                    pivot: 0.0,
+                    scale: 0.0,
+                })
+            }
+            Err(LuError::Generic(e)) => return Err(faer_error(e)),
+        }
+        // the pivots: U's diagonal, against the pivot row's scale
+        let rel = pivot_tolerance(n);
+        let mut min_ratio = f64::INFINITY;
+        {
+            let u = lu.u_factor_unsorted();
+            for (j, &row) in row_fwd.iter().enumerate() {
+                let pivot = u
+                    .row_idx_of_col_raw(j)
+                    .iter()
+                    .zip(u.val_of_col(j))
+                    .find(|(&i, _)| i == j)
+                    .map_or(0.0, |(_, v)| *v);
+                let scale = rowmax[row];
+                if !exceeds(pivot.abs(), rel * scale) {
+                    return Err(LinsolveError::Singular {
+                        index: pm.fwd[j],
+                        pivot,
+                        scale,
+                    });
+                }
+                min_ratio = min_ratio.min(pivot.abs() / scale);
+            }
+        }
+        Ok((
+            Numeric::Lu {
+                lu,
+                row_fwd,
+                row_inv,
+            },
+            min_ratio,
+        ))
+    }
+
+    /// The scaled, shifted values `d_i d_j k_ij + μ δ_ij` into the permuted
+    /// storage.
+    ///
+    /// # Errors
+    /// [`LinsolveError::NonFinite`] naming the first entry that is not
+    /// finite.
+    fn scale_and_permute(
+        &mut self,
+        matrix: &SymmetricMatrix,
+        d_perm: &[f64],
+        shift: f64,
+    ) -> Result<(), LinsolveError> {
+        let pm = &self.perm;
+        let tri = pm.tri.as_ref();
+        let values = matrix.values();
+        self.scaled.clear();
+        self.scaled.resize(pm.src.len(), 0.0);
+        // v − v is 0 for finite v, NaN for NaN and ±∞
+        let mut bad = 0.0f64;
+        for (c, &dc) in d_perm.iter().enumerate() {
+            let range = tri.col_range(c);
+            for ((out, &k), &r) in self.scaled[range.clone()]
+                .iter_mut()
+                .zip(&pm.src[range.clone()])
+                .zip(tri.row_idx_of_col_raw(c))
+            {
+                let v = values[k];
+                #[allow(clippy::eq_op)]
+                {
+                    bad += v - v;
+                }
+                *out = v * d_perm[r] * dc;
+            }
+        }
+        for &at in &pm.diag {
+            self.scaled[at] += shift;
+        }
+        if bad.is_nan() {
+            matrix.check_finite()?;
+        }
+        Ok(())
+    }
+}
+
+/// What a numeric `L Lᵀ` / `L D Lᵀ` gave.
+enum CholeskyOutcome {
+    /// faer stopped at a pivot (zero, non-finite, or for `L Lᵀ` not positive).
+    Failed { index: usize },
+    /// The factor values and the pivots in elimination order.
+    Done { values: Vec<f64>, pivots: Vec<f64> },
+}
+
+impl TangentSolver for SparseSolver {
+    type Factors = SparseFactors;
+
+    fn analyze(pattern: &Arc<SymmetricPattern>) -> Result<Self, LinsolveError> {
+        Self::with_settings(pattern, SparseSettings::default())
+    }
+
+    fn pattern(&self) -> &Arc<SymmetricPattern> {
+        &self.pattern
+    }
+
+    fn factor(
+        &mut self,
+        matrix: &SymmetricMatrix,
+        options: FactorOptions,
+    ) -> Result<SparseFactors, LinsolveError> {
+        check_factor_input(&self.pattern, matrix, &options)?;
+        let n = matrix.n();
+        let d = matrix.jacobi_scaling();
+        let d_perm: Vec<f64> = self.perm.fwd.iter().map(|&i| d[i]).collect();
+        self.scale_and_permute(matrix, &d_perm, options.shift)?;
+        let d_perm = Arc::new(d_perm);
+        let (symbolic, perm) = (self.symbolic.clone(), self.perm.clone());
+        let factors = |numeric, inertia, min_pivot| SparseFactors {
+            n,
+            symbolic: symbolic.clone(),
+            perm: perm.clone(),
+            numeric,
+            scaling: d_perm.clone(),
+            inertia,
+            min_pivot,
+        };
+        let llt_first = self.settings.cholesky == CholeskyKind::Llt;
+        let all_positive = Some(Inertia {
+            positive: n,
+            negative: 0,
+        });
+        let mut outcome = self.cholesky(llt_first)?;
+        if llt_first {
+            if let CholeskyOutcome::Done { values, pivots } = &outcome {
+                if let Ok(ratio) = self.positive_definite(pivots) {
+                    return Ok(factors(Numeric::Llt(values.clone()), all_positive, ratio));
+                }
+            }
+            // not positive definite: L D Lᵀ for the pivot and the inertia
+            outcome = self.cholesky(false)?;
+        }
+        let rowmax = self.row_scales();
+        let inertia = match outcome {
+            CholeskyOutcome::Done { values, pivots } => match self.positive_definite(&pivots) {
+                Ok(ratio) => return Ok(factors(Numeric::Ldlt(values), all_positive, ratio)),
+                Err((index, pivot)) if options.require_positive_definite => {
+                    return Err(LinsolveError::NotPositiveDefinite { index, pivot });
+                }
+                Err(_) => self.inertia_of(&pivots, &rowmax),
+            },
+            CholeskyOutcome::Failed { index } => {
+                if options.require_positive_definite {
+                    return Err(LinsolveError::NotPositiveDefinite { index, pivot: 0.0 });
+                }
+                None
+            }
+        };
+        let (numeric, min_pivot) = self.lu(&rowmax)?;
+        Ok(factors(numeric, inertia, min_pivot))
+    }
+}
+
+/// The numeric factors.
+#[derive(Debug, Clone)]
+enum Numeric {
+    Llt(Vec<f64>),
+    Ldlt(Vec<f64>),
+    Lu {
+        lu: SimplicialLu<usize, f64>,
+        row_fwd: Vec<usize>,
+        row_inv: Vec<usize>,
+    },
+}
+
+/// The factors [`SparseSolver`] returns (see [`Factorization`]).
+///
+/// # Example
+/// ```
+/// use std::sync::Arc;
+/// use softrod::linsolve::*;
+/// let p = Arc::new(SymmetricPattern::from_elements(2, [[0, 1]])?);
+/// let mut k = SymmetricMatrix::zeros(p.clone());
+/// k.add_element(0, &[1.0, 2.0, 2.0, 1.0])?; // eigenvalues 3 and −1
+/// let f: SparseFactors = SparseSolver::analyze(&p)?.factor(&k, FactorOptions::default())?;
+/// assert_eq!(f.method(), FactorMethod::Lu);
+/// assert_eq!(f.inertia(), Some(Inertia { positive: 1, negative: 1 }));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct SparseFactors {
+    n: usize,
+    symbolic: Arc<SymbolicCholesky<usize>>,
+    perm: Arc<Permuted>,
+    numeric: Numeric,
+    /// The Jacobi scaling in the permuted order.
+    scaling: Arc<Vec<f64>>,
+    inertia: Option<Inertia>,
+    min_pivot: f64,
+}
+
+impl SparseFactors {
+    /// The solve for `k >= 1` column-major right-hand sides (sizes checked):
+    /// permuted and scaled into a workspace, solved there, back.
+    fn solve_cols(&self, b: &mut [f64], k: usize) -> Result<(), LinsolveError> {
+        let n = self.n;
+        let fwd = &self.perm.fwd;
+        let mut x = try_zeros(n * k)?;
+        for (xc, bc) in x.chunks_exact_mut(n).zip(b.chunks_exact(n)) {
+            for ((xi, &i), d) in xc.iter_mut().zip(fwd).zip(self.scaling.iter()) {
+                *xi = bc[i] * d;
+            }
+        }
+        let req = match &self.numeric {
+            Numeric::Llt(_) | Numeric::Ldlt(_) => {
+                self.symbolic.solve_in_place_scratch::<f64>(k, Par::Seq)
+            }
+            Numeric::Lu { .. } => lu_solve_scratch::<usize, f64>(n, k, Par::Seq),
+        };
+        let mut mem = MemBuffer::try_new(req).map_err(|_| LinsolveError::OutOfMemory)?;
+        let stack = MemStack::new(&mut mem);
+        let rhs = MatMut::from_column_major_slice_mut(&mut x, n, k);
+        match &self.numeric {
+            Numeric::Llt(values) => {
+                LltRef::new(&self.symbolic, values).solve_in_place_with_conj(
+                    Conj::No,
+                    rhs,
+                    Par::Seq,
+                    stack,
+                );
+            }
+            Numeric::Ldlt(values) => {
+                LdltRef::new(&self.symbolic, values).solve_in_place_with_conj(
+                    Conj::No,
+                    rhs,
+                    Par::Seq,
+                    stack,
+                );
+            }
+            Numeric::Lu {
+                lu,
+                row_fwd,
+                row_inv,
+            } => {
+                let id = &self.perm.identity;
+                let row_perm = PermRef::new_checked(row_fwd, row_inv, n);
+                let col_perm = PermRef::new_checked(id, id, n);
+                lu.solve_in_place_with_conj(row_perm, col_perm, Conj::No, rhs, Par::Seq, stack);
+            }
+        }
+        for (xc, bc) in x.chunks_exact(n).zip(b.chunks_exact_mut(n)) {
+            for ((xi, &i), d) in xc.iter().zip(fwd).zip(self.scaling.iter()) {
+                bc[i] = xi * d;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Factorization for SparseFactors {
+    fn n(&self) -> usize {
+        self.n
+    }
+
+    fn method(&self) -> FactorMethod {
+        match self.numeric {
+            Numeric::Llt(_) => FactorMethod::Llt,
+            Numeric::Ldlt(_) => FactorMethod::Ldlt,
+            Numeric::Lu { .. } => FactorMethod::Lu,
+        }
+    }
+
+    fn inertia(&self) -> Option<Inertia> {
+        self.inertia
+    }
+
+    fn pivot_ratio(&self) -> f64 {
+        self.min_pivot
+    }
+
+    fn solve_in_place(&self, b: &mut [f64]) -> Result<(), LinsolveError> {
+        self.solve_columns_in_place(b, 1)
+    }
+
+    fn solve_columns_in_place(&self, b: &mut [f64], nrhs: usize) -> Result<(), LinsolveError> {
+        check_rhs("b", self.n.saturating_mul(nrhs), b.len())?;
+        if nrhs == 0 || self.n == 0 {
+            return Ok(());
+        }
+        self.solve_cols(b, nrhs)
+    }
+}
+
+/// One triangle of the symmetrically permuted pattern (`inv[i]` the new
+/// index of row `i`): column pointers, sorted row indices, and for each
+/// stored entry its slot in `p`'s values.
+fn permuted_triangle(
+    p: &SymmetricPattern,
+    inv: &[usize],
+    side: Side,
+) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let n = p.n();
+    let (cp, ri) = (p.col_ptr(), p.row_idx());
+    // (column, row, slot) in the permuted numbering
+    let mut entries: Vec<(usize, usize, usize)> = Vec::with_capacity(ri.len());
+    for j in 0..n {
+        for (k, &i) in ri.iter().enumerate().take(cp[j + 1]).skip(cp[j]) {
+            let (a, b) = (inv[i], inv[j]);
+            let (lo, hi) = (a.min(b), a.max(b));
+            entries.push(match side {
+                Side::Upper => (hi, lo, k),
+                Side::Lower => (lo, hi, k),
+            });
+        }
+    }
+    entries.sort_unstable();
+    compress(n, &entries)
+}
+
+/// The full pattern (both triangles) of a symmetric matrix stored as one
+/// triangle (`col_ptr`, `row_idx`): its column pointers, sorted row
+/// indices, and for each entry the stored entry it copies.
+fn full_pattern(
+    n: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let mut entries: Vec<(usize, usize, usize)> = Vec::with_capacity(2 * row_idx.len());
+    for c in 0..n {
+        for (k, &r) in row_idx
+            .iter()
+            .enumerate()
+            .take(col_ptr[c + 1])
+            .skip(col_ptr[c])
+        {
+            entries.push((c, r, k));
+            if r != c {
+                entries.push((r, c, k));
+            }
+        }
+    }
+    entries.sort_unstable();
+    compress(n, &entries)
+}
+
+/// Compressed columns from sorted `(column, row, source)` triples.
+fn compress(n: usize, entries: &[(usize, usize, usize)]) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let mut ptr = vec![0usize; n + 1];
+    for &(c, _, _) in entries {
+        ptr[c + 1] += 1;
+    }
+    for c in 0..n {
+        ptr[c + 1] += ptr[c];
+    }
+    let rows = entries.iter().map(|e| e.1).collect();
+    let src = entries.iter().map(|e| e.2).collect();
+    (ptr, rows, src)
+}
+
+/// `x > t`, false for a NaN.
+fn exceeds(x: f64, t: f64) -> bool {
+    x > t
+}
+
+/// A zeroed vector, refusing instead of aborting when it cannot be allocated.
+fn try_zeros(len: usize) -> Result<Vec<f64>, LinsolveError> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(len)
+        .map_err(|_| LinsolveError::OutOfMemory)?;
+    v.resize(len, 0.0);
+    Ok(v)
+}
+
+/// faer's non-numeric errors.
+fn faer_error(e: FaerError) -> LinsolveError {
+    match e {
+        FaerError::IndexOverflow => LinsolveError::TooLarge {
+            what: "sparse factor",
+            entries: usize::MAX,
+            max: isize::MAX as usize,
+        },
+        _ => LinsolveError::OutOfMemory,
+    }
+}
