@@ -34,7 +34,8 @@ use criterion::{criterion_group, criterion_main, BatchSize, BenchmarkId, Criteri
 use softrod::assembly::Robot;
 use softrod::element::PlanarCable;
 use softrod::estimate::{
-    Backend, BoundFrame, Estimator, EstimatorSettings, LoadBound, MarkerObservation, Observation,
+    Backend, BoundFrame, Estimate, Estimator, EstimatorSettings, LoadBound, MarkerObservation,
+    Observation,
 };
 use softrod::loads::{LineLoad, Loads, PointForce};
 use softrod::scene::Scene;
@@ -123,7 +124,7 @@ fn warm(c: &Case, backend: Backend, settings: EstimatorSettings) -> Warm {
     let mut est = backend
         .build(c.robot.clone(), c.known.clone(), settings)
         .unwrap();
-    if est.step(&c.frames[0]).is_ok() {
+    if est.step(&c.frames[0]).and_then(Estimate::converged).is_ok() {
         return (est, None);
     }
     est.reset();
@@ -147,12 +148,16 @@ fn warm(c: &Case, backend: Backend, settings: EstimatorSettings) -> Warm {
                 MarkerObservation::at_arc(s, p)
             })
             .collect();
-        if let Err(e) = est.step(&Observation { markers }) {
+        if let Err(e) = est
+            .step(&Observation { markers })
+            .and_then(Estimate::converged)
+        {
             return (est, Some(format!("no warm start: {e}")));
         }
     }
     let failed = est
         .step(&c.frames[0])
+        .and_then(Estimate::converged)
         .err()
         .map(|e| format!("no warm start: {e}"));
     (est, failed)
@@ -179,7 +184,8 @@ fn bench_warm(
         let (c, (est, cold)) = state.get_or_insert_with(&make);
         b.iter(|| {
             k = (k + 1) % c.frames.len();
-            let ok = black_box(est.step(black_box(&c.frames[k]))).is_ok();
+            let ok = black_box(est.step(black_box(&c.frames[k])))
+                .is_ok_and(|e| e.report.status.is_converged());
             steps += 1;
             failed += usize::from(!ok);
         });
@@ -242,7 +248,12 @@ fn cold_step(c: &mut Criterion) {
                         },
                         // the time to the answer, an estimate or a
                         // non-convergence (marked by `note_failure`)
-                        |mut est| black_box(est.step(black_box(&c.frames[1])).is_ok()),
+                        |mut est| {
+                            black_box(
+                                est.step(black_box(&c.frames[1]))
+                                    .is_ok_and(|e| e.report.status.is_converged()),
+                            )
+                        },
                         BatchSize::SmallInput,
                     )
                 });
@@ -262,7 +273,7 @@ fn note_failure(group: &str, backend: Backend, param: &str, c: &Case, settings: 
     let mut est = backend
         .build(c.robot.clone(), c.known.clone(), settings)
         .unwrap();
-    if let Err(e) = est.step(&c.frames[1]) {
+    if let Err(e) = est.step(&c.frames[1]).and_then(Estimate::converged) {
         eprintln!("{group}/{}/{param}: {e}", backend.name());
         let _ = std::fs::create_dir_all(&dir);
         let _ = std::fs::write(&marker, format!("{e}\n"));
@@ -285,7 +296,12 @@ fn alpha_search(c: &mut Criterion) {
                     };
                     backend.build(c.robot.clone(), c.known.clone(), s).unwrap()
                 },
-                |mut est| black_box(est.step(black_box(&c.frames[1])).is_ok()),
+                |mut est| {
+                    black_box(
+                        est.step(black_box(&c.frames[1]))
+                            .is_ok_and(|e| e.report.status.is_converged()),
+                    )
+                },
                 BatchSize::SmallInput,
             )
         });

@@ -345,7 +345,7 @@ fn median_warm_step(est: &mut dyn softrod::estimate::Estimator, observations: &[
     let mut times = Vec::with_capacity(observations.len());
     for o in observations {
         let t = std::time::Instant::now();
-        est.step(o)?;
+        est.step(o)?.converged()?;
         times.push(t.elapsed().as_secs_f64());
     }
     times.sort_by(f64::total_cmp);
@@ -381,7 +381,7 @@ fn estimation_demo() -> Result<()> {
     outln!("  truth:    tip ({:+.5}, {:+.5}) m, resultant ({:+.4}, {:+.4}) N", tx, ty, true_force[0], true_force[1]);
     for backend in [Backend::Newton, Backend::Sqp] {
         let mut est = backend.build(robot.clone(), known.clone(), scene.solver.estimator.clone())?;
-        let e = est.step(&obs)?;
+        let e = est.step(&obs)?.converged()?;
         let (ex, ey) = tip(&e.q);
         let sd: Vec<f64> = (0..2).map(|a| e.resultant_force_cov[a * 2 + a].max(0.0).sqrt()).collect();
         outln!(
@@ -458,7 +458,14 @@ pub fn run() -> Result<()> {
             if markers.is_none() {
                 eprintln!("softrod: no markers file: {}", result.observation);
             }
-            write_json(&result, out.as_ref())
+            write_json(&result, out.as_ref())?;
+            // the last iterate is written (its report says how it ended); the
+            // exit status says that it is not an estimate
+            let status = result.report.status;
+            if !status.is_converged() {
+                anyhow::bail!("estimation did not converge: {status} after {} iterations; the result written is the last iterate", result.report.iterations);
+            }
+            Ok(())
         }
         Some(Command::Report { out, quick, only, quiet }) => report(out, quick, only, quiet),
     }
@@ -482,7 +489,7 @@ fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Resu
         }
     }
     if let Some(s) = &summary.stability {
-        let failed = s.cells.iter().filter(|c| !c.outcome.converged).count();
+        let failed = s.cells.iter().filter(|c| !c.outcome.is_converged()).count();
         outln!("Stability: {} cases in {:.1} s, {} failed, {} panics", s.cells.len(), s.wall_time_s, failed, s.panics);
     }
     outln!("wrote {} files in {:.1} s:", summary.files.len(), summary.wall_time_s);

@@ -11,8 +11,12 @@
 //! matches on the kind, not on the module it came from. The enum is
 //! `#[non_exhaustive]`, so variants can be added without breaking callers.
 //! [`Error::field`] gives the name of the field at fault.
+//!
+//! What a failed solve reports (its status, its report) is plain data from
+//! [`crate::outcome`], which depends on no solver: this module imports no
+//! solver module, so no module cycle runs through the error type.
 
-use crate::statics::StaticReport;
+use crate::outcome::{EstimateStatus, RefinementFailure, StaticReport};
 
 /// Errors returned by `softrod`.
 ///
@@ -86,18 +90,28 @@ pub enum Error {
         /// What the solver reached before it stopped.
         report: Box<StaticReport>,
     },
-    /// An estimator did not converge (see [`crate::estimate`]).
-    #[error("estimation did not converge: {report}")]
+    /// A matrix that must be positive definite (a Gauss–Newton system) is not.
+    #[error("{context} is not positive definite")]
+    NotPositiveDefinite {
+        /// Which matrix.
+        context: String,
+    },
+    /// An estimate did not converge and the caller asked for a converged one
+    /// ([`crate::estimate::Estimate::converged`]); the estimators themselves
+    /// return their last iterate with its status.
+    #[error("estimation did not converge: {status} after {iterations} iterations")]
     EstimateNotConverged {
-        /// What the estimator reached before it stopped.
-        report: Box<crate::estimate::EstimateReport>,
+        /// How the estimation ended.
+        status: EstimateStatus,
+        /// Outer iterations taken.
+        iterations: usize,
     },
     /// The refinement of `"elements": "auto"` sections did not reach its
     /// tolerance (see [`crate::refine`]).
     #[error("refinement did not reach its tolerance: {report}")]
     RefinementNotConverged {
         /// The target, every mesh tried and why the refinement stopped.
-        report: Box<crate::refine::RefinementFailure>,
+        report: Box<RefinementFailure>,
     },
     /// A scene file could not be read or is malformed.
     #[error("scene: {message}")]

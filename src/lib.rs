@@ -14,6 +14,7 @@
 //!   to all coordinates.
 //! - [`estimate`]: shape and load estimation (25)–(30), backends `newton` and `sqp`.
 //! - [`scene`]: JSON scene files; [`params`]: the values the paper leaves open.
+//! - [`outcome`]: how a solve ended: the status enums and the reports errors carry.
 //! - [`refine`]: `"elements": "auto"`, the smallest mesh meeting a tolerance.
 //! - [`linsolve`]: linear solvers for the tangent (banded, faer sparse); [`quadrature`]: Gauss rules.
 //! - [`report`]: `softrod report`, the speed–accuracy chart and the stability map.
@@ -26,7 +27,7 @@
 //! let scene = Scene::two_section();
 //! let robot = scene.robot()?;
 //! let eq = StaticSolver::default().solve(&robot, &scene.loads()?, None)?;
-//! assert!(eq.report.converged);
+//! assert!(eq.report.status.is_converged());
 //! # Ok::<(), softrod::Error>(())
 //! ```
 #![warn(missing_docs)]
@@ -38,6 +39,7 @@ pub mod error;
 pub mod estimate;
 pub mod linsolve;
 pub mod loads;
+pub mod outcome;
 pub mod params;
 pub mod quadrature;
 pub mod refine;

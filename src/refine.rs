@@ -91,13 +91,15 @@
 
 use std::time::Instant;
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use crate::element::{NodeKinematics, PlanarCable};
 use crate::error::{Error, Result};
 use crate::estimate::Observation;
 use crate::scene::{RefinementTarget, Scene, UnknownLoad, NODE_MATCH};
 use crate::statics::StaticSolver;
+
+pub use crate::outcome::{Phase, Quantity, RefinementFailure, RefinementStop, Trial, TrialFailure};
 
 /// The smallest observed order of convergence the error estimate trusts.
 pub const MIN_ORDER: f64 = 1.0;
@@ -108,74 +110,21 @@ pub const MAX_ORDER: f64 = 8.0;
 /// doubling whatever their ratio (the quantity has settled at round-off).
 pub const SETTLED_FRACTION: f64 = 1.0 / 16.0;
 
-/// The quantity a refinement controls.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Quantity {
-    /// The tip position of the static equilibrium (m).
-    TipPosition,
-    /// The resultant force of the estimated unknown load (N).
-    LoadResultant,
-}
-
 impl Quantity {
     /// The quantity a target names.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{refine::Quantity, scene::RefinementTarget};
+    /// let t = RefinementTarget::TipPosition { tolerance_m: 1e-6, max_elements: 100 };
+    /// assert_eq!(Quantity::of(&t), Quantity::TipPosition);
+    /// ```
     pub fn of(target: &RefinementTarget) -> Self {
         match target {
             RefinementTarget::TipPosition { .. } => Quantity::TipPosition,
             RefinementTarget::LoadResultant { .. } => Quantity::LoadResultant,
         }
     }
-
-    /// Its name in a scene (`tip_position`, `load_resultant`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Quantity::TipPosition => "tip_position",
-            Quantity::LoadResultant => "load_resultant",
-        }
-    }
-
-    /// Its SI unit (`m` or `N`).
-    pub fn unit(self) -> &'static str {
-        match self {
-            Quantity::TipPosition => "m",
-            Quantity::LoadResultant => "N",
-        }
-    }
-}
-
-/// Which stage of the refinement tried a mesh.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Phase {
-    /// The doubling of the scale, `1, 2, 4, …`.
-    Doubling,
-    /// The bisection between the last failing and the first passing level.
-    Search,
-}
-
-/// One mesh the refinement tried.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Trial {
-    /// The scale `t` of the candidate ([`Ladder::elements`]).
-    pub scale: usize,
-    /// Elements per section.
-    pub elements: Vec<usize>,
-    /// Elements in all.
-    pub total_elements: usize,
-    /// The stage that tried it.
-    pub phase: Phase,
-    /// The quantity on this mesh (m or N); `None` if the solve failed.
-    pub value: Option<Vec<f64>>,
-    /// `|Q_t − Q_{t/2}|`, the change from the previous doubling level (m or N).
-    pub change: Option<f64>,
-    /// The estimated error `|Q_t − Q_R|` (m or N), once the extrapolated
-    /// value `Q_R` is known.
-    pub estimated_error: Option<f64>,
-    /// Why the solve failed, if it did.
-    pub failure: Option<String>,
-    /// Wall time of the solve (s; information, not a measurement).
-    pub wall_time_s: f64,
 }
 
 /// The outcome of [`auto_elements`].
@@ -209,45 +158,6 @@ pub struct Refinement {
     /// dropped): build the robot, solve or estimate with it.
     #[serde(skip)]
     pub scene: Scene,
-}
-
-/// Why a refinement stopped short of its tolerance, with what it tried
-/// (carried by [`Error::RefinementNotConverged`]).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct RefinementFailure {
-    /// The target that was not met.
-    pub target: RefinementTarget,
-    /// Why it stopped.
-    pub cause: String,
-    /// Every mesh tried, in order.
-    pub history: Vec<Trial>,
-}
-
-impl std::fmt::Display for RefinementFailure {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let q = Quantity::of(&self.target);
-        write!(
-            f,
-            "{} to {:e} {}: {}; meshes tried:",
-            q.name(),
-            self.target.tolerance(),
-            q.unit(),
-            self.cause
-        )?;
-        for t in &self.history {
-            match (&t.failure, t.change) {
-                (Some(why), _) => write!(f, " {} elements (failed: {why});", t.total_elements)?,
-                (None, Some(c)) => write!(
-                    f,
-                    " {} elements (change {c:.2e} {});",
-                    t.total_elements,
-                    q.unit()
-                )?,
-                (None, None) => write!(f, " {} elements;", t.total_elements)?,
-            }
-        }
-        Ok(())
-    }
 }
 
 /// The candidate meshes of a scene: fixed sections keep their count, auto
@@ -432,15 +342,12 @@ pub fn auto_elements(scene: &Scene, observation: Option<&Observation>) -> Result
     let (order, extrapolated, margin) = loop {
         let total = run.ladder.total_elements(scale);
         if total > max || scale == usize::MAX {
-            let last = levels.last().and_then(|&i| run.history[i].change);
-            let cause = format!(
-                "the next mesh, {total} elements, exceeds refinement.max_elements = {max}{}",
-                last.map_or(String::new(), |c| format!(
-                    " (last change {c:.2e} {})",
-                    quantity.unit()
-                ))
-            );
-            return Err(run.failure(target, cause));
+            let stop = RefinementStop::MeshLimit {
+                next_elements: total,
+                max_elements: max,
+                last_change: levels.last().and_then(|&i| run.history[i].change),
+            };
+            return Err(run.failure(&target, stop));
         }
         let i = run.trial(scale, Phase::Doubling)?;
         if let Some(&prev) = levels.last() {
@@ -581,14 +488,20 @@ impl Run<'_> {
             },
         };
         let (value, failure) = match outcome {
-            Ok(v) if v.iter().all(|x| x.is_finite()) => (Some(v), None),
-            Ok(_) => (None, Some("non-finite value".to_string())),
-            Err(
-                e @ (Error::NotConverged { .. }
-                | Error::EstimateNotConverged { .. }
-                | Error::Singular { .. }
-                | Error::NonFinite { .. }),
-            ) => (None, Some(e.to_string())),
+            Ok(Ok(v)) if v.iter().all(|x| x.is_finite()) => (Some(v), None),
+            Ok(Ok(_)) => (None, Some(TrialFailure::NonFinite)),
+            Ok(Err(f)) => (None, Some(f)),
+            Err(Error::NotConverged { report }) => {
+                (None, Some(TrialFailure::Statics(report.status)))
+            }
+            Err(Error::EstimateNotConverged { status, .. }) => {
+                (None, Some(TrialFailure::Estimate(status)))
+            }
+            Err(Error::Singular { .. }) => (None, Some(TrialFailure::Singular)),
+            Err(Error::NotPositiveDefinite { .. }) => {
+                (None, Some(TrialFailure::NotPositiveDefinite))
+            }
+            Err(Error::NonFinite { .. }) => (None, Some(TrialFailure::NonFinite)),
             Err(e) => return Err(e),
         };
         self.history.push(Trial {
@@ -605,11 +518,12 @@ impl Run<'_> {
         Ok(self.history.len() - 1)
     }
 
-    fn failure(self, target: RefinementTarget, cause: String) -> Error {
+    fn failure(self, target: &RefinementTarget, stop: RefinementStop) -> Error {
         Error::RefinementNotConverged {
             report: Box::new(RefinementFailure {
-                target,
-                cause,
+                quantity: Quantity::of(target),
+                tolerance: target.tolerance(),
+                stop,
                 history: self.history,
             }),
         }
@@ -617,20 +531,29 @@ impl Run<'_> {
 }
 
 /// The tip position of the scene's static equilibrium (m).
-fn tip_position(scene: &Scene) -> Result<Vec<f64>> {
+fn tip_position(scene: &Scene) -> Result<std::result::Result<Vec<f64>, TrialFailure>> {
     let robot = scene.robot()?;
     let loads = scene.loads()?;
     let eq = StaticSolver::new(scene.solver.statics.clone())?.solve(&robot, &loads, None)?;
     let nd = PlanarCable::NODE_DOFS;
     let tip = eq.q.len().saturating_sub(nd);
-    Ok(eq.q[tip..tip + PlanarCable::DIM].to_vec())
+    Ok(Ok(eq.q[tip..tip + PlanarCable::DIM].to_vec()))
 }
 
-/// The resultant force of the unknown load estimated from `observation` (N).
-fn load_resultant(scene: &Scene, observation: &Observation) -> Result<Vec<f64>> {
+/// The resultant force of the unknown load estimated from `observation`
+/// (N), or the status of an estimation that did not converge.
+fn load_resultant(
+    scene: &Scene,
+    observation: &Observation,
+) -> Result<std::result::Result<Vec<f64>, TrialFailure>> {
     let robot = scene.robot()?;
     let known = scene.loads()?;
     let settings = scene.estimator_settings()?;
     let mut estimator = settings.backend.build(robot, known, settings)?;
-    Ok(estimator.step(observation)?.resultant_force_n)
+    let e = estimator.step(observation)?;
+    Ok(if e.report.status.is_converged() {
+        Ok(e.resultant_force_n)
+    } else {
+        Err(TrialFailure::Estimate(e.report.status))
+    })
 }

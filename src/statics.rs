@@ -22,6 +22,7 @@ use crate::element::Element;
 use crate::error::{check_len, Error, Result};
 use crate::linsolve::BandedMatrix;
 use crate::loads::Loads;
+pub use crate::outcome::{NonFiniteAt, StaticCriterion, StaticReport, StaticStatus};
 
 /// Settings of the static solver; every field has a documented default.
 ///
@@ -114,79 +115,6 @@ impl StaticSettings {
 /// time a solve may take.
 pub const MAX_ITERATIONS: usize = 100_000;
 
-/// Which test ended a converged solve.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Criterion {
-    /// `|Q| <= residual_tolerance × load scale`.
-    Residual,
-    /// `|Q|` is at the round-off floor.
-    Floor,
-    /// A full Newton step below `increment_tolerance × L`.
-    Increment,
-}
-
-/// Why a solve failed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum FailureCause {
-    /// The iteration budget ran out.
-    IterationLimit,
-    /// The tangent stiffness was singular.
-    SingularTangent,
-    /// A residual or tangent was not finite.
-    NonFinite,
-    /// The homotopy step fell below `min_load_step`.
-    LoadStepTooSmall,
-}
-
-/// What a static solve did.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct StaticReport {
-    /// Whether equilibrium was reached.
-    pub converged: bool,
-    /// The test that ended a converged solve.
-    pub criterion: Option<Criterion>,
-    /// Why it failed, if it did.
-    pub cause: Option<FailureCause>,
-    /// Newton iterations in all.
-    pub iterations: usize,
-    /// Homotopy steps taken (0: the full problem converged directly).
-    pub load_steps: usize,
-    /// Final `|Q|_2` (N).
-    pub residual_norm_n: f64,
-    /// `residual_tolerance × load_scale_n` (N).
-    pub residual_tolerance_n: f64,
-    /// Estimated round-off floor of `|Q|_2` (N).
-    pub residual_floor_n: f64,
-    /// Norm of the applied generalized forces (N).
-    pub load_scale_n: f64,
-    /// Last Newton step `|dq|_∞` (m).
-    pub increment_norm_m: f64,
-    /// Wall time (s).
-    pub wall_time_s: f64,
-}
-
-impl std::fmt::Display for StaticReport {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "{} after {} iterations ({} load steps), |Q| = {:.3e} N (tolerance {:.3e} N, round-off floor {:.3e} N), last step {:.3e} m",
-            match (self.converged, self.cause) {
-                (true, _) => "converged".to_string(),
-                (false, Some(c)) => format!("failed ({c:?})"),
-                (false, None) => "failed".to_string(),
-            },
-            self.iterations,
-            self.load_steps,
-            self.residual_norm_n,
-            self.residual_tolerance_n,
-            self.residual_floor_n,
-            self.increment_norm_m
-        )
-    }
-}
-
 /// A converged equilibrium.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Equilibrium {
@@ -220,11 +148,6 @@ struct Work {
     iterations: usize,
     floor: f64,
     last_step: f64,
-}
-
-enum Outcome {
-    Converged(Criterion),
-    Failed(FailureCause),
 }
 
 impl StaticSolver {
@@ -295,12 +218,14 @@ impl StaticSolver {
         let mut load_steps = 0;
         // loads so large that their norm overflows (or a start point where the
         // forces do): no tolerance can be stated, so no solve is attempted
-        let mut outcome = if scale.is_finite() {
+        let mut status = if scale.is_finite() {
             self.newton(robot, &dead, loads, &offset, &mut q, &mut w, scale)?
         } else {
-            Outcome::Failed(FailureCause::NonFinite)
+            StaticStatus::NonFinite {
+                at: NonFiniteAt::Loads,
+            }
         };
-        if matches!(outcome, Outcome::Failed(_)) && scale.is_finite() {
+        if !status.is_converged() && scale.is_finite() {
             // Homotopy from the start point: R_λ(q) = Q(q; λ loads) − (1 − λ) Q(q_start; no loads).
             // At λ = 0 the start point is exact; the load-dependent part of the
             // tangent (the torques' Hessian) grows with λ, so iterates stay
@@ -312,7 +237,7 @@ impl StaticSolver {
             robot.residual_into(&q, &zero_dead, &unloaded, &mut r0)?;
             let mut lambda = 0.0;
             let mut step: f64 = 0.25;
-            outcome = Outcome::Failed(FailureCause::LoadStepTooSmall);
+            status = StaticStatus::LoadStepTooSmall { load_fraction: 0.0 };
             while w.iterations < self.settings.max_total_iterations {
                 let target = (lambda + step).min(1.0);
                 let off: Vec<f64> = r0.iter().map(|v| (1.0 - target) * v).collect();
@@ -320,36 +245,39 @@ impl StaticSolver {
                 let loads_t = loads.scaled(target);
                 let saved = q.clone();
                 let before = w.iterations;
-                match self.newton(robot, &dead_t, &loads_t, &off, &mut q, &mut w, scale)? {
-                    Outcome::Converged(c) => {
-                        load_steps += 1;
-                        lambda = target;
-                        if lambda >= 1.0 {
-                            outcome = Outcome::Converged(c);
-                            break;
-                        }
-                        if w.iterations - before <= 6 {
-                            step *= 2.0;
-                        }
+                let step_status =
+                    self.newton(robot, &dead_t, &loads_t, &off, &mut q, &mut w, scale)?;
+                if step_status.is_converged() {
+                    load_steps += 1;
+                    lambda = target;
+                    if lambda >= 1.0 {
+                        status = step_status;
+                        break;
                     }
-                    Outcome::Failed(cause) => {
-                        q = saved;
-                        step *= 0.5;
-                        if step < self.settings.min_load_step {
-                            outcome = Outcome::Failed(if cause == FailureCause::IterationLimit {
-                                FailureCause::LoadStepTooSmall
-                            } else {
-                                cause
-                            });
-                            break;
-                        }
+                    if w.iterations - before <= 6 {
+                        step *= 2.0;
+                    }
+                } else {
+                    q = saved;
+                    step *= 0.5;
+                    if step < self.settings.min_load_step {
+                        // a load step that ran out of iterations or found no
+                        // descent: the homotopy stalled
+                        status = match step_status {
+                            StaticStatus::IterationLimit { .. }
+                            | StaticStatus::LineSearchFailed => StaticStatus::LoadStepTooSmall {
+                                load_fraction: lambda,
+                            },
+                            other => other,
+                        };
+                        break;
                     }
                 }
             }
-            if w.iterations >= self.settings.max_total_iterations
-                && !matches!(outcome, Outcome::Converged(_))
-            {
-                outcome = Outcome::Failed(FailureCause::IterationLimit);
+            if w.iterations >= self.settings.max_total_iterations && !status.is_converged() {
+                status = StaticStatus::IterationLimit {
+                    iterations: w.iterations,
+                };
             }
         }
         // final residual for the report
@@ -358,16 +286,12 @@ impl StaticSolver {
         // no NaN leaves the library: a "converged" state with a non-finite
         // coordinate or residual is a failure
         if !(res.is_finite() && q.iter().all(|v| v.is_finite())) {
-            outcome = Outcome::Failed(FailureCause::NonFinite);
+            status = StaticStatus::NonFinite {
+                at: NonFiniteAt::Solution,
+            };
         }
-        let (converged, criterion, cause) = match outcome {
-            Outcome::Converged(c) => (true, Some(c), None),
-            Outcome::Failed(c) => (false, None, Some(c)),
-        };
         let report = StaticReport {
-            converged,
-            criterion,
-            cause,
+            status,
             iterations: w.iterations,
             load_steps,
             residual_norm_n: finite_or_max(res),
@@ -377,7 +301,7 @@ impl StaticSolver {
             increment_norm_m: finite_or_max(w.last_step),
             wall_time_s: start.elapsed().as_secs_f64(),
         };
-        if converged {
+        if status.is_converged() {
             Ok(Equilibrium { q, report })
         } else {
             Err(Error::NotConverged {
@@ -397,7 +321,7 @@ impl StaticSolver {
         q: &mut [f64],
         w: &mut Work,
         scale: f64,
-    ) -> Result<Outcome> {
+    ) -> Result<StaticStatus> {
         let nd = E::NODE_DOFS;
         let d = E::DIM;
         let n = robot.n_free();
@@ -416,18 +340,21 @@ impl StaticSolver {
         let mut energies = vec![0.0; robot.n_elements()];
         for _ in 0..self.settings.max_iterations {
             if !rn.is_finite() {
-                return Ok(Outcome::Failed(FailureCause::NonFinite));
+                return Ok(StaticStatus::NonFinite {
+                    at: NonFiniteAt::Residual,
+                });
             }
             if rn <= tol {
-                return Ok(Outcome::Converged(Criterion::Residual));
+                return Ok(StaticStatus::Converged(StaticCriterion::Residual));
             }
             if w.iterations >= self.settings.max_total_iterations {
-                return Ok(Outcome::Failed(FailureCause::IterationLimit));
+                return Ok(StaticStatus::IterationLimit {
+                    iterations: w.iterations,
+                });
             }
             robot.tangent_into(q, loads, &mut w.k)?;
             let qmax = q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            w.floor =
-                f64::EPSILON * w.k.max_abs() * qmax * (FLOOR_SQRT_N * (n as f64).sqrt()).max(1.0);
+            w.floor = residual_floor(w.k.max_abs(), qmax, n);
             // At the round-off floor the residual cannot certify more digits,
             // but one more Newton step still can gain them (the floor does not
             // shrink with the load; stopping here left small-load solves 1e-11 m
@@ -450,7 +377,9 @@ impl StaticSolver {
                     Ok(lu) => lu,
                     Err(Error::Singular { .. }) => continue,
                     Err(Error::NonFinite { .. }) => {
-                        return Ok(Outcome::Failed(FailureCause::NonFinite));
+                        return Ok(StaticStatus::NonFinite {
+                            at: NonFiniteAt::Tangent,
+                        });
                     }
                     Err(e) => return Err(e),
                 };
@@ -463,7 +392,7 @@ impl StaticSolver {
                 }
             }
             if !found {
-                return Ok(Outcome::Failed(FailureCause::SingularTangent));
+                return Ok(StaticStatus::SingularTangent);
             }
             let dq_full = robot.expand_step(&dq)?;
             // cap the slope change
@@ -489,7 +418,7 @@ impl StaticSolver {
                     std::mem::swap(&mut w.r, &mut r_trial);
                     w.last_step = step_inf;
                 }
-                return Ok(Outcome::Converged(Criterion::Floor));
+                return Ok(StaticStatus::Converged(StaticCriterion::RoundOffFloor));
             }
             // the element energies at q, once for all trials
             robot.element_energies_into(q, &mut energies)?;
@@ -518,26 +447,46 @@ impl StaticSolver {
             if !accepted {
                 // no decrease along the Newton direction: at the floor or stuck
                 if step_inf <= xtol {
-                    return Ok(Outcome::Converged(Criterion::Increment));
+                    return Ok(StaticStatus::Converged(StaticCriterion::Increment));
                 }
-                return Ok(Outcome::Failed(FailureCause::IterationLimit));
+                return Ok(StaticStatus::LineSearchFailed);
             }
             q.copy_from_slice(&trial);
             std::mem::swap(&mut w.r, &mut r_trial);
             rn = norm2(&w.r);
             w.last_step = t * step_inf;
             if t == 1.0 && step_inf <= xtol {
-                return Ok(Outcome::Converged(Criterion::Increment));
+                return Ok(StaticStatus::Converged(StaticCriterion::Increment));
             }
         }
         if rn <= tol.max(w.floor) {
-            return Ok(Outcome::Converged(Criterion::Residual));
+            return Ok(StaticStatus::Converged(StaticCriterion::Residual));
         }
-        Ok(Outcome::Failed(FailureCause::IterationLimit))
+        Ok(StaticStatus::IterationLimit {
+            iterations: w.iterations,
+        })
     }
 }
 
-/// The round-off floor of `|Q|_2` is `ε |K|_max |q|_∞ · max(1, FLOOR_SQRT_N √n_free)`.
+/// The round-off floor of the equilibrium residual `|Q|_2` (N) at a
+/// configuration whose largest coordinate is `q_max_abs` (m), with a tangent
+/// stiffness whose largest entry is `k_max_abs` over `n_free` free
+/// coordinates: `ε |K|_max |q|_∞ · max(1, 0.05 √n_free)`. Below it the
+/// residual cannot certify more digits; the static solver stops there (after
+/// one more Newton step) and the SQP estimator calls an iterate feasible
+/// there.
+///
+/// # Example
+/// ```
+/// let floor = softrod::statics::residual_floor(1e4, 0.24, 84);
+/// assert!((floor - f64::EPSILON * 1e4 * 0.24).abs() < 1e-25);
+/// ```
+pub fn residual_floor(k_max_abs: f64, q_max_abs: f64, n_free: usize) -> f64 {
+    f64::EPSILON * k_max_abs * q_max_abs * (FLOOR_SQRT_N * (n_free as f64).sqrt()).max(1.0)
+}
+
+/// The floor's growth with the number of free coordinates,
+/// `max(1, FLOOR_SQRT_N √n_free)`.
 /// Calibrated by running Newton far past convergence: on a cantilever under a
 /// uniform load (8 to 2048 elements) the residual stagnates at 0.05 to 0.47
 /// times `ε |K|_max |q|_∞` (0.22 at 8 elements, 0.08 at 32, 0.13 at 128,

@@ -21,7 +21,7 @@ fn cantilever(elements: usize) -> Robot<PlanarCable> {
 
 fn tip(robot: &Robot<PlanarCable>, loads: &Loads) -> [f64; 4] {
     let eq = StaticSolver::default().solve(robot, loads, None).unwrap();
-    assert!(eq.report.converged);
+    assert!(eq.report.status.is_converged());
     let n = eq.q.len();
     [eq.q[n - 4], eq.q[n - 3], eq.q[n - 2], eq.q[n - 1]]
 }

@@ -21,7 +21,7 @@ use softrod::linsolve::BandedMatrix;
 use softrod::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use softrod::quadrature::GaussRule;
 use softrod::scene::{Marker, RefinementTarget, Scene, SceneLoad};
-use softrod::statics::{FailureCause, StaticSettings, StaticSolver};
+use softrod::statics::{StaticSettings, StaticSolver, StaticStatus};
 use softrod::structure::{
     BodyLoad, EndSupport, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec,
 };
@@ -1703,7 +1703,7 @@ fn zero_mass_is_a_weightless_robot_that_solves() {
     let eq = StaticSolver::default()
         .solve(&robot, &s.loads().unwrap(), None)
         .unwrap();
-    assert!(eq.report.converged);
+    assert!(eq.report.status.is_converged());
     assert!(eq.q.iter().all(|v| v.is_finite()));
     assert!(robot.gravity_force().iter().all(|v| *v == 0.0));
 }
@@ -1825,16 +1825,14 @@ fn divergent_and_ill_posed_solves_end_with_a_report_in_bounded_time() {
                 assert!(r.iterations <= budget, "{what}: {r}");
                 assert!(
                     r.residual_norm_n <= 1.0001 * r.residual_tolerance_n.max(r.residual_floor_n)
-                        || r.criterion == Some(softrod::statics::Criterion::Increment),
+                        || r.status.criterion()
+                            == Some(softrod::statics::StaticCriterion::Increment),
                     "{what}: {r}"
                 );
             }
             Err(Error::NotConverged { report }) => {
                 println!("{what:45} -> {report}");
-                assert!(
-                    !report.converged && report.cause.is_some(),
-                    "{what}: {report}"
-                );
+                assert!(!report.status.is_converged(), "{what}: {report}");
                 assert!(report.iterations <= budget, "{what}: {report}");
                 assert!(all_finite(&[], &report), "{what}: {report:?}");
             }
@@ -1869,8 +1867,12 @@ fn a_small_budget_bounds_the_iterations_of_a_divergent_solve() {
         .solve(&robot, &loads, None)
     {
         Err(Error::NotConverged { report }) => {
-            assert_eq!(report.cause, Some(FailureCause::IterationLimit), "{report}");
-            assert!(!report.converged, "{report}");
+            assert_eq!(
+                report.status,
+                StaticStatus::IterationLimit { iterations: 25 },
+                "{report}"
+            );
+            assert!(!report.status.is_converged(), "{report}");
             assert_eq!(report.iterations, 25, "{report}");
             assert!(all_finite(&[], &report));
         }

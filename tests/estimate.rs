@@ -278,7 +278,7 @@ fn synthetic_truth_is_recovered() {
                 "{:>8} {:2} markers: rms {:.3e} m, |dF| {:.3e} N ({:.1} % of {:.3}), |dM| {:.3e} N m ({:.1} %), peak at {:.3} m, alpha {:.2e}, {} it",
                 truth.name, n, rms, df, 100.0 * df / fnorm, fnorm, dm, 100.0 * dm / m_true.abs(), peak, e.report.alpha, e.report.iterations
             );
-            assert!(e.report.converged);
+            assert!(e.report.status.is_converged());
             assert!(rms < 1e-4, "{} {n}: rms {rms}", truth.name);
             assert!(df < 0.25 * fnorm, "{} {n}: dF {df}", truth.name);
             assert!(dm < 0.25 * m_true.abs(), "{} {n}: dM {dm}", truth.name);
@@ -316,7 +316,7 @@ proptest! {
         let settings = EstimatorSettings { alpha: Some(alpha), load_model: model, ..EstimatorSettings::default() };
         let en = Backend::Newton.build(robot.clone(), k.clone(), settings.clone()).unwrap().step(&obs).unwrap();
         let es = Backend::Sqp.build(robot.clone(), k.clone(), settings).unwrap().step(&obs).unwrap();
-        prop_assert!(en.report.converged && es.report.converged);
+        prop_assert!(en.report.status.is_converged() && es.report.status.is_converged());
         let nf: f64 = en.f.iter().map(|v| v * v).sum::<f64>().sqrt();
         let df: f64 = en.f.iter().zip(&es.f).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
         let dq = en.node_positions().iter().zip(es.node_positions()).map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1])).fold(0.0f64, f64::max);
@@ -449,7 +449,7 @@ fn sqp_respects_load_bounds() {
         .map(|b| free.load_at(b.s_m)[1])
         .fold(f64::MIN, f64::max);
     eprintln!("max w_y at bounded points: {worst:.3e} N/m (unbounded: {worst_free:.3e})");
-    assert!(e.report.converged);
+    assert!(e.report.status.is_converged());
     assert!(worst <= 1e-6, "{worst}");
     assert!(
         worst_free > 1e-3,
@@ -513,7 +513,7 @@ fn sqp_respects_local_frame_bounds() {
         .map(|b| normal_load(&free, b.s_m))
         .fold(f64::MAX, f64::min);
     eprintln!("min n.w at bounded points: {worst:.3e} N/m (unbounded: {worst_free:.3e})");
-    assert!(e.report.converged, "{}", e.report);
+    assert!(e.report.status.is_converged(), "{}", e.report);
     assert!(worst >= -1e-5, "{worst}");
     assert!(
         worst_free < -1e-3,

@@ -133,7 +133,7 @@ fn run(name: &str, markers: usize, backend: Backend, seed: u64, sigma_model_m: f
     };
     let mut est = backend.build(robot, Loads::default(), settings).unwrap();
     let e = est.step(&obs).unwrap();
-    assert!(e.report.converged, "{name}: {:?}", e.report);
+    assert!(e.report.status.is_converged(), "{name}: {:?}", e.report);
     let nodes = e.node_positions();
     let n = nodes.len();
     let rms = (nodes

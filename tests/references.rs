@@ -42,7 +42,7 @@ fn solve(s: &Scene) -> Vec<f64> {
     let eq = StaticSolver::default()
         .solve(&robot, &s.loads().unwrap(), None)
         .unwrap();
-    assert!(eq.report.converged);
+    assert!(eq.report.status.is_converged());
     eq.q
 }
 

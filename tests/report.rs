@@ -6,18 +6,23 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use clarabel::solver::SolverStatus;
 use proptest::prelude::*;
 use serde_json::Value;
-use softrod::estimate::{Backend, EstimatorSettings, LoadBound, MarkerObservation, Observation};
+use softrod::estimate::{
+    Backend, EstimateStatus, EstimatorSettings, LoadBound, MarkerObservation, Observation,
+};
 use softrod::loads::Loads;
 use softrod::report::auto_point::{auto_scene, AUTO_FORCE_FRACTION};
 use softrod::report::pareto::{pareto_front, pareto_front_tol};
 use softrod::report::reference::{embedded_names, Reference};
 use softrod::report::sweep::{
     marker_arcs, model_robot, observe, run_case, run_guarded, run_guarded_with, CaseSpec,
-    FailureCause, Outcome,
+    FailureCause, Outcome, Stage,
 };
 use softrod::report::{run, Part, ReportOptions};
+use softrod::statics::StaticStatus;
+use softrod::Error;
 
 fn spec(backend: Backend) -> CaseSpec {
     CaseSpec {
@@ -134,12 +139,14 @@ fn quick_report_writes_every_file_and_records_every_case() {
     assert_eq!(s.panics, 0);
     for c in &s.cells {
         let o = &c.outcome;
-        assert_ne!(o.cause, Some(FailureCause::Panic), "{:?}", o.message);
-        if o.converged {
+        assert_ne!(o.cause(), Some(FailureCause::Panic), "{:?}", o.failure());
+        if o.is_converged() {
             let e = o.errors.unwrap();
             assert!(e.backbone_rms_m.is_finite() && e.load_rel_l2.is_finite());
         } else {
-            assert!(o.cause.is_some() && o.message.is_some() && o.failed_at.is_some());
+            // a failure carries its cause, its message and where it happened
+            let f = o.failure().unwrap();
+            assert!(!f.message.is_empty(), "{f:?}");
         }
     }
     // the JSON holds them all, and the Markdown table names every backend and map
@@ -219,15 +226,20 @@ fn constructed_failures_are_classified() {
         markers: 0,
         ..spec(Backend::Newton)
     });
-    assert!(!o.converged);
-    assert_eq!(o.cause, Some(FailureCause::InvalidInput), "{:?}", o.message);
+    assert!(!o.is_converged());
+    assert_eq!(
+        o.cause(),
+        Some(FailureCause::InvalidInput),
+        "{:?}",
+        o.failure()
+    );
     // an element count the two sections cannot share
     let o = run_case(&CaseSpec {
         elements: 7,
         ..spec(Backend::Newton)
     });
-    assert_eq!(o.cause, Some(FailureCause::InvalidInput));
-    assert_eq!(o.failed_at.as_deref(), Some("setup"));
+    assert_eq!(o.cause(), Some(FailureCause::InvalidInput));
+    assert_eq!(o.failure().map(|f| f.at), Some(Stage::Setup));
     // one iteration from the straight robot to a 68 mm deflection: the
     // budget runs out
     let o = run_case(&CaseSpec {
@@ -235,12 +247,12 @@ fn constructed_failures_are_classified() {
         alpha: Some(1e-2),
         ..spec(Backend::Newton)
     });
-    assert!(!o.converged);
+    assert!(!o.is_converged());
     assert_eq!(
-        o.cause,
+        o.cause(),
         Some(FailureCause::IterationLimit),
         "{:?}",
-        o.message
+        o.failure()
     );
     // the SQP iterate after one QP is off the equilibrium manifold; the
     // final static solve at its load then fails (the homotopy stalls), and
@@ -250,14 +262,14 @@ fn constructed_failures_are_classified() {
         alpha: Some(1e-2),
         ..spec(Backend::Sqp)
     });
-    assert!(!o.converged);
+    assert!(!o.is_converged());
     assert!(
         matches!(
-            o.cause,
+            o.cause(),
             Some(FailureCause::IterationLimit | FailureCause::Divergence)
         ),
         "{:?}",
-        o.message
+        o.failure()
     );
     // a non-finite marker position: invalid input, typed
     let r = Reference::embedded("exudyn_family_uniform_3").unwrap();
@@ -308,11 +320,23 @@ fn constructed_failures_are_classified() {
             })
             .collect(),
     };
-    let err = est.step(&obs).unwrap_err();
+    // the estimator returns its last iterate with the typed status
+    let e = est.step(&obs).unwrap();
+    assert!(
+        matches!(
+            e.report.status,
+            EstimateStatus::QpNotSolved(
+                SolverStatus::PrimalInfeasible | SolverStatus::DualInfeasible
+            )
+        ),
+        "{}",
+        e.report
+    );
     assert_eq!(
-        FailureCause::classify(&err),
+        FailureCause::of_estimate(&e.report.status),
         FailureCause::QpInfeasible,
-        "{err}"
+        "{}",
+        e.report
     );
 }
 
@@ -337,7 +361,8 @@ fn one_marker_under_a_distributed_load_is_a_recorded_outcome() {
         .collect();
     for o in &outcomes {
         assert!(
-            o.converged && o.cause.is_none() && o.failed_at.is_none(),
+            // converged: no cause, no failure stage (the status is one enum)
+            o.is_converged() && o.cause().is_none() && o.failure().is_none(),
             "{o:?}"
         );
         let e = o
@@ -364,31 +389,70 @@ fn one_marker_under_a_distributed_load_is_a_recorded_outcome() {
     );
 }
 
+/// The failure categories come from typed statuses and errors, never from
+/// a message: the same table the messages were read by before.
 #[test]
-fn error_texts_map_to_categories() {
-    for (text, want) in [
+fn typed_failures_map_to_categories() {
+    for (status, want) in [
         (
-            "SQP subproblem: clarabel status PrimalInfeasible",
+            EstimateStatus::QpNotSolved(SolverStatus::PrimalInfeasible),
             FailureCause::QpInfeasible,
         ),
         (
-            "SQP subproblem: clarabel status NumericalError",
-            FailureCause::IllConditioning,
-        ),
-        ("iteration limit", FailureCause::IterationLimit),
-        ("merit line search failed", FailureCause::LineSearchFailed),
-        ("line search failed", FailureCause::LineSearchFailed),
-        (
-            "Gauss-Newton matrix of the estimator (not positive definite)",
+            EstimateStatus::QpNotSolved(SolverStatus::NumericalError),
             FailureCause::IllConditioning,
         ),
         (
-            "plain Newton steps of the equilibrium did not converge",
+            EstimateStatus::QpNotSolved(SolverStatus::MaxIterations),
+            FailureCause::IterationLimit,
+        ),
+        (
+            EstimateStatus::IterationLimit { iterations: 3 },
+            FailureCause::IterationLimit,
+        ),
+        (
+            EstimateStatus::LineSearchFailed,
+            FailureCause::LineSearchFailed,
+        ),
+        (
+            EstimateStatus::NotPositiveDefinite,
+            FailureCause::IllConditioning,
+        ),
+        (
+            EstimateStatus::SingularTangent,
+            FailureCause::SingularTangent,
+        ),
+    ] {
+        assert_eq!(FailureCause::of_estimate(&status), want, "{status}");
+    }
+    for (status, want) in [
+        (
+            StaticStatus::IterationLimit { iterations: 9 },
+            FailureCause::IterationLimit,
+        ),
+        (
+            StaticStatus::LoadStepTooSmall { load_fraction: 0.3 },
             FailureCause::Divergence,
         ),
-        ("something new", FailureCause::Other),
+        (StaticStatus::SingularTangent, FailureCause::SingularTangent),
     ] {
-        assert_eq!(FailureCause::from_text(text), want, "{text}");
+        assert_eq!(FailureCause::of_statics(&status), want, "{status}");
+    }
+    for (err, want) in [
+        (
+            Error::NotPositiveDefinite {
+                context: "the Gauss-Newton matrix of the estimator".into(),
+            },
+            FailureCause::IllConditioning,
+        ),
+        (
+            Error::NonFinite {
+                context: "residual".into(),
+            },
+            FailureCause::Divergence,
+        ),
+    ] {
+        assert_eq!(FailureCause::classify(&err), want, "{err}");
     }
 }
 
@@ -404,12 +468,12 @@ fn sleeps(s: &CaseSpec) -> Outcome {
 #[test]
 fn the_guard_turns_a_panic_and_an_overrun_into_outcomes() {
     let o = run_guarded_with(&spec(Backend::Newton), Duration::from_secs(10), panics);
-    assert_eq!(o.cause, Some(FailureCause::Panic));
-    assert_eq!(o.message.as_deref(), Some("deliberate"));
+    assert_eq!(o.cause(), Some(FailureCause::Panic));
+    assert_eq!(o.failure().map(|f| f.message.as_str()), Some("deliberate"));
     let o = run_guarded_with(&spec(Backend::Newton), Duration::from_millis(50), sleeps);
-    assert_eq!(o.cause, Some(FailureCause::Timeout));
+    assert_eq!(o.cause(), Some(FailureCause::Timeout));
     let o = run_guarded(&spec(Backend::Newton), Duration::from_secs(60));
-    assert!(o.converged, "{o:?}");
+    assert!(o.is_converged(), "{o:?}");
 }
 
 /// The reference's Hermite interpolation reproduces its own nodes (position

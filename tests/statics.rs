@@ -4,7 +4,7 @@
 
 use softrod::loads::{Loads, PointForce};
 use softrod::scene::Scene;
-use softrod::statics::{FailureCause, StaticSettings, StaticSolver};
+use softrod::statics::{StaticSettings, StaticSolver, StaticStatus};
 use softrod::Error;
 
 fn scene(elements_per_section: usize) -> Scene {
@@ -28,7 +28,7 @@ fn default_scene_converges_cold_from_10_to_2000_elements() {
             .solve(&robot, &s.loads().unwrap(), None)
             .unwrap();
         assert!(
-            eq.report.converged && eq.report.iterations <= 8,
+            eq.report.status.is_converged() && eq.report.iterations <= 8,
             "{n}: {}",
             eq.report
         );
@@ -91,8 +91,11 @@ fn non_convergence_is_an_error_with_its_report() {
         .solve(&robot, &loads, None)
     {
         Err(Error::NotConverged { report }) => {
-            assert!(!report.converged);
-            assert_eq!(report.cause, Some(FailureCause::IterationLimit));
+            assert!(!report.status.is_converged());
+            assert!(
+                matches!(report.status, StaticStatus::IterationLimit { .. }),
+                "{report}"
+            );
             assert!(report.iterations <= 4 && report.residual_norm_n.is_finite());
         }
         other => panic!("expected NotConverged, got {other:?}"),

@@ -216,8 +216,10 @@ def compute(exe, ref_dir):
                     out = run_softrod(exe, scene(ex["params"], n, cfg, f"{case}_{key}_{n}"), tmp)
                     rep = out["report"]
                     tips.append(out["tip_position_m"])
-                    errs.append(math.dist(out["tip_position_m"], tip_el) if rep["converged"] else None)
-                    reports.append({k: rep.get(k) for k in ("converged", "criterion", "iterations", "load_steps",
+                    # the status is {"converged": "<criterion>"} or a failure variant
+                    converged = isinstance(rep["status"], dict) and "converged" in rep["status"]
+                    errs.append(math.dist(out["tip_position_m"], tip_el) if converged else None)
+                    reports.append({k: rep.get(k) for k in ("status", "iterations", "load_steps",
                                                             "residual_norm_n", "residual_tolerance_n")})
                 res["series"][key] = {"tip_error_m": errs, "tip_position_m": tips, "report": reports}
             # softrod (b) against exudyn's discrete answer at the same n

@@ -64,7 +64,7 @@
 //! let settings = EstimatorSettings { alpha: Some(1.0), ..EstimatorSettings::default() };
 //! let mut est = Backend::Newton.build(robot, loads, settings)?;
 //! let e = est.step(&obs)?;
-//! assert!(e.report.converged);
+//! assert!(e.report.status.is_converged());
 //! // nothing but the known loads acts: the estimated load is small
 //! assert!(e.resultant_force_n.iter().all(|f| f.abs() < 1e-3));
 //! # Ok::<(), softrod::Error>(())
@@ -90,6 +90,8 @@ use crate::error::{check_all_finite, check_len, check_positive, Error, Result};
 use crate::linsolve::{BandedLu, BandedMatrix};
 use crate::loads::{Loads, PointForce};
 use crate::statics::{StaticSettings, StaticSolver};
+
+pub use crate::outcome::{EstimateCriterion, EstimateStatus};
 
 /// Which estimator runs.
 ///
@@ -475,8 +477,9 @@ impl Gaussian {
 pub struct EstimateReport {
     /// The backend that ran.
     pub backend: Backend,
-    /// Whether the optimality test was met.
-    pub converged: bool,
+    /// How the estimation ended (of the intermediate observation that
+    /// stopped it, if one did).
+    pub status: EstimateStatus,
     /// Outer iterations (Gauss–Newton steps or QPs), summed over the
     /// intermediate observations.
     pub iterations: usize,
@@ -501,17 +504,14 @@ pub struct EstimateReport {
     pub alpha: f64,
     /// Wall time of the step (s).
     pub wall_time_s: f64,
-    /// Why it failed, if it did.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub cause: Option<String>,
 }
 
 impl std::fmt::Display for EstimateReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} ({}) after {} iterations, objective {:.6e} (weighted residual {:.4e} for {} components), |grad| {:.3e}, alpha {:.3e}, {:.1} us{}",
-            if self.converged { "converged" } else { "not converged" },
+            "{} ({}); {} iterations, objective {:.6e} (weighted residual {:.4e} for {} components), |grad| {:.3e}, alpha {:.3e}, {:.1} us",
+            self.status,
             self.backend.name(),
             self.iterations,
             self.objective,
@@ -520,7 +520,6 @@ impl std::fmt::Display for EstimateReport {
             self.gradient_norm,
             self.alpha,
             self.wall_time_s * 1e6,
-            self.cause.as_ref().map(|c| format!(": {c}")).unwrap_or_default()
         )
     }
 }
@@ -657,6 +656,39 @@ impl Estimate {
     pub fn node_arc(&self) -> &[f64] {
         &self.node_s
     }
+
+    /// The estimate if it converged, else [`Error::EstimateNotConverged`]
+    /// with its status: for callers to whom a last iterate is no answer.
+    ///
+    /// # Errors
+    /// [`Error::EstimateNotConverged`] when `report.status` is not converged.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::estimate::{Backend, EstimatorSettings, Observation};
+    /// use softrod::{scene::Scene, statics::StaticSolver, Error};
+    /// let scene = Scene::two_section();
+    /// let (robot, loads) = (scene.robot()?, scene.loads()?);
+    /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+    /// let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]);
+    /// // one Gauss-Newton step is not enough at a small alpha
+    /// let settings = EstimatorSettings { alpha: Some(1e-2), max_iterations: 1, ..Default::default() };
+    /// let mut est = Backend::Newton.build(robot, loads, settings)?;
+    /// let e = est.step(&obs.with_noise(1e-4, 3))?;
+    /// assert!(!e.report.status.is_converged()); // the last iterate, with its status
+    /// assert!(matches!(e.converged(), Err(Error::EstimateNotConverged { .. })));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn converged(self) -> Result<Self> {
+        if self.report.status.is_converged() {
+            Ok(self)
+        } else {
+            Err(Error::EstimateNotConverged {
+                status: self.report.status,
+                iterations: self.report.iterations,
+            })
+        }
+    }
 }
 
 /// Implements [`Estimator`] for a backend type with a `core` field and a
@@ -704,11 +736,23 @@ pub trait Estimator {
     /// previous step. A large jump from the previous observation is taken
     /// through intermediate observations (`max_observation_jump_m`).
     ///
+    /// # Outcome
+    /// `Ok` whenever the estimator has an iterate to give: its
+    /// `report.status` says whether it converged. One that stopped short
+    /// (the iteration limit, a failed line search, an SQP subproblem clarabel
+    /// did not solve) returns its last iterate, an equilibrium `(q, F)` of
+    /// the model, with its covariances, because a control loop needs the last
+    /// good estimate; the estimator's warm start stays at the last converged
+    /// estimate. The caller decides: [`Estimate::converged`] turns a
+    /// non-converged estimate into [`Error::EstimateNotConverged`].
+    ///
     /// # Errors
-    /// [`Error::EstimateNotConverged`] with the report when the iteration
-    /// budget runs out or the step fails (the warm start is kept at the last
-    /// good estimate); [`Error::InvalidParameter`] / [`Error::DimensionMismatch`]
-    /// for a malformed observation.
+    /// [`Error::InvalidParameter`] / [`Error::DimensionMismatch`] for a
+    /// malformed observation; when a computation breaks down before there is
+    /// an iterate to return: [`Error::NotConverged`] (a static solve the
+    /// estimator needs fails), [`Error::Singular`],
+    /// [`Error::NotPositiveDefinite`] (the Newton backend's Gauss–Newton
+    /// matrix), [`Error::NonFinite`].
     fn step(&mut self, observation: &Observation) -> Result<Estimate>;
     /// The backend.
     fn backend(&self) -> Backend;
@@ -1484,8 +1528,8 @@ impl<E: Element> Core<E> {
     ) -> Result<(Vec<f64>, GnFactor)> {
         let m = op.n();
         let nf = self.n_f;
-        let not_spd = || Error::NonFinite {
-            context: "Gauss-Newton matrix of the estimator (not positive definite)".into(),
+        let not_spd = || Error::NotPositiveDefinite {
+            context: "the Gauss-Newton matrix of the estimator".into(),
         };
         match self.settings.load_model {
             LoadModel::Distributed => {
@@ -1897,7 +1941,7 @@ fn path_solve<S>(
     solve_one: fn(&mut S, &ObsOp, Vec<f64>, Vec<f64>, f64) -> Result<Solved>,
 ) -> Option<f64> {
     let s = solve_one(core_of, op, f0.clone(), q0.clone(), alpha).ok()?;
-    if s.report.converged {
+    if s.report.status.is_converged() {
         *f0 = s.f;
         *q0 = s.q;
     }
@@ -1994,14 +2038,20 @@ pub(crate) fn run_step<E: Element, S>(
         let sub = op.with_y(y);
         let s = solve_one(core_of, &sub, f0, q0, alpha)?;
         iterations += s.report.iterations;
-        if !s.report.converged {
+        if !s.report.status.is_converged() {
+            // the last iterate, with its status (the warm start stays at the
+            // last converged estimate); its objective and marker residuals
+            // against the observation itself, not the intermediate one
+            let core = get_core(core_of);
+            let (wr, pen, e) = core.objective(&op, &s.q, &s.f, alpha)?;
             let mut report = s.report;
             report.iterations = iterations;
-            report.wall_time_s = start.elapsed().as_secs_f64();
             report.sub_steps = n_sub;
-            return Err(Error::EstimateNotConverged {
-                report: Box::new(report),
-            });
+            report.backend = backend;
+            report.objective = wr + pen;
+            report.weighted_residual = wr;
+            report.wall_time_s = start.elapsed().as_secs_f64();
+            return core.finish(s.q, s.f, &op, &s.derivs, s.cov_factor, e, report);
         }
         last = Some(s);
     }

@@ -39,8 +39,8 @@ use crate::error::Result;
 use crate::loads::Loads;
 
 use super::{
-    dot, norm2, run_step, step_cap, Backend, Core, Estimate, EstimateReport, Estimator,
-    EstimatorSettings, ObsOp, Observation, Solved,
+    dot, norm2, run_step, step_cap, Backend, Core, Estimate, EstimateCriterion, EstimateReport,
+    EstimateStatus, Estimator, EstimatorSettings, ObsOp, Observation, Solved,
 };
 
 /// The reduced Gauss–Newton estimator (backend "newton").
@@ -55,7 +55,7 @@ use super::{
 /// let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]).with_noise(1e-5, 1);
 /// let mut est = NewtonEstimator::new(robot, loads, EstimatorSettings::default())?;
 /// let e = est.step(&obs)?; // α by the discrepancy principle
-/// assert!(e.report.converged);
+/// assert!(e.report.status.is_converged());
 /// let again = est.step(&obs)?; // warm: converges at once
 /// assert!(again.report.iterations <= 2);
 /// # Ok::<(), softrod::Error>(())
@@ -176,25 +176,32 @@ impl<E: Element> NewtonEstimator<E> {
             step.iter_mut().for_each(|v| *v *= cap);
             let slope = dot(&g, &step);
             let scale = obj.max(n_ob);
-            let report =
-                |converged: bool, iterations: usize, cause: Option<String>| EstimateReport {
-                    backend: Backend::Newton,
-                    converged,
-                    iterations,
-                    sub_steps: 1,
-                    objective: obj,
-                    weighted_residual: wr,
-                    n_observations: op.n(),
-                    gradient_norm: norm2(&g),
-                    equilibrium_residual_n: res_n,
-                    alpha,
-                    wall_time_s: 0.0,
-                    cause,
-                };
+            let report = |status: EstimateStatus, iterations: usize| EstimateReport {
+                backend: Backend::Newton,
+                status,
+                iterations,
+                sub_steps: 1,
+                objective: obj,
+                weighted_residual: wr,
+                n_observations: op.n(),
+                gradient_norm: norm2(&g),
+                equilibrium_residual_n: res_n,
+                alpha,
+                wall_time_s: 0.0,
+            };
             // converged: predicted decrease below tolerance, or at the
             // round-off floor (tiny and no longer shrinking)
             let floor = dec <= 1e-13 * scale && dec > 0.9 * prev_dec;
-            if dec <= settings.tolerance * scale || floor || !dec.is_finite() && slope == 0.0 {
+            let criterion = if dec <= settings.tolerance * scale {
+                Some(EstimateCriterion::PredictedDecrease)
+            } else if floor {
+                Some(EstimateCriterion::RoundOffFloor)
+            } else if !dec.is_finite() && slope == 0.0 {
+                Some(EstimateCriterion::Stationary)
+            } else {
+                None
+            };
+            if let Some(criterion) = criterion {
                 let l = core.cov_factor(&dv, op, &fac);
                 core.keep_derivs(&q, op, &dv);
                 return Ok(Solved {
@@ -203,7 +210,7 @@ impl<E: Element> NewtonEstimator<E> {
                     derivs: dv,
                     cov_factor: l,
                     e,
-                    report: report(true, iterations, None),
+                    report: report(EstimateStatus::Converged(criterion), iterations),
                 });
             }
             if iterations >= settings.max_iterations {
@@ -214,7 +221,7 @@ impl<E: Element> NewtonEstimator<E> {
                     derivs: dv,
                     cov_factor: l,
                     e,
-                    report: report(false, iterations, Some("iteration limit".into())),
+                    report: report(EstimateStatus::IterationLimit { iterations }, iterations),
                 });
             }
             // The last step: when the decrease predicted after this step
@@ -235,7 +242,10 @@ impl<E: Element> NewtonEstimator<E> {
                 if let Some((qt, res_t)) = core.equilibrium_chord(&ft, &q)? {
                     let (wr_t, pen_t, e_t) = core.objective(op, &qt, &ft, alpha)?;
                     let l = core.cov_factor(&dv, op, &fac);
-                    let mut rep = report(true, iterations, None);
+                    let mut rep = report(
+                        EstimateStatus::Converged(EstimateCriterion::UnconfirmedLastStep),
+                        iterations,
+                    );
                     rep.objective = wr_t + pen_t;
                     rep.weighted_residual = wr_t;
                     rep.equilibrium_residual_n = res_t;
@@ -280,9 +290,12 @@ impl<E: Element> NewtonEstimator<E> {
                         cov_factor: l,
                         e,
                         report: report(
-                            dec <= 1e-6 * scale,
+                            if dec <= 1e-6 * scale {
+                                EstimateStatus::Converged(EstimateCriterion::NegligibleDecrease)
+                            } else {
+                                EstimateStatus::LineSearchFailed
+                            },
                             iterations,
-                            Some("line search failed".into()),
                         ),
                     });
                 }

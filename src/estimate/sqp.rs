@@ -67,9 +67,46 @@ use crate::linsolve::BandedLu;
 use crate::loads::Loads;
 
 use super::{
-    dot, norm2, run_step, Backend, BoundFrame, Core, Derivs, Estimate, EstimateReport, Estimator,
-    EstimatorSettings, LoadModel, ObsOp, Observation, Solved,
+    dot, norm2, run_step, Backend, BoundFrame, Core, Derivs, Estimate, EstimateCriterion,
+    EstimateReport, EstimateStatus, Estimator, EstimatorSettings, LoadModel, ObsOp, Observation,
+    Solved,
 };
+use crate::outcome::NonFiniteAt;
+
+/// Why an SQP subproblem was not solved: clarabel's status, or an error of
+/// the linear algebra around it.
+#[derive(Debug)]
+enum QpError {
+    /// Clarabel stopped without a solution.
+    Clarabel(SolverStatus),
+    /// Another error (a singular tangent, a Gauss–Newton matrix that is not
+    /// positive definite, …).
+    Other(Error),
+}
+
+impl From<Error> for QpError {
+    fn from(e: Error) -> Self {
+        QpError::Other(e)
+    }
+}
+
+impl QpError {
+    /// The estimator's status for a subproblem that failed this way; an
+    /// error that says nothing about the subproblem is passed on.
+    fn status(self) -> Result<EstimateStatus> {
+        match self {
+            QpError::Clarabel(s) => Ok(EstimateStatus::QpNotSolved(s)),
+            QpError::Other(Error::Singular { .. }) => Ok(EstimateStatus::SingularTangent),
+            QpError::Other(Error::NotPositiveDefinite { .. }) => {
+                Ok(EstimateStatus::NotPositiveDefinite)
+            }
+            QpError::Other(Error::NonFinite { .. }) => Ok(EstimateStatus::NonFinite {
+                at: NonFiniteAt::Tangent,
+            }),
+            QpError::Other(e) => Err(e),
+        }
+    }
+}
 
 /// The SQP estimator (backend "sqp").
 ///
@@ -84,7 +121,7 @@ use super::{
 /// let settings = EstimatorSettings { alpha: Some(1.0), ..EstimatorSettings::default() };
 /// let mut est = SqpEstimator::new(robot, loads, settings)?;
 /// let e = est.step(&obs)?;
-/// assert!(e.report.converged);
+/// assert!(e.report.status.is_converged());
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone)]
@@ -232,7 +269,7 @@ impl<E: Element> SqpEstimator<E> {
         e: &[f64],
         r: &[f64],
         alpha: f64,
-    ) -> Result<QpStep> {
+    ) -> std::result::Result<QpStep, QpError> {
         let lu = self.core.factor(q)?;
         let c = self.linear_term(op, f, e, alpha)?;
         let step = if self.core.settings.bounds.is_empty() {
@@ -373,7 +410,7 @@ impl<E: Element> SqpEstimator<E> {
         r: &[f64],
         alpha: f64,
         c: Vec<f64>,
-    ) -> Result<QpStep> {
+    ) -> std::result::Result<QpStep, QpError> {
         let ineq = self.inequalities(q, f)?;
         let core = &self.core;
         let Unconstrained { dv, df0, g1, l } = self.unconstrained(lu, op, f, e, r, alpha)?;
@@ -441,7 +478,7 @@ impl<E: Element> SqpEstimator<E> {
         alpha: f64,
         c: &[f64],
         ineq: &[Ineq],
-    ) -> Result<(Vec<f64>, Vec<usize>)> {
+    ) -> std::result::Result<(Vec<f64>, Vec<usize>), QpError> {
         let core = &self.core;
         let nfree = core.robot.n_free();
         let nq = core.robot.n_q();
@@ -533,9 +570,7 @@ impl<E: Element> SqpEstimator<E> {
             sol.status,
             SolverStatus::Solved | SolverStatus::AlmostSolved
         ) {
-            return Err(Error::NonFinite {
-                context: format!("SQP subproblem: clarabel status {:?}", sol.status),
-            });
+            return Err(QpError::Clarabel(sol.status));
         }
         let df: Vec<f64> = sol.x[nfree..].iter().map(|v| v * gamma).collect();
         let act: Vec<usize> = sol.s[m_eq..]
@@ -558,8 +593,8 @@ impl<E: Element> SqpEstimator<E> {
         let n_ob = op.n() as f64;
         let mut iterations = 0;
         let mut mu = 0.0f64;
-        let mut cause = None;
-        let mut converged = false;
+        // set where the loop ends
+        let status;
         let mut prev_dec = f64::INFINITY;
         // the state at (q, F): dead force, residual Q, objective parts; an
         // accepted line-search trial hands its own on to the next iteration
@@ -573,7 +608,7 @@ impl<E: Element> SqpEstimator<E> {
             let load = norm2(&self.core.robot.restrict(&dead)?).max(1e-12);
             let rn = norm2(&r);
             if iterations >= settings.max_iterations {
-                cause = Some("iteration limit".to_string());
+                status = EstimateStatus::IterationLimit { iterations };
                 break;
             }
             let QpStep {
@@ -589,7 +624,7 @@ impl<E: Element> SqpEstimator<E> {
             } = match self.qp(op, &q, &f, &e, &r, alpha) {
                 Ok(s) => s,
                 Err(err) => {
-                    cause = Some(err.to_string());
+                    status = err.status()?;
                     break;
                 }
             };
@@ -632,11 +667,18 @@ impl<E: Element> SqpEstimator<E> {
             };
             // convergence is judged on the decrease along the manifold
             let dec_c = dec_opt.unwrap_or(dec);
-            if feasible
-                && (dec_c <= tol * scale || (dec_c <= 1e-13 * scale && dec_c > 0.9 * prev_dec))
-            {
-                converged = true;
-                break;
+            if feasible {
+                let criterion = if dec_c <= tol * scale {
+                    Some(EstimateCriterion::PredictedDecrease)
+                } else if dec_c <= 1e-13 * scale && dec_c > 0.9 * prev_dec {
+                    Some(EstimateCriterion::RoundOffFloor)
+                } else {
+                    None
+                };
+                if let Some(c) = criterion {
+                    status = EstimateStatus::Converged(c);
+                    break;
+                }
             }
             prev_dec = if feasible { dec_c } else { f64::INFINITY };
             mu = mu.max(1.5 * lmax + 1e-12);
@@ -697,10 +739,11 @@ impl<E: Element> SqpEstimator<E> {
                 t *= 0.5;
             }
             if !accepted {
-                converged = dec <= 1e-10 * scale && rn <= 1e-6 * load;
-                if !converged {
-                    cause = Some("merit line search failed".to_string());
-                }
+                status = if dec <= 1e-10 * scale && rn <= 1e-6 * load {
+                    EstimateStatus::Converged(EstimateCriterion::NegligibleDecrease)
+                } else {
+                    EstimateStatus::LineSearchFailed
+                };
                 break;
             }
         }
@@ -740,7 +783,7 @@ impl<E: Element> SqpEstimator<E> {
             e,
             report: EstimateReport {
                 backend: Backend::Sqp,
-                converged,
+                status,
                 iterations,
                 sub_steps: 1,
                 objective: wr + pen,
@@ -750,7 +793,6 @@ impl<E: Element> SqpEstimator<E> {
                 equilibrium_residual_n: residual_n,
                 alpha,
                 wall_time_s: 0.0,
-                cause,
             },
         })
     }

@@ -104,7 +104,7 @@ pub fn auto_points(
                 markers,
             );
             let out = run_guarded(&spec, opts.case_cap);
-            match (out.converged, out.errors) {
+            match (out.is_converged(), out.errors) {
                 (true, Some(e)) => {
                     chosen.push(refinement.total_elements);
                     errs.push(e);
@@ -115,7 +115,9 @@ pub fn auto_points(
                         "auto, {markers} markers, {}: {} elements did not converge ({})",
                         r.name,
                         refinement.total_elements,
-                        out.message.unwrap_or_default()
+                        out.failure()
+                            .map(|f| f.message.as_str())
+                            .unwrap_or_default()
                     ));
                     continue 'markers;
                 }

@@ -253,7 +253,7 @@ pub fn run(opts: &ReportOptions) -> Result<ParetoReport> {
                             && o.spec.markers == markers
                     })
                     .collect();
-                let converged = !mine.is_empty() && mine.iter().all(|o| o.converged);
+                let converged = !mine.is_empty() && mine.iter().all(|o| o.is_converged());
                 let errs: Vec<_> = mine.iter().filter_map(|o| o.errors).collect();
                 let n = errs.len().max(1) as f64;
                 let mut times: Vec<f64> = mine

@@ -475,7 +475,7 @@ fn stability_draw<DB: DrawingBackend>(
                 (SegmentValue::Exact(ix + 1), SegmentValue::Exact(iy + 1)),
             ];
             let centre = (SegmentValue::CenterOf(ix), SegmentValue::CenterOf(iy));
-            let (fill, text, tc) = match (c.outcome.converged, c.outcome.errors) {
+            let (fill, text, tc) = match (c.outcome.is_converged(), c.outcome.errors) {
                 (true, Some(e)) => {
                     let t = t_of(e.backbone_rms_m * 1e3);
                     let tc = if t > 0.55 { BLACK } else { WHITE };
@@ -492,7 +492,7 @@ fn stability_draw<DB: DrawingBackend>(
                 _ => (
                     RGBColor(200, 200, 200),
                     c.outcome
-                        .cause
+                        .cause()
                         .unwrap_or(FailureCause::Other)
                         .code()
                         .to_string(),

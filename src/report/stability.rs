@@ -295,7 +295,7 @@ pub fn run(opts: &ReportOptions) -> Result<StabilityReport> {
     machine.sample_load();
     let panics = cells
         .iter()
-        .filter(|c| c.outcome.cause == Some(FailureCause::Panic))
+        .filter(|c| c.outcome.cause() == Some(FailureCause::Panic))
         .count();
     Ok(StabilityReport {
         description: "Stability of the estimators: pairs of parameters swept with the others at their \
@@ -337,10 +337,10 @@ impl StabilityReport {
         for &b in &self.backends {
             for map in &self.maps {
                 let cells = self.cells_of(&map.name, b);
-                let ok = cells.iter().filter(|c| c.outcome.converged).count();
+                let ok = cells.iter().filter(|c| c.outcome.is_converged()).count();
                 let mut by: BTreeMap<FailureCause, Vec<String>> = BTreeMap::new();
-                for c in cells.iter().filter(|c| !c.outcome.converged) {
-                    let cause = c.outcome.cause.unwrap_or(FailureCause::Other);
+                for c in cells.iter().filter(|c| !c.outcome.is_converged()) {
+                    let cause = c.outcome.cause().unwrap_or(FailureCause::Other);
                     by.entry(cause).or_default().push(format!(
                         "{} {}, {} {}",
                         short(map.x),

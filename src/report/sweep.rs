@@ -4,21 +4,23 @@
 //! A case never panics and never hangs: the estimator runs on its own thread
 //! under [`std::panic::catch_unwind`] with a wall-clock cap, its iteration
 //! budgets bounded by [`EstimatorSettings`]; an error, a panic or a timeout is
-//! recorded as an outcome with a [`FailureCause`].
+//! recorded as an outcome with a [`FailureCause`], computed from the typed
+//! status or error (never from a message).
 
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
+use clarabel::solver::SolverStatus;
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::{Base, Clamp, Robot, RobotSpec, Section};
 use crate::element::PlanarCable;
 use crate::error::{Error, Result};
 use crate::estimate::{
-    Backend, Estimate, EstimateReport, EstimatorSettings, MarkerObservation, Observation,
+    Backend, Estimate, EstimateStatus, EstimatorSettings, MarkerObservation, Observation,
 };
 use crate::loads::Loads;
-use crate::statics::FailureCause as StaticCause;
+use crate::statics::StaticStatus;
 
 use super::reference::Reference;
 
@@ -115,58 +117,62 @@ impl FailureCause {
             | Error::DimensionMismatch { .. }
             | Error::Scene { .. } => FailureCause::InvalidInput,
             Error::Singular { .. } => FailureCause::SingularTangent,
-            Error::NotConverged { report } => match report.cause {
-                Some(StaticCause::IterationLimit) => FailureCause::IterationLimit,
-                Some(StaticCause::SingularTangent) => FailureCause::SingularTangent,
-                Some(StaticCause::NonFinite) | Some(StaticCause::LoadStepTooSmall) => {
-                    FailureCause::Divergence
-                }
-                _ => FailureCause::Other,
-            },
-            Error::EstimateNotConverged { report } => Self::from_report(report),
-            Error::NonFinite { context } => Self::from_text(context),
+            Error::NotPositiveDefinite { .. } => FailureCause::IllConditioning,
+            Error::NotConverged { report } => Self::of_statics(&report.status),
+            Error::EstimateNotConverged { status, .. } => Self::of_estimate(status),
+            Error::NonFinite { .. } => FailureCause::Divergence,
             Error::Io { .. } => FailureCause::Other,
             #[allow(unreachable_patterns)]
             _ => FailureCause::Other,
         }
     }
 
-    /// The category of a failed estimator report (its `cause` text).
-    pub fn from_report(report: &EstimateReport) -> FailureCause {
-        match &report.cause {
-            Some(c) => Self::from_text(c),
-            None if !report.objective.is_finite() => FailureCause::Divergence,
-            None => FailureCause::Other,
+    /// The category of a static solve that did not converge.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::report::sweep::FailureCause;
+    /// use softrod::statics::StaticStatus;
+    /// let s = StaticStatus::LoadStepTooSmall { load_fraction: 0.5 };
+    /// assert_eq!(FailureCause::of_statics(&s), FailureCause::Divergence);
+    /// ```
+    pub fn of_statics(status: &StaticStatus) -> FailureCause {
+        match status {
+            StaticStatus::IterationLimit { .. } => FailureCause::IterationLimit,
+            StaticStatus::SingularTangent => FailureCause::SingularTangent,
+            StaticStatus::LineSearchFailed => FailureCause::LineSearchFailed,
+            StaticStatus::NonFinite { .. } | StaticStatus::LoadStepTooSmall { .. } => {
+                FailureCause::Divergence
+            }
+            StaticStatus::Converged(_) => FailureCause::Other,
         }
     }
 
-    /// The category of a failure message (the estimators report causes as text).
-    pub fn from_text(text: &str) -> FailureCause {
-        let t = text.to_ascii_lowercase();
-        if t.contains("infeasible") {
-            FailureCause::QpInfeasible
-        } else if t.contains("iteration limit") || t.contains("maxiterations") {
-            FailureCause::IterationLimit
-        } else if t.contains("line search") {
-            FailureCause::LineSearchFailed
-        } else if t.contains("singular") {
-            FailureCause::SingularTangent
-        } else if t.contains("positive definite")
-            || t.contains("numericalerror")
-            || t.contains("insufficientprogress")
-            || t.contains("clarabel status")
-            || t.contains("direct solution")
-        {
-            FailureCause::IllConditioning
-        } else if t.contains("non-finite")
-            || t.contains("not finite")
-            || t.contains("nan")
-            || t.contains("did not converge")
-            || t.contains("load step")
-        {
-            FailureCause::Divergence
-        } else {
-            FailureCause::Other
+    /// The category of an estimation that did not converge.
+    ///
+    /// # Example
+    /// ```
+    /// use clarabel::solver::SolverStatus;
+    /// use softrod::{estimate::EstimateStatus, report::sweep::FailureCause};
+    /// let s = EstimateStatus::QpNotSolved(SolverStatus::PrimalInfeasible);
+    /// assert_eq!(FailureCause::of_estimate(&s), FailureCause::QpInfeasible);
+    /// ```
+    pub fn of_estimate(status: &EstimateStatus) -> FailureCause {
+        match status {
+            EstimateStatus::IterationLimit { .. } => FailureCause::IterationLimit,
+            EstimateStatus::LineSearchFailed => FailureCause::LineSearchFailed,
+            EstimateStatus::QpNotSolved(s) => match s {
+                SolverStatus::PrimalInfeasible
+                | SolverStatus::DualInfeasible
+                | SolverStatus::AlmostPrimalInfeasible
+                | SolverStatus::AlmostDualInfeasible => FailureCause::QpInfeasible,
+                SolverStatus::MaxIterations => FailureCause::IterationLimit,
+                _ => FailureCause::IllConditioning,
+            },
+            EstimateStatus::SingularTangent => FailureCause::SingularTangent,
+            EstimateStatus::NotPositiveDefinite => FailureCause::IllConditioning,
+            EstimateStatus::NonFinite { .. } => FailureCause::Divergence,
+            EstimateStatus::Converged(_) => FailureCause::Other,
         }
     }
 }
@@ -228,20 +234,89 @@ pub const BACKBONE_POINTS: usize = 241;
 /// Arc points of the load error.
 pub const LOAD_POINTS: usize = 481;
 
+/// The step of a case at which it failed.
+///
+/// # Example
+/// ```
+/// use softrod::report::sweep::Stage;
+/// assert_eq!(Stage::WarmFrame(3).to_string(), "warm frame 3");
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stage {
+    /// Building the model or the estimator.
+    Setup,
+    /// The first (cold) frame.
+    FirstFrame,
+    /// The previous frame of a jump.
+    PreviousFrame,
+    /// The measured frame.
+    MeasuredFrame,
+    /// The `k`-th warm frame after it.
+    WarmFrame(usize),
+    /// Not known (a panic or a timeout of the guarded case).
+    Unknown,
+}
+
+impl std::fmt::Display for Stage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Stage::Setup => write!(f, "setup"),
+            Stage::FirstFrame => write!(f, "first frame"),
+            Stage::PreviousFrame => write!(f, "previous frame"),
+            Stage::MeasuredFrame => write!(f, "measured frame"),
+            Stage::WarmFrame(k) => write!(f, "warm frame {k}"),
+            Stage::Unknown => write!(f, "unknown"),
+        }
+    }
+}
+
+/// Why a case failed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CaseFailure {
+    /// The category.
+    pub cause: FailureCause,
+    /// The estimator's status, when it returned an estimate that did not
+    /// converge.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimator: Option<EstimateStatus>,
+    /// Where.
+    pub at: Stage,
+    /// The error message or the failed report, for people.
+    pub message: String,
+}
+
+/// How a case ended.
+///
+/// # Example
+/// ```
+/// use softrod::report::sweep::CaseStatus;
+/// assert!(CaseStatus::Converged.is_converged());
+/// assert_eq!(serde_json::to_string(&CaseStatus::Converged).unwrap(), "\"converged\"");
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CaseStatus {
+    /// Every step converged.
+    Converged,
+    /// A step failed.
+    Failed(CaseFailure),
+}
+
+impl CaseStatus {
+    /// Whether every step converged.
+    pub fn is_converged(&self) -> bool {
+        matches!(self, CaseStatus::Converged)
+    }
+}
+
 /// The result of one case.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Outcome {
     /// What ran.
     pub spec: CaseSpec,
-    /// Whether every step converged.
-    pub converged: bool,
-    /// Why not, if not.
-    pub cause: Option<FailureCause>,
-    /// The error message or failed report, if any.
-    pub message: Option<String>,
-    /// Which step failed: "setup", "first frame", "previous frame",
-    /// "measured frame", "warm frame k".
-    pub failed_at: Option<String>,
+    /// How it ended.
+    pub status: CaseStatus,
     /// Outer iterations of the measured frame's step (or of the failed one).
     pub iterations: usize,
     /// The `α` in use at the end (m/N²), if chosen.
@@ -260,19 +335,10 @@ pub struct Outcome {
 }
 
 impl Outcome {
-    fn failed(
-        spec: CaseSpec,
-        cause: FailureCause,
-        message: String,
-        at: &str,
-        total_s: f64,
-    ) -> Self {
+    fn failed(spec: CaseSpec, failure: CaseFailure, total_s: f64) -> Self {
         Outcome {
             spec,
-            converged: false,
-            cause: Some(cause),
-            message: Some(message),
-            failed_at: Some(at.to_string()),
+            status: CaseStatus::Failed(failure),
             iterations: 0,
             alpha_used: None,
             errors: None,
@@ -280,6 +346,55 @@ impl Outcome {
             warm_step_s: Vec::new(),
             step_s: None,
             total_s,
+        }
+    }
+
+    /// Whether every step converged.
+    pub fn is_converged(&self) -> bool {
+        self.status.is_converged()
+    }
+
+    /// The failure, if the case failed.
+    pub fn failure(&self) -> Option<&CaseFailure> {
+        match &self.status {
+            CaseStatus::Converged => None,
+            CaseStatus::Failed(f) => Some(f),
+        }
+    }
+
+    /// The category of the failure, if the case failed.
+    pub fn cause(&self) -> Option<FailureCause> {
+        self.failure().map(|f| f.cause)
+    }
+}
+
+/// A failed step: the failure without its stage, and the iterations taken.
+struct StepFailure {
+    cause: FailureCause,
+    estimator: Option<EstimateStatus>,
+    message: String,
+    iterations: usize,
+}
+
+impl StepFailure {
+    fn of_error(err: &Error) -> Self {
+        StepFailure {
+            cause: FailureCause::classify(err),
+            estimator: match err {
+                Error::EstimateNotConverged { status, .. } => Some(*status),
+                _ => None,
+            },
+            message: err.to_string(),
+            iterations: 0,
+        }
+    }
+
+    fn at(self, at: Stage) -> CaseFailure {
+        CaseFailure {
+            cause: self.cause,
+            estimator: self.estimator,
+            at,
+            message: self.message,
         }
     }
 }
@@ -423,12 +538,14 @@ pub fn case_errors(
 pub fn run_case(spec: &CaseSpec) -> Outcome {
     let start = Instant::now();
     let reference = &spec.reference;
-    let fail = |cause, msg: String, at: &str| {
-        Outcome::failed(spec.clone(), cause, msg, at, start.elapsed().as_secs_f64())
+    let elapsed = || start.elapsed().as_secs_f64();
+    let fail = |f: StepFailure, at: Stage| Outcome {
+        iterations: f.iterations,
+        ..Outcome::failed(spec.clone(), f.at(at), elapsed())
     };
     let robot = match model_robot(reference, spec.elements) {
         Ok(r) => r,
-        Err(e) => return fail(FailureCause::classify(&e), e.to_string(), "setup"),
+        Err(e) => return fail(StepFailure::of_error(&e), Stage::Setup),
     };
     let settings = EstimatorSettings {
         backend: spec.backend,
@@ -442,7 +559,7 @@ pub fn run_case(spec: &CaseSpec) -> Outcome {
         .build(robot.clone(), Loads::default(), settings)
     {
         Ok(e) => e,
-        Err(e) => return fail(FailureCause::classify(&e), e.to_string(), "setup"),
+        Err(e) => return fail(StepFailure::of_error(&e), Stage::Setup),
     };
     let arcs = marker_arcs(reference.length_m, spec.markers);
     let measured = observe(reference, &arcs, spec.noise_m, spec.seed);
@@ -455,62 +572,56 @@ pub fn run_case(spec: &CaseSpec) -> Outcome {
     let previous = (spec.jump_m > 0.0).then(|| previous_frame(&measured, spec.jump_m));
     let step = |est: &mut Box<dyn crate::estimate::Estimator>,
                 o: &Observation|
-     -> std::result::Result<(Estimate, f64), (FailureCause, String, usize)> {
+     -> std::result::Result<(Estimate, f64), StepFailure> {
         let t = Instant::now();
         match est.step(o) {
             Ok(e) => {
                 let dt = t.elapsed().as_secs_f64();
-                if !e.report.converged {
-                    Err((
-                        FailureCause::from_report(&e.report),
-                        e.report.to_string(),
-                        e.report.iterations,
-                    ))
+                if !e.report.status.is_converged() {
+                    Err(StepFailure {
+                        cause: FailureCause::of_estimate(&e.report.status),
+                        estimator: Some(e.report.status),
+                        message: e.report.to_string(),
+                        iterations: e.report.iterations,
+                    })
                 } else if e.q.iter().chain(&e.f).any(|v| !v.is_finite()) {
-                    Err((
-                        FailureCause::Divergence,
-                        "non-finite estimate".into(),
-                        e.report.iterations,
-                    ))
+                    Err(StepFailure {
+                        cause: FailureCause::Divergence,
+                        estimator: None,
+                        message: "non-finite estimate".into(),
+                        iterations: e.report.iterations,
+                    })
                 } else {
                     Ok((e, dt))
                 }
             }
-            Err(err) => {
-                let it = match &err {
-                    Error::EstimateNotConverged { report } => report.iterations,
-                    _ => 0,
-                };
-                Err((FailureCause::classify(&err), err.to_string(), it))
-            }
+            Err(err) => Err(StepFailure::of_error(&err)),
         }
     };
-    if let Err((c, m, it)) = step(&mut est, &first) {
-        let mut o = fail(c, m, "first frame");
-        o.iterations = it;
-        return o;
+    if let Err(f) = step(&mut est, &first) {
+        return fail(f, Stage::FirstFrame);
     }
     if let Some(previous) = &previous {
-        if let Err((c, m, it)) = step(&mut est, previous) {
-            let mut o = fail(c, m, "previous frame");
-            o.iterations = it;
-            o.alpha_used = est.alpha();
-            return o;
+        if let Err(f) = step(&mut est, previous) {
+            return Outcome {
+                alpha_used: est.alpha(),
+                ..fail(f, Stage::PreviousFrame)
+            };
         }
     }
     let (e, dt) = match step(&mut est, &measured) {
         Ok(x) => x,
-        Err((c, m, it)) => {
-            let mut o = fail(c, m, "measured frame");
-            o.iterations = it;
-            o.alpha_used = est.alpha();
-            return o;
+        Err(f) => {
+            return Outcome {
+                alpha_used: est.alpha(),
+                ..fail(f, Stage::MeasuredFrame)
+            }
         }
     };
     let iterations = e.report.iterations;
     let first = match case_errors(&robot, &e, reference) {
         Ok(x) => x,
-        Err(err) => return fail(FailureCause::Divergence, err.to_string(), "measured frame"),
+        Err(err) => return fail(StepFailure::of_error(&err), Stage::MeasuredFrame),
     };
     let mut errs = Vec::new();
     let mut times = Vec::new();
@@ -526,20 +637,10 @@ pub fn run_case(spec: &CaseSpec) -> Outcome {
                 times.push(dt);
                 match case_errors(&robot, &e, reference) {
                     Ok(x) => errs.push(x),
-                    Err(err) => {
-                        return fail(
-                            FailureCause::Divergence,
-                            err.to_string(),
-                            &format!("warm frame {k}"),
-                        )
-                    }
+                    Err(err) => return fail(StepFailure::of_error(&err), Stage::WarmFrame(k)),
                 }
             }
-            Err((c, m, it)) => {
-                let mut o = fail(c, m, &format!("warm frame {k}"));
-                o.iterations = it;
-                return o;
-            }
+            Err(f) => return fail(f, Stage::WarmFrame(k)),
         }
     }
     let errors = if errs.is_empty() {
@@ -554,17 +655,14 @@ pub fn run_case(spec: &CaseSpec) -> Outcome {
     };
     Outcome {
         spec: spec.clone(),
-        converged: true,
-        cause: None,
-        message: None,
-        failed_at: None,
+        status: CaseStatus::Converged,
         iterations,
         alpha_used: est.alpha(),
         errors: Some(errors),
         median_step_s: median(&mut times.clone()),
         warm_step_s: times,
         step_s: Some(dt),
-        total_s: start.elapsed().as_secs_f64(),
+        total_s: elapsed(),
     }
 }
 
@@ -599,12 +697,20 @@ pub fn run_guarded_with(spec: &CaseSpec, cap: Duration, f: fn(&CaseSpec) -> Outc
             // the receiver may have given up (timeout): nothing to do then
             let _ = tx.send(r);
         });
+    let guard_failure = |cause, message, at| CaseFailure {
+        cause,
+        estimator: None,
+        at,
+        message,
+    };
     if let Err(e) = spawned {
         return Outcome::failed(
             spec.clone(),
-            FailureCause::Other,
-            format!("cannot start a thread: {e}"),
-            "setup",
+            guard_failure(
+                FailureCause::Other,
+                format!("cannot start a thread: {e}"),
+                Stage::Setup,
+            ),
             0.0,
         );
     }
@@ -618,17 +724,17 @@ pub fn run_guarded_with(spec: &CaseSpec, cap: Duration, f: fn(&CaseSpec) -> Outc
                 .unwrap_or_else(|| "panic".to_string());
             Outcome::failed(
                 spec.clone(),
-                FailureCause::Panic,
-                msg,
-                "unknown",
+                guard_failure(FailureCause::Panic, msg, Stage::Unknown),
                 start.elapsed().as_secs_f64(),
             )
         }
         Err(_) => Outcome::failed(
             spec.clone(),
-            FailureCause::Timeout,
-            format!("no result within {:.0} s", cap.as_secs_f64()),
-            "unknown",
+            guard_failure(
+                FailureCause::Timeout,
+                format!("no result within {:.0} s", cap.as_secs_f64()),
+                Stage::Unknown,
+            ),
             start.elapsed().as_secs_f64(),
         ),
     }

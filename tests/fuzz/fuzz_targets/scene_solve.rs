@@ -9,7 +9,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use softrod::scene::Scene;
-use softrod::statics::{Criterion, StaticSolver};
+use softrod::statics::{StaticCriterion, StaticSolver};
 
 /// Largest input (bytes).
 const MAX_INPUT: usize = 16 * 1024;
@@ -72,7 +72,7 @@ fuzz_target!(|data: &[u8]| {
                     .residual(&eq.q, &dead, &loads)
                     .map(|r| r.iter().map(|x| x * x).sum::<f64>().sqrt());
                 let bound = r.residual_tolerance_n.max(r.residual_floor_n);
-                let by_increment = r.criterion == Some(Criterion::Increment);
+                let by_increment = r.status.criterion() == Some(StaticCriterion::Increment);
                 if let Ok(res) = res {
                     assert!(
                         res <= bound * (1.0 + 1e-6)

@@ -1,0 +1,165 @@
+//! The estimators' status.
+
+use clarabel::solver::SolverStatus;
+use serde::{Deserialize, Serialize};
+
+use super::NonFiniteAt;
+
+/// Which test ended a converged estimation (the predicted decrease `dec` of
+/// the objective along the step, `scale = max(objective, n_ob)`).
+///
+/// # Example
+/// ```
+/// use softrod::outcome::{EstimateCriterion, EstimateStatus};
+/// let s = EstimateStatus::Converged(EstimateCriterion::PredictedDecrease);
+/// assert_eq!(serde_json::to_string(&s).unwrap(), r#"{"converged":"predicted_decrease"}"#);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EstimateCriterion {
+    /// `dec <= tolerance × scale` (for the SQP backend at a feasible point,
+    /// the decrease along the equilibrium manifold).
+    PredictedDecrease,
+    /// `dec` at the round-off floor: below `1e-13 scale` and no longer
+    /// shrinking.
+    RoundOffFloor,
+    /// Newton backend: the decrease predicted after the step
+    /// (`dec²/dec_prev`, quadratic convergence) was far below the tolerance,
+    /// so the step was taken without a further linearization to confirm it.
+    UnconfirmedLastStep,
+    /// Newton backend: the step makes no first-order change of the
+    /// objective (zero slope) and its predicted decrease is not a number.
+    Stationary,
+    /// The line search found no decrease, but the predicted decrease was
+    /// already negligible (below `1e-6 scale` for the Newton backend, `1e-10
+    /// scale` at a feasible point for the SQP backend): round-off hides it.
+    NegligibleDecrease,
+}
+
+impl EstimateCriterion {
+    /// The test in words.
+    pub fn name(self) -> &'static str {
+        match self {
+            EstimateCriterion::PredictedDecrease => "predicted decrease",
+            EstimateCriterion::RoundOffFloor => "round-off floor",
+            EstimateCriterion::UnconfirmedLastStep => "unconfirmed last step",
+            EstimateCriterion::Stationary => "stationary point",
+            EstimateCriterion::NegligibleDecrease => "negligible decrease",
+        }
+    }
+}
+
+/// How an estimation ended.
+///
+/// An estimator that stops short still returns its last iterate (an
+/// equilibrium) with one of the other variants: see
+/// [`Estimator::step`](crate::estimate::Estimator::step).
+///
+/// # Example
+/// ```
+/// use softrod::outcome::EstimateStatus;
+/// use clarabel::solver::SolverStatus;
+/// let s = EstimateStatus::QpNotSolved(SolverStatus::PrimalInfeasible);
+/// assert!(!s.is_converged());
+/// assert_eq!(serde_json::to_string(&s).unwrap(), r#"{"qp_not_solved":"PrimalInfeasible"}"#);
+/// let back: EstimateStatus = serde_json::from_str(r#"{"qp_not_solved":"PrimalInfeasible"}"#).unwrap();
+/// assert_eq!(back, s);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EstimateStatus {
+    /// Converged; the test that ended it.
+    Converged(EstimateCriterion),
+    /// The outer iteration budget (`max_iterations`) ran out.
+    IterationLimit {
+        /// Outer iterations of the solve that stopped.
+        iterations: usize,
+    },
+    /// The line search (Armijo on the objective, or on the SQP merit
+    /// function) found no acceptable step.
+    LineSearchFailed,
+    /// An SQP subproblem was not solved: clarabel's status (infeasible, as
+    /// with contradictory bounds, a numerical error, its iteration limit…).
+    QpNotSolved(#[serde(with = "solver_status")] SolverStatus),
+    /// An SQP subproblem's tangent stiffness had a vanishing pivot.
+    SingularTangent,
+    /// An SQP subproblem's Gauss–Newton matrix was not positive definite.
+    NotPositiveDefinite,
+    /// A number that is not finite appeared in an SQP subproblem.
+    NonFinite {
+        /// Where.
+        at: NonFiniteAt,
+    },
+}
+
+impl EstimateStatus {
+    /// Whether the estimation converged.
+    pub fn is_converged(&self) -> bool {
+        matches!(self, EstimateStatus::Converged(_))
+    }
+
+    /// The test that ended a converged estimation.
+    pub fn criterion(&self) -> Option<EstimateCriterion> {
+        match self {
+            EstimateStatus::Converged(c) => Some(*c),
+            _ => None,
+        }
+    }
+}
+
+impl std::fmt::Display for EstimateStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            EstimateStatus::Converged(c) => write!(f, "converged ({})", c.name()),
+            EstimateStatus::IterationLimit { iterations } => {
+                write!(f, "iteration limit ({iterations} iterations)")
+            }
+            EstimateStatus::LineSearchFailed => write!(f, "line search failed"),
+            EstimateStatus::QpNotSolved(s) => {
+                write!(f, "QP subproblem not solved (clarabel: {s:?})")
+            }
+            EstimateStatus::SingularTangent => write!(f, "singular tangent in a QP subproblem"),
+            EstimateStatus::NotPositiveDefinite => {
+                write!(
+                    f,
+                    "Gauss-Newton matrix not positive definite in a QP subproblem"
+                )
+            }
+            EstimateStatus::NonFinite { at } => {
+                write!(f, "non-finite {} in a QP subproblem", at.name())
+            }
+        }
+    }
+}
+
+/// clarabel's `SolverStatus` as its variant name (it has no serde support).
+mod solver_status {
+    use clarabel::solver::SolverStatus;
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    const ALL: [SolverStatus; 12] = [
+        SolverStatus::Unsolved,
+        SolverStatus::Solved,
+        SolverStatus::PrimalInfeasible,
+        SolverStatus::DualInfeasible,
+        SolverStatus::AlmostSolved,
+        SolverStatus::AlmostPrimalInfeasible,
+        SolverStatus::AlmostDualInfeasible,
+        SolverStatus::MaxIterations,
+        SolverStatus::MaxTime,
+        SolverStatus::NumericalError,
+        SolverStatus::InsufficientProgress,
+        SolverStatus::CallbackTerminated,
+    ];
+
+    pub fn serialize<S: Serializer>(s: &SolverStatus, ser: S) -> Result<S::Ok, S::Error> {
+        ser.collect_str(&format_args!("{s:?}"))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(de: D) -> Result<SolverStatus, D::Error> {
+        let name = String::deserialize(de)?;
+        ALL.into_iter()
+            .find(|s| format!("{s:?}") == name)
+            .ok_or_else(|| serde::de::Error::custom(format!("unknown clarabel status `{name}`")))
+    }
+}

@@ -1,0 +1,169 @@
+//! The static solver's status and report.
+
+use serde::{Deserialize, Serialize};
+
+use super::NonFiniteAt;
+
+/// Which test ended a converged static solve.
+///
+/// # Example
+/// ```
+/// use softrod::outcome::StaticCriterion;
+/// assert_eq!(serde_json::to_string(&StaticCriterion::RoundOffFloor).unwrap(), "\"round_off_floor\"");
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StaticCriterion {
+    /// `|Q| <= residual_tolerance × load scale`.
+    Residual,
+    /// `|Q|` reached the round-off floor (see
+    /// [`residual_floor`](crate::statics::residual_floor)); one more Newton
+    /// step was taken there.
+    RoundOffFloor,
+    /// A full Newton step below `increment_tolerance × L`.
+    Increment,
+}
+
+impl StaticCriterion {
+    /// The test in words ("residual").
+    pub fn name(self) -> &'static str {
+        match self {
+            StaticCriterion::Residual => "residual",
+            StaticCriterion::RoundOffFloor => "round-off floor",
+            StaticCriterion::Increment => "increment",
+        }
+    }
+}
+
+/// How a static solve ended.
+///
+/// # Example
+/// ```
+/// use softrod::{scene::Scene, statics::{StaticSettings, StaticSolver, StaticStatus}, Error};
+/// let scene = Scene::two_section();
+/// let robot = scene.robot()?;
+/// let eq = StaticSolver::default().solve(&robot, &scene.loads()?, None)?;
+/// assert!(eq.report.status.is_converged());
+/// // one iteration cannot reach equilibrium from the straight robot
+/// let tight = StaticSolver::new(StaticSettings { max_iterations: 1, max_total_iterations: 1, ..Default::default() })?;
+/// match tight.solve(&robot, &scene.loads()?, None) {
+///     Err(Error::NotConverged { report }) => {
+///         assert_eq!(report.status, StaticStatus::IterationLimit { iterations: 1 })
+///     }
+///     other => panic!("{other:?}"),
+/// }
+/// # Ok::<(), softrod::Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StaticStatus {
+    /// Equilibrium reached; the test that ended the solve.
+    Converged(StaticCriterion),
+    /// The iteration budget (`max_total_iterations`) ran out.
+    IterationLimit {
+        /// Newton iterations taken.
+        iterations: usize,
+    },
+    /// The line search found no step that decreases the potential or the
+    /// residual along the Newton direction (one load step; the homotopy then
+    /// shortens the step).
+    LineSearchFailed,
+    /// No shift of the tangent's diagonal gave a factorization with a
+    /// descent direction.
+    SingularTangent,
+    /// The homotopy step fell below `min_load_step`.
+    LoadStepTooSmall {
+        /// The load fraction `λ` the homotopy had reached (0 to 1).
+        load_fraction: f64,
+    },
+    /// A number that is not finite appeared.
+    NonFinite {
+        /// Where.
+        at: NonFiniteAt,
+    },
+}
+
+impl StaticStatus {
+    /// Whether equilibrium was reached.
+    pub fn is_converged(&self) -> bool {
+        matches!(self, StaticStatus::Converged(_))
+    }
+
+    /// The test that ended a converged solve.
+    pub fn criterion(&self) -> Option<StaticCriterion> {
+        match self {
+            StaticStatus::Converged(c) => Some(*c),
+            _ => None,
+        }
+    }
+}
+
+impl std::fmt::Display for StaticStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StaticStatus::Converged(c) => write!(f, "converged ({} test)", c.name()),
+            StaticStatus::IterationLimit { iterations } => {
+                write!(f, "iteration limit ({iterations} iterations)")
+            }
+            StaticStatus::LineSearchFailed => write!(f, "line search failed"),
+            StaticStatus::SingularTangent => write!(f, "singular tangent"),
+            StaticStatus::LoadStepTooSmall { load_fraction } => {
+                write!(
+                    f,
+                    "load step too small (at load fraction {load_fraction:.4})"
+                )
+            }
+            StaticStatus::NonFinite { at } => write!(f, "non-finite {}", at.name()),
+        }
+    }
+}
+
+/// What a static solve did.
+///
+/// # Example
+/// ```
+/// use softrod::{scene::Scene, statics::StaticSolver};
+/// let scene = Scene::two_section();
+/// let eq = StaticSolver::default().solve(&scene.robot()?, &scene.loads()?, None)?;
+/// let r = &eq.report;
+/// assert!(r.status.is_converged() && r.residual_norm_n <= r.residual_tolerance_n.max(r.residual_floor_n));
+/// println!("{r}");
+/// # Ok::<(), softrod::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StaticReport {
+    /// How the solve ended.
+    pub status: StaticStatus,
+    /// Newton iterations in all.
+    pub iterations: usize,
+    /// Homotopy steps taken (0: the full problem converged directly).
+    pub load_steps: usize,
+    /// Final `|Q|_2` (N).
+    pub residual_norm_n: f64,
+    /// `residual_tolerance × load_scale_n` (N).
+    pub residual_tolerance_n: f64,
+    /// Estimated round-off floor of `|Q|_2` (N).
+    pub residual_floor_n: f64,
+    /// Norm of the applied generalized forces (N).
+    pub load_scale_n: f64,
+    /// Last Newton step `|dq|_∞` (m).
+    pub increment_norm_m: f64,
+    /// Wall time (s).
+    pub wall_time_s: f64,
+}
+
+impl std::fmt::Display for StaticReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}; {} iterations ({} load steps), |Q| = {:.3e} N (tolerance {:.3e} N, round-off floor {:.3e} N), last step {:.3e} m",
+            self.status,
+            self.iterations,
+            self.load_steps,
+            self.residual_norm_n,
+            self.residual_tolerance_n,
+            self.residual_floor_n,
+            self.increment_norm_m
+        )
+    }
+}
