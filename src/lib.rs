@@ -39,12 +39,15 @@ pub mod error;
 pub mod estimate;
 pub mod linsolve;
 pub mod loads;
+pub(crate) mod numeric;
+pub mod observe;
 pub mod outcome;
 pub mod params;
 pub mod quadrature;
 pub mod refine;
 pub mod report;
 pub mod scene;
+pub mod sensitivity;
 pub mod statics;
 pub mod structure;
 

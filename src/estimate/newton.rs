@@ -34,13 +34,20 @@
 //!   intermediate observations.
 
 use crate::assembly::Robot;
+use crate::banded::BandedLu;
 use crate::element::Element;
 use crate::error::Result;
 use crate::loads::Loads;
+use crate::numeric::{dot, norm2};
+use crate::observe::{ObsRow, ObservationOperator};
+use crate::sensitivity::Sensitivity;
 
+use super::covariance::cov_factor;
+use super::driver::{run_step, Method, Solved, Stream};
+use super::problem::{step_cap, Derivs, Problem};
 use super::{
-    dot, norm2, run_step, step_cap, Backend, Core, Estimate, EstimateCriterion, EstimateReport,
-    EstimateStatus, Estimator, EstimatorSettings, ObsOp, Observation, Solved,
+    Backend, Estimate, EstimateCriterion, EstimateReport, EstimateStatus, Estimator,
+    EstimatorSettings, Observation,
 };
 
 /// The reduced Gauss–Newton estimator (backend "newton").
@@ -62,7 +69,10 @@ use super::{
 /// ```
 #[derive(Debug, Clone)]
 pub struct NewtonEstimator<E: Element> {
-    core: Core<E>,
+    stream: Stream<E>,
+    /// The derivatives at the last converged estimate's shape for its
+    /// observation rows: a warm step's first iteration starts there.
+    derivs_cache: Option<(Vec<f64>, Vec<ObsRow>, Derivs)>,
 }
 
 impl<E: Element> NewtonEstimator<E> {
@@ -80,13 +90,14 @@ impl<E: Element> NewtonEstimator<E> {
             ));
         }
         Ok(NewtonEstimator {
-            core: Core::new(robot, known, settings)?,
+            stream: Stream::new(Problem::new(robot, known, settings)?),
+            derivs_cache: None,
         })
     }
 
     /// The robot.
     pub fn robot(&self) -> &Robot<E> {
-        &self.core.robot
+        self.stream.problem.robot()
     }
 
     /// Objective `J(F)` and reduced gradient (29) at `F` for `observation`
@@ -101,14 +112,11 @@ impl<E: Element> NewtonEstimator<E> {
         f: &[f64],
         alpha: f64,
     ) -> Result<(f64, Vec<f64>)> {
-        let op = self.core.obs_op(observation)?;
-        crate::error::check_len("f", self.core.n_f, f.len())?;
-        let (_, q0) = self.core.start()?;
-        let eq = self.core.equilibrium(f, &q0)?;
-        let lu = self.core.factor(&eq.q)?;
-        let (wr, pen, e) = self.core.objective(&op, &eq.q, f, alpha)?;
-        let dv = self.core.derivs(&lu, &op)?;
-        let g = self.core.gradient(&dv, &op, &e, f, alpha)?;
+        let (q, lu, op) = self.equilibrium_at(observation, f)?;
+        let problem = &self.stream.problem;
+        let (wr, pen, e) = problem.objective(&op, &q, f, alpha)?;
+        let dv = problem.derivs(&lu, &op)?;
+        let g = problem.gradient(&dv, &op, &e, f, alpha)?;
         Ok((wr + pen, g))
     }
 
@@ -122,25 +130,49 @@ impl<E: Element> NewtonEstimator<E> {
         observation: &Observation,
         f: &[f64],
     ) -> Result<(Vec<f64>, Vec<f64>)> {
-        let op = self.core.obs_op(observation)?;
-        crate::error::check_len("f", self.core.n_f, f.len())?;
-        let (_, q0) = self.core.start()?;
-        let eq = self.core.equilibrium(f, &q0)?;
-        let lu = self.core.factor(&eq.q)?;
-        let ob: Vec<f64> = (0..op.n())
-            .map(|i| op.apply_row(i, &eq.q, E::NODE_DOFS, E::DIM))
-            .collect();
-        let dv = self.core.derivs(&lu, &op)?;
-        Ok((ob, dv.jm.concat()))
+        let (q, lu, op) = self.equilibrium_at(observation, f)?;
+        let dv = self.stream.problem.derivs(&lu, &op)?;
+        // column i of Jᵀ is row i of J
+        Ok((op.apply(&q), dv.jt.as_slice().to_vec()))
     }
 
-    fn solve_one(&mut self, op: &ObsOp, f0: Vec<f64>, q0: Vec<f64>, alpha: f64) -> Result<Solved> {
-        let core = &mut self.core;
-        let settings = core.settings.clone();
+    /// The equilibrium at `F` from the warm shape, the tangent's factors
+    /// there and the observation operator.
+    fn equilibrium_at(
+        &mut self,
+        observation: &Observation,
+        f: &[f64],
+    ) -> Result<(Vec<f64>, BandedLu, ObservationOperator)> {
+        let op = self.stream.problem.operator(observation)?;
+        crate::error::check_len("f", self.stream.problem.n_f(), f.len())?;
+        let (_, q0) = self.stream.start()?;
+        let problem = &mut self.stream.problem;
+        let eq = problem.equilibrium(f, &q0)?;
+        let lu = problem.factor(&eq.q)?;
+        Ok((eq.q, lu, op))
+    }
+}
+
+impl<E: Element> Method<E> for NewtonEstimator<E> {
+    const BACKEND: Backend = Backend::Newton;
+
+    fn stream(&mut self) -> &mut Stream<E> {
+        &mut self.stream
+    }
+
+    fn solve_one(
+        &mut self,
+        op: &ObservationOperator,
+        f0: Vec<f64>,
+        q0: Vec<f64>,
+        alpha: f64,
+    ) -> Result<Solved> {
+        let core = &mut self.stream.problem;
+        let settings = core.settings().clone();
         let mut f = f0;
         let eq = core.equilibrium(&f, &q0)?;
-        let (mut q, mut lu, mut res_n) = (eq.q, eq.lu, eq.residual_n);
-        let n_ob = op.n() as f64;
+        let (mut q, mut lu, mut res_n) = (eq.q, eq.factors, eq.residual_n);
+        let n_ob = op.len() as f64;
         let mut iterations = 0;
         let mut prev_dec = f64::INFINITY;
         loop {
@@ -148,10 +180,13 @@ impl<E: Element> NewtonEstimator<E> {
             let obj = wr + pen;
             // (a warm step starts where the last one converged: the
             // derivatives there are cached)
-            let dv = if iterations == 0 {
-                core.derivs_at(&q, &lu, op)?
-            } else {
-                core.derivs(&lu, op)?
+            let cached = match self.derivs_cache.take() {
+                Some((qc, rows, dv)) if iterations == 0 && qc == q && rows == op.rows() => Some(dv),
+                _ => None,
+            };
+            let dv = match cached {
+                Some(dv) => dv,
+                None => core.derivs(&lu, op)?,
             };
             let g = core.gradient(&dv, op, &e, &f, alpha)?;
             // the step only: the covariance factor is formed once, at the end
@@ -159,9 +194,7 @@ impl<E: Element> NewtonEstimator<E> {
             let dec = -0.5 * dot(&g, &step);
             // trust region: the predicted motion of every node, M K⁻¹ Mᵀ G dF
             // (one more solve), within max_observation_jump_m
-            let mut du = core.robot.restrict(&core.gen_force(&step)?)?;
-            lu.solve_in_place(&mut du)?;
-            let dq = core.robot.expand_step(&du)?;
+            let dq = Sensitivity::new(core.robot(), &lu)?.response(&core.gen_force(&step)?)?;
             let nd = E::NODE_DOFS;
             let moved = dq
                 .iter()
@@ -171,7 +204,7 @@ impl<E: Element> NewtonEstimator<E> {
             let cap = if moved > settings.max_observation_jump_m && moved.is_finite() {
                 settings.max_observation_jump_m / moved
             } else {
-                step_cap(&dv.jm, &step, settings.max_observation_jump_m)
+                step_cap(&dv, &step, settings.max_observation_jump_m)
             };
             step.iter_mut().for_each(|v| *v *= cap);
             let slope = dot(&g, &step);
@@ -183,7 +216,7 @@ impl<E: Element> NewtonEstimator<E> {
                 sub_steps: 1,
                 objective: obj,
                 weighted_residual: wr,
-                n_observations: op.n(),
+                n_observations: op.len(),
                 gradient_norm: norm2(&g),
                 equilibrium_residual_n: res_n,
                 alpha,
@@ -202,8 +235,8 @@ impl<E: Element> NewtonEstimator<E> {
                 None
             };
             if let Some(criterion) = criterion {
-                let l = core.cov_factor(&dv, op, &fac);
-                core.keep_derivs(&q, op, &dv);
+                let l = cov_factor(core, &dv, op, &fac);
+                self.derivs_cache = Some((q.clone(), op.rows().to_vec(), dv.clone()));
                 return Ok(Solved {
                     f,
                     q,
@@ -214,7 +247,7 @@ impl<E: Element> NewtonEstimator<E> {
                 });
             }
             if iterations >= settings.max_iterations {
-                let l = core.cov_factor(&dv, op, &fac);
+                let l = cov_factor(core, &dv, op, &fac);
                 return Ok(Solved {
                     f,
                     q,
@@ -239,9 +272,10 @@ impl<E: Element> NewtonEstimator<E> {
             prev_dec = dec;
             if last {
                 let ft: Vec<f64> = f.iter().zip(&step).map(|(a, b)| a + b).collect();
-                if let Some((qt, res_t)) = core.equilibrium_chord(&ft, &q)? {
+                let load = core.load();
+                if let Some((qt, res_t)) = core.tracker().solve_chord(&load, &ft, &q)? {
                     let (wr_t, pen_t, e_t) = core.objective(op, &qt, &ft, alpha)?;
-                    let l = core.cov_factor(&dv, op, &fac);
+                    let l = cov_factor(core, &dv, op, &fac);
                     let mut rep = report(
                         EstimateStatus::Converged(EstimateCriterion::UnconfirmedLastStep),
                         iterations,
@@ -265,7 +299,15 @@ impl<E: Element> NewtonEstimator<E> {
             let mut accepted = None;
             for _ in 0..30 {
                 let ft: Vec<f64> = f.iter().zip(&step).map(|(a, b)| a + t * b).collect();
-                if let Ok(eq) = core.equilibrium_opt(&ft, &q, t < 0.01) {
+                // a trial without the globalized fallback unless the step is
+                // already short: cheap
+                let load = core.load();
+                let trial = if t < 0.01 {
+                    core.equilibrium(&ft, &q).ok()
+                } else {
+                    core.tracker().try_solve(&load, &ft, &q).ok().flatten()
+                };
+                if let Some(eq) = trial {
                     let (wr_t, pen_t, _) = core.objective(op, &eq.q, &ft, alpha)?;
                     if wr_t + pen_t <= obj + 1e-4 * t * slope || dec <= 1e-8 * scale {
                         accepted = Some((ft, eq));
@@ -278,11 +320,11 @@ impl<E: Element> NewtonEstimator<E> {
                 Some((ft, eq)) => {
                     f = ft;
                     q = eq.q;
-                    lu = eq.lu;
+                    lu = eq.factors;
                     res_n = eq.residual_n;
                 }
                 None => {
-                    let l = core.cov_factor(&dv, op, &fac);
+                    let l = cov_factor(core, &dv, op, &fac);
                     return Ok(Solved {
                         f,
                         q,
@@ -304,4 +346,21 @@ impl<E: Element> NewtonEstimator<E> {
     }
 }
 
-crate::estimate::impl_estimator!(NewtonEstimator, Backend::Newton);
+impl<E: Element + 'static> Estimator for NewtonEstimator<E> {
+    fn step(&mut self, observation: &Observation) -> Result<Estimate> {
+        run_step(self, observation)
+    }
+
+    fn backend(&self) -> Backend {
+        Backend::Newton
+    }
+
+    fn alpha(&self) -> Option<f64> {
+        self.stream.alpha
+    }
+
+    fn reset(&mut self) {
+        self.stream.reset();
+        self.derivs_cache = None;
+    }
+}

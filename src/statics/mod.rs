@@ -10,8 +10,13 @@
 //! generalized forces, but never asks for less than the round-off floor
 //! `ε |K|_max |q|_∞ max(1, 0.05 √n)`, which grows with the element count (a fixed
 //! relative tolerance of 1e-10 is unreachable at 32+ elements). A full Newton
-//! step below `increment_tolerance × L` also ends the solve. The report shows
-//! which test ended it, the tolerance and the floor.
+//! step below `increment_tolerance × L` also ends the solve. The report's
+//! status shows which test ended it (or why it failed), with the tolerance
+//! and the floor ([`residual_floor`]).
+//!
+//! [`EquilibriumTracker`] (in [`tracker`]) solves the same equilibrium at a
+//! sequence of nearby loads, warm, reusing factorizations: what an estimator
+//! or a controller needs; it falls back to [`StaticSolver`].
 
 use std::time::Instant;
 
@@ -22,7 +27,12 @@ use crate::element::Element;
 use crate::error::{check_len, Error, Result};
 use crate::linsolve::BandedMatrix;
 use crate::loads::Loads;
+use crate::numeric::norm2;
 pub use crate::outcome::{NonFiniteAt, StaticCriterion, StaticReport, StaticStatus};
+
+pub mod tracker;
+
+pub use tracker::{EquilibriumTracker, LinearLoad, TrackedEquilibrium};
 
 /// Settings of the static solver; every field has a documented default.
 ///
@@ -517,8 +527,4 @@ fn finite_or_max(v: f64) -> f64 {
     } else {
         f64::MAX
     }
-}
-
-fn norm2(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }

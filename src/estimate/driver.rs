@@ -1,0 +1,347 @@
+//! What both estimators do around their method: the stream of
+//! observations (warm starts), the choice of `α` by the discrepancy principle
+//! and the continuation in `α`, the incremental observations of a large jump,
+//! and the assembly of the [`Estimate`].
+
+use std::time::Instant;
+
+use crate::element::Element;
+use crate::error::{Error, Result};
+use crate::observe::{Observation, ObservationOperator};
+
+use super::problem::{Derivs, Problem};
+use super::{Backend, Estimate, EstimateReport};
+
+/// Where the cold start of the `newton` backend at a given small `α` begins
+/// its continuation (m/N² with whitened weights; the discrepancy search
+/// starts there too).
+pub const ALPHA_CONTINUATION_START: f64 = 100.0;
+
+/// The state a backend keeps between steps: the last converged estimate and
+/// the observation it fitted.
+#[derive(Debug, Clone)]
+pub(crate) struct Warm {
+    pub f: Vec<f64>,
+    pub q: Vec<f64>,
+    pub y: Vec<f64>,
+}
+
+/// One solve of a backend at a fixed `α` and observation, converged or not
+/// (its report's status says).
+pub(crate) struct Solved {
+    pub f: Vec<f64>,
+    pub q: Vec<f64>,
+    pub derivs: Derivs,
+    pub cov_factor: Vec<f64>,
+    pub e: Vec<f64>,
+    pub report: EstimateReport,
+}
+
+/// An estimator's state along a stream of observations: the problem, the
+/// `α` in use and the warm start.
+#[derive(Debug, Clone)]
+pub(crate) struct Stream<E: Element> {
+    pub problem: Problem<E>,
+    pub alpha: Option<f64>,
+    pub warm: Option<Warm>,
+}
+
+impl<E: Element> Stream<E> {
+    /// A fresh stream over `problem` (`α` from its settings).
+    pub fn new(problem: Problem<E>) -> Self {
+        Stream {
+            alpha: problem.settings().alpha,
+            problem,
+            warm: None,
+        }
+    }
+
+    /// Forgets the warm start, the tracker's state and an automatically
+    /// chosen `α`.
+    pub fn reset(&mut self) {
+        self.warm = None;
+        self.problem.tracker().forget();
+        self.alpha = self.problem.settings().alpha;
+    }
+
+    /// The starting point of a step: the warm state, else zero load and the
+    /// shape of the known loads.
+    pub fn start(&self) -> Result<(Vec<f64>, Vec<f64>)> {
+        if let Some(w) = &self.warm {
+            return Ok((w.f.clone(), w.q.clone()));
+        }
+        self.problem.unloaded_start()
+    }
+
+    /// Intermediate measurement vectors from the previous observation to `y`
+    /// when the jump exceeds `max_observation_jump_m` (positions only count).
+    fn sub_targets(&self, op: &ObservationOperator, q_start: &[f64]) -> Vec<Vec<f64>> {
+        let y = op.measurements();
+        // from the last observation, or (first step) from the markers of
+        // the starting shape
+        let predicted: Vec<f64>;
+        let prev = match &self.warm {
+            Some(w) if w.y.len() == y.len() => &w.y,
+            _ => {
+                predicted = op.apply(q_start);
+                &predicted
+            }
+        };
+        let jump = y
+            .iter()
+            .zip(prev)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        let n = (jump / self.problem.settings().max_observation_jump_m)
+            .ceil()
+            .max(1.0);
+        let n = if n.is_finite() {
+            (n as usize).min(1000)
+        } else {
+            1
+        };
+        (1..=n)
+            .map(|k| {
+                let t = k as f64 / n as f64;
+                prev.iter().zip(y).map(|(a, b)| a + t * (b - a)).collect()
+            })
+            .collect()
+    }
+
+    /// Assembles the [`Estimate`] at `(q, F)`.
+    #[allow(clippy::too_many_arguments)]
+    fn finish(
+        &self,
+        q: Vec<f64>,
+        f: Vec<f64>,
+        op: &ObservationOperator,
+        dv: &Derivs,
+        cov_factor: Vec<f64>,
+        e: Vec<f64>,
+        report: EstimateReport,
+    ) -> Result<Estimate> {
+        let problem = &self.problem;
+        let (resultant_force_n, resultant_moment_nm, fw) = problem.resultants(&q, &f)?;
+        let (resultant_force_cov, marker_cov) =
+            super::covariance::resultant_and_marker_cov(&cov_factor, &fw, dv);
+        Ok(Estimate {
+            q,
+            f,
+            load_model: problem.load(),
+            resultant_force_n,
+            resultant_moment_nm,
+            resultant_force_cov,
+            marker_residuals: e,
+            cov_factor,
+            marker_cov,
+            noise_sigma_m: problem.settings().noise_sigma_m,
+            report,
+            node_s: problem.robot().node_arc().to_vec(),
+            dim: E::DIM,
+            node_dofs: E::NODE_DOFS,
+            n_ob: op.len(),
+        })
+    }
+}
+
+/// A method over the estimation problem: how one backend solves it at a
+/// fixed `α` and observation from a start `(F, q)`.
+pub(crate) trait Method<E: Element> {
+    /// The backend.
+    const BACKEND: Backend;
+    /// The stream the method runs on.
+    fn stream(&mut self) -> &mut Stream<E>;
+    /// One solve from `(f0, q0)` at `alpha` for the observation `op`.
+    fn solve_one(
+        &mut self,
+        op: &ObservationOperator,
+        f0: Vec<f64>,
+        q0: Vec<f64>,
+        alpha: f64,
+    ) -> Result<Solved>;
+}
+
+/// Chooses `α` by the discrepancy principle: `weighted_residual(α) =
+/// n_ob`, with `solve(α)` returning the weighted residual of the estimate
+/// at `α`. The residual grows with `α`: from `α = 100` the bracket is
+/// widened by factors of 10, then bisected in `log10 α` to 0.02.
+pub(crate) fn discrepancy_alpha(
+    n_ob: usize,
+    mut solve: impl FnMut(f64) -> Result<f64>,
+) -> Result<f64> {
+    let target = n_ob as f64;
+    let (lo_lim, hi_lim) = (-14.0f64, 14.0f64);
+    // start where the reduced problem is well conditioned (with whitened
+    // weights α = 100 is a strong regularization) and move by decades:
+    // each solve starts from the previous one (continuation)
+    let mut a = 2.0f64;
+    let mut r = solve(ALPHA_CONTINUATION_START)?;
+    let (mut lo, mut hi);
+    if r > target {
+        hi = a;
+        while r > target && a > lo_lim {
+            hi = a;
+            a -= 1.0;
+            r = solve(10f64.powf(a))?;
+        }
+        if r > target {
+            return Ok(10f64.powf(a));
+        }
+        lo = a;
+    } else {
+        lo = a;
+        while r <= target && a < hi_lim {
+            lo = a;
+            a += 1.0;
+            r = solve(10f64.powf(a))?;
+        }
+        if r <= target {
+            return Ok(10f64.powf(a));
+        }
+        hi = a;
+    }
+    while hi - lo > 0.02 {
+        let mid = 0.5 * (lo + hi);
+        if solve(10f64.powf(mid))? > target {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    Ok(10f64.powf(0.5 * (lo + hi)))
+}
+
+/// One solve of a continuation path in `α` (the discrepancy search, the
+/// cold start at a small `α`): from `(f0, q0)` at `alpha`; a converged solve
+/// becomes the next start. Its weighted residual, or `None` when the solve
+/// failed.
+fn path_solve<E: Element, M: Method<E>>(
+    method: &mut M,
+    op: &ObservationOperator,
+    alpha: f64,
+    f0: &mut Vec<f64>,
+    q0: &mut Vec<f64>,
+) -> Option<f64> {
+    let s = method.solve_one(op, f0.clone(), q0.clone(), alpha).ok()?;
+    if s.report.status.is_converged() {
+        *f0 = s.f;
+        *q0 = s.q;
+    }
+    Some(s.report.weighted_residual)
+}
+
+/// The cold start of the reduced Gauss–Newton method at a small fixed `α`:
+/// from the unloaded start, the Gauss–Newton iteration on a nearly
+/// unregularized problem takes many short line-search steps, or stalls (the
+/// stability map's "line search failed" at α ≤ 1 m/N² before this). The
+/// solution is instead followed from [`ALPHA_CONTINUATION_START`] down by
+/// decades to `α`, each solve starting from the last converged one (the path
+/// the discrepancy search takes); the last one becomes the warm start of the
+/// solve at `α`. A solve of the path that fails or does not converge is
+/// skipped (the next one starts from the last converged point), so the
+/// result at `α` is the same minimizer, reached from a closer start.
+fn alpha_continuation<E: Element, M: Method<E>>(
+    method: &mut M,
+    op: &ObservationOperator,
+    alpha: f64,
+) -> Result<()> {
+    let (mut f0, mut q0) = method.stream().start()?;
+    let mut b = ALPHA_CONTINUATION_START;
+    while b > 1.5 * alpha {
+        path_solve(method, op, b, &mut f0, &mut q0);
+        b /= 10.0;
+    }
+    method.stream().warm = Some(Warm {
+        f: f0,
+        q: q0,
+        y: op.measurements().to_vec(),
+    });
+    Ok(())
+}
+
+/// One observation through the backend's method: `α` chosen if not yet, a
+/// large jump split into intermediate observations, each solved from the
+/// last; the estimate with its covariances. A solve that stops short ends
+/// the step with its last iterate and status (the warm start stays at the
+/// last converged estimate).
+pub(crate) fn run_step<E: Element, M: Method<E>>(
+    method: &mut M,
+    observation: &Observation,
+) -> Result<Estimate> {
+    let start = Instant::now();
+    let backend = M::BACKEND;
+    let op = method.stream().problem.operator(observation)?;
+    let alpha = match method.stream().alpha {
+        Some(a) => {
+            if backend == Backend::Newton
+                && method.stream().warm.is_none()
+                && a < ALPHA_CONTINUATION_START
+            {
+                alpha_continuation(method, &op, a)?;
+            }
+            a
+        }
+        None => {
+            // continuation in α: each solve starts from the last converged one
+            let (mut f0, mut q0) = method.stream().start()?;
+            let a = discrepancy_alpha(op.len(), |a| {
+                // a failure (at an extreme α) counts as a perfect fit: the
+                // search then moves to larger α
+                Ok(path_solve(method, &op, a, &mut f0, &mut q0).unwrap_or(0.0))
+            })?;
+            let stream = method.stream();
+            stream.alpha = Some(a);
+            // the last solve of the search is close: start from it
+            stream.warm = Some(Warm {
+                f: f0,
+                q: q0,
+                y: op.measurements().to_vec(),
+            });
+            a
+        }
+    };
+    let (_, q_start) = method.stream().start()?;
+    let targets = method.stream().sub_targets(&op, &q_start);
+    let n_sub = targets.len();
+    let mut iterations = 0;
+    let mut last: Option<Solved> = None;
+    for y in targets {
+        let (f0, q0) = match &last {
+            Some(s) => (s.f.clone(), s.q.clone()),
+            None => method.stream().start()?,
+        };
+        let sub = op.with_measurements(y)?;
+        let s = method.solve_one(&sub, f0, q0, alpha)?;
+        iterations += s.report.iterations;
+        if !s.report.status.is_converged() {
+            // the last iterate, with its status; its objective and marker
+            // residuals against the observation itself, not the intermediate
+            // one
+            let stream = method.stream();
+            let (wr, pen, e) = stream.problem.objective(&op, &s.q, &s.f, alpha)?;
+            let mut report = s.report;
+            report.iterations = iterations;
+            report.sub_steps = n_sub;
+            report.backend = backend;
+            report.objective = wr + pen;
+            report.weighted_residual = wr;
+            report.wall_time_s = start.elapsed().as_secs_f64();
+            return stream.finish(s.q, s.f, &op, &s.derivs, s.cov_factor, e, report);
+        }
+        last = Some(s);
+    }
+    let s = last.ok_or_else(|| Error::NonFinite {
+        context: "estimator produced no step".into(),
+    })?;
+    let stream = method.stream();
+    stream.warm = Some(Warm {
+        f: s.f.clone(),
+        q: s.q.clone(),
+        y: op.measurements().to_vec(),
+    });
+    let mut report = s.report;
+    report.iterations = iterations;
+    report.sub_steps = n_sub;
+    report.backend = backend;
+    report.wall_time_s = start.elapsed().as_secs_f64();
+    stream.finish(s.q, s.f, &op, &s.derivs, s.cov_factor, s.e, report)
+}

@@ -1,0 +1,546 @@
+//! The estimation problem (25) and what it computes at a point, apart from
+//! the methods that search it (argmin's problem/solver split):
+//!
+//! - the unknown load `Q_F = G F` ([`LoadModel`] as a [`LinearLoad`]) and its
+//!   penalty `α Fᵀ H F` (26);
+//! - the equilibrium `q(F)` (17), through the static solver's warm tracker;
+//! - the objective `(A q − y)ᵀ W (A q − y) + α Fᵀ H F` (25);
+//! - the marker Jacobian `J = ∂(A q)/∂F` (28) by adjoint solves
+//!   ([`crate::sensitivity`]);
+//! - the reduced gradient (29) and the Gauss–Newton step (30);
+//! - the resultants of a load, and the direct solution (24).
+//!
+//! [`super::newton`] and [`super::sqp`] are methods over it.
+
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+
+use crate::assembly::Robot;
+use crate::banded::{BandedLu, BandedMatrix};
+use crate::element::Element;
+use crate::error::{check_len, Error, Result};
+use crate::loads::{Loads, PointForce};
+use crate::numeric::dot;
+use crate::observe::{Observation, ObservationOperator};
+use crate::sensitivity::Sensitivity;
+use crate::statics::{EquilibriumTracker, LinearLoad, StaticSolver, TrackedEquilibrium};
+
+use super::{EstimatorSettings, LoadModel};
+
+/// `G F` of the load models: the distributed field (8) with `G = B = ∫ Sᵀ S dX`
+/// (22), (23), or a force at a node (32)–(35) (`G = A_xᵀ`).
+impl<E: Element> LinearLoad<E> for LoadModel {
+    fn n_params(&self, robot: &Robot<E>) -> usize {
+        match self {
+            LoadModel::Distributed => robot.n_q(),
+            LoadModel::Concentrated { .. } => E::DIM,
+        }
+    }
+
+    fn force(&self, robot: &Robot<E>, f: &[f64]) -> Result<Vec<f64>> {
+        match *self {
+            LoadModel::Distributed => robot.apply_load_gram(f),
+            LoadModel::Concentrated { node } => {
+                check_len("f", E::DIM, f.len())?;
+                let nd = E::NODE_DOFS;
+                let mut g = vec![0.0; robot.n_q()];
+                crate::error::check_index("load_model.node", node, robot.n_nodes())?;
+                g[node * nd..node * nd + E::DIM].copy_from_slice(f);
+                Ok(g)
+            }
+        }
+    }
+
+    fn force_transpose(&self, robot: &Robot<E>, v: &[f64]) -> Result<Vec<f64>> {
+        match *self {
+            LoadModel::Distributed => robot.apply_load_gram(v),
+            LoadModel::Concentrated { node } => {
+                check_len("v", robot.n_q(), v.len())?;
+                crate::error::check_index("load_model.node", node, robot.n_nodes())?;
+                let nd = E::NODE_DOFS;
+                Ok(v[node * nd..node * nd + E::DIM].to_vec())
+            }
+        }
+    }
+
+    fn add_to(&self, robot: &Robot<E>, known: &Loads, f: &[f64]) -> Loads {
+        let mut loads = known.clone();
+        match *self {
+            LoadModel::Distributed => {
+                if loads.distributed_f.is_empty() {
+                    loads.distributed_f = f.to_vec();
+                } else {
+                    loads
+                        .distributed_f
+                        .iter_mut()
+                        .zip(f)
+                        .for_each(|(a, b)| *a += b);
+                }
+            }
+            LoadModel::Concentrated { node } => loads.point_forces.push(PointForce {
+                s_m: robot.node_arc().get(node).copied().unwrap_or(f64::NAN),
+                force_n: f.to_vec(),
+            }),
+        }
+        loads
+    }
+}
+
+/// The derivatives of the observation at an equilibrium.
+#[derive(Debug, Clone)]
+pub(crate) struct Derivs {
+    /// Adjoint fields `z_i = M K⁻¹ Mᵀ a_iᵀ`, column `i` (`n_q × n_ob`).
+    pub z: DMatrix<f64>,
+    /// The marker Jacobian transposed (28): column `i` is `J_i = Gᵀ z_i`,
+    /// the gradient of observed scalar `i` with respect to `F` (`n_F × n_ob`).
+    pub jt: DMatrix<f64>,
+}
+
+/// The Cholesky factor of a Gauss–Newton system ([`Problem::gn_solve`]):
+/// `S = α W⁻¹ + Zᵀ B Z` (`n_ob × n_ob`) for the distributed load, `N = Jᵀ W J
+/// + α I` (`n_F × n_F`) for a concentrated one.
+pub(crate) struct GnFactor(pub Cholesky<f64, Dyn>);
+
+/// The estimation problem: the robot, its known loads and the load model,
+/// with the equilibrium tracker that solves `q(F)`.
+#[derive(Debug, Clone)]
+pub(crate) struct Problem<E: Element> {
+    tracker: EquilibriumTracker<E>,
+    settings: EstimatorSettings,
+    n_f: usize,
+}
+
+impl<E: Element> Problem<E> {
+    /// The problem of `robot` under the known loads `known`.
+    pub fn new(robot: Robot<E>, known: Loads, settings: EstimatorSettings) -> Result<Self> {
+        settings.validate()?;
+        if let LoadModel::Concentrated { node } = settings.load_model {
+            if node == 0 || node >= robot.n_nodes() {
+                return Err(Error::invalid(
+                    "estimator.load_model.node",
+                    node,
+                    format!("must be a free node, 1..={}", robot.n_nodes() - 1),
+                ));
+            }
+        }
+        let n_f = settings.load_model.n_params(&robot);
+        for (i, b) in settings.bounds.iter().enumerate() {
+            check_len(
+                &format!("estimator.bounds[{i}].direction"),
+                E::DIM,
+                b.direction.len(),
+            )?;
+            if settings.load_model == LoadModel::Distributed {
+                robot.locate(&format!("estimator.bounds[{i}].s_m"), b.s_m)?;
+            }
+        }
+        let tracker = EquilibriumTracker::new(robot, known, settings.statics.clone())?;
+        Ok(Problem {
+            tracker,
+            settings,
+            n_f,
+        })
+    }
+
+    /// The robot.
+    pub fn robot(&self) -> &Robot<E> {
+        self.tracker.robot()
+    }
+
+    /// The equilibrium tracker.
+    pub fn tracker(&mut self) -> &mut EquilibriumTracker<E> {
+        &mut self.tracker
+    }
+
+    /// The known loads.
+    pub fn known(&self) -> &Loads {
+        self.tracker.known()
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &EstimatorSettings {
+        &self.settings
+    }
+
+    /// Number of load parameters `n_F`.
+    pub fn n_f(&self) -> usize {
+        self.n_f
+    }
+
+    /// The load model.
+    pub fn load(&self) -> LoadModel {
+        self.settings.load_model
+    }
+
+    /// The observation operator of `obs` with the settings' noise.
+    pub fn operator(&self, obs: &Observation) -> Result<ObservationOperator> {
+        ObservationOperator::new(
+            self.robot(),
+            obs,
+            self.settings.noise_sigma_m,
+            self.settings.tangent_sigma,
+        )
+    }
+
+    /// `G F` over all coordinates (N).
+    pub fn gen_force(&self, f: &[f64]) -> Result<Vec<f64>> {
+        self.load().force(self.robot(), f)
+    }
+
+    /// `H F`: the penalty (26) is `α Fᵀ H F`, `H = B` for the distributed
+    /// field (`α ∫ wᵀ w dX`), `H = I` for a concentrated force.
+    pub fn penalty_grad(&self, f: &[f64]) -> Result<Vec<f64>> {
+        match self.load() {
+            LoadModel::Distributed => self.robot().apply_load_gram(f),
+            LoadModel::Concentrated { .. } => Ok(f.to_vec()),
+        }
+    }
+
+    /// `Fᵀ H F`.
+    pub fn penalty(&self, f: &[f64]) -> Result<f64> {
+        Ok(self
+            .penalty_grad(f)?
+            .iter()
+            .zip(f)
+            .map(|(a, b)| a * b)
+            .sum())
+    }
+
+    /// The dead force with the unknown load `F` (`n_q`).
+    pub fn dead_with(&self, f: &[f64]) -> Result<Vec<f64>> {
+        self.tracker.dead_with(&self.load(), f)
+    }
+
+    /// The residual `Q` over the free coordinates at `(q, F)`.
+    pub fn residual(&self, q: &[f64], f: &[f64]) -> Result<Vec<f64>> {
+        self.tracker.residual(&self.load(), q, f)
+    }
+
+    /// The equilibrium `q(F)` from `q0` (warm; the globalized static solve
+    /// if needed).
+    pub fn equilibrium(&mut self, f: &[f64], q0: &[f64]) -> Result<TrackedEquilibrium> {
+        let load = self.load();
+        self.tracker.solve(&load, f, q0)
+    }
+
+    /// The factors of the tangent at `q`.
+    pub fn factor(&self, q: &[f64]) -> Result<BandedLu> {
+        let mut k = self.tracker.tangent_buffer();
+        self.tracker.tangent_into(q, &mut k)
+    }
+
+    /// The tangent at `q` into `k` and its factors (see
+    /// [`EquilibriumTracker::tangent_into`]).
+    pub fn tangent_into(&self, q: &[f64], k: &mut BandedMatrix) -> Result<BandedLu> {
+        self.tracker.tangent_into(q, k)
+    }
+
+    /// A band matrix of the tangent's shape.
+    pub fn tangent_buffer(&self) -> BandedMatrix {
+        self.tracker.tangent_buffer()
+    }
+
+    /// The equilibrium and the free start: zero load and the shape of the
+    /// known loads alone.
+    pub fn unloaded_start(&self) -> Result<(Vec<f64>, Vec<f64>)> {
+        let f = vec![0.0; self.n_f];
+        let solver = StaticSolver::new(self.settings.statics.clone())?;
+        let eq = solver.solve(self.robot(), self.tracker.known(), None)?;
+        Ok((f, eq.q))
+    }
+
+    /// Adjoint fields and the marker Jacobian (28) at an equilibrium with
+    /// the tangent's factors `lu`: row `i` of `∂(Aq)/∂F` is
+    /// `Gᵀ M K⁻¹ Mᵀ a_iᵀ` (K symmetric), the `n_ob` adjoint systems in one
+    /// sweep over the factors.
+    pub fn derivs(&self, lu: &BandedLu, op: &ObservationOperator) -> Result<Derivs> {
+        let s = Sensitivity::new(self.robot(), lu)?;
+        let adj = s.adjoints(op.rows().iter().map(|r| r.entries()))?;
+        let jt = s.load_gradients(&self.load(), &adj)?;
+        Ok(Derivs { z: adj.full, jt })
+    }
+
+    /// The objective parts at `(q, F)`: `(eᵀWe, α FᵀHF, e)` (25).
+    pub fn objective(
+        &self,
+        op: &ObservationOperator,
+        q: &[f64],
+        f: &[f64],
+        alpha: f64,
+    ) -> Result<(f64, f64, Vec<f64>)> {
+        let e = op.residual(q);
+        Ok((op.weighted(&e), alpha * self.penalty(f)?, e))
+    }
+
+    /// Reduced gradient (29): `2 (Jᵀ W e + α H F)`.
+    pub fn gradient(
+        &self,
+        dv: &Derivs,
+        op: &ObservationOperator,
+        e: &[f64],
+        f: &[f64],
+        alpha: f64,
+    ) -> Result<Vec<f64>> {
+        let mut g: Vec<f64> = self
+            .penalty_grad(f)?
+            .iter()
+            .map(|v| 2.0 * alpha * v)
+            .collect();
+        for ((ji, wi), ei) in columns(&dv.jt).zip(op.weights()).zip(e) {
+            let c = 2.0 * wi * ei;
+            g.iter_mut().zip(ji).for_each(|(a, b)| *a += c * b);
+        }
+        Ok(g)
+    }
+
+    /// The Gauss–Newton step (30) for `F` and the covariance factor there:
+    /// see [`Problem::gn_solve`] and [`super::covariance::cov_factor`].
+    pub fn gn_step(
+        &self,
+        dv: &Derivs,
+        op: &ObservationOperator,
+        e: &[f64],
+        f: &[f64],
+        alpha: f64,
+    ) -> Result<(Vec<f64>, Vec<f64>)> {
+        let (step, fac) = self.gn_solve(dv, op, e, f, alpha)?;
+        let l = super::covariance::cov_factor(self, dv, op, &fac);
+        Ok((step, l))
+    }
+
+    /// The Gauss–Newton step (30): solves `(JᵀWJ + αH) dF = −(JᵀWe + αHF)`,
+    /// and the Cholesky factor of its system. Distributed loads use the
+    /// representer form `F + dF = Σ_i z_i c_i`, `(α W⁻¹ + Zᵀ B Z) c = J F − e`
+    /// (an `n_ob × n_ob` Cholesky, no `n_q³` work); concentrated loads solve
+    /// the small `n_F × n_F` system.
+    pub fn gn_solve(
+        &self,
+        dv: &Derivs,
+        op: &ObservationOperator,
+        e: &[f64],
+        f: &[f64],
+        alpha: f64,
+    ) -> Result<(Vec<f64>, GnFactor)> {
+        let w = op.weights();
+        let not_spd = || Error::NotPositiveDefinite {
+            context: "the Gauss-Newton matrix of the estimator".into(),
+        };
+        match self.load() {
+            LoadModel::Distributed => {
+                // S = Zᵀ B Z + α W⁻¹ (B z_j = J_j; symmetric: the upper
+                // triangle by dot products of the contiguous columns,
+                // mirrored)
+                let m = w.len();
+                let z: Vec<&[f64]> = columns(&dv.z).collect();
+                let jt: Vec<&[f64]> = columns(&dv.jt).collect();
+                let mut s = DMatrix::zeros(m, m);
+                for i in 0..m {
+                    for j in i..m {
+                        let v = dot(z[i], jt[j]);
+                        s[(i, j)] = v;
+                        s[(j, i)] = v;
+                    }
+                    s[(i, i)] += alpha / w[i];
+                }
+                let chol = jittered_cholesky(s).ok_or_else(not_spd)?;
+                let mut c =
+                    DVector::from_iterator(m, jt.iter().zip(e).map(|(j, ei)| dot(j, f) - ei));
+                chol.solve_mut(&mut c);
+                let mut step: Vec<f64> = f.iter().map(|v| -v).collect();
+                for (zi, ci) in z.iter().zip(c.iter()) {
+                    step.iter_mut().zip(*zi).for_each(|(a, b)| *a += ci * b);
+                }
+                Ok((step, GnFactor(chol)))
+            }
+            LoadModel::Concentrated { .. } => {
+                let jw = weighted_columns(&dv.jt, w);
+                let mut n = &jw * dv.jt.transpose();
+                for i in 0..n.nrows() {
+                    n[(i, i)] += alpha;
+                }
+                let chol = jittered_cholesky(n).ok_or_else(not_spd)?;
+                let (fv, ev) = (DVector::from_column_slice(f), DVector::from_column_slice(e));
+                let mut step = -(&jw * ev) - fv * alpha;
+                chol.solve_mut(&mut step);
+                Ok((step.as_slice().to_vec(), GnFactor(chol)))
+            }
+        }
+    }
+
+    /// Resultant force and moment (about the base position, in the shape
+    /// `q`) of the load `F`, and the `DIM × n_F` map `F → ∫ w dX`
+    /// (row-major).
+    #[allow(clippy::type_complexity)]
+    pub fn resultants(&self, q: &[f64], f: &[f64]) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+        let d = E::DIM;
+        let nd = E::NODE_DOFS;
+        let nf = self.n_f;
+        let r0 = &q[..d];
+        let mut force = vec![0.0; d];
+        let mut moment = vec![0.0; if d == 2 { 1 } else { 3 }];
+        let mut fw = vec![0.0; d * nf];
+        match self.load() {
+            LoadModel::Concentrated { node } => {
+                force.copy_from_slice(f);
+                let r: Vec<f64> = (0..d).map(|i| q[node * nd + i] - r0[i]).collect();
+                moment = cross(&r, f);
+                for a in 0..d {
+                    fw[a * nf + a] = 1.0;
+                }
+            }
+            LoadModel::Distributed => {
+                const MAX_DIM: usize = 3;
+                let rule = crate::quadrature::GaussRule::new(5)?;
+                // the shape functions at the rule's points (elements of a
+                // section share a length: recomputed only when it changes)
+                let mut le_prev = f64::NAN;
+                let mut shapes = [[0.0; 4]; 5];
+                for (e, el) in self.robot().elements().iter().enumerate() {
+                    let le = el.length();
+                    if le != le_prev {
+                        for (sh, (xi, _)) in shapes.iter_mut().zip(rule.iter()) {
+                            *sh = el.shape(xi);
+                        }
+                        le_prev = le;
+                    }
+                    for (sh, (_, wt)) in shapes.iter().zip(rule.iter()) {
+                        let mut w = [0.0; MAX_DIM];
+                        let mut r = [0.0; MAX_DIM];
+                        for (k, sk) in sh.iter().enumerate() {
+                            // slot k: node e + k/2, its position (k even)
+                            // or slope (k odd)
+                            let base = (e + k / 2) * nd + (k % 2) * d;
+                            for i in 0..d.min(MAX_DIM) {
+                                w[i] += sk * f[base + i];
+                                r[i] += sk * q[base + i];
+                                fw[i * nf + base + i] += wt * le * sk;
+                            }
+                        }
+                        for i in 0..d.min(MAX_DIM) {
+                            force[i] += wt * le * w[i];
+                            r[i] -= r0[i];
+                        }
+                        if d == 2 {
+                            moment[0] += wt * le * (r[0] * w[1] - r[1] * w[0]);
+                        } else {
+                            let mm = cross(&r[..d], &w[..d]);
+                            moment
+                                .iter_mut()
+                                .zip(mm)
+                                .for_each(|(a, b)| *a += wt * le * b);
+                        }
+                    }
+                }
+            }
+        }
+        Ok((force, moment, fw))
+    }
+}
+
+/// The factor (≤ 1) that keeps the predicted marker motion `max_i |J_i dF|`
+/// within `cap` (m): a trust region against Gauss–Newton overshoots far from
+/// the solution (loads under which the statics barely converge).
+pub(crate) fn step_cap(dv: &Derivs, step: &[f64], cap: f64) -> f64 {
+    let pred = columns(&dv.jt)
+        .map(|j| dot(j, step).abs())
+        .fold(0.0f64, f64::max);
+    if pred > cap && pred.is_finite() {
+        cap / pred
+    } else {
+        1.0
+    }
+}
+
+/// The columns of a matrix as contiguous slices (nalgebra stores by
+/// column).
+pub(crate) fn columns(a: &DMatrix<f64>) -> impl Iterator<Item = &[f64]> {
+    a.as_slice().chunks_exact(a.nrows().max(1)).take(a.ncols())
+}
+
+/// `J W`: the columns of `jt` scaled by the weights.
+pub(crate) fn weighted_columns(jt: &DMatrix<f64>, w: &[f64]) -> DMatrix<f64> {
+    let mut jw = jt.clone();
+    for (mut col, wi) in jw.column_iter_mut().zip(w) {
+        col *= *wi;
+    }
+    jw
+}
+
+/// `A = L Lᵀ` of a small dense symmetric matrix (only its lower triangle is
+/// read), with a diagonal jitter of 1e-14 … 1e-10 of the largest diagonal
+/// entry if the plain factorization fails (nearly redundant markers);
+/// `None` if that does not help either.
+pub(crate) fn jittered_cholesky(a: DMatrix<f64>) -> Option<Cholesky<f64, Dyn>> {
+    let m = a.nrows();
+    let dmax = (0..m).fold(0.0f64, |x, i| x.max(a[(i, i)].abs()));
+    for jitter in [0.0, 1e-14, 1e-12, 1e-10] {
+        let mut l = a.clone();
+        for i in 0..m {
+            l[(i, i)] += jitter * dmax;
+        }
+        if let Some(c) = l.cholesky() {
+            if c.l_dirty().diagonal().iter().all(|v| v.is_finite()) {
+                return Some(c);
+            }
+        }
+    }
+    None
+}
+
+/// The cross product: scalar (as a 1-vector) in 2-D, vector in 3-D.
+fn cross(a: &[f64], b: &[f64]) -> Vec<f64> {
+    if a.len() == 2 {
+        vec![a[0] * b[1] - a[1] * b[0]]
+    } else {
+        vec![
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    }
+}
+
+/// The direct solution (24) for the Fig. 3 comparison: the distributed load
+/// `F` that makes the observed full state `q` an equilibrium,
+/// `J_QF F = −(Q_E + Q_A + known dead forces)` over the free coordinates.
+/// With a clamped base `J_QF` restricted to the free rows is not square
+/// (`n_free × n_q`): this returns the minimum-norm least-squares solution
+/// (normal equations of the free rows, an SVD pseudo-inverse). Only for
+/// comparison: it amplifies marker errors into large forces.
+///
+/// # Errors
+/// As [`Robot::dead_force`] and [`Robot::residual`].
+///
+/// # Example
+/// ```
+/// use softrod::{scene::Scene, statics::StaticSolver, estimate::direct_solution};
+/// let scene = Scene::two_section();
+/// let robot = scene.robot()?;
+/// let loads = scene.loads()?;
+/// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+/// let f = direct_solution(&robot, &loads, &eq.q)?;
+/// assert!(f.iter().all(|v| v.abs() < 1e-3));
+/// # Ok::<(), softrod::Error>(())
+/// ```
+pub fn direct_solution<E: Element>(robot: &Robot<E>, known: &Loads, q: &[f64]) -> Result<Vec<f64>> {
+    let dead = robot.dead_force(known)?;
+    let r = robot.residual(q, &dead, known)?; // Q without F
+    let nq = robot.n_q();
+    let nfree = robot.n_free();
+    let b = robot.load_gram();
+    // free rows of J_QF: column j = restrict(B e_j)
+    let mut j = DMatrix::zeros(nfree, nq);
+    for c in 0..nq {
+        let mut ej = vec![0.0; nq];
+        ej[c] = 1.0;
+        let col = robot.restrict(&b.mul_vec(&ej)?)?;
+        for (i, v) in col.iter().enumerate() {
+            j[(i, c)] = *v;
+        }
+    }
+    let rhs = DVector::from_iterator(nfree, r.iter().map(|v| -v));
+    let svd = j.svd(true, true);
+    let f = svd.solve(&rhs, 1e-12).map_err(|m| Error::NonFinite {
+        context: format!("direct solution (24): {m}"),
+    })?;
+    Ok(f.iter().copied().collect())
+}

@@ -1,0 +1,637 @@
+//! The constrained estimator (25) by sequential quadratic programming.
+//!
+//! Unknowns: the free coordinates `u` (so `q = q(u)`, linear: the base
+//! stretch and nodes 1…N) and the load parameters `F`. The objective is
+//! quadratic in `(u, F)`, only the equilibrium `Q(F, q, P) = 0` (17) is
+//! nonlinear. Each iteration takes a full-space step `(du, dF)` from the QP
+//!
+//! ```text
+//! min_{du, dF}  ½ dᵀ P d + cᵀ d
+//!   P = 2 [Mᵀ AᵀWA M, 0; 0, α H],  c = 2 [Mᵀ AᵀW e; α H F]
+//!   s.t.  −K du + Mᵀ G dF = −Q        (linearized equilibrium)
+//!         lo ≤ d_j · w(s_j; F + dF) ≤ hi   (optional bounds on the load)
+//! ```
+//!
+//! `P` holds the objective's Hessian only (no constraint curvature): a
+//! Gauss–Newton SQP, whose fixed points are the KKT points of (25), the same
+//! as the reduced method's. How the QP is solved:
+//!
+//! - **No bounds** (`EstimatorSettings::bounds` empty): the QP has equality
+//!   constraints only, and its KKT system is solved directly, without an
+//!   interior-point method: block elimination with the banded LU of `K`
+//!   (`du = K⁻¹ (Q + Mᵀ G dF)`) leaves for `dF` the Gauss–Newton system of
+//!   the reduced problem at the linearized residual `e' = e + A M K⁻¹ Q`,
+//!   solved in the representer form (an `n_ob × n_ob` Cholesky, see
+//!   the Gauss–Newton step (30)). One tangent factorization per iteration; the
+//!   equality multipliers follow from the `du` rows, `K λ = 2 Mᵀ AᵀW (e + A M du)`.
+//! - **With bounds**: the bounds act on `F` only, so on a known active set
+//!   the QP is again equality-constrained and solved exactly through the
+//!   same reduced system (`N = Jᵀ W J + α H` applied by Woodbury, one
+//!   `n_act × n_act` Cholesky for the active rows' multipliers).
+//!   Active-set iterations (drop a negative multiplier, add the most
+//!   violated bound) start from the last QP's active set and stop at the
+//!   QP's KKT conditions, a certificate of optimality for this convex QP.
+//!   Clarabel's interior-point method solves the QP when there is no
+//!   active set yet (the first QP of an estimator) or when the warm-started
+//!   iterations fail; its solution's active set then seeds the same exact
+//!   solve, and only if that fails too is clarabel's step used as it is.
+//!   For clarabel the QP data are rescaled so that its absolute tolerances
+//!   act as relative ones (the QP is homogeneous in its right-hand sides);
+//!   `du` is always recomputed from `dF` with the banded factorization of
+//!   `K`, so the linearized equilibrium holds to round-off. (Clarabel alone
+//!   resolves the weakly penalized directions, the slopes `w'`, only to
+//!   about 1e-5 of `|F|`; the exact solve does not have that limit.)
+//!
+//! Globalization: backtracking on the ℓ1 merit function `φ = J + μ |Q|₁`,
+//! `μ` above the largest equality multiplier, each trial pulled back onto
+//! the equilibrium manifold by chord steps (a second-order correction).
+//! Convergence is judged on feasibility and on the predicted decrease along
+//! the manifold, `−g̃ᵀ dF` with `g̃` the reduced gradient (29) at the
+//! feasibility-restored residual `e'` (for a step of clarabel's: `−cᵀ d`,
+//! to 1e-9), and on the bounds holding at the current `F` (in the local
+//! frame they move with the shape).
+//! After convergence the shape is re-solved at the final `F` (a chord step
+//! with the last factorization, or a few Newton steps) so the estimate is
+//! an exact equilibrium.
+
+mod bounded;
+
+use clarabel::solver::SolverStatus;
+
+use crate::assembly::Robot;
+use crate::banded::{BandedLu, BandedMatrix};
+use crate::element::Element;
+use crate::error::{Error, Result};
+use crate::loads::Loads;
+use crate::numeric::{dot, max_abs, norm2};
+use crate::observe::ObservationOperator;
+use crate::outcome::NonFiniteAt;
+use crate::statics::residual_floor;
+
+use super::driver::{run_step, Method, Solved, Stream};
+use super::problem::{columns, Derivs, Problem};
+use super::{
+    Backend, Estimate, EstimateCriterion, EstimateReport, EstimateStatus, Estimator,
+    EstimatorSettings, LoadModel, Observation,
+};
+
+/// Why an SQP subproblem was not solved: clarabel's status, or an error of
+/// the linear algebra around it.
+#[derive(Debug)]
+enum QpError {
+    /// Clarabel stopped without a solution.
+    Clarabel(SolverStatus),
+    /// Another error (a singular tangent, a Gauss–Newton matrix that is not
+    /// positive definite, …).
+    Other(Error),
+}
+
+impl From<Error> for QpError {
+    fn from(e: Error) -> Self {
+        QpError::Other(e)
+    }
+}
+
+impl QpError {
+    /// The estimator's status for a subproblem that failed this way; an
+    /// error that says nothing about the subproblem is passed on.
+    fn status(self) -> Result<EstimateStatus> {
+        match self {
+            QpError::Clarabel(s) => Ok(EstimateStatus::QpNotSolved(s)),
+            QpError::Other(Error::Singular { .. }) => Ok(EstimateStatus::SingularTangent),
+            QpError::Other(Error::NotPositiveDefinite { .. }) => {
+                Ok(EstimateStatus::NotPositiveDefinite)
+            }
+            QpError::Other(Error::NonFinite { .. }) => Ok(EstimateStatus::NonFinite {
+                at: NonFiniteAt::Tangent,
+            }),
+            QpError::Other(e) => Err(e),
+        }
+    }
+}
+
+/// The SQP estimator (backend "sqp").
+///
+/// # Example
+/// ```
+/// use softrod::estimate::{Estimator, EstimatorSettings, SqpEstimator, Observation};
+/// use softrod::{scene::Scene, statics::StaticSolver};
+/// let scene = Scene::two_section();
+/// let (robot, loads) = (scene.robot()?, scene.loads()?);
+/// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+/// let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]);
+/// let settings = EstimatorSettings { alpha: Some(1.0), ..EstimatorSettings::default() };
+/// let mut est = SqpEstimator::new(robot, loads, settings)?;
+/// let e = est.step(&obs)?;
+/// assert!(e.report.status.is_converged());
+/// # Ok::<(), softrod::Error>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct SqpEstimator<E: Element> {
+    stream: Stream<E>,
+    /// The tangent `K` of the current QP (assembled at its `q`).
+    tangent: BandedMatrix,
+    /// Triplets `(free row, F column, value)` of `Mᵀ G` (constant).
+    g_free: Vec<(usize, usize, f64)>,
+    /// Upper-triangle triplets of `H` (constant).
+    h_upper: Vec<(usize, usize, f64)>,
+    /// The factored tangent of the last QP (for the second-order correction).
+    last_lu: Option<BandedLu>,
+    /// The factored load Gram matrix `B` (distributed load with bounds).
+    gram_lu: Option<BandedLu>,
+    /// The bounds active in the last QP's solution (indices into the rows
+    /// of the bounds' inequalities): the first guess for the next QP
+    /// (`None` before the first: clarabel then finds one).
+    active_set: Option<Vec<usize>>,
+}
+
+impl<E: Element> SqpEstimator<E> {
+    /// An estimator for `robot` under the known loads `known`.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidParameter`] for invalid settings or bounds; the
+    /// errors of [`Robot::validate_loads`].
+    pub fn new(robot: Robot<E>, known: Loads, settings: EstimatorSettings) -> Result<Self> {
+        let problem = Problem::new(robot, known, settings)?;
+        let nf = problem.n_f();
+        let mut g_free = Vec::new();
+        let mut h_upper = Vec::new();
+        for j in 0..nf {
+            let mut ej = vec![0.0; nf];
+            ej[j] = 1.0;
+            let col = problem.robot().restrict(&problem.gen_force(&ej)?)?;
+            for (i, v) in col.iter().enumerate() {
+                if *v != 0.0 {
+                    g_free.push((i, j, *v));
+                }
+            }
+            let hcol = problem.penalty_grad(&ej)?;
+            for (i, v) in hcol.iter().enumerate().take(j + 1) {
+                if *v != 0.0 {
+                    h_upper.push((i, j, *v));
+                }
+            }
+        }
+        let gram_lu = match problem.load() {
+            LoadModel::Distributed if !problem.settings().bounds.is_empty() => Some(
+                problem
+                    .robot()
+                    .load_gram()
+                    .clone()
+                    .factor_scaled(0.0, "load Gram matrix")?,
+            ),
+            _ => None,
+        };
+        Ok(SqpEstimator {
+            tangent: problem.tangent_buffer(),
+            stream: Stream::new(problem),
+            g_free,
+            h_upper,
+            last_lu: None,
+            gram_lu,
+            active_set: None,
+        })
+    }
+
+    /// The robot.
+    pub fn robot(&self) -> &Robot<E> {
+        self.stream.problem.robot()
+    }
+
+    /// One QP at `(q, F)`: the tangent `K` assembled and factored at `q`
+    /// (into [`SqpEstimator::tangent`], which the bounded QP's clarabel
+    /// matrix reads), then the step `(du, dF)`, the largest equality
+    /// multiplier, the objective's linear term `c` and whether a bound is
+    /// active. Without bounds the QP is the equality-constrained one, solved
+    /// exactly through the banded factorization of `K`
+    /// ([`SqpEstimator::equality_qp`]); with bounds `bounded_qp`. The
+    /// factors are kept (the second-order correction, and the tracker's
+    /// chord steps).
+    fn qp(
+        &mut self,
+        op: &ObservationOperator,
+        q: &[f64],
+        f: &[f64],
+        e: &[f64],
+        r: &[f64],
+        alpha: f64,
+    ) -> std::result::Result<QpStep, QpError> {
+        let lu = self.stream.problem.tangent_into(q, &mut self.tangent)?;
+        let c = self.linear_term(op, f, e, alpha)?;
+        let step = if self.stream.problem.settings().bounds.is_empty() {
+            self.equality_qp(&self.tangent, &lu, op, f, e, r, alpha, c)?
+        } else {
+            let (step, act) = self.bounded_qp(&self.tangent, &lu, op, q, f, e, r, alpha, c)?;
+            self.active_set = Some(act);
+            step
+        };
+        self.stream.problem.tracker().keep_factors(q, lu.clone())?;
+        self.last_lu = Some(lu);
+        Ok(step)
+    }
+
+    /// The QP objective's linear term `c = 2 [Mᵀ AᵀW e; α H F]`.
+    fn linear_term(
+        &self,
+        op: &ObservationOperator,
+        f: &[f64],
+        e: &[f64],
+        alpha: f64,
+    ) -> Result<Vec<f64>> {
+        let problem = &self.stream.problem;
+        let mut wa = vec![0.0; problem.robot().n_q()];
+        for ((row, w), ei) in op.rows().iter().zip(op.weights()).zip(e) {
+            for &(j, v) in row.entries() {
+                wa[j] += 2.0 * w * ei * v;
+            }
+        }
+        let mut c = problem.robot().restrict(&wa)?;
+        c.extend(problem.penalty_grad(f)?.iter().map(|v| 2.0 * alpha * v));
+        Ok(c)
+    }
+
+    /// The equality-constrained QP (no bounds), exactly: its KKT system
+    /// `[P, A_eqᵀ; A_eq, 0]` is solved by block elimination with the banded
+    /// LU of `K` (`du = K⁻¹ (Q + Mᵀ G dF)`) and, for `dF`, the Gauss–Newton
+    /// system of the reduced problem at the linearized residual
+    /// `e' = e + A M K⁻¹ Q` (the Gauss–Newton step (30): an `n_ob × n_ob` Cholesky in
+    /// the representer form). The equality multipliers follow from the `du`
+    /// rows of the KKT system, `K λ = 2 Mᵀ AᵀW (e + A M du)`.
+    #[allow(clippy::too_many_arguments)]
+    fn equality_qp(
+        &self,
+        k: &BandedMatrix,
+        lu: &BandedLu,
+        op: &ObservationOperator,
+        f: &[f64],
+        e: &[f64],
+        r: &[f64],
+        alpha: f64,
+        c: Vec<f64>,
+    ) -> Result<QpStep> {
+        let Unconstrained { dv, df0: df, g1, l } = self.unconstrained(lu, op, f, e, r, alpha)?;
+        let dec_opt = (-dot(&g1, &df)).max(0.0);
+        let du = self.du_from(lu, r, &df)?;
+        let lambda_max = self.lambda_max(&dv, op, e, &du)?;
+        Ok(QpStep {
+            du,
+            df,
+            lambda_max,
+            c,
+            active: false,
+            exact: true,
+            bound_violation: 0.0,
+            dec_opt: Some(dec_opt),
+            derivs: Some((dv, l)),
+            tangent_max_abs: k.max_abs(),
+        })
+    }
+
+    /// The QP's solution without bounds, by block elimination: the
+    /// restored residual `e' = e + A M K⁻¹ Q`, the derivatives at `q`, the
+    /// Gauss–Newton load step there and the reduced gradient at `e'`.
+    fn unconstrained(
+        &self,
+        lu: &BandedLu,
+        op: &ObservationOperator,
+        f: &[f64],
+        e: &[f64],
+        r: &[f64],
+        alpha: f64,
+    ) -> Result<Unconstrained> {
+        let problem = &self.stream.problem;
+        let mut w0 = r.to_vec();
+        lu.solve_in_place(&mut w0)?;
+        let dq0 = problem.robot().expand_step(&w0)?;
+        let e1: Vec<f64> = e
+            .iter()
+            .zip(op.rows())
+            .map(|(ei, row)| ei + row.apply(&dq0))
+            .collect();
+        let dv = problem.derivs(lu, op)?;
+        let (df0, l) = problem.gn_step(&dv, op, &e1, f, alpha)?;
+        let g1 = problem.gradient(&dv, op, &e1, f, alpha)?;
+        Ok(Unconstrained { dv, df0, g1, l })
+    }
+
+    /// `du` from the linearized equilibrium, `K du = Q + Mᵀ G dF`.
+    fn du_from(&self, lu: &BandedLu, r: &[f64], df: &[f64]) -> Result<Vec<f64>> {
+        let mut rhs = r.to_vec();
+        for &(i, j, v) in &self.g_free {
+            rhs[i] += v * df[j];
+        }
+        lu.solve_in_place(&mut rhs)?;
+        Ok(rhs)
+    }
+
+    /// The largest equality multiplier, from the `du` rows of the KKT
+    /// system (the bounds do not involve `u`):
+    /// `λ = 2 Σ_i w_i ẽ_i K⁻¹ Mᵀ a_iᵀ`, `ẽ = e + A M du`.
+    fn lambda_max(
+        &self,
+        dv: &Derivs,
+        op: &ObservationOperator,
+        e: &[f64],
+        du: &[f64],
+    ) -> Result<f64> {
+        let robot = self.stream.problem.robot();
+        let dq = robot.expand_step(du)?;
+        let mut lam = vec![0.0; robot.n_q()];
+        for (((zi, row), w), ei) in columns(&dv.z).zip(op.rows()).zip(op.weights()).zip(e) {
+            let s = 2.0 * w * (ei + row.apply(&dq));
+            lam.iter_mut().zip(zi).for_each(|(a, b)| *a += s * b);
+        }
+        Ok(max_abs(&lam))
+    }
+}
+
+impl<E: Element> Method<E> for SqpEstimator<E> {
+    const BACKEND: Backend = Backend::Sqp;
+
+    fn stream(&mut self) -> &mut Stream<E> {
+        &mut self.stream
+    }
+
+    #[allow(clippy::too_many_lines)]
+    fn solve_one(
+        &mut self,
+        op: &ObservationOperator,
+        f0: Vec<f64>,
+        q0: Vec<f64>,
+        alpha: f64,
+    ) -> Result<Solved> {
+        let settings = self.stream.problem.settings().clone();
+        let len = self.stream.problem.robot().length();
+        let n_free = self.stream.problem.robot().n_free();
+        let mut f = f0;
+        let mut q = q0;
+        let n_ob = op.len() as f64;
+        let mut iterations = 0;
+        let mut mu = 0.0f64;
+        // set where the loop ends
+        let status;
+        let mut prev_dec = f64::INFINITY;
+        // the state at (q, F): dead force, residual Q, objective parts; an
+        // accepted line-search trial hands its own on to the next iteration
+        let mut dead = self.stream.problem.dead_with(&f)?;
+        let mut r = self.stream.problem.residual(&q, &f)?;
+        let (mut wr, mut pen, mut e) = self.stream.problem.objective(op, &q, &f, alpha)?;
+        // derivatives and covariance factor of the last QP, taken at q
+        let mut at_q: Option<(Derivs, Vec<f64>)> = None;
+        loop {
+            let obj = wr + pen;
+            let load = norm2(&self.stream.problem.robot().restrict(&dead)?).max(1e-12);
+            let rn = norm2(&r);
+            if iterations >= settings.max_iterations {
+                status = EstimateStatus::IterationLimit { iterations };
+                break;
+            }
+            let QpStep {
+                mut du,
+                mut df,
+                lambda_max: lmax,
+                c,
+                active,
+                exact,
+                bound_violation,
+                dec_opt,
+                derivs,
+                tangent_max_abs,
+            } = match self.qp(op, &q, &f, &e, &r, alpha) {
+                Ok(s) => s,
+                Err(err) => {
+                    status = err.status()?;
+                    break;
+                }
+            };
+            at_q = derivs;
+            iterations += 1;
+            let mut dm = du.clone();
+            dm.extend_from_slice(&df);
+            // model decrease of the objective
+            let dec = (-dot(&c, &dm)).max(0.0);
+            // trust region on the predicted marker motion
+            let mut dq = self.stream.problem.robot().expand_step(&du)?;
+            let moved = op
+                .rows()
+                .iter()
+                .map(|row| row.apply(&dq).abs())
+                .fold(0.0f64, f64::max);
+            if moved > settings.max_observation_jump_m && moved.is_finite() {
+                let s = settings.max_observation_jump_m / moved;
+                du.iter_mut()
+                    .chain(df.iter_mut())
+                    .chain(dm.iter_mut())
+                    .chain(dq.iter_mut())
+                    .for_each(|v| *v *= s);
+            }
+            let lin = dot(&c, &dm);
+            let scale = obj.max(n_ob);
+            // feasible: |Q| relative to the applied loads, or at the round-off
+            // floor ε |K|max |q|∞ √n (which grows with the element count)
+            let floor = residual_floor(tangent_max_abs, max_abs(&q), n_free);
+            let feasible = rn <= (1e-9 * load).max(floor) && bound_violation <= 1e-9;
+            // with a bound active the step is clarabel's, accurate to its
+            // tolerances only: a predicted decrease of 1e-9 then ends it
+            let tol = if active && !exact {
+                settings.tolerance.max(1e-9)
+            } else {
+                settings.tolerance
+            };
+            // convergence is judged on the decrease along the manifold
+            let dec_c = dec_opt.unwrap_or(dec);
+            if feasible {
+                let criterion = if dec_c <= tol * scale {
+                    Some(EstimateCriterion::PredictedDecrease)
+                } else if dec_c <= 1e-13 * scale && dec_c > 0.9 * prev_dec {
+                    Some(EstimateCriterion::RoundOffFloor)
+                } else {
+                    None
+                };
+                if let Some(c) = criterion {
+                    status = EstimateStatus::Converged(c);
+                    break;
+                }
+            }
+            prev_dec = if feasible { dec_c } else { f64::INFINITY };
+            mu = mu.max(1.5 * lmax + 1e-12);
+            let r1: f64 = r.iter().map(|v| v.abs()).sum();
+            let phi = obj + mu * r1;
+            let slope = lin - mu * r1;
+            let mut t = 1.0;
+            let mut accepted = false;
+            // second-order correction (against the Maratos effect): the
+            // trial shape is pulled back onto the equilibrium manifold by
+            // chord steps u += K⁻¹ Q(q_t, F_t) with the factorization at q
+            for _ in 0..30 {
+                let mut qt: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + t * b).collect();
+                let ft: Vec<f64> = f.iter().zip(&df).map(|(a, b)| a + t * b).collect();
+                let problem = &self.stream.problem;
+                let dead_t = problem.dead_with(&ft)?;
+                let mut rt = problem.robot().residual(&qt, &dead_t, problem.known())?;
+                if let Some(lu) = &self.last_lu {
+                    // up to four chord steps while the residual shrinks
+                    let mut rn_t = norm2(&rt);
+                    for _ in 0..4 {
+                        let mut du_c = rt.clone();
+                        lu.solve_in_place(&mut du_c)?;
+                        if !du_c.iter().all(|v| v.is_finite()) {
+                            break;
+                        }
+                        let corr = problem.robot().expand_step(&du_c)?;
+                        let qc: Vec<f64> = qt.iter().zip(&corr).map(|(a, b)| a + b).collect();
+                        let rc = problem.robot().residual(&qc, &dead_t, problem.known())?;
+                        let rn_c = norm2(&rc);
+                        if rn_c.is_nan() || rn_c >= rn_t {
+                            break;
+                        }
+                        qt = qc;
+                        rt = rc;
+                        rn_t = rn_c;
+                        if rn_t <= 1e-10 * load {
+                            break;
+                        }
+                    }
+                }
+                let (wr_t, pen_t, e_t) = problem.objective(op, &qt, &ft, alpha)?;
+                let phi_t = wr_t + pen_t + mu * rt.iter().map(|v| v.abs()).sum::<f64>();
+                let small = dec <= 1e-8 * scale && rn <= 1e-6 * load;
+                // near the round-off floor μ|Q|₁ is noise: a trial that stays
+                // feasible to 10× the tolerance and decreases J is accepted
+                let feasible_t = norm2(&rt) <= 10.0 * (1e-9 * load).max(floor);
+                let descends = wr_t + pen_t <= obj + 1e-4 * t * lin.min(0.0);
+                if phi_t <= phi + 1e-4 * t * slope.min(0.0) || small || (feasible_t && descends) {
+                    q = qt;
+                    f = ft;
+                    dead = dead_t;
+                    r = rt;
+                    (wr, pen, e) = (wr_t, pen_t, e_t);
+                    at_q = None;
+                    accepted = true;
+                    break;
+                }
+                t *= 0.5;
+            }
+            if !accepted {
+                status = if dec <= 1e-10 * scale && rn <= 1e-6 * load {
+                    EstimateStatus::Converged(EstimateCriterion::NegligibleDecrease)
+                } else {
+                    EstimateStatus::LineSearchFailed
+                };
+                break;
+            }
+        }
+        // exact equilibrium at the final F, derivatives and covariance
+        // there: at a feasible point one chord step with the last QP's
+        // factorization (taken at q) does it, and that QP's derivatives are
+        // exact; otherwise the equilibrium is re-solved and re-factored
+        let mut finish = None;
+        if let (Some((dv, l)), Some(lu)) = (at_q.take(), &self.last_lu) {
+            let mut w = r.clone();
+            lu.solve_in_place(&mut w)?;
+            let step = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if step <= 1e-10 * len {
+                let problem = &self.stream.problem;
+                let dq = problem.robot().expand_step(&w)?;
+                q.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
+                let residual_n = norm2(&problem.robot().residual(&q, &dead, problem.known())?);
+                finish = Some((q.clone(), dv, l, residual_n));
+            }
+        }
+        let (q, dv, l, residual_n) = match finish {
+            Some(x) => x,
+            None => {
+                let problem = &mut self.stream.problem;
+                let eq = problem.equilibrium(&f, &q)?;
+                let dv = problem.derivs(&eq.factors, op)?;
+                let e = op.residual(&eq.q);
+                let (_, l) = problem.gn_step(&dv, op, &e, &f, alpha)?;
+                (eq.q, dv, l, eq.residual_n)
+            }
+        };
+        let problem = &self.stream.problem;
+        let (wr, pen, e) = problem.objective(op, &q, &f, alpha)?;
+        let g = problem.gradient(&dv, op, &e, &f, alpha)?;
+        Ok(Solved {
+            f,
+            q,
+            derivs: dv,
+            cov_factor: l,
+            e,
+            report: EstimateReport {
+                backend: Backend::Sqp,
+                status,
+                iterations,
+                sub_steps: 1,
+                objective: wr + pen,
+                weighted_residual: wr,
+                n_observations: op.len(),
+                gradient_norm: norm2(&g),
+                equilibrium_residual_n: residual_n,
+                alpha,
+                wall_time_s: 0.0,
+            },
+        })
+    }
+}
+
+/// One SQP subproblem's solution.
+struct QpStep {
+    /// Step of the free coordinates (m).
+    du: Vec<f64>,
+    /// Step of the load parameters.
+    df: Vec<f64>,
+    /// The largest equality multiplier `|λ|∞` (for the merit weight).
+    lambda_max: f64,
+    /// The objective's linear term `c` over `(u, F)`.
+    c: Vec<f64>,
+    /// Whether a bound is active in the solution.
+    active: bool,
+    /// Whether the step solves the QP exactly (else it is clarabel's, to
+    /// its tolerances).
+    exact: bool,
+    /// The largest violation of a bound at the current `F`, relative to
+    /// the bounded quantity's scale (0 if all hold).
+    bound_violation: f64,
+    /// The predicted decrease along the constraint manifold,
+    /// `−g̃ᵀ dF` with `g̃` the reduced gradient (29) at the
+    /// feasibility-restored residual `e' = e + A M K⁻¹ Q`, when known
+    /// (no bound active). Unlike `−cᵀ d` it carries no term linear in the
+    /// equilibrium residual `Q`, so it reaches the round-off floor at once.
+    dec_opt: Option<f64>,
+    /// The derivatives at `q` and the covariance factor there, when the
+    /// step computed them.
+    derivs: Option<(Derivs, Vec<f64>)>,
+    /// `|K|_max` of the QP's tangent (for the round-off floor of `|Q|`).
+    tangent_max_abs: f64,
+}
+
+/// The equality-constrained QP's parts (see [`SqpEstimator::unconstrained`]).
+struct Unconstrained {
+    /// Adjoint fields and marker Jacobian at `q`.
+    dv: Derivs,
+    /// The Gauss–Newton load step at the restored residual.
+    df0: Vec<f64>,
+    /// The reduced gradient (29) at the restored residual.
+    g1: Vec<f64>,
+    /// The covariance factor at `q`.
+    l: Vec<f64>,
+}
+
+impl<E: Element + 'static> Estimator for SqpEstimator<E> {
+    fn step(&mut self, observation: &Observation) -> Result<Estimate> {
+        run_step(self, observation)
+    }
+
+    fn backend(&self) -> Backend {
+        Backend::Sqp
+    }
+
+    fn alpha(&self) -> Option<f64> {
+        self.stream.alpha
+    }
+
+    fn reset(&mut self) {
+        self.stream.reset();
+    }
+}

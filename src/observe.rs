@@ -1,0 +1,432 @@
+//! Observations of the robot and the observation operator `A` of (25).
+//!
+//! A marker measures the centreline position `r(X_m) = S(X_m) q` (16) at a
+//! node or at an undeformed arc coordinate `X_m`, optionally the tangent
+//! `r'(X_m)` too. Stacked, the observed quantities are linear in the
+//! coordinates: `A q`, one row of `A` per observed scalar, compared with the
+//! measurements `y` under diagonal weights `W` in the estimator's objective
+//! `(A q − y)ᵀ W (A q − y)` (25). [`ObservationOperator`] is `(A, y, W)`.
+//!
+//! A row of `A` is sparse: the cable's four Hermite functions (14) weight one
+//! component of the two node positions and the two node slopes of the element
+//! holding the marker. Rows index the coordinates through the node layout
+//! (`q_i = [r_i, r_i', …]`, `NODE_DOFS` per node, position first, then the
+//! slope), so the same code serves the planar cable (4 per node) and the
+//! spatial one (6 per node).
+
+use serde::{Deserialize, Serialize};
+
+use crate::assembly::Robot;
+use crate::element::{hermite, Element};
+use crate::error::{check_all_finite, check_index, check_len, check_positive, Error, Result};
+
+/// One marker measurement.
+///
+/// # Example
+/// ```
+/// let m = softrod::observe::MarkerObservation::at_node(20, vec![0.2, 0.05]);
+/// assert_eq!(m.node, Some(20));
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MarkerObservation {
+    /// Node index, or
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub node: Option<usize>,
+    /// undeformed arc coordinate (m): exactly one of the two.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub s_m: Option<f64>,
+    /// Measured position (m, world axes).
+    pub position_m: Vec<f64>,
+    /// Measured tangent `r'` (dimensionless), if observed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tangent: Option<Vec<f64>>,
+    /// Weights of the position components (1/m²); default `1/σ²`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position_weight: Option<Vec<f64>>,
+    /// Weights of the tangent components (dimensionless); default `1/σ_t²`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tangent_weight: Option<Vec<f64>>,
+}
+
+impl MarkerObservation {
+    /// A position-only marker at a node with default weights.
+    ///
+    /// # Example
+    /// See [`MarkerObservation`].
+    pub fn at_node(node: usize, position_m: Vec<f64>) -> Self {
+        MarkerObservation {
+            node: Some(node),
+            s_m: None,
+            position_m,
+            tangent: None,
+            position_weight: None,
+            tangent_weight: None,
+        }
+    }
+
+    /// A position-only marker at arc coordinate `s_m` with default weights.
+    ///
+    /// # Example
+    /// ```
+    /// let m = softrod::observe::MarkerObservation::at_arc(0.12, vec![0.12, 0.0]);
+    /// assert_eq!(m.s_m, Some(0.12));
+    /// ```
+    pub fn at_arc(s_m: f64, position_m: Vec<f64>) -> Self {
+        MarkerObservation {
+            node: None,
+            s_m: Some(s_m),
+            position_m,
+            tangent: None,
+            position_weight: None,
+            tangent_weight: None,
+        }
+    }
+}
+
+/// One observation: the markers measured at one instant. This is also the
+/// format of a markers file (`softrod estimate --markers FILE`):
+/// `{"markers": [{"node": 4, "position_m": [0.05, 0.01]}, {"s_m": 0.24,
+/// "position_m": [...], "tangent": [...]}, ...]}`.
+///
+/// # Example
+/// ```
+/// let o: softrod::observe::Observation = serde_json::from_str(
+///     r#"{"markers": [{"node": 20, "position_m": [0.2, 0.05]}]}"#).unwrap();
+/// assert_eq!(o.n_components(), 2);
+/// ```
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Observation {
+    /// The markers.
+    pub markers: Vec<MarkerObservation>,
+}
+
+impl Observation {
+    /// The exact positions of the configuration `q` at the given nodes (a
+    /// noise-free synthetic observation); nodes beyond `q` are skipped.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{observe::Observation, scene::Scene};
+    /// let robot = Scene::two_section().robot()?;
+    /// let q = robot.reference_configuration();
+    /// let o = Observation::at_nodes(&robot, &q, &[10, 20]);
+    /// assert_eq!(o.markers[1].position_m, q[80..82].to_vec());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn at_nodes<E: Element>(_robot: &Robot<E>, q: &[f64], nodes: &[usize]) -> Self {
+        let nd = E::NODE_DOFS;
+        let d = E::DIM;
+        Observation {
+            markers: nodes
+                .iter()
+                .filter(|&&n| (n + 1) * nd <= q.len())
+                .map(|&n| MarkerObservation::at_node(n, q[n * nd..n * nd + d].to_vec()))
+                .collect(),
+        }
+    }
+
+    /// Number of observed scalar components `n_ob`.
+    ///
+    /// # Example
+    /// See [`Observation`].
+    pub fn n_components(&self) -> usize {
+        self.markers
+            .iter()
+            .map(|m| m.position_m.len() + m.tangent.as_ref().map_or(0, |t| t.len()))
+            .sum()
+    }
+
+    /// Adds seeded Gaussian noise of standard deviation `sigma_m` to every
+    /// position component (a deterministic generator: the same seed gives the
+    /// same noise).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::observe::{MarkerObservation, Observation};
+    /// let o = Observation { markers: vec![MarkerObservation::at_node(1, vec![0.0, 0.0])] };
+    /// let (a, b) = (o.clone().with_noise(1e-3, 7), o.with_noise(1e-3, 7));
+    /// assert_eq!(a, b);
+    /// assert!(a.markers[0].position_m.iter().all(|v| *v != 0.0 && v.abs() < 1e-2));
+    /// ```
+    pub fn with_noise(mut self, sigma_m: f64, seed: u64) -> Self {
+        let mut rng = Gaussian::new(seed);
+        for m in &mut self.markers {
+            for p in &mut m.position_m {
+                *p += sigma_m * rng.sample();
+            }
+        }
+        self
+    }
+}
+
+/// A small deterministic normal generator (SplitMix64 + Box–Muller), for
+/// synthetic observations.
+#[derive(Debug, Clone)]
+struct Gaussian {
+    state: u64,
+    spare: Option<f64>,
+}
+
+impl Gaussian {
+    fn new(seed: u64) -> Self {
+        Gaussian {
+            state: seed ^ 0x9E37_79B9_7F4A_7C15,
+            spare: None,
+        }
+    }
+
+    fn uniform(&mut self) -> f64 {
+        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        ((z >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+
+    /// One standard normal sample.
+    fn sample(&mut self) -> f64 {
+        if let Some(s) = self.spare.take() {
+            return s;
+        }
+        let (u, v) = (self.uniform(), self.uniform());
+        let r = (-2.0 * u.ln()).sqrt();
+        let t = 2.0 * std::f64::consts::PI * v;
+        self.spare = Some(r * t.sin());
+        r * t.cos()
+    }
+}
+
+/// One row of the observation operator: an observed scalar
+/// `Σ_j w_j q[j]`, sparse over all `n_q` coordinates.
+///
+/// # Example
+/// ```
+/// use softrod::{observe::{Observation, ObservationOperator}, scene::Scene};
+/// let robot = Scene::two_section().robot()?;
+/// let q = robot.reference_configuration();
+/// let op = ObservationOperator::new(&robot, &Observation::at_nodes(&robot, &q, &[20]), 1e-5, 1e-3)?;
+/// // the tip's y coordinate: one entry of weight 1 at node 20's y
+/// let tip_y = &op.rows()[1];
+/// assert_eq!(tip_y.apply(&q), q[81]);
+/// # Ok::<(), softrod::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObsRow {
+    entries: Vec<(usize, f64)>,
+}
+
+impl ObsRow {
+    /// The entries `(coordinate index, weight)`.
+    pub fn entries(&self) -> &[(usize, f64)] {
+        &self.entries
+    }
+
+    /// The observed scalar at `q` (`n_q` coordinates; NaN if `q` is too short).
+    pub fn apply(&self, q: &[f64]) -> f64 {
+        self.entries
+            .iter()
+            .map(|&(j, w)| w * q.get(j).copied().unwrap_or(f64::NAN))
+            .sum()
+    }
+}
+
+/// The observation operator `A`, the measurements `y` and the diagonal
+/// weights `W` of an [`Observation`] on a robot, as the estimator's objective
+/// `(A q − y)ᵀ W (A q − y)` (25) uses them.
+///
+/// Default weights are noise-whitened: `1/σ²` for a position component,
+/// `1/σ_t²` for a tangent component (a marker's own weights override them).
+///
+/// # Example
+/// ```
+/// use softrod::{observe::{Observation, ObservationOperator}, scene::Scene};
+/// let robot = Scene::two_section().robot()?;
+/// let q = robot.reference_configuration();
+/// let obs = Observation::at_nodes(&robot, &q, &[4, 20]);
+/// let op = ObservationOperator::new(&robot, &obs, 1e-5, 1e-3)?;
+/// assert_eq!(op.len(), 4);
+/// assert!(op.residual(&q).iter().all(|e| *e == 0.0));
+/// assert!((op.weights()[0] - 1e10).abs() < 1e-3); // 1/σ²
+/// # Ok::<(), softrod::Error>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct ObservationOperator {
+    rows: Vec<ObsRow>,
+    y: Vec<f64>,
+    weights: Vec<f64>,
+}
+
+impl ObservationOperator {
+    /// The operator of `obs` on `robot`, with default weights for the
+    /// position noise `noise_sigma_m` (m) and the tangent noise
+    /// `tangent_sigma`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `observation.markers[i].…` for a
+    /// marker with neither or both of `node` and `s_m`, off the robot, at the
+    /// position of another, with a non-finite value or a non-positive weight,
+    /// or for no marker at all; [`Error::IndexOutOfRange`] for a node beyond
+    /// the last; [`Error::DimensionMismatch`] for a vector that is not `DIM`
+    /// long; for a `sigma` that is not finite and positive,
+    /// [`Error::InvalidParameter`].
+    pub fn new<E: Element>(
+        robot: &Robot<E>,
+        obs: &Observation,
+        noise_sigma_m: f64,
+        tangent_sigma: f64,
+    ) -> Result<Self> {
+        check_positive("noise_sigma_m", noise_sigma_m)?;
+        check_positive("tangent_sigma", tangent_sigma)?;
+        let (d, nd) = (E::DIM, E::NODE_DOFS);
+        if obs.markers.is_empty() {
+            return Err(Error::invalid(
+                "observation.markers",
+                "[]",
+                "needs at least one marker",
+            ));
+        }
+        let mut op = ObservationOperator {
+            rows: Vec::new(),
+            y: Vec::new(),
+            weights: Vec::new(),
+        };
+        let pw = 1.0 / (noise_sigma_m * noise_sigma_m);
+        let tw = 1.0 / (tangent_sigma * tangent_sigma);
+        let mut seen: Vec<f64> = Vec::with_capacity(obs.markers.len());
+        for (i, m) in obs.markers.iter().enumerate() {
+            let name = |f: &str| format!("observation.markers[{i}].{f}");
+            let s = match (m.node, m.s_m) {
+                (Some(n), None) => {
+                    check_index(&name("node"), n, robot.n_nodes())?;
+                    robot.node_arc()[n]
+                }
+                (None, Some(s)) => s,
+                _ => {
+                    return Err(Error::invalid(
+                        format!("observation.markers[{i}]"),
+                        "",
+                        "give exactly one of `node` and `s_m`",
+                    ))
+                }
+            };
+            let (e, xi) = robot.locate(&name("s_m"), s)?;
+            if seen
+                .iter()
+                .any(|t: &f64| (t - s).abs() <= 1e-9 * robot.length())
+            {
+                return Err(Error::invalid(
+                    format!("observation.markers[{i}]"),
+                    s,
+                    "duplicates another marker's position",
+                ));
+            }
+            seen.push(s);
+            let le = robot.elements()[e].length();
+            // (16): r(X) = Σ_k s_k(ξ) of the element's four slots, the
+            // positions and slopes of its two nodes; r'(X) with s_k'
+            let (sh, dsh, _) = hermite(xi, le);
+            let row = |w: &[f64; 4], comp: usize| ObsRow {
+                entries: (0..4)
+                    .map(|k| ((e + k / 2) * nd + (k % 2) * d + comp, w[k]))
+                    .collect(),
+            };
+            check_len(&name("position_m"), d, m.position_m.len())?;
+            check_all_finite(&name("position_m"), &m.position_m)?;
+            let weights = |w: &Option<Vec<f64>>, field: &str, default: f64| -> Result<Vec<f64>> {
+                match w {
+                    None => Ok(vec![default; d]),
+                    Some(w) => {
+                        check_len(&name(field), d, w.len())?;
+                        for (k, v) in w.iter().enumerate() {
+                            check_positive(&format!("{}[{k}]", name(field)), *v)?;
+                        }
+                        Ok(w.clone())
+                    }
+                }
+            };
+            let wp = weights(&m.position_weight, "position_weight", pw)?;
+            for (c, (y, w)) in m.position_m.iter().zip(&wp).enumerate() {
+                op.rows.push(row(&sh, c));
+                op.y.push(*y);
+                op.weights.push(*w);
+            }
+            if let Some(t) = &m.tangent {
+                check_len(&name("tangent"), d, t.len())?;
+                check_all_finite(&name("tangent"), t)?;
+                let wtan = weights(&m.tangent_weight, "tangent_weight", tw)?;
+                for (c, (y, w)) in t.iter().zip(&wtan).enumerate() {
+                    op.rows.push(row(&dsh, c));
+                    op.y.push(*y);
+                    op.weights.push(*w);
+                }
+            }
+        }
+        Ok(op)
+    }
+
+    /// Number of observed scalars `n_ob` (rows of `A`).
+    pub fn len(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Whether there is no row (never, for an operator built by
+    /// [`ObservationOperator::new`]).
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+
+    /// The rows of `A`.
+    pub fn rows(&self) -> &[ObsRow] {
+        &self.rows
+    }
+
+    /// The measurements `y`.
+    pub fn measurements(&self) -> &[f64] {
+        &self.y
+    }
+
+    /// The diagonal of `W`.
+    pub fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+
+    /// Row `i` of `A q` (NaN for a row beyond the last).
+    pub fn value(&self, i: usize, q: &[f64]) -> f64 {
+        self.rows.get(i).map_or(f64::NAN, |r| r.apply(q))
+    }
+
+    /// `A q`.
+    pub fn apply(&self, q: &[f64]) -> Vec<f64> {
+        self.rows.iter().map(|r| r.apply(q)).collect()
+    }
+
+    /// `A q − y`.
+    pub fn residual(&self, q: &[f64]) -> Vec<f64> {
+        self.rows
+            .iter()
+            .zip(&self.y)
+            .map(|(r, y)| r.apply(q) - y)
+            .collect()
+    }
+
+    /// `eᵀ W e`.
+    pub fn weighted(&self, e: &[f64]) -> f64 {
+        e.iter().zip(&self.weights).map(|(e, w)| w * e * e).sum()
+    }
+
+    /// The same operator with the measurements `y` (as many as rows).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `y` has the wrong length.
+    pub fn with_measurements(&self, y: Vec<f64>) -> Result<Self> {
+        check_len("y", self.len(), y.len())?;
+        Ok(ObservationOperator {
+            rows: self.rows.clone(),
+            y,
+            weights: self.weights.clone(),
+        })
+    }
+}

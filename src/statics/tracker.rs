@@ -1,0 +1,524 @@
+//! Equilibria at a sequence of nearby loads: the static solver's warm
+//! tracker.
+//!
+//! An estimator (or a controller) asks for the equilibrium `Q(F, q, P) = 0`
+//! (17) at many loads `F` close to each other, each from a nearby shape. The
+//! load enters linearly, `Q_F = G F` ([`LinearLoad`]). The tracker keeps the
+//! last factorization of the tangent `K` and the last solved state, so that
+//!
+//! - asked again at the same `(F, q)`, it answers at once;
+//! - from the shape of its last solution, the residual at a new `F'` is
+//!   `Q(q, F') = Q(q, F) + Mᵀ G (F' − F)`, with no new residual evaluation;
+//! - it first takes chord (modified Newton) steps with the kept factors, then
+//!   plain Newton steps, and only then falls back to the globalized
+//!   [`StaticSolver`] (line search, homotopy).
+//!
+//! Every converged solve ends with a step below `1e-10 L` and returns the
+//! factors of `K` at its solution (fresh, unless the solution did not move
+//! from the point the kept factors belong to), which the sensitivities
+//! ([`crate::sensitivity`]) of that equilibrium use.
+
+use crate::assembly::Robot;
+use crate::banded::{BandedLu, BandedMatrix};
+use crate::element::Element;
+use crate::error::{check_len, Result};
+use crate::loads::Loads;
+use crate::numeric::norm2;
+
+use super::{StaticSettings, StaticSolver};
+
+/// A load linear in a parameter vector `F`: its generalized force over all
+/// coordinates is `G F` with a constant `G` (the distributed field (8) with
+/// `G = J_QF` (22), (23), a concentrated force (32)–(35), …).
+///
+/// # Example
+/// A force on node 20's `y` coordinate:
+/// ```
+/// use softrod::{assembly::Robot, element::Element, loads::{Loads, PointForce}};
+/// use softrod::statics::LinearLoad;
+/// struct TipY;
+/// impl<E: Element> LinearLoad<E> for TipY {
+///     fn n_params(&self, _: &Robot<E>) -> usize { 1 }
+///     fn force(&self, robot: &Robot<E>, f: &[f64]) -> softrod::Result<Vec<f64>> {
+///         let mut g = vec![0.0; robot.n_q()];
+///         g[20 * E::NODE_DOFS + 1] = f[0];
+///         Ok(g)
+///     }
+///     fn force_transpose(&self, _: &Robot<E>, v: &[f64]) -> softrod::Result<Vec<f64>> {
+///         Ok(vec![v[20 * E::NODE_DOFS + 1]])
+///     }
+///     fn add_to(&self, robot: &Robot<E>, known: &Loads, f: &[f64]) -> Loads {
+///         let mut loads = known.clone();
+///         loads.point_forces.push(PointForce { s_m: robot.node_arc()[20], force_n: vec![0.0, f[0]] });
+///         loads
+///     }
+/// }
+/// let robot = softrod::scene::Scene::two_section().robot()?;
+/// assert_eq!(LinearLoad::force(&TipY, &robot, &[2.0])?[81], 2.0);
+/// # Ok::<(), softrod::Error>(())
+/// ```
+pub trait LinearLoad<E: Element> {
+    /// Number of parameters `n_F`.
+    fn n_params(&self, robot: &Robot<E>) -> usize;
+    /// `G F` over all `n_q` coordinates (N).
+    ///
+    /// # Errors
+    /// [`crate::Error::DimensionMismatch`] if `f` has the wrong length.
+    fn force(&self, robot: &Robot<E>, f: &[f64]) -> Result<Vec<f64>>;
+    /// `Gᵀ v` for `v` over all `n_q` coordinates.
+    ///
+    /// # Errors
+    /// [`crate::Error::DimensionMismatch`] if `v` has the wrong length.
+    fn force_transpose(&self, robot: &Robot<E>, v: &[f64]) -> Result<Vec<f64>>;
+    /// The loads `known` with `F` added, for the globalized static solver.
+    fn add_to(&self, robot: &Robot<E>, known: &Loads, f: &[f64]) -> Loads;
+}
+
+/// A solved equilibrium of the tracker: the shape, the factored tangent at
+/// it and its residual.
+#[derive(Debug, Clone)]
+pub struct TrackedEquilibrium {
+    /// All coordinates (m, dimensionless slopes).
+    pub q: Vec<f64>,
+    /// The factors of the tangent `K` at `q` (see the [module
+    /// documentation](self) for the one exception).
+    pub factors: BandedLu,
+    /// `|Q|_2` at `q` (N).
+    pub residual_n: f64,
+}
+
+/// The last solved state: its load, shape and residual.
+#[derive(Debug, Clone)]
+struct State {
+    f: Vec<f64>,
+    q: Vec<f64>,
+    r: Vec<f64>,
+    residual_n: f64,
+}
+
+/// Equilibria of a robot under known loads plus a [`LinearLoad`] at a
+/// sequence of nearby parameters (see the [module documentation](self)).
+///
+/// # Example
+/// ```
+/// use softrod::{estimate::LoadModel, scene::Scene, statics::{EquilibriumTracker, StaticSettings}};
+/// let scene = Scene::two_section();
+/// let robot = scene.robot()?;
+/// let n = robot.n_q();
+/// let mut tracker = EquilibriumTracker::new(robot, scene.loads()?, StaticSettings::default())?;
+/// let load = LoadModel::Distributed;
+/// let q0 = tracker.solve(&load, &vec![0.0; n], &tracker.robot().arc_configuration(&[]))?.q;
+/// // a small uniform downward load: a warm solve from q0
+/// let mut f = vec![0.0; n];
+/// f.iter_mut().skip(1).step_by(4).for_each(|w| *w = -0.1);
+/// let eq = tracker.solve(&load, &f, &q0)?;
+/// assert!(eq.q[n - 3] < q0[n - 3] && eq.residual_n < 1e-8);
+/// # Ok::<(), softrod::Error>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct EquilibriumTracker<E: Element> {
+    robot: Robot<E>,
+    known: Loads,
+    /// Dead force of the known loads (`n_q`).
+    dead_known: Vec<f64>,
+    solver: StaticSolver,
+    /// Tangent buffer.
+    kmat: BandedMatrix,
+    /// The last factorization of `K` and the shape it was taken at.
+    factors: Option<(Vec<f64>, BandedLu)>,
+    /// The last solved equilibrium.
+    state: Option<State>,
+}
+
+impl<E: Element> EquilibriumTracker<E> {
+    /// A tracker for `robot` under the known loads `known`; `settings` are
+    /// those of the globalized fallback solve.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidParameter`] for invalid settings; the errors of
+    /// [`Robot::dead_force`].
+    pub fn new(robot: Robot<E>, known: Loads, settings: StaticSettings) -> Result<Self> {
+        let solver = StaticSolver::new(settings)?;
+        let dead_known = robot.dead_force(&known)?;
+        let nd = E::NODE_DOFS;
+        Ok(EquilibriumTracker {
+            kmat: BandedMatrix::zeros(robot.n_free(), 2 * nd - 1, 2 * nd - 1),
+            robot,
+            known,
+            dead_known,
+            solver,
+            factors: None,
+            state: None,
+        })
+    }
+
+    /// The robot.
+    pub fn robot(&self) -> &Robot<E> {
+        &self.robot
+    }
+
+    /// The known loads.
+    pub fn known(&self) -> &Loads {
+        &self.known
+    }
+
+    /// The settings of the fallback solve.
+    pub fn settings(&self) -> &StaticSettings {
+        &self.solver.settings
+    }
+
+    /// The dead force of the known loads plus `G F` (`n_q`, N).
+    ///
+    /// # Errors
+    /// As [`LinearLoad::force`].
+    pub fn dead_with<L: LinearLoad<E>>(&self, load: &L, f: &[f64]) -> Result<Vec<f64>> {
+        let mut dead = load.force(&self.robot, f)?;
+        dead.iter_mut()
+            .zip(&self.dead_known)
+            .for_each(|(a, b)| *a += b);
+        Ok(dead)
+    }
+
+    /// The residual `Q` over the free coordinates at `(q, F)` (N).
+    ///
+    /// # Errors
+    /// As [`LinearLoad::force`] and [`Robot::residual`].
+    pub fn residual<L: LinearLoad<E>>(&self, load: &L, q: &[f64], f: &[f64]) -> Result<Vec<f64>> {
+        let dead = self.dead_with(load, f)?;
+        self.robot.residual(q, &dead, &self.known)
+    }
+
+    /// A zero band matrix of the tangent's shape (`n_free` square), for
+    /// [`EquilibriumTracker::tangent_into`].
+    pub fn tangent_buffer(&self) -> BandedMatrix {
+        let nd = E::NODE_DOFS;
+        BandedMatrix::zeros(self.robot.n_free(), 2 * nd - 1, 2 * nd - 1)
+    }
+
+    /// The tangent `K = −∂Q/∂q` at `q` over the free coordinates, into `k`
+    /// (from [`EquilibriumTracker::tangent_buffer`]), and its factors (`L D
+    /// Lᵀ` of the Jacobi-scaled tangent, which is symmetric and positive
+    /// definite near a stable equilibrium; the pivoted LU if it is not
+    /// positive definite). `k` is left holding `K`.
+    ///
+    /// # Errors
+    /// [`crate::Error::Singular`] or [`crate::Error::NonFinite`] if the
+    /// factorization fails; [`crate::Error::DimensionMismatch`] for a `q` or
+    /// a `k` of the wrong size.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{scene::Scene, statics::EquilibriumTracker};
+    /// let scene = Scene::two_section();
+    /// let tracker = EquilibriumTracker::new(scene.robot()?, scene.loads()?, Default::default())?;
+    /// let mut k = tracker.tangent_buffer();
+    /// let q = tracker.robot().reference_configuration();
+    /// let lu = tracker.tangent_into(&q, &mut k)?;
+    /// assert_eq!(lu.negative_pivots(), 0); // the straight robot is stable
+    /// assert!(k.max_abs() > 0.0);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn tangent_into(&self, q: &[f64], k: &mut BandedMatrix) -> Result<BandedLu> {
+        self.robot.tangent_into(q, &self.known, k)?;
+        debug_assert!(k.is_symmetric());
+        k.factor_scaled_symmetric(0.0, "tangent stiffness")
+    }
+
+    /// Keeps `factors`, taken at `q`, for the chord steps of the next solve.
+    ///
+    /// # Errors
+    /// [`crate::Error::DimensionMismatch`] if `q` or the factors do not fit
+    /// the robot.
+    pub fn keep_factors(&mut self, q: &[f64], factors: BandedLu) -> Result<()> {
+        check_len("q", self.robot.n_q(), q.len())?;
+        check_len("factors", self.robot.n_free(), factors.n())?;
+        self.factors = Some((q.to_vec(), factors));
+        Ok(())
+    }
+
+    /// Forgets the kept factors and the last solution.
+    pub fn forget(&mut self) {
+        self.factors = None;
+        self.state = None;
+    }
+
+    /// The equilibrium at `F` from `q0`: chord steps with the kept factors,
+    /// then plain Newton steps, then the globalized [`StaticSolver`].
+    ///
+    /// # Errors
+    /// [`crate::Error::NotConverged`] if the globalized solve fails too; the
+    /// errors of [`EquilibriumTracker::residual`] and of the factorization.
+    pub fn solve<L: LinearLoad<E>>(
+        &mut self,
+        load: &L,
+        f: &[f64],
+        q0: &[f64],
+    ) -> Result<TrackedEquilibrium> {
+        match self.solve_opt(load, f, q0, true)? {
+            Some(eq) => Ok(eq),
+            // unreachable: with the fallback a failure is an error
+            None => self.fallback(load, f, q0),
+        }
+    }
+
+    /// As [`EquilibriumTracker::solve`] without the globalized fallback:
+    /// `None` when the chord and plain Newton steps do not converge (cheap,
+    /// for the trials of a line search).
+    ///
+    /// # Errors
+    /// As [`EquilibriumTracker::solve`].
+    pub fn try_solve<L: LinearLoad<E>>(
+        &mut self,
+        load: &L,
+        f: &[f64],
+        q0: &[f64],
+    ) -> Result<Option<TrackedEquilibrium>> {
+        self.solve_opt(load, f, q0, false)
+    }
+
+    /// The equilibrium at `F` from `q0` by chord steps with the kept factors
+    /// only, keeping them (no factorization at the solution): for a last,
+    /// tiny step. `None` (and no change) if no factors are kept or the steps
+    /// do not converge below `1e-10 L`; else the shape and its `|Q|_2` (N).
+    ///
+    /// # Errors
+    /// As [`EquilibriumTracker::residual`].
+    pub fn solve_chord<L: LinearLoad<E>>(
+        &mut self,
+        load: &L,
+        f: &[f64],
+        q0: &[f64],
+    ) -> Result<Option<(Vec<f64>, f64)>> {
+        let Some((q_lu, lu)) = self.factors.take() else {
+            return Ok(None);
+        };
+        let dead = self.dead_with(load, f)?;
+        let n = self.robot.n_free();
+        let len = self.robot.length();
+        let mut r = vec![0.0; n];
+        let mut du = vec![0.0; n];
+        let mut dq = vec![0.0; self.robot.n_q()];
+        let known_residual = self.residual_from_state(load, f, q0, &mut r)?;
+        let mut q = q0.to_vec();
+        let mut prev = f64::INFINITY;
+        let mut done = false;
+        for it in 0..12 {
+            if it > 0 || !known_residual {
+                self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+            }
+            let Some(step) = self.plain_step(&mut q, &lu, &r, &mut du, &mut dq, 0.5 * prev)? else {
+                break;
+            };
+            prev = step;
+            if step <= 1e-10 * len {
+                done = true;
+                break;
+            }
+        }
+        self.factors = Some((q_lu, lu));
+        if !done {
+            return Ok(None);
+        }
+        self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+        let residual_n = norm2(&r);
+        self.state = Some(State {
+            f: f.to_vec(),
+            q: q.clone(),
+            r,
+            residual_n,
+        });
+        Ok(Some((q, residual_n)))
+    }
+
+    /// One plain Newton (or, with old factors, chord) step at `q` with the
+    /// factors `lu` for the residual `r` at `q` (computed by the caller):
+    /// the step is applied unless it is not finite, longer than a quarter
+    /// of the robot, or not shorter than `limit` (m). Returns the step's
+    /// size (m) if applied. `du` (`n_free`) and `dq` (`n_q`) are scratch.
+    fn plain_step(
+        &self,
+        q: &mut [f64],
+        lu: &BandedLu,
+        r: &[f64],
+        du: &mut [f64],
+        dq: &mut [f64],
+        limit: f64,
+    ) -> Result<Option<f64>> {
+        du.copy_from_slice(r);
+        lu.solve_in_place(du)?;
+        let step = du.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if !step.is_finite() || step > 0.25 * self.robot.length() || step > limit {
+            return Ok(None);
+        }
+        self.robot.expand_step_into(du, dq)?;
+        q.iter_mut().zip(dq.iter()).for_each(|(a, b)| *a += b);
+        Ok(Some(step))
+    }
+
+    /// The solve; without `fallback` a failure of the chord and plain Newton
+    /// steps is `None`.
+    ///
+    /// Warm starts take chord (modified Newton) steps with the kept
+    /// factorization: a few residuals, then one fresh factorization at the
+    /// solution for exact derivatives (kept for the next call).
+    fn solve_opt<L: LinearLoad<E>>(
+        &mut self,
+        load: &L,
+        f: &[f64],
+        q0: &[f64],
+        fallback: bool,
+    ) -> Result<Option<TrackedEquilibrium>> {
+        // asked again at the last solution (a warm start): nothing to solve.
+        // The kept factors may be those of a point up to 1e-8 L away (a
+        // chord solve keeps them, see solve_chord): the derivatives they give
+        // differ by about 1e-7 relative, which the next Gauss–Newton step of
+        // an estimator absorbs.
+        if let (Some(st), Some((q_lu, lu))) = (&self.state, &self.factors) {
+            let near = q_lu
+                .iter()
+                .zip(q0)
+                .all(|(a, b)| (a - b).abs() <= 1e-8 * self.robot.length());
+            if st.f == f && st.q == q0 && near {
+                return Ok(Some(TrackedEquilibrium {
+                    q: q0.to_vec(),
+                    factors: lu.clone(),
+                    residual_n: st.residual_n,
+                }));
+            }
+        }
+        let dead = self.dead_with(load, f)?;
+        let n = self.robot.n_free();
+        let len = self.robot.length();
+        let mut r = vec![0.0; n];
+        let mut du = vec![0.0; n];
+        let mut dq = vec![0.0; self.robot.n_q()];
+        // the residual at q0 from the remembered one, if q0 is its shape
+        let known_residual = self.residual_from_state(load, f, q0, &mut r)?;
+        if let Some((q_lu, lu)) = self.factors.take() {
+            let mut q = q0.to_vec();
+            let mut prev = f64::INFINITY;
+            let mut done = false;
+            let mut moved = false;
+            for it in 0..12 {
+                if it > 0 || !known_residual {
+                    self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+                }
+                let Some(step) = self.plain_step(&mut q, &lu, &r, &mut du, &mut dq, 0.5 * prev)?
+                else {
+                    break;
+                };
+                prev = step;
+                if step <= 1e-10 * len {
+                    done = true;
+                    break;
+                }
+                moved = true;
+            }
+            if done {
+                // the kept factors are exact if q has not left their point
+                let same = !moved && q_lu.iter().zip(q0).all(|(a, b)| a == b);
+                let lu = if same {
+                    self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+                    lu
+                } else {
+                    // fresh factors at the solution, with its residual
+                    self.robot.residual_and_tangent_into(
+                        &q,
+                        &dead,
+                        &self.known,
+                        &mut r,
+                        &mut self.kmat,
+                    )?;
+                    self.kmat
+                        .factor_scaled_symmetric(0.0, "tangent stiffness")?
+                };
+                return Ok(Some(self.solved(f, q, lu, r)));
+            }
+            self.factors = Some((q_lu, lu));
+        }
+        let mut q = q0.to_vec();
+        let mut prev = f64::INFINITY;
+        for _ in 0..12 {
+            // Newton: residual and tangent at q in one pass
+            self.robot
+                .residual_and_tangent_into(&q, &dead, &self.known, &mut r, &mut self.kmat)?;
+            let lu = match self.kmat.factor_scaled_symmetric(0.0, "tangent stiffness") {
+                Ok(lu) => lu,
+                Err(_) => break,
+            };
+            let Some(step) = self.plain_step(&mut q, &lu, &r, &mut du, &mut dq, 0.9 * prev)? else {
+                break;
+            };
+            prev = step;
+            if step <= 1e-10 * len {
+                self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+                return Ok(Some(self.solved(f, q, lu, r)));
+            }
+        }
+        if !fallback {
+            return Ok(None);
+        }
+        self.fallback(load, f, q0).map(Some)
+    }
+
+    /// The globalized [`StaticSolver`] from `q0`, its solution factored and
+    /// kept.
+    fn fallback<L: LinearLoad<E>>(
+        &mut self,
+        load: &L,
+        f: &[f64],
+        q0: &[f64],
+    ) -> Result<TrackedEquilibrium> {
+        let dead = self.dead_with(load, f)?;
+        let mut r = vec![0.0; self.robot.n_free()];
+        let loads = load.add_to(&self.robot, &self.known, f);
+        let eq = self.solver.solve(&self.robot, &loads, Some(q0))?;
+        self.robot
+            .residual_and_tangent_into(&eq.q, &dead, &self.known, &mut r, &mut self.kmat)?;
+        let lu = self
+            .kmat
+            .factor_scaled_symmetric(0.0, "tangent stiffness")?;
+        let mut out = self.solved(f, eq.q, lu, r);
+        out.residual_n = eq.report.residual_norm_n;
+        Ok(out)
+    }
+
+    /// `Q(q0, F)` into `r` from the remembered equilibrium if `q0` is its
+    /// shape (`Q(q, F) = Q(q, F_s) + Mᵀ G (F − F_s)`); false otherwise.
+    fn residual_from_state<L: LinearLoad<E>>(
+        &self,
+        load: &L,
+        f: &[f64],
+        q0: &[f64],
+        r: &mut [f64],
+    ) -> Result<bool> {
+        match &self.state {
+            Some(st) if st.q == q0 && st.f.len() == f.len() => {
+                let df: Vec<f64> = f.iter().zip(&st.f).map(|(a, b)| a - b).collect();
+                let gdf = load.force(&self.robot, &df)?;
+                self.robot.restrict_into(&gdf, r)?;
+                r.iter_mut().zip(&st.r).for_each(|(a, b)| *a += b);
+                Ok(true)
+            }
+            _ => Ok(false),
+        }
+    }
+
+    /// Records a solved equilibrium (`r` its residual, `lu` the factors at
+    /// `q`) and returns it.
+    fn solved(&mut self, f: &[f64], q: Vec<f64>, lu: BandedLu, r: Vec<f64>) -> TrackedEquilibrium {
+        let residual_n = norm2(&r);
+        self.factors = Some((q.clone(), lu.clone()));
+        self.state = Some(State {
+            f: f.to_vec(),
+            q: q.clone(),
+            r,
+            residual_n,
+        });
+        TrackedEquilibrium {
+            q,
+            factors: lu,
+            residual_n,
+        }
+    }
+}
