@@ -463,7 +463,7 @@ pub fn run() -> Result<()> {
             // exit status says that it is not an estimate
             let status = result.report.status;
             if !status.is_converged() {
-                anyhow::bail!("estimation did not converge: {status} after {} iterations; the result written is the last iterate", result.report.iterations);
+                anyhow::bail!("estimation did not converge: {status}; the result written is the last iterate");
             }
             Ok(())
         }

@@ -99,7 +99,7 @@ pub enum Error {
     /// An estimate did not converge and the caller asked for a converged one
     /// ([`crate::estimate::Estimate::converged`]); the estimators themselves
     /// return their last iterate with its status.
-    #[error("estimation did not converge: {status} after {iterations} iterations")]
+    #[error("estimation did not converge: {status} ({iterations} outer iterations)")]
     EstimateNotConverged {
         /// How the estimation ended.
         status: EstimateStatus,

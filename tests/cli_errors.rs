@@ -115,3 +115,47 @@ fn help_version_and_a_good_solve_exit_zero() {
         );
     }
 }
+
+/// The JSON reports carry a typed status (`{"converged": "<test>"}` or a
+/// failure variant with its data), and an estimate that stops short is
+/// written, with its status, under a non-zero exit and one line on stderr.
+#[test]
+fn json_reports_carry_a_typed_status() {
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/two_section.json");
+    let (code, stdout, stderr) = run(&["solve", example]);
+    assert_eq!(code, 0, "{stderr}");
+    let out: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert!(
+        out["report"]["status"]["converged"].is_string(),
+        "{}",
+        out["report"]
+    );
+    let (code, stdout, stderr) = run(&["estimate", example]);
+    assert_eq!(code, 0, "{stderr}");
+    let out: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert!(
+        out["report"]["status"]["converged"].is_string(),
+        "{}",
+        out["report"]
+    );
+    // one Gauss-Newton step at a small alpha: the last iterate is written
+    let mut scene: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(example).unwrap()).unwrap();
+    scene["solver"]["estimator"] = serde_json::json!({"alpha": 1e-2, "max_iterations": 1});
+    let path = temp_file("one_iteration.json", &scene.to_string());
+    let (code, stdout, stderr) = run(&["estimate", &path]);
+    assert_ne!(code, 0, "{stdout}");
+    let errors: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("softrod: error:"))
+        .collect();
+    assert_eq!(errors.len(), 1, "{stderr}");
+    assert!(errors[0].contains("did not converge"), "{stderr}");
+    let out: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(
+        out["report"]["status"],
+        serde_json::json!({"iteration_limit": {"iterations": 1}}),
+        "{}",
+        out["report"]
+    );
+}

@@ -135,7 +135,20 @@ impl Backend {
     /// the Newton backend); the errors of [`Robot::validate_loads`].
     ///
     /// # Example
-    /// See the [module documentation](self).
+    /// Generic over the element (see also the [module documentation](self)):
+    /// ```
+    /// use softrod::assembly::{Robot, RobotSpec, Section};
+    /// use softrod::{element::Element, loads::Loads};
+    /// use softrod::estimate::{Backend, Estimator, EstimatorSettings};
+    /// fn newton<E: Element + 'static>(robot: Robot<E>) -> softrod::Result<Box<dyn Estimator>> {
+    ///     let settings = EstimatorSettings { alpha: Some(1.0), ..Default::default() };
+    ///     Backend::Newton.build(robot, Loads::default(), settings)
+    /// }
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 8)]).build_planar()?;
+    /// let est = newton(robot)?;
+    /// assert_eq!(est.backend(), Backend::Newton);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn build<E: Element + 'static>(
         self,
         robot: Robot<E>,
