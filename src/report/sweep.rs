@@ -272,6 +272,14 @@ impl std::fmt::Display for Stage {
 }
 
 /// Why a case failed.
+///
+/// # Example
+/// ```
+/// use softrod::report::sweep::{CaseFailure, FailureCause, Stage};
+/// let f = CaseFailure { cause: FailureCause::Timeout, estimator: None, at: Stage::Unknown,
+///                       message: "no result within 60 s".into() };
+/// assert_eq!(serde_json::to_value(&f).unwrap()["at"], "unknown");
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CaseFailure {
     /// The category.

@@ -76,6 +76,9 @@ pub trait LinearLoad<E: Element> {
 
 /// A solved equilibrium of the tracker: the shape, the factored tangent at
 /// it and its residual.
+///
+/// # Example
+/// See [`EquilibriumTracker`] and [`crate::sensitivity`].
 #[derive(Debug, Clone)]
 pub struct TrackedEquilibrium {
     /// All coordinates (m, dimensionless slopes).
