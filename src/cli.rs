@@ -18,7 +18,7 @@ use clap::{Parser, Subcommand};
 use serde::Serialize;
 
 use softrod::assembly::Robot;
-use softrod::element::{Element, NodeKinematics, PlanarCable};
+use softrod::element::{NodeKinematics, PlanarCable};
 use softrod::estimate::{Backend, Estimate, EstimateReport, MarkerObservation, Observation};
 use softrod::loads::{LineLoad, PointForce};
 use softrod::refine::{Quantity, Refinement};
@@ -275,17 +275,16 @@ fn observe(scene: &Scene, robot: &Robot<PlanarCable>, q: &[f64]) -> Result<Obser
             (None, Some(s)) => s,
             _ => anyhow::bail!("a marker needs `node` or `s_m`"),
         };
-        let (e, xi) = robot.locate("marker", s)?;
+        let point = robot.arc_point("marker", s)?;
         let p = robot.position_at(q, s)?;
         let mut mo = match m.node {
             Some(n) => MarkerObservation::at_node(n, p),
             None => MarkerObservation::at_arc(s, p),
         };
         if m.tangent {
-            let le = robot.elements()[e].length();
-            let (_, ds, _) = softrod::element::hermite(xi, le);
-            let qe = &q[e * 4..e * 4 + 8];
-            mo.tangent = Some((0..2).map(|i| (0..4).map(|k| ds[k] * qe[2 * k + i]).sum()).collect());
+            let mut t = vec![0.0; PlanarCable::DIM];
+            point.slope_into(q, &mut t)?;
+            mo.tangent = Some(t);
         }
         markers.push(mo);
     }

@@ -17,7 +17,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
-use crate::element::{hermite, Element};
+use crate::element::Element;
 use crate::error::{check_all_finite, check_index, check_len, check_positive, Error, Result};
 
 /// One marker measurement.
@@ -312,7 +312,7 @@ impl ObservationOperator {
                     ))
                 }
             };
-            let (e, xi) = robot.locate(&name("s_m"), s)?;
+            let p = robot.arc_point(&name("s_m"), s)?;
             if seen
                 .iter()
                 .any(|t: &f64| (t - s).abs() <= 1e-9 * robot.length())
@@ -324,10 +324,9 @@ impl ObservationOperator {
                 ));
             }
             seen.push(s);
-            let le = robot.elements()[e].length();
             // (16): r(X) = Σ_k s_k(ξ) of the element's four slots, the
             // positions and slopes of its two nodes; r'(X) with s_k'
-            let (sh, dsh, _) = hermite(xi, le);
+            let (e, sh, dsh) = (p.element, p.values, p.slopes);
             let row = |w: &[f64; 4], comp: usize| ObsRow {
                 entries: (0..4)
                     .map(|k| ((e + k / 2) * nd + (k % 2) * d + comp, w[k]))

@@ -103,7 +103,7 @@ pub use crate::outcome::{EstimateCriterion, EstimateStatus};
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
-use crate::element::{hermite, Element};
+use crate::element::{ArcPoint, Element};
 use crate::error::{check_all_finite, check_positive, Error, Result};
 use crate::loads::Loads;
 use crate::statics::StaticSettings;
@@ -454,25 +454,10 @@ impl Estimate {
         if self.load_model != LoadModel::Distributed || self.node_s.len() < 2 {
             return w;
         }
-        let total = self.node_s[self.node_s.len() - 1];
-        if !(s >= -1e-12 * total && s <= total * (1.0 + 1e-12)) {
-            return w;
-        }
-        let n_el = self.node_s.len() - 1;
-        let e = self
-            .node_s
-            .partition_point(|&x| x <= s)
-            .saturating_sub(1)
-            .min(n_el - 1);
-        let le = self.node_s[e + 1] - self.node_s[e];
-        let xi = ((s - self.node_s[e]) / le).clamp(0.0, 1.0);
-        let (sh, _, _) = hermite(xi, le);
-        let nd = self.node_dofs;
-        for (k, sk) in sh.iter().enumerate() {
-            // slot k: node e + k/2, its value (k even) or slope (k odd)
-            let base = (e + k / 2) * nd + (k % 2) * d;
-            for (i, wi) in w.iter_mut().enumerate() {
-                *wi += sk * self.f.get(base + i).copied().unwrap_or(f64::NAN);
+        // w(s) = S(s) F (8): the cable field F at the point
+        if let Some(p) = ArcPoint::locate(&self.node_s, s) {
+            if p.value_into(&self.f, &mut w).is_err() {
+                w.iter_mut().for_each(|v| *v = f64::NAN);
             }
         }
         w

@@ -11,7 +11,7 @@
 
 use serde_json::Value;
 
-use crate::element::hermite;
+use crate::element::ArcPoint;
 use crate::error::{Error, Result};
 use crate::loads::LineLoad;
 use crate::scene::SceneLoad;
@@ -199,20 +199,32 @@ impl Reference {
     /// Position `r(s)` (m) by the reference's own cubic Hermite interpolation
     /// (14) of its nodes; `s` is clamped to `[0, L]`.
     pub fn position_at(&self, s: f64) -> [f64; 2] {
-        let (e, xi, le) = self.locate(s);
-        let (w, _, _) = hermite(xi, le);
-        let (a, b) = (&self.nodes[e], &self.nodes[e + 1]);
-        let c = |i: usize| w[0] * a[i] + w[1] * a[i + 2] + w[2] * b[i] + w[3] * b[i + 2];
-        [c(0), c(1)]
+        self.interpolate(s, ArcPoint::value_into)
     }
 
     /// Slope `r'(s)` (dimensionless) by the same interpolation.
     pub fn slope_at(&self, s: f64) -> [f64; 2] {
+        self.interpolate(s, ArcPoint::slope_into)
+    }
+
+    /// The crate's one Hermite interpolation ([`ArcPoint`]) of the
+    /// reference's element holding `s`: values or slopes.
+    fn interpolate(
+        &self,
+        s: f64,
+        how: fn(&ArcPoint, &[f64], &mut [f64]) -> Result<()>,
+    ) -> [f64; 2] {
         let (e, xi, le) = self.locate(s);
-        let (_, d, _) = hermite(xi, le);
         let (a, b) = (&self.nodes[e], &self.nodes[e + 1]);
-        let c = |i: usize| d[0] * a[i] + d[1] * a[i + 2] + d[2] * b[i] + d[3] * b[i + 2];
-        [c(0), c(1)]
+        let mut fe = [f64::NAN; 8];
+        for (dst, src) in fe.iter_mut().zip(a.iter().take(4).chain(b.iter().take(4))) {
+            *dst = *src;
+        }
+        let mut out = [f64::NAN; 2];
+        if how(&ArcPoint::new(0, xi, le), &fe, &mut out).is_err() {
+            out = [f64::NAN; 2];
+        }
+        out
     }
 
     /// The applied load per undeformed length at `s` (N/m, world axes).

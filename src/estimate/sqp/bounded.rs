@@ -11,7 +11,7 @@ use clarabel::solver::{
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use crate::banded::{BandedLu, BandedMatrix};
-use crate::element::{hermite, Element};
+use crate::element::{ArcPoint, Element};
 use crate::error::{Error, Result};
 use crate::numeric::{dot, norm2};
 use crate::observe::ObservationOperator;
@@ -38,28 +38,20 @@ impl<E: Element> SqpEstimator<E> {
         let slot = |e: usize, k: usize, i: usize| (e + k / 2) * nd + (k % 2) * d + i;
         let mut rows = Vec::new();
         for b in &problem.settings().bounds {
-            let (e, xi) = match problem.load() {
-                LoadModel::Distributed => robot.locate("bound.s_m", b.s_m)?,
+            let p = match problem.load() {
+                LoadModel::Distributed => robot.arc_point("bound.s_m", b.s_m)?,
                 LoadModel::Concentrated { node } => {
-                    if node == 0 {
-                        (0, 0.0)
-                    } else {
-                        (node - 1, 1.0)
-                    }
+                    let (e, xi) = if node == 0 { (0, 0.0) } else { (node - 1, 1.0) };
+                    ArcPoint::new(e, xi, robot.elements()[e].length())
                 }
             };
-            let le = robot.elements()[e].length();
-            let (sh, dsh, _) = hermite(xi, le);
+            let (e, sh) = (p.element, p.values);
             // world direction
             let dir: Vec<f64> = match b.frame {
                 BoundFrame::World => b.direction.clone(),
                 BoundFrame::Local => {
                     let mut t = vec![0.0; d];
-                    for (k, dk) in dsh.iter().enumerate() {
-                        for (i, ti) in t.iter_mut().enumerate() {
-                            *ti += dk * q[slot(e, k, i)];
-                        }
-                    }
+                    p.slope_into(q, &mut t)?;
                     let n = norm2(&t).max(1e-300);
                     t.iter_mut().for_each(|v| *v /= n);
                     if d == 2 {
