@@ -9,9 +9,13 @@
 //! Modules, one concept each:
 //! - [`element`]: the cable element (14)–(16), energy, gradient, tangent.
 //! - [`assembly`]: a multi-section robot, loads (22), actuation (18).
-//! - [`statics`]: Newton's method on the equilibrium (17).
+//! - [`statics`]: Newton's method on the equilibrium (17), and its warm
+//!   tracker for equilibria at nearby loads.
 //! - [`structure`]: rods, rigid bodies and joints; the map `q = φ(u)` from free
 //!   to all coordinates.
+//! - [`sensitivity`]: `∂q/∂F` (28), `∂q/∂P` (43) and output gradients by
+//!   adjoint solves.
+//! - [`observe`]: marker observations and the observation operator `A` (25).
 //! - [`estimate`]: shape and load estimation (25)–(30), backends `newton` and `sqp`.
 //! - [`scene`]: JSON scene files; [`params`]: the values the paper leaves open.
 //! - [`outcome`]: how a solve ended: the status enums and the reports errors carry.

@@ -2,7 +2,7 @@
 //! of the estimators.
 //!
 //! - [`pareto`]: backend × element count × marker count against exudyn's
-//!   128-element solutions ([`reference`]); error (backbone RMS, load error)
+//!   128-element solutions ([`reference`](mod@reference)); error (backbone RMS, load error)
 //!   against the median time per warm estimate; the Pareto front marked.
 //! - [`auto_point`]: where `"elements": "auto"` lands on the Pareto chart.
 //! - [`stability`]: marker noise, load magnitude, marker count, the jump
