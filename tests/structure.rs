@@ -167,7 +167,7 @@ fn one_clamped_rod_is_the_single_chain() {
     assert!(worst.0 < 1e-13 && worst.1 < 1e-13, "{worst:?}");
     // the equilibria
     let eq = StaticSolver::default().solve(&robot, &loads, None).unwrap();
-    assert!(eq.report.converged);
+    assert!(eq.report.status.is_converged());
     let settings = NewtonSettings {
         load_steps: 4,
         ..NewtonSettings::default()
@@ -533,7 +533,7 @@ fn a_gripper_on_a_fixed_palm_holds_each_finger_like_a_clamp() {
         let robot = rs.build_planar().unwrap();
         let l = &loads.rods[rod];
         let eq = StaticSolver::default().solve(&robot, l, None).unwrap();
-        assert!(eq.report.converged);
+        assert!(eq.report.status.is_converged());
         let r = s.node_coordinates(rod, 0).unwrap().start;
         let d =
             eq.q.iter()
