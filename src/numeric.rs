@@ -2,7 +2,7 @@
 
 /// `Σ a_i b_i` over the common length: the band kernels' dot product (four
 /// partial sums).
-pub(crate) use crate::banded::dot;
+pub(crate) use crate::linsolve::banded::dot;
 
 /// The Euclidean norm `|v|_2`, summed in order.
 pub(crate) fn norm2(v: &[f64]) -> f64 {

@@ -45,9 +45,9 @@
 use nalgebra::DMatrix;
 
 use crate::assembly::Robot;
-use crate::banded::BandedLu;
 use crate::element::Element;
 use crate::error::{check_len, Error, Result};
+use crate::linsolve::BandedLu;
 use crate::statics::LinearLoad;
 
 /// The sensitivities of one equilibrium of `robot`, from the factors of its

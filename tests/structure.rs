@@ -16,8 +16,8 @@
 use std::sync::Arc;
 
 use softrod::assembly::{Chamber, Section};
-use softrod::linsolve::BandedMatrix;
 use softrod::element::{Element, PlanarCable};
+use softrod::linsolve::BandedMatrix;
 use softrod::loads::force_field::PointSpring;
 use softrod::loads::{Loads, NodeMoment, PointForce};
 use softrod::scene::Scene;

@@ -18,9 +18,9 @@
 //! Equilibrium (17) is `Q(F, q, P) = 0` with `Q = Q_F + Q_E + Q_A` and the
 //! tangent stiffness is `K = −∂Q/∂q`.
 
-use crate::linsolve::BandedMatrix;
 use crate::element::{ArcPoint, Element};
 use crate::error::{check_all_finite, check_finite, check_len, Result};
+use crate::linsolve::BandedMatrix;
 use crate::loads::Loads;
 use crate::structure::rod::MAX_EDOF;
 use crate::structure::{BlockRule, DofMap, Rod};

@@ -34,9 +34,9 @@
 //!   intermediate observations.
 
 use crate::assembly::Robot;
-use crate::banded::BandedLu;
 use crate::element::Element;
 use crate::error::Result;
+use crate::linsolve::BandedLu;
 use crate::loads::Loads;
 use crate::numeric::{dot, norm2};
 use crate::observe::{ObsRow, ObservationOperator};

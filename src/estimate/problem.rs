@@ -15,9 +15,9 @@
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use crate::assembly::Robot;
-use crate::banded::{BandedLu, BandedMatrix};
 use crate::element::Element;
 use crate::error::{check_len, Error, Result};
+use crate::linsolve::{BandedLu, BandedMatrix};
 use crate::loads::{Loads, PointForce};
 use crate::numeric::dot;
 use crate::observe::{Observation, ObservationOperator};

@@ -19,9 +19,9 @@
 //! ([`crate::sensitivity`]) of that equilibrium use.
 
 use crate::assembly::Robot;
-use crate::banded::{BandedLu, BandedMatrix};
 use crate::element::Element;
 use crate::error::{check_len, Result};
+use crate::linsolve::{BandedLu, BandedMatrix};
 use crate::loads::Loads;
 use crate::numeric::norm2;
 

@@ -11,12 +11,12 @@
 //! a rod clamped at its start, a [`super::Structure`] places several rods
 //! and rigid bodies by its [`super::DofMap`].
 
-use crate::linsolve::BandedMatrix;
 use crate::element::{ArcPoint, Element};
 use crate::error::{
     check_all_finite, check_at_most, check_finite, check_index, check_len, check_positive, Error,
     Result,
 };
+use crate::linsolve::BandedMatrix;
 use crate::loads::{outside, Loads};
 use crate::quadrature::GaussRule;
 

@@ -10,9 +10,9 @@ use clarabel::solver::{
 };
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
-use crate::banded::{BandedLu, BandedMatrix};
 use crate::element::{ArcPoint, Element};
 use crate::error::{Error, Result};
+use crate::linsolve::{BandedLu, BandedMatrix};
 use crate::numeric::{dot, norm2};
 use crate::observe::ObservationOperator;
 

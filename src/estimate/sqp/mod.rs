@@ -59,9 +59,9 @@ mod bounded;
 use clarabel::solver::SolverStatus;
 
 use crate::assembly::Robot;
-use crate::banded::{BandedLu, BandedMatrix};
 use crate::element::Element;
 use crate::error::{Error, Result};
+use crate::linsolve::{BandedLu, BandedMatrix};
 use crate::loads::Loads;
 use crate::numeric::{dot, max_abs, norm2};
 use crate::observe::ObservationOperator;
