@@ -49,7 +49,7 @@ impl BandedLu {
     /// Solves `A x = b` in place (`b` has `n` entries).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] (field `b`) if `b` does not have `n` entries.
+    /// [`crate::Error::DimensionMismatch`] (field `b`) if `b` does not have `n` entries.
     pub fn solve_in_place(&self, b: &mut [f64]) -> Result<()> {
         check_len("b", self.n(), b.len())?;
         self.solve_rows(b, 1);
@@ -61,7 +61,7 @@ impl BandedLu {
     /// `c`): one sweep over the factors for all of them.
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] (field `b`) if `b` does not have
+    /// [`crate::Error::DimensionMismatch`] (field `b`) if `b` does not have
     /// `n · nrhs` entries.
     ///
     /// # Example
