@@ -1,6 +1,6 @@
 //! The values the paper leaves open, in one place, with their reasons.
 //!
-//! MODEL.md §5 lists what the paper gives: sections of 120 mm, EI =
+//! What the paper gives: sections of 120 mm, EI =
 //! 0.025 N·m² (Sec. IV), EA = 300 N (the simulated robot of Fig. 3), five
 //! markers, control at 30 Hz. Everything else a simulation needs is chosen
 //! here and used everywhere (the built-in scene, `examples/two_section.json`,

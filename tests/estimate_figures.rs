@@ -1,7 +1,7 @@
 //! The paper's simulated estimation figures (Sec. III): Fig. 3 (direct
 //! solution (24) against the estimator), Fig. 4 (error against the number of
 //! feature points) and Fig. 5 (virtual payload from model errors). The
-//! "real robot" is always a finer mesh or a perturbed model (MODEL.md §6),
+//! "real robot" is always a finer mesh or a perturbed model,
 //! except in Fig. 3, which is about the same model with one marker error.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 

@@ -6,7 +6,7 @@
 //!
 //! Layout: node-major, `q = [q_0; q_1; …; q_N]`, `NODE_DOFS` numbers per node.
 //! Node 0 is the clamped base. A clamp fixes the base position and the base
-//! direction but not the axial strain there: MODEL.md §2 prescribes `r_0'`,
+//! direction but not the axial strain there: the literal clamp prescribes `r_0'`,
 //! but prescribing `|r_0'| = 1` forbids stretch at the base and makes an
 //! axial tip force stretch a 6-element cantilever 2 % too little (exudyn's
 //! cantilevers likewise constrain only x, y and y' of the base). So the

@@ -21,8 +21,8 @@ pub enum Clamp {
     /// free (the physical clamp; default).
     #[default]
     PositionAndDirection,
-    /// Position and the whole slope vector `r_0' = t_0` (MODEL.md's literal
-    /// reading, and exudyn's cantilevers that fix all four base coordinates):
+    /// Position and the whole slope vector `r_0' = t_0` (the literal reading
+    /// of a clamp `r_0' = t_0`, and exudyn's cantilevers that fix all four base coordinates):
     /// forbids axial strain at the base, a boundary layer one element long.
     Full,
 }
