@@ -22,7 +22,7 @@ use softrod::element::{NodeKinematics, PlanarCable};
 use softrod::estimate::{Backend, Estimate, EstimateReport, MarkerObservation, Observation};
 use softrod::loads::{LineLoad, PointForce};
 use softrod::refine::{Quantity, Refinement};
-use softrod::scene::Scene;
+use softrod::scene::{Scene, SceneRobot};
 use softrod::statics::{StaticReport, StaticSolver};
 
 /// Shape and force estimation for slender soft robots (ANCF cable model).
@@ -127,42 +127,80 @@ struct SolveOut {
     pressures_pa: Vec<f64>,
     nodes: Vec<NodeOut>,
     tip_position_m: Vec<f64>,
-    tip_angle_rad: f64,
+    /// Planar: the tip tangent's angle from the x axis (rad).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tip_angle_rad: Option<f64>,
+    /// Spatial: the unit tangent at the tip.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tip_direction: Option<Vec<f64>>,
+    /// Spatial: the angle between the tip tangent and the base tangent (rad).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tip_angle_from_base_rad: Option<f64>,
     report: StaticReport,
     /// How the counts of "elements": "auto" sections were chosen.
     #[serde(skip_serializing_if = "Option::is_none")]
     refinement: Option<Refinement>,
 }
 
-fn solve_out(scene: &Scene, robot: &Robot<PlanarCable>, pressures: Vec<f64>, q: &[f64], report: StaticReport) -> SolveOut {
-    let nd = PlanarCable::NODE_DOFS;
-    let nodes: Vec<NodeOut> = robot
+/// The nodes of configuration `q`: arc coordinate, position and slope.
+fn node_outs<E: Element>(robot: &Robot<E>, q: &[f64]) -> Vec<NodeOut> {
+    let (d, nd) = (E::DIM, E::NODE_DOFS);
+    robot
         .node_arc()
         .iter()
         .enumerate()
-        .map(|(i, &s)| NodeOut { s_m: s, position_m: q[i * nd..i * nd + 2].to_vec(), slope: q[i * nd + 2..i * nd + 4].to_vec() })
-        .collect();
-    let tip = &q[q.len() - nd..];
+        .map(|(i, &s)| NodeOut { s_m: s, position_m: q[i * nd..i * nd + d].to_vec(), slope: q[i * nd + d..i * nd + 2 * d].to_vec() })
+        .collect()
+}
+
+fn solve_out<E: Element>(scene: &Scene, robot: &Robot<E>, pressures: Vec<f64>, q: &[f64], report: StaticReport) -> SolveOut {
+    let tip = &q[q.len() - E::NODE_DOFS..];
     SolveOut {
         scene: scene.name.clone(),
         pressures_pa: pressures,
-        tip_position_m: tip[..2].to_vec(),
-        tip_angle_rad: PlanarCable::node_angle(tip),
-        nodes,
+        tip_position_m: tip[..E::DIM].to_vec(),
+        tip_angle_rad: None,
+        tip_direction: None,
+        tip_angle_from_base_rad: None,
+        nodes: node_outs(robot, q),
         report,
         refinement: None,
     }
 }
 
-fn solve(scene: &Scene, pressures: Option<Vec<f64>>) -> Result<SolveOut> {
-    let robot = scene.robot()?;
+/// The static equilibrium of the scene's robot under its loads.
+fn solve_with<E: Element>(scene: &Scene, robot: &Robot<E>, pressures: Option<Vec<f64>>) -> Result<SolveOut> {
     let mut loads = scene.loads()?;
     if let Some(p) = pressures {
         loads.pressures_pa = p;
     }
     let solver = StaticSolver::new(scene.solver.statics.clone())?;
-    let eq = solver.solve(&robot, &loads, None)?;
-    Ok(solve_out(scene, &robot, loads.pressures_pa.clone(), &eq.q, eq.report))
+    let eq = solver.solve(robot, &loads, None)?;
+    Ok(solve_out(scene, robot, loads.pressures_pa.clone(), &eq.q, eq.report))
+}
+
+fn solve(scene: &Scene, pressures: Option<Vec<f64>>) -> Result<SolveOut> {
+    match scene.build()? {
+        SceneRobot::Planar(robot) => {
+            let mut out = solve_with(scene, &robot, pressures)?;
+            out.tip_angle_rad = out.nodes.last().map(|n| n.slope[1].atan2(n.slope[0]));
+            Ok(out)
+        }
+        SceneRobot::Spatial(robot) => {
+            let mut out = solve_with(scene, &robot, pressures)?;
+            let unit = |v: &[f64]| {
+                let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+                v.iter().map(|x| x / n).collect::<Vec<f64>>()
+            };
+            let base = unit(&robot.base_node()[3..6]);
+            if let Some(tip) = out.nodes.last().map(|n| unit(&n.slope)) {
+                let cos = base.iter().zip(&tip).map(|(a, b)| a * b).sum::<f64>();
+                out.tip_angle_from_base_rad = Some(cos.clamp(-1.0, 1.0).acos());
+                out.tip_direction = Some(tip);
+            }
+            Ok(out)
+        }
+    }
 }
 
 fn write_json<T: Serialize>(value: &T, out: Option<&PathBuf>) -> Result<()> {
@@ -413,7 +451,7 @@ fn solve_summary() -> Result<()> {
     );
     outln!("  equilibrium: {}", out.report);
     outln!("  solve time: {:.1} µs", out.report.wall_time_s * 1e6);
-    outln!("  tip position: ({:+.4}, {:+.4}) m, tip angle {:+.2}°", out.tip_position_m[0], out.tip_position_m[1], out.tip_angle_rad.to_degrees());
+    outln!("  tip position: ({:+.4}, {:+.4}) m, tip angle {:+.2}°", out.tip_position_m[0], out.tip_position_m[1], out.tip_angle_rad.unwrap_or(f64::NAN).to_degrees());
     outln!("  markers:");
     for m in &scene.markers {
         if let Some(n) = m.node {

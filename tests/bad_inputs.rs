@@ -103,6 +103,15 @@ fn auto_json(f: impl FnOnce(&mut Value)) -> Result<(), Error> {
     Scene::from_json(&v.to_string()).map(|_| ())
 }
 
+/// Parses `examples/spatial_cantilever.json` (a spatial cable scene) after
+/// `f` changed its JSON value.
+fn spatial_json(f: impl FnOnce(&mut Value)) -> Result<(), Error> {
+    let mut v: Value =
+        serde_json::from_str(include_str!("../examples/spatial_cantilever.json")).unwrap();
+    f(&mut v);
+    Scene::from_json(&v.to_string()).map(|_| ())
+}
+
 /// Validates `examples/auto_tip.json` after `f` changed the parsed scene.
 fn auto_scene(f: impl FnOnce(&mut Scene)) -> Result<(), Error> {
     let mut s = Scene::from_json(include_str!("../examples/auto_tip.json")).unwrap();
@@ -284,7 +293,7 @@ fn cases() -> Vec<Case> {
         ),
         case(
             "infinite tip moment",
-            move || scene_load(SceneLoad::TipMoment { moment_nm: inf }),
+            move || scene_load(SceneLoad::TipMoment { moment_nm: inf.into() }),
             Invalid,
             "loads[0].moment_nm",
         ),
@@ -293,7 +302,7 @@ fn cases() -> Vec<Case> {
             move || {
                 scene_load(SceneLoad::NodeMoment {
                     node: 3,
-                    moment_nm: -inf,
+                    moment_nm: (-inf).into(),
                 })
             },
             Invalid,
@@ -753,7 +762,7 @@ fn cases() -> Vec<Case> {
             move || {
                 scene_load(SceneLoad::NodeMoment {
                     node: 0,
-                    moment_nm: 0.1,
+                    moment_nm: 0.1.into(),
                 })
             },
             Invalid,
@@ -764,7 +773,7 @@ fn cases() -> Vec<Case> {
             move || {
                 scene_load(SceneLoad::NodeMoment {
                     node: 99,
-                    moment_nm: 0.1,
+                    moment_nm: 0.1.into(),
                 })
             },
             Index,
@@ -1644,6 +1653,142 @@ fn cases() -> Vec<Case> {
             || json(|v| v["solver"]["estimator"] = json!({"backend": "newton", "beta": 1.0})),
             Parse,
             "beta",
+        ),
+        case(
+            "unknown element",
+            || json(|v| v["robot"]["element"] = json!("full_ancf")),
+            Parse,
+            "robot.element",
+        ),
+        case(
+            "2-D tip force in a spatial scene",
+            || spatial_json(|v| v["loads"][0]["force_n"] = json!([0.0, 1.0])),
+            Dim,
+            "loads[0].force_n",
+        ),
+        case(
+            "3-D tip force in a planar scene",
+            || json(|v| v["loads"] = json!([{"type": "tip_force", "force_n": [0.0, 1.0, 0.0]}])),
+            Dim,
+            "loads[0].force_n",
+        ),
+        case(
+            "2-D base position in a spatial scene",
+            || spatial_json(|v| v["base"]["position_m"] = json!([0.0, 0.0])),
+            Dim,
+            "base.position_m",
+        ),
+        case(
+            "3-D base position in a planar scene",
+            || json(|v| v["base"]["position_m"] = json!([0.0, 0.0, 0.0])),
+            Dim,
+            "base.position_m",
+        ),
+        case(
+            "2-D base direction in a spatial scene",
+            || spatial_json(|v| v["base"]["direction"] = json!([1.0, 0.0])),
+            Dim,
+            "base.direction",
+        ),
+        case(
+            "zero base direction in a spatial scene",
+            || spatial_json(|v| v["base"]["direction"] = json!([0.0, 0.0, 0.0])),
+            Invalid,
+            "base.direction",
+        ),
+        case(
+            "2-D gravity in a spatial scene",
+            || spatial_json(|v| v["gravity_m_per_s2"] = json!([0.0, -9.81])),
+            Dim,
+            "gravity_m_per_s2",
+        ),
+        case(
+            "null gravity in a spatial scene",
+            || spatial_json(|v| v["gravity_m_per_s2"] = Value::Null),
+            Parse,
+            "gravity_m_per_s2: invalid type: null",
+        ),
+        case(
+            "2-D distributed load in a spatial scene",
+            || {
+                spatial_json(|v| {
+                    v["loads"] = json!([{"type": "distributed", "profile": "uniform", "w_n_per_m": [0.0, 1.0]}])
+                })
+            },
+            Dim,
+            "loads[0].w_n_per_m",
+        ),
+        case(
+            "scalar tip moment in a spatial scene",
+            || spatial_json(|v| v["loads"] = json!([{"type": "tip_moment", "moment_nm": 0.01}])),
+            Invalid,
+            "loads[0].moment_nm",
+        ),
+        case(
+            "2-D node moment in a spatial scene",
+            || {
+                spatial_json(|v| {
+                    v["loads"] = json!([{"type": "node_moment", "node": 3, "moment_nm": [0.0, 0.01]}])
+                })
+            },
+            Dim,
+            "loads[0].moment_nm",
+        ),
+        case(
+            "non-numeric moment component",
+            || spatial_json(|v| v["loads"] = json!([{"type": "tip_moment", "moment_nm": [0.0, "x", 0.0]}])),
+            Parse,
+            "loads[0]: moment_nm[1]",
+        ),
+        case(
+            "four-component moment",
+            || spatial_json(|v| v["loads"] = json!([{"type": "tip_moment", "moment_nm": [0.0, 0.0, 0.0, 1.0]}])),
+            Parse,
+            "loads[0]: moment_nm",
+        ),
+        case(
+            "vector tip moment in a planar scene",
+            || json(|v| v["loads"] = json!([{"type": "tip_moment", "moment_nm": [0.0, 0.0, 0.01]}])),
+            Invalid,
+            "loads[0].moment_nm",
+        ),
+        case(
+            "2-D self-weight gravity in a spatial scene",
+            || {
+                spatial_json(|v| {
+                    v["loads"] = json!([{"type": "self_weight", "mass_per_length_kg_per_m": 0.1, "gravity_m_per_s2": [0.0, -9.81]}])
+                })
+            },
+            Dim,
+            "loads[0].gravity_m_per_s2",
+        ),
+        case(
+            "1-D chamber gain in a spatial scene",
+            || {
+                spatial_json(|v| {
+                    v["robot"]["sections"][0]["chambers"] = json!([{"gain_nm_per_pa": [3e-6], "pressure_min_pa": 0.0, "pressure_max_pa": 1e5}]);
+                    v["pressures_pa"] = json!([0.0]);
+                })
+            },
+            Dim,
+            "robot.sections[0].chambers[0].gain_nm_per_pa",
+        ),
+        case(
+            "rest curvature in a spatial scene",
+            || spatial_json(|v| v["robot"]["sections"][1]["rest_curvature_per_m"] = json!(2.0)),
+            Invalid,
+            "robot.sections[1].rest_curvature_per_m",
+        ),
+        case(
+            "auto elements in a spatial scene",
+            || {
+                spatial_json(|v| {
+                    v["robot"]["sections"][0]["elements"] = json!("auto");
+                    v["refinement"] = json!({"quantity": "tip_position", "tolerance_m": 1e-5});
+                })
+            },
+            Invalid,
+            "robot.sections[0].elements",
         ),
     ]
 }

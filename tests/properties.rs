@@ -334,10 +334,12 @@ fn scene_strategy() -> impl Strategy<Value = Scene> {
                         s_m: s_frac / 0.24 * total,
                         force_n: vec![c, m],
                     },
-                    SceneLoad::TipMoment { moment_nm: m },
+                    SceneLoad::TipMoment {
+                        moment_nm: m.into(),
+                    },
                     SceneLoad::NodeMoment {
                         node: 1 + node % nodes,
-                        moment_nm: -m,
+                        moment_nm: (-m).into(),
                     },
                     SceneLoad::SelfWeight {
                         mass_per_length_kg_per_m: mass,

@@ -5,18 +5,21 @@
 //! See `README.md` for the format and `examples/two_section.json` for the
 //! paper's two-section robot.
 
+mod load;
+mod robot;
+
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::{Base, Chamber, Robot, RobotSpec, Section};
-use crate::element::{PlanarCable, DEFAULT_GAUSS_POINTS};
-use crate::error::{
-    check_all_finite, check_at_most, check_finite, check_index, check_len, check_positive, Error,
-    Result,
-};
+use crate::element::{Element, NodeKinematics, PlanarCable, SpatialCable, DEFAULT_GAUSS_POINTS};
+use crate::error::{check_at_most, check_index, check_len, check_positive, Error, Result};
 use crate::estimate::{EstimatorSettings, LoadModel};
 use crate::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use crate::params;
 use crate::statics::StaticSettings;
+
+pub use load::{MomentNm, SceneLoad};
+pub use robot::{SceneElement, SceneRobot};
 
 /// The largest scene file [`Scene::from_file`] reads (64 MiB).
 pub const MAX_SCENE_BYTES: usize = 64 << 20;
@@ -28,6 +31,52 @@ pub enum ElementKind {
     /// Planar ANCF cable (2-D, 4 coordinates per node).
     #[default]
     PlanarCable,
+    /// Spatial ANCF cable (3-D, 6 coordinates per node: `[r, r']`); the
+    /// scene's vectors (base position and direction, gravity, forces,
+    /// moments, chamber gains) have three components.
+    SpatialCable,
+}
+
+impl ElementKind {
+    /// The number of space dimensions of the element (2 or 3).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::scene::ElementKind;
+    /// assert_eq!(ElementKind::SpatialCable.dim(), 3);
+    /// ```
+    pub fn dim(self) -> usize {
+        match self {
+            ElementKind::PlanarCable => PlanarCable::DIM,
+            ElementKind::SpatialCable => SpatialCable::DIM,
+        }
+    }
+
+    /// The name in scene files (`planar_cable`, `spatial_cable`).
+    pub fn name(self) -> &'static str {
+        match self {
+            ElementKind::PlanarCable => "planar_cable",
+            ElementKind::SpatialCable => "spatial_cable",
+        }
+    }
+
+    /// The default base of a scene with this element: at the origin,
+    /// along +x.
+    pub fn default_base(self) -> Base {
+        match self {
+            ElementKind::PlanarCable => Base::default(),
+            ElementKind::SpatialCable => RobotSpec::spatial(Vec::new()).base,
+        }
+    }
+
+    /// The default gravity of a scene with this element (m/s²): 9.81 down
+    /// the y axis in 2-D, down the z axis in 3-D.
+    pub fn default_gravity(self) -> Vec<f64> {
+        match self {
+            ElementKind::PlanarCable => gravity(),
+            ElementKind::SpatialCable => vec![0.0, 0.0, params::GRAVITY_M_PER_S2[1]],
+        }
+    }
 }
 
 /// The robot of a scene.
@@ -52,50 +101,6 @@ fn gauss() -> usize {
 }
 fn gravity() -> Vec<f64> {
     params::GRAVITY_M_PER_S2.to_vec()
-}
-
-/// A known load of a scene (dead, world axes, SI).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-pub enum SceneLoad {
-    /// A distributed load with a profile (`uniform`, `linear`, `gaussian`).
-    Distributed(LineLoad),
-    /// A force at the tip (N).
-    TipForce {
-        /// Force (N).
-        force_n: Vec<f64>,
-    },
-    /// A force at arc coordinate `s_m` (N).
-    PointForce {
-        /// Arc coordinate (m).
-        s_m: f64,
-        /// Force (N).
-        force_n: Vec<f64>,
-    },
-    /// A moment at the tip node (N·m).
-    TipMoment {
-        /// Moment (N·m, counter-clockwise positive in 2-D).
-        moment_nm: f64,
-    },
-    /// A moment at a node (N·m).
-    NodeMoment {
-        /// Node index (1 ..= number of elements).
-        node: usize,
-        /// Moment (N·m).
-        moment_nm: f64,
-    },
-    /// An extra uniform weight (kg/m) under its own gravity vector.
-    SelfWeight {
-        /// Mass per length (kg/m).
-        mass_per_length_kg_per_m: f64,
-        /// Gravity (m/s²).
-        gravity_m_per_s2: Vec<f64>,
-    },
-    /// A mass hanging at the tip (kg), under the scene's gravity.
-    TipMass {
-        /// Mass (kg).
-        mass_kg: f64,
-    },
 }
 
 /// A marker: a tracked point of the backbone at a node or at an arc coordinate.
@@ -242,42 +247,88 @@ pub enum UnknownLoad {
 /// assert_eq!(softrod::scene::Scene::from_json(&json).unwrap(), scene);
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(from = "SceneFile")]
 pub struct Scene {
     /// Name.
-    #[serde(default)]
     pub name: String,
     /// Free text.
-    #[serde(default)]
     pub description: String,
     /// The robot.
     pub robot: RobotDef,
     /// Base pose (default at the origin, along +x).
-    #[serde(default)]
     pub base: Base,
-    /// Gravity (m/s², default `[0, -9.81]`).
-    #[serde(default = "gravity")]
+    /// Gravity (m/s², default `[0, -9.81]` in 2-D, `[0, 0, -9.81]` in 3-D).
     pub gravity_m_per_s2: Vec<f64>,
     /// Known loads.
-    #[serde(default)]
     pub loads: Vec<SceneLoad>,
     /// Chamber pressures (Pa), one per chamber in section order; default all zero.
-    #[serde(default)]
     pub pressures_pa: Vec<f64>,
     /// Markers.
-    #[serde(default)]
     pub markers: Vec<Marker>,
     /// Solver settings.
-    #[serde(default)]
     pub solver: SolverSettings,
     /// The tolerance that chooses the element counts of `"elements": "auto"`
     /// sections (required with them, refused without them).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub refinement: Option<RefinementTarget>,
     /// Where the unknown load of an estimation acts (default: the estimator's
     /// `load_model`, itself distributed by default).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub unknown_load: Option<UnknownLoad>,
+}
+
+/// A scene as written in a file: the base and gravity are optional, their
+/// defaults depend on the element (see [`ElementKind::default_base`]).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    #[serde(default)]
+    name: String,
+    #[serde(default)]
+    description: String,
+    robot: RobotDef,
+    #[serde(default, deserialize_with = "present")]
+    base: Option<Base>,
+    #[serde(default, deserialize_with = "present")]
+    gravity_m_per_s2: Option<Vec<f64>>,
+    #[serde(default)]
+    loads: Vec<SceneLoad>,
+    #[serde(default)]
+    pressures_pa: Vec<f64>,
+    #[serde(default)]
+    markers: Vec<Marker>,
+    #[serde(default)]
+    solver: SolverSettings,
+    #[serde(default)]
+    refinement: Option<RefinementTarget>,
+    #[serde(default)]
+    unknown_load: Option<UnknownLoad>,
+}
+
+/// An optional field that, when present, is not `null`.
+fn present<'de, D: serde::Deserializer<'de>, T: Deserialize<'de>>(
+    d: D,
+) -> std::result::Result<Option<T>, D::Error> {
+    T::deserialize(d).map(Some)
+}
+
+impl From<SceneFile> for Scene {
+    fn from(f: SceneFile) -> Scene {
+        let kind = f.robot.element;
+        Scene {
+            name: f.name,
+            description: f.description,
+            base: f.base.unwrap_or_else(|| kind.default_base()),
+            gravity_m_per_s2: f.gravity_m_per_s2.unwrap_or_else(|| kind.default_gravity()),
+            robot: f.robot,
+            loads: f.loads,
+            pressures_pa: f.pressures_pa,
+            markers: f.markers,
+            solver: f.solver,
+            refinement: f.refinement,
+            unknown_load: f.unknown_load,
+        }
+    }
 }
 
 impl Scene {
@@ -347,7 +398,29 @@ impl Scene {
     /// section), a tolerance that is not finite and positive, a
     /// `max_elements` below the smallest mesh, markers, moments or a
     /// concentrated `load_model` given by node index.
+    ///
+    /// A spatial scene's vectors have three components (a two-component
+    /// force, gravity or base position is refused, naming the field, and so
+    /// is a three-component one in a planar scene); a spatial scene's
+    /// element counts are fixed (`"auto"` is planar only).
     pub fn validate(&self) -> Result<()> {
+        match self.robot.element {
+            ElementKind::PlanarCable => self.validate_as::<PlanarCable>(),
+            ElementKind::SpatialCable => {
+                if let Some(i) = self.robot.sections.iter().position(|s| s.auto_elements) {
+                    return Err(Error::invalid(
+                        format!("robot.sections[{i}].elements"),
+                        "\"auto\"",
+                        "the refinement of element counts is planar only: give a count",
+                    ));
+                }
+                self.validate_as::<SpatialCable>()
+            }
+        }
+    }
+
+    /// [`Scene::validate`] for a scene of element `E`.
+    fn validate_as<E: SceneElement>(&self) -> Result<()> {
         let auto = self.has_auto_elements();
         let smallest;
         let mesh = if auto {
@@ -364,7 +437,7 @@ impl Scene {
             }
             self
         };
-        let robot = mesh.robot()?;
+        let robot = mesh.robot_as::<E>()?;
         for (i, load) in self.loads.iter().enumerate() {
             if let (true, SceneLoad::NodeMoment { node, .. }) = (auto, load) {
                 return Err(Error::invalid(
@@ -374,7 +447,7 @@ impl Scene {
                      to the refinement: use a tip_moment, or fixed element counts",
                 ));
             }
-            validate_scene_load(&robot, load)
+            load::validate_scene_load(&robot, load)
                 .map_err(|e| e.with_prefix(&format!("loads[{i}].")))?;
         }
         robot.validate_loads(&mesh.loads()?)?;
@@ -484,10 +557,11 @@ impl Scene {
             None => {}
             Some(UnknownLoad::Distributed) => settings.load_model = LoadModel::Distributed,
             Some(UnknownLoad::Point { s_m }) => {
-                let robot = self.robot()?;
-                settings.load_model = LoadModel::Concentrated {
-                    node: node_at(&robot, "unknown_load.s_m", s_m)?,
+                let node = match self.build()? {
+                    SceneRobot::Planar(r) => node_at(&r, "unknown_load.s_m", s_m)?,
+                    SceneRobot::Spatial(r) => node_at(&r, "unknown_load.s_m", s_m)?,
                 };
+                settings.load_model = LoadModel::Concentrated { node };
             }
         }
         Ok(settings)
@@ -544,7 +618,7 @@ impl Scene {
 
     /// Checks `unknown_load` against the robot (on a fixed mesh, a point
     /// load must fall on a node) and against the estimator's `load_model`.
-    fn check_unknown_load(&self, robot: &Robot<PlanarCable>, auto: bool) -> Result<()> {
+    fn check_unknown_load<E: Element>(&self, robot: &Robot<E>, auto: bool) -> Result<()> {
         if let (true, LoadModel::Concentrated { node }) = (auto, self.solver.estimator.load_model) {
             return Err(Error::invalid(
                 "solver.estimator.load_model.node",
@@ -590,18 +664,16 @@ impl Scene {
         }
     }
 
-    /// Builds the robot.
+    /// Builds the planar robot (for any element: [`Scene::build`]).
     ///
     /// # Errors
     /// As [`Robot::new`]; [`Error::InvalidParameter`] naming
     /// `robot.sections[i].elements` for a section whose count is `"auto"`
     /// (resolve the scene with [`crate::refine::auto_elements`] or
-    /// [`Scene::with_elements`] first).
+    /// [`Scene::with_elements`] first), or naming `robot.element` for a
+    /// scene of another element.
     pub fn robot(&self) -> Result<Robot<PlanarCable>> {
-        self.check_resolved()?;
-        match self.robot.element {
-            ElementKind::PlanarCable => self.robot_spec().build_planar(),
-        }
+        self.robot_as()
     }
 
     /// The scene's loads and pressures as [`Loads`] (pressures default to zero).
@@ -613,6 +685,7 @@ impl Scene {
     /// moment's node depends on the mesh).
     pub fn loads(&self) -> Result<Loads> {
         self.check_resolved()?;
+        let d = self.robot.element.dim();
         let n_chambers: usize = self.robot.sections.iter().map(|s| s.chambers.len()).sum();
         let total: f64 = self.robot.sections.iter().map(|s| s.length_m).sum();
         let mut loads = Loads {
@@ -641,11 +714,11 @@ impl Scene {
                 }),
                 SceneLoad::TipMoment { moment_nm } => loads.node_moments.push(NodeMoment {
                     node: n_nodes - 1,
-                    moment_nm: vec![*moment_nm],
+                    moment_nm: moment_nm.components(),
                 }),
                 SceneLoad::NodeMoment { node, moment_nm } => loads.node_moments.push(NodeMoment {
                     node: *node,
-                    moment_nm: vec![*moment_nm],
+                    moment_nm: moment_nm.components(),
                 }),
                 SceneLoad::SelfWeight {
                     mass_per_length_kg_per_m: m,
@@ -658,14 +731,14 @@ impl Scene {
                             "must be finite and >= 0",
                         ));
                     }
-                    check_len(&format!("loads[{i}].gravity_m_per_s2"), 2, g.len())?;
+                    check_len(&format!("loads[{i}].gravity_m_per_s2"), d, g.len())?;
                     loads.line_loads.push(LineLoad::Uniform {
                         w_n_per_m: g.iter().map(|g| m * g).collect(),
                     })
                 }
                 SceneLoad::TipMass { mass_kg } => {
                     check_positive(&format!("loads[{i}].mass_kg"), *mass_kg)?;
-                    check_len("gravity_m_per_s2", 2, self.gravity_m_per_s2.len())?;
+                    check_len("gravity_m_per_s2", d, self.gravity_m_per_s2.len())?;
                     loads.point_forces.push(PointForce {
                         s_m: total,
                         force_n: self.gravity_m_per_s2.iter().map(|g| mass_kg * g).collect(),
@@ -729,7 +802,7 @@ impl Scene {
 pub(crate) const NODE_MATCH: f64 = 1e-9;
 
 /// The node at arc coordinate `s` (within [`NODE_MATCH`] of the length).
-fn node_at(robot: &Robot<PlanarCable>, name: &str, s: f64) -> Result<usize> {
+fn node_at<E: Element>(robot: &Robot<E>, name: &str, s: f64) -> Result<usize> {
     robot.locate(name, s)?;
     let arc = robot.node_arc();
     let tol = NODE_MATCH * robot.length();
@@ -754,84 +827,5 @@ fn node_at(robot: &Robot<PlanarCable>, name: &str, s: f64) -> Result<usize> {
     }
 }
 
-/// Checks one scene load against the robot, naming its fields as in the
-/// scene file (the caller prefixes `loads[i].`).
-fn validate_scene_load(robot: &Robot<PlanarCable>, load: &SceneLoad) -> Result<()> {
-    let vec2 = |name: &str, v: &[f64]| -> Result<()> {
-        check_len(name, 2, v.len())?;
-        check_all_finite(name, v)
-    };
-    match load {
-        SceneLoad::Distributed(l) => l.validate("", 2),
-        SceneLoad::TipForce { force_n } => vec2("force_n", force_n),
-        SceneLoad::PointForce { s_m, force_n } => {
-            vec2("force_n", force_n)?;
-            robot.locate("s_m", *s_m).map(|_| ())
-        }
-        SceneLoad::TipMoment { moment_nm } => check_finite("moment_nm", *moment_nm),
-        SceneLoad::NodeMoment { node, moment_nm } => {
-            check_finite("moment_nm", *moment_nm)?;
-            check_index("node", *node, robot.n_nodes())?;
-            if *node == 0 {
-                return Err(Error::invalid(
-                    "node",
-                    0,
-                    "the clamped base takes no moment: must be a free node, >= 1",
-                ));
-            }
-            Ok(())
-        }
-        SceneLoad::SelfWeight {
-            mass_per_length_kg_per_m: m,
-            gravity_m_per_s2: g,
-        } => {
-            if !(m.is_finite() && *m >= 0.0) {
-                return Err(Error::invalid(
-                    "mass_per_length_kg_per_m",
-                    m,
-                    "must be finite and >= 0",
-                ));
-            }
-            vec2("gravity_m_per_s2", g)
-        }
-        SceneLoad::TipMass { mass_kg } => check_positive("mass_kg", *mass_kg),
-    }
-}
-
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn example_file_is_the_built_in_scene() {
-        let text = include_str!("../examples/two_section.json");
-        assert_eq!(Scene::from_json(text).unwrap(), Scene::two_section());
-    }
-
-    #[test]
-    fn unknown_and_missing_fields_are_named() {
-        let bad = r#"{"robot": {"sections": [{"length_m": 0.1, "ea_n": 1, "ei_nm2": 1, "elements": 2, "colour": 3}]}}"#;
-        let msg = Scene::from_json(bad).unwrap_err().to_string();
-        assert!(msg.contains("colour"), "{msg}");
-        let missing = r#"{"robot": {"sections": [{"length_m": 0.1, "ea_n": 1, "elements": 2}]}}"#;
-        let msg = Scene::from_json(missing).unwrap_err().to_string();
-        assert!(msg.contains("ei_nm2"), "{msg}");
-    }
-
-    #[test]
-    fn nested_load_tags_parse() {
-        let text = r#"{"robot": {"sections": [{"length_m": 0.2, "ea_n": 300, "ei_nm2": 0.02, "elements": 4}]},
-            "loads": [{"type": "distributed", "profile": "gaussian", "amplitude_n_per_m": [0, -1], "center_m": 0.1, "width_m": 0.01},
-                      {"type": "tip_moment", "moment_nm": 0.01}, {"type": "tip_mass", "mass_kg": 0.02}]}"#;
-        let scene = Scene::from_json(text).unwrap();
-        let loads = scene.loads().unwrap();
-        assert_eq!(loads.line_loads.len(), 1);
-        assert_eq!(loads.node_moments[0].node, 4);
-        assert!((loads.point_forces[0].force_n[1] + 0.02 * 9.81).abs() < 1e-15);
-        let bad = text.replace("\"width_m\"", "\"sigma\"");
-        assert!(Scene::from_json(&bad)
-            .unwrap_err()
-            .to_string()
-            .contains("sigma"));
-    }
-}
+mod tests;

@@ -1,0 +1,217 @@
+//! The known loads of a scene: forces, moments, weights, in 2-D or 3-D.
+
+use serde::{Deserialize, Serialize};
+
+use crate::assembly::Robot;
+use crate::element::Element;
+use crate::error::{
+    check_all_finite, check_finite, check_index, check_len, check_positive, Error, Result,
+};
+use crate::loads::LineLoad;
+
+/// A known load of a scene (dead, world axes, SI). Vectors have as many
+/// components as the scene's element has dimensions (2 for `planar_cable`,
+/// 3 for `spatial_cable`); a moment is one number in 2-D and a 3-vector in 3-D.
+///
+/// # Example
+/// ```
+/// use softrod::scene::{MomentNm, SceneLoad};
+/// let l: SceneLoad = serde_json::from_str(
+///     r#"{"type": "tip_moment", "moment_nm": [0, 0.01, 0]}"#).unwrap();
+/// assert_eq!(l, SceneLoad::TipMoment { moment_nm: MomentNm::Vector(vec![0.0, 0.01, 0.0]) });
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum SceneLoad {
+    /// A distributed load with a profile (`uniform`, `linear`, `gaussian`).
+    Distributed(LineLoad),
+    /// A force at the tip (N).
+    TipForce {
+        /// Force (N).
+        force_n: Vec<f64>,
+    },
+    /// A force at arc coordinate `s_m` (N).
+    PointForce {
+        /// Arc coordinate (m).
+        s_m: f64,
+        /// Force (N).
+        force_n: Vec<f64>,
+    },
+    /// A moment at the tip node (N·m).
+    TipMoment {
+        /// Moment (N·m; in 2-D one number, counter-clockwise positive; in
+        /// 3-D a vector in world axes).
+        moment_nm: MomentNm,
+    },
+    /// A moment at a node (N·m).
+    NodeMoment {
+        /// Node index (1 ..= number of elements).
+        node: usize,
+        /// Moment (N·m, as for `tip_moment`).
+        moment_nm: MomentNm,
+    },
+    /// An extra uniform weight (kg/m) under its own gravity vector.
+    SelfWeight {
+        /// Mass per length (kg/m).
+        mass_per_length_kg_per_m: f64,
+        /// Gravity (m/s²).
+        gravity_m_per_s2: Vec<f64>,
+    },
+    /// A mass hanging at the tip (kg), under the scene's gravity.
+    TipMass {
+        /// Mass (kg).
+        mass_kg: f64,
+    },
+}
+
+/// A concentrated moment in a scene file (N·m): a number in a planar scene,
+/// an array of three numbers (world axes) in a spatial one.
+///
+/// # Example
+/// ```
+/// use softrod::scene::MomentNm;
+/// let planar: MomentNm = serde_json::from_str("0.01").unwrap();
+/// assert_eq!(planar.components(), vec![0.01]);
+/// let spatial: MomentNm = serde_json::from_str("[0, 0, 0.01]").unwrap();
+/// assert_eq!(spatial.components(), vec![0.0, 0.0, 0.01]);
+/// assert_eq!(serde_json::to_string(&planar).unwrap(), "0.01");
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum MomentNm {
+    /// One number (N·m): the planar moment.
+    Scalar(f64),
+    /// Components in world axes (N·m): the spatial moment.
+    Vector(Vec<f64>),
+}
+
+impl MomentNm {
+    /// The moment's components (one for [`MomentNm::Scalar`]).
+    pub fn components(&self) -> Vec<f64> {
+        match self {
+            MomentNm::Scalar(m) => vec![*m],
+            MomentNm::Vector(v) => v.clone(),
+        }
+    }
+
+    /// Checks that the moment has `dim` finite components; `name` is its field.
+    fn validate(&self, name: &str, dim: usize) -> Result<()> {
+        match (self, dim) {
+            (MomentNm::Scalar(_), 1) => {}
+            (MomentNm::Scalar(_), _) => {
+                return Err(Error::invalid(
+                    name,
+                    "a number",
+                    format!(
+                        "a moment in this scene is an array of {dim} numbers (N·m, world axes)"
+                    ),
+                ))
+            }
+            (MomentNm::Vector(v), 1) => {
+                return Err(Error::invalid(
+                    name,
+                    format!("{v:?}"),
+                    "a moment in a planar scene is one number (N·m, counter-clockwise positive)",
+                ))
+            }
+            (MomentNm::Vector(v), _) => check_len(name, dim, v.len())?,
+        }
+        match self {
+            MomentNm::Scalar(m) => check_finite(name, *m),
+            MomentNm::Vector(v) => check_all_finite(name, v),
+        }
+    }
+}
+
+impl From<f64> for MomentNm {
+    fn from(m: f64) -> Self {
+        MomentNm::Scalar(m)
+    }
+}
+
+impl<'de> Deserialize<'de> for MomentNm {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = MomentNm;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("`moment_nm` as a number (planar) or an array of 3 numbers (spatial)")
+            }
+            fn visit_f64<Er: serde::de::Error>(self, v: f64) -> std::result::Result<MomentNm, Er> {
+                Ok(MomentNm::Scalar(v))
+            }
+            fn visit_i64<Er: serde::de::Error>(self, v: i64) -> std::result::Result<MomentNm, Er> {
+                Ok(MomentNm::Scalar(v as f64))
+            }
+            fn visit_u64<Er: serde::de::Error>(self, v: u64) -> std::result::Result<MomentNm, Er> {
+                Ok(MomentNm::Scalar(v as f64))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> std::result::Result<MomentNm, A::Error> {
+                use serde::de::Error as _;
+                // (a tagged load loses the path below `loads[i]`: name the field)
+                let mut v = Vec::new();
+                while let Some(x) = seq
+                    .next_element::<f64>()
+                    .map_err(|e| A::Error::custom(format!("moment_nm[{}]: {e}", v.len())))?
+                {
+                    if v.len() >= 3 {
+                        return Err(A::Error::custom(
+                            "moment_nm: more than 3 components (N·m, world axes)",
+                        ));
+                    }
+                    v.push(x);
+                }
+                Ok(MomentNm::Vector(v))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// Checks one scene load against the robot, naming its fields as in the
+/// scene file (the caller prefixes `loads[i].`).
+pub(super) fn validate_scene_load<E: Element>(robot: &Robot<E>, load: &SceneLoad) -> Result<()> {
+    let d = E::DIM;
+    let vector = |name: &str, v: &[f64]| -> Result<()> {
+        check_len(name, d, v.len())?;
+        check_all_finite(name, v)
+    };
+    match load {
+        SceneLoad::Distributed(l) => l.validate("", d),
+        SceneLoad::TipForce { force_n } => vector("force_n", force_n),
+        SceneLoad::PointForce { s_m, force_n } => {
+            vector("force_n", force_n)?;
+            robot.locate("s_m", *s_m).map(|_| ())
+        }
+        SceneLoad::TipMoment { moment_nm } => moment_nm.validate("moment_nm", E::MOMENT_DIM),
+        SceneLoad::NodeMoment { node, moment_nm } => {
+            moment_nm.validate("moment_nm", E::MOMENT_DIM)?;
+            check_index("node", *node, robot.n_nodes())?;
+            if *node == 0 {
+                return Err(Error::invalid(
+                    "node",
+                    0,
+                    "the clamped base takes no moment: must be a free node, >= 1",
+                ));
+            }
+            Ok(())
+        }
+        SceneLoad::SelfWeight {
+            mass_per_length_kg_per_m: m,
+            gravity_m_per_s2: g,
+        } => {
+            if !(m.is_finite() && *m >= 0.0) {
+                return Err(Error::invalid(
+                    "mass_per_length_kg_per_m",
+                    m,
+                    "must be finite and >= 0",
+                ));
+            }
+            vector("gravity_m_per_s2", g)
+        }
+        SceneLoad::TipMass { mass_kg } => check_positive("mass_kg", *mass_kg),
+    }
+}
