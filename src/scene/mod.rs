@@ -7,6 +7,7 @@
 
 mod load;
 mod robot;
+mod settings;
 
 use serde::{Deserialize, Serialize};
 
@@ -16,10 +17,10 @@ use crate::error::{check_at_most, check_index, check_len, check_positive, Error,
 use crate::estimate::{EstimatorSettings, LoadModel};
 use crate::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use crate::params;
-use crate::statics::StaticSettings;
 
 pub use load::{MomentNm, SceneLoad};
 pub use robot::{SceneElement, SceneRobot};
+pub use settings::{RefinementTarget, SolverSettings, UnknownLoad, DEFAULT_MAX_REFINED_ELEMENTS};
 
 /// The largest scene file [`Scene::from_file`] reads (64 MiB).
 pub const MAX_SCENE_BYTES: usize = 64 << 20;
@@ -122,118 +123,6 @@ pub struct Marker {
     /// Whether the marker also observes the tangent `r'` (default false).
     #[serde(default)]
     pub tangent: bool,
-}
-
-/// Solver settings of a scene.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SolverSettings {
-    /// Static solver settings.
-    #[serde(default, rename = "static")]
-    pub statics: StaticSettings,
-    /// Estimator settings (`"estimator": {"backend": "newton" | "sqp",
-    /// "alpha": ..., "noise_sigma_m": ..., ...}`, every field optional; see
-    /// [`EstimatorSettings`] for the fields and their defaults).
-    #[serde(default)]
-    pub estimator: EstimatorSettings,
-}
-
-/// The default of [`RefinementTarget`]'s `max_elements`.
-pub const DEFAULT_MAX_REFINED_ELEMENTS: usize = 2000;
-
-fn max_refined() -> usize {
-    DEFAULT_MAX_REFINED_ELEMENTS
-}
-
-/// What the refinement of `"elements": "auto"` sections must achieve: a
-/// tolerance on one named quantity, with the unit in the field name
-/// (`"refinement": {"quantity": "tip_position", "tolerance_m": 1e-5}`).
-/// See [`crate::refine`] for how the mesh is chosen.
-///
-/// # Example
-/// ```
-/// use softrod::scene::RefinementTarget;
-/// let t: RefinementTarget = serde_json::from_str(
-///     r#"{"quantity": "load_resultant", "tolerance_n": 1e-3, "max_elements": 400}"#).unwrap();
-/// assert_eq!(t.tolerance(), 1e-3);
-/// assert_eq!(t.max_elements(), 400);
-/// ```
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "quantity", rename_all = "snake_case", deny_unknown_fields)]
-pub enum RefinementTarget {
-    /// The tip position of the scene's static equilibrium (its loads and
-    /// pressures): the Euclidean norm of its error at most `tolerance_m`.
-    TipPosition {
-        /// Tolerance on the tip position error (m).
-        tolerance_m: f64,
-        /// Most elements (in all, fixed sections included) a tried mesh may
-        /// have (default [`DEFAULT_MAX_REFINED_ELEMENTS`]).
-        #[serde(default = "max_refined")]
-        max_elements: usize,
-    },
-    /// The resultant force of the estimated unknown load, fitted to an
-    /// observation (see [`crate::refine`]): the norm of its error at most
-    /// `tolerance_n`.
-    LoadResultant {
-        /// Tolerance on the resultant force error (N).
-        tolerance_n: f64,
-        /// Most elements (in all) a tried mesh may have (default
-        /// [`DEFAULT_MAX_REFINED_ELEMENTS`]).
-        #[serde(default = "max_refined")]
-        max_elements: usize,
-    },
-}
-
-impl RefinementTarget {
-    /// The tolerance, in the quantity's unit (m or N).
-    pub fn tolerance(&self) -> f64 {
-        match *self {
-            RefinementTarget::TipPosition { tolerance_m, .. } => tolerance_m,
-            RefinementTarget::LoadResultant { tolerance_n, .. } => tolerance_n,
-        }
-    }
-
-    /// The most elements a tried mesh may have.
-    pub fn max_elements(&self) -> usize {
-        match *self {
-            RefinementTarget::TipPosition { max_elements, .. }
-            | RefinementTarget::LoadResultant { max_elements, .. } => max_elements,
-        }
-    }
-
-    /// The tolerance's field name in the scene (`tolerance_m` or `tolerance_n`).
-    pub fn tolerance_field(&self) -> &'static str {
-        match self {
-            RefinementTarget::TipPosition { .. } => "tolerance_m",
-            RefinementTarget::LoadResultant { .. } => "tolerance_n",
-        }
-    }
-}
-
-/// Where the unknown load of an estimation acts, independently of the mesh
-/// (`"unknown_load": {"acts_at": "point", "s_m": 0.24}`). A point load is
-/// estimated as a concentrated force at the node at `s_m`
-/// ([`LoadModel::Concentrated`]); the node must exist (on a fixed mesh) or
-/// is kept by the refinement (with `"elements": "auto"`). See
-/// [`Scene::estimator_settings`].
-///
-/// # Example
-/// ```
-/// use softrod::scene::UnknownLoad;
-/// let u: UnknownLoad = serde_json::from_str(r#"{"acts_at": "point", "s_m": 0.24}"#).unwrap();
-/// assert_eq!(u, UnknownLoad::Point { s_m: 0.24 });
-/// ```
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "acts_at", rename_all = "snake_case", deny_unknown_fields)]
-pub enum UnknownLoad {
-    /// A distributed load along the whole backbone ([`LoadModel::Distributed`]).
-    Distributed,
-    /// A force at one point of the backbone.
-    Point {
-        /// Undeformed arc coordinate of the point (m, > 0: the clamped base
-        /// takes no load).
-        s_m: f64,
-    },
 }
 
 /// A scene.
