@@ -18,7 +18,7 @@ use clap::{Parser, Subcommand};
 use serde::Serialize;
 
 use softrod::assembly::Robot;
-use softrod::element::{NodeKinematics, PlanarCable};
+use softrod::element::Element;
 use softrod::estimate::{Backend, Estimate, EstimateReport, MarkerObservation, Observation};
 use softrod::loads::{LineLoad, PointForce};
 use softrod::refine::{Quantity, Refinement};
@@ -266,14 +266,8 @@ struct EstimateOut {
 
 const LOAD_GRID: usize = 49;
 
-fn estimate_out(scene: &Scene, robot: &Robot<PlanarCable>, e: &Estimate, observation: String) -> EstimateOut {
-    let nd = PlanarCable::NODE_DOFS;
-    let nodes = robot
-        .node_arc()
-        .iter()
-        .enumerate()
-        .map(|(i, &s)| NodeOut { s_m: s, position_m: e.q[i * nd..i * nd + 2].to_vec(), slope: e.q[i * nd + 2..i * nd + 4].to_vec() })
-        .collect();
+fn estimate_out<E: Element>(scene: &Scene, robot: &Robot<E>, e: &Estimate, observation: String) -> EstimateOut {
+    let nodes = node_outs(robot, &e.q);
     let d = e.resultant_force_n.len();
     let m = e.marker_residuals.len();
     EstimateOut {
@@ -305,7 +299,7 @@ fn read_markers(path: &PathBuf) -> Result<Observation> {
 }
 
 /// The scene's markers read off the configuration `q` (exact).
-fn observe(scene: &Scene, robot: &Robot<PlanarCable>, q: &[f64]) -> Result<Observation> {
+fn observe<E: Element>(scene: &Scene, robot: &Robot<E>, q: &[f64]) -> Result<Observation> {
     let mut markers = Vec::new();
     for m in &scene.markers {
         let s = match (m.node, m.s_m) {
@@ -320,7 +314,7 @@ fn observe(scene: &Scene, robot: &Robot<PlanarCable>, q: &[f64]) -> Result<Obser
             None => MarkerObservation::at_arc(s, p),
         };
         if m.tangent {
-            let mut t = vec![0.0; PlanarCable::DIM];
+            let mut t = vec![0.0; E::DIM];
             point.slope_into(q, &mut t)?;
             mo.tangent = Some(t);
         }
@@ -330,7 +324,14 @@ fn observe(scene: &Scene, robot: &Robot<PlanarCable>, q: &[f64]) -> Result<Obser
 }
 
 fn estimate(scene: &Scene, backend: Option<Backend>, markers: Option<&PathBuf>) -> Result<EstimateOut> {
-    let robot = scene.robot()?;
+    match scene.build()? {
+        SceneRobot::Planar(robot) => estimate_with(scene, robot, backend, markers),
+        SceneRobot::Spatial(robot) => estimate_with(scene, robot, backend, markers),
+    }
+}
+
+/// [`estimate`] on the scene's robot of element `E`.
+fn estimate_with<E: Element + 'static>(scene: &Scene, robot: Robot<E>, backend: Option<Backend>, markers: Option<&PathBuf>) -> Result<EstimateOut> {
     let known = scene.loads()?;
     let mut settings = scene.estimator_settings()?;
     if let Some(b) = backend {
