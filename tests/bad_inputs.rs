@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
 use softrod::assembly::{RobotSpec, Section, MAX_ELEMENTS};
-use softrod::element::PlanarCable;
+use softrod::element::{PlanarCable, SpatialCable};
 use softrod::estimate::{
     Backend, BoundFrame, EstimatorSettings, LoadBound, MarkerObservation, Observation,
 };
@@ -110,6 +110,33 @@ fn spatial_json(f: impl FnOnce(&mut Value)) -> Result<(), Error> {
         serde_json::from_str(include_str!("../examples/spatial_cantilever.json")).unwrap();
     f(&mut v);
     Scene::from_json(&v.to_string()).map(|_| ())
+}
+
+/// Builds an SQP estimator for the spatial example
+/// (`examples/spatial_cantilever.json`, 16 elements), its settings changed by
+/// `fs`, and takes one step on markers at nodes 4, 8, 12, 16 of its straight
+/// configuration (changed by `fo`).
+fn estimate_spatial(
+    fs: impl FnOnce(&mut EstimatorSettings),
+    fo: impl FnOnce(&mut Observation),
+) -> Result<(), Error> {
+    let scene = Scene::from_json(include_str!("../examples/spatial_cantilever.json"))?;
+    let robot = scene.robot_as::<SpatialCable>()?;
+    let q = robot.reference_configuration();
+    let mut settings = EstimatorSettings {
+        backend: Backend::Sqp,
+        ..EstimatorSettings::default()
+    };
+    fs(&mut settings);
+    let mut obs = Observation {
+        markers: [4usize, 8, 12, 16]
+            .iter()
+            .map(|&n| MarkerObservation::at_node(n, q[6 * n..6 * n + 3].to_vec()))
+            .collect(),
+    };
+    fo(&mut obs);
+    let mut est = settings.backend.build(robot, scene.loads()?, settings)?;
+    est.step(&obs).map(|_| ())
 }
 
 /// Validates `examples/auto_tip.json` after `f` changed the parsed scene.
@@ -1393,6 +1420,56 @@ fn cases() -> Vec<Case> {
             },
             Dim,
             "observation.markers[0].position_m",
+        ),
+        case(
+            "2-D position for a spatial robot",
+            || estimate_spatial(|_| {}, |o| o.markers[0].position_m.truncate(2)),
+            Dim,
+            "observation.markers[0].position_m",
+        ),
+        case(
+            "2-D tangent for a spatial robot",
+            || estimate_spatial(|_| {}, |o| o.markers[3].tangent = Some(vec![1.0, 0.0])),
+            Dim,
+            "observation.markers[3].tangent",
+        ),
+        case(
+            "local-frame load bound on a spatial robot",
+            || {
+                estimate_spatial(
+                    |s| {
+                        s.bounds = vec![LoadBound {
+                            s_m: 0.12,
+                            frame: BoundFrame::Local,
+                            direction: vec![0.0, 1.0, 0.0],
+                            min_n_per_m: Some(0.0),
+                            max_n_per_m: None,
+                        }]
+                    },
+                    |_| {},
+                )
+            },
+            Invalid,
+            "estimator.bounds[0].frame",
+        ),
+        case(
+            "2-D load bound direction on a spatial robot",
+            || {
+                estimate_spatial(
+                    |s| {
+                        s.bounds = vec![LoadBound {
+                            s_m: 0.12,
+                            frame: BoundFrame::World,
+                            direction: vec![0.0, 1.0],
+                            min_n_per_m: Some(0.0),
+                            max_n_per_m: None,
+                        }]
+                    },
+                    |_| {},
+                )
+            },
+            Dim,
+            "estimator.bounds[0].direction",
         ),
         case(
             "observed marker beyond the tip (node)",

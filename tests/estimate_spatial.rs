@@ -194,3 +194,44 @@ fn distributed_load_from_exudyn_markers_both_backends_agree() {
     assert!(dq <= 1e-6, "{dq}");
     assert!(err <= 0.06, "{:?} vs {applied:?}", e[0].resultant_force_n);
 }
+
+/// Bounds in 3-D (SQP): a world-axes bound holds at the estimate. The tip
+/// force of the oblique case has z component -1.6 N; bounding it to
+/// `F_z >= -1 N` makes the bound active (the estimate sits on it, 1e-6 N)
+/// while the unbounded estimate is -1.6 N. The local frame (tangent,
+/// normal) is planar only, refused naming the field.
+#[test]
+fn world_bounds_hold_in_3d_and_the_local_frame_is_refused() {
+    use softrod::estimate::{BoundFrame, LoadBound};
+    let n = 16;
+    let (_, shape) = exudyn_nodes("tip_force_oblique_large", n);
+    let robot = robot(n);
+    let obs = markers(&shape, &[4, 8, 12, 16]);
+    let bound = |frame| LoadBound {
+        s_m: L,
+        frame,
+        direction: vec![0.0, 0.0, 1.0],
+        min_n_per_m: Some(-1.0),
+        max_n_per_m: None,
+    };
+    let settings = |frame| EstimatorSettings {
+        backend: Backend::Sqp,
+        load_model: LoadModel::Concentrated { node: n },
+        alpha: Some(1e-9),
+        bounds: vec![bound(frame)],
+        ..EstimatorSettings::default()
+    };
+    let mut est = Backend::Sqp
+        .build(robot.clone(), Loads::default(), settings(BoundFrame::World))
+        .unwrap();
+    let e = est.step(&obs).unwrap();
+    assert!(e.report.status.is_converged(), "{}", e.report);
+    let fz = e.resultant_force_n[2];
+    println!("bounded tip force: {:?} N", e.resultant_force_n);
+    assert!((fz + 1.0).abs() <= 1e-6, "{fz}");
+    let err = Backend::Sqp
+        .build(robot, Loads::default(), settings(BoundFrame::Local))
+        .err()
+        .unwrap();
+    assert_eq!(err.field(), Some("estimator.bounds[0].frame"), "{err}");
+}

@@ -24,7 +24,7 @@ use crate::observe::{Observation, ObservationOperator};
 use crate::sensitivity::Sensitivity;
 use crate::statics::{EquilibriumTracker, LinearLoad, StaticSolver, TrackedEquilibrium};
 
-use super::{EstimatorSettings, LoadModel};
+use super::{BoundFrame, EstimatorSettings, LoadModel};
 
 /// `G F` of the load models: the distributed field (8) with `G = B = ∫ Sᵀ S dX`
 /// (22), (23), or a force at a node (32)–(35) (`G = A_xᵀ`).
@@ -129,6 +129,14 @@ impl<E: Element> Problem<E> {
                 E::DIM,
                 b.direction.len(),
             )?;
+            if b.frame == BoundFrame::Local && E::DIM != 2 {
+                return Err(Error::invalid(
+                    format!("estimator.bounds[{i}].frame"),
+                    "local",
+                    "the local frame (tangent, normal) is planar only: give the direction \
+                     in world axes",
+                ));
+            }
             if settings.load_model == LoadModel::Distributed {
                 robot.locate(&format!("estimator.bounds[{i}].s_m"), b.s_m)?;
             }

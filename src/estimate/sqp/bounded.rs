@@ -60,7 +60,7 @@ impl<E: Element> SqpEstimator<E> {
                             .map(|i| b.direction[0] * t[i] + b.direction[1] * nrm[i])
                             .collect()
                     } else {
-                        // 3-D: tangent component only is frame-invariant; use world for the rest
+                        // 3-D: refused when the problem is built (no section frame)
                         b.direction.clone()
                     }
                 }
