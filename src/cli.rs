@@ -53,7 +53,8 @@ enum Command {
     ///
     /// The markers file is JSON: {"markers": [{"node": 4, "position_m": [x, y]},
     /// {"s_m": 0.24, "position_m": [x, y], "tangent": [tx, ty]}, ...]} (positions in m,
-    /// world axes; optional "position_weight"/"tangent_weight" per component).
+    /// world axes; [x, y, z] and [tx, ty, tz] in a "spatial_cable" scene; optional
+    /// "position_weight"/"tangent_weight" per component).
     /// Without it, the observation is synthesized: the scene is solved forward
     /// with its own loads and seeded 0.01 mm noise is added at the scene's markers.
     Estimate {
