@@ -5,6 +5,7 @@
 //! See `README.md` for the format and `examples/two_section.json` for the
 //! paper's two-section robot.
 
+mod ladder;
 mod load;
 mod robot;
 mod settings;
@@ -18,6 +19,7 @@ use crate::estimate::{EstimatorSettings, LoadModel};
 use crate::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use crate::params;
 
+pub use ladder::Ladder;
 pub use load::{MomentNm, SceneLoad};
 pub use robot::{SceneElement, SceneRobot};
 pub use settings::{RefinementTarget, SolverSettings, UnknownLoad, DEFAULT_MAX_REFINED_ELEMENTS};
@@ -493,7 +495,7 @@ impl Scene {
             .collect();
         let robot = self.with_elements(&ones)?.robot()?;
         self.check_unknown_load(&robot, true)?;
-        let ladder = crate::refine::Ladder::new(self)?;
+        let ladder = Ladder::new(self)?;
         let smallest = ladder.total_elements(1);
         if smallest > target.max_elements() {
             return Err(Error::invalid(
