@@ -210,6 +210,44 @@ pub fn solve_equilibrium<M: Assembled>(
     settings: &NewtonSettings,
 ) -> Result<StructureEquilibrium> {
     settings.validate()?;
+    let pattern = structure.tangent_pattern()?;
+    let mut solver = AutoSolver::with_kind(&pattern, settings.linear_solver)?;
+    solve_equilibrium_with(structure, loads, u0, settings, &mut solver)
+}
+
+/// [`solve_equilibrium`] with a solver analyzed before, on the model's
+/// [`Assembled::tangent_pattern`] (a caller that solves one model many
+/// times analyzes once; `settings.linear_solver` is then not read).
+///
+/// # Errors
+/// As [`solve_equilibrium`];
+/// [`crate::Error::InvalidParameter`] (field `solver`) for a solver
+/// analyzed on another pattern.
+///
+/// # Example
+/// ```
+/// use softrod::assembly::{RobotSpec, Section};
+/// use softrod::linsolve::{AutoSolver, SolverKind};
+/// use softrod::loads::Loads;
+/// use softrod::structure::solve::{solve_equilibrium_with, NewtonSettings};
+/// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 8)]).build_planar()?;
+/// let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), SolverKind::Sparse)?;
+/// let settings = NewtonSettings::default();
+/// let a = solve_equilibrium_with(&robot, &Loads::default(), None, &settings, &mut solver)?;
+/// let mut light = Loads::default();
+/// light.point_forces = vec![softrod::loads::PointForce { s_m: 0.2, force_n: vec![0.0, 1e-3] }];
+/// let b = solve_equilibrium_with(&robot, &light, Some(&a.u), &settings, &mut solver)?;
+/// assert!(a.converged() && b.converged() && b.q[b.q.len() - 3] > a.q[a.q.len() - 3]);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn solve_equilibrium_with<M: Assembled>(
+    structure: &M,
+    loads: &M::Loads,
+    u0: Option<&[f64]>,
+    settings: &NewtonSettings,
+    solver: &mut AutoSolver,
+) -> Result<StructureEquilibrium> {
+    settings.validate()?;
     structure.validate_loads(loads)?;
     let mut u = match u0 {
         Some(u0) => {
@@ -219,8 +257,14 @@ pub fn solve_equilibrium<M: Assembled>(
         None => structure.reference_free_coordinates(),
     };
     let n = structure.n_free();
-    let pattern = structure.tangent_pattern()?;
-    let mut solver = AutoSolver::with_kind(&pattern, settings.linear_solver)?;
+    let pattern = solver.pattern().clone();
+    if pattern.n() != n {
+        return Err(Error::invalid(
+            "solver",
+            pattern.n(),
+            "analyzed for another pattern than the model's tangent",
+        ));
+    }
     let mut r = vec![0.0; n];
     let mut k = SymmetricMatrix::zeros(pattern);
     let mut q = vec![0.0; structure.n_q()];
@@ -252,7 +296,7 @@ pub fn solve_equilibrium<M: Assembled>(
             floor = 10.0 * f64::EPSILON * k.max_abs() * norm_inf(&u);
             let at_floor = norm_inf(&r) <= floor;
             iterations += 1;
-            let du = factor_and_solve(&mut solver, &k, &r)?;
+            let du = factor_and_solve(solver, &k, &r)?;
             // backtracking: accept a step that lowers the potential
             // (Armijo) or the residual
             let slope: f64 = r.iter().zip(&du).map(|(a, b)| a * b).sum();
