@@ -25,7 +25,10 @@ use serde::{Deserialize, Serialize};
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::{check_len, Error, Result};
-use crate::linsolve::BandedMatrix;
+use crate::linsolve::{
+    AutoSolver, FactorOptions, Factorization, LinsolveError, SolverKind, SymmetricMatrix,
+    TangentSolver,
+};
 use crate::loads::Loads;
 use crate::numeric::norm2;
 pub use crate::outcome::{NonFiniteAt, StaticCriterion, StaticReport, StaticStatus};
@@ -59,6 +62,9 @@ pub struct StaticSettings {
     pub max_step_rotation: f64,
     /// Smallest homotopy step before giving up (default 1e-4).
     pub min_load_step: f64,
+    /// The linear solver of the tangent (default [`SolverKind::Auto`]: the
+    /// banded one for the robot's single chain).
+    pub linear_solver: SolverKind,
 }
 
 impl Default for StaticSettings {
@@ -70,6 +76,7 @@ impl Default for StaticSettings {
             increment_tolerance: 1e-12,
             max_step_rotation: 0.5,
             min_load_step: 1e-4,
+            linear_solver: SolverKind::Auto,
         }
     }
 }
@@ -153,7 +160,9 @@ pub struct StaticSolver {
 }
 
 struct Work {
-    k: BandedMatrix,
+    k: SymmetricMatrix,
+    /// Analyzed once per solve on the robot's tangent pattern.
+    solver: AutoSolver,
     r: Vec<f64>,
     iterations: usize,
     floor: f64,
@@ -216,7 +225,8 @@ impl StaticSolver {
         q[..nd].copy_from_slice(&base);
         let n = robot.n_free();
         let mut w = Work {
-            k: BandedMatrix::zeros(n, 2 * nd - 1, 2 * nd - 1),
+            k: SymmetricMatrix::zeros(robot.tangent_pattern().clone()),
+            solver: AutoSolver::with_kind(robot.tangent_pattern(), self.settings.linear_solver)?,
             r: vec![0.0; n],
             iterations: 0,
             floor: 0.0,
@@ -383,15 +393,19 @@ impl StaticSolver {
             // pivoted LU otherwise, neither consuming it)
             let mut found = false;
             for mu in [0.0, 1e-8, 1e-6, 1e-4, 1e-2, 1.0] {
-                let lu = match w.k.factor_scaled_symmetric(mu, "tangent stiffness") {
+                let options = FactorOptions {
+                    shift: mu,
+                    ..FactorOptions::default()
+                };
+                let lu = match w.solver.factor(&w.k, options) {
                     Ok(lu) => lu,
-                    Err(Error::Singular { .. }) => continue,
-                    Err(Error::NonFinite { .. }) => {
+                    Err(LinsolveError::Singular { .. }) => continue,
+                    Err(LinsolveError::NonFinite { .. }) => {
                         return Ok(StaticStatus::NonFinite {
                             at: NonFiniteAt::Tangent,
                         });
                     }
-                    Err(e) => return Err(e),
+                    Err(e) => return Err(e.into()),
                 };
                 dq.copy_from_slice(&w.r);
                 lu.solve_in_place(&mut dq)?;
