@@ -11,7 +11,9 @@
 //!   one Newton step on the tangent pattern (assembly into the symmetric
 //!   matrix, numeric factorization, solve), and the warm solve of the
 //!   generic Newton (`structure::solve`), with the banded and the sparse
-//!   solver, 20, 200 and 2000 elements (the banded-or-sparse decision).
+//!   solver, 20, 200 and 2000 elements (the banded-or-sparse decision);
+//!   `static_solve_warm_solver/<kind>/<n>`: `static_solve_warm` with each (the
+//!   solver analyzed once per robot).
 //!
 //! Run: `cargo bench --bench statics -- --warm-up-time 1 --measurement-time 3`
 //! (filter by group: `cargo bench --bench statics -- static_solve_warm`),
@@ -164,6 +166,26 @@ fn solver_kinds(c: &mut Criterion) {
         }
     }
     solve.finish();
+    // the static solver itself (load steps, shifts, line search), warm
+    let mut warm = c.benchmark_group("static_solve_warm_solver");
+    for &n in &[20usize, 200, 2000] {
+        let (robot, loads, q) = robot(n);
+        let mut nudged = loads.clone();
+        nudged.pressures_pa[0] += 500.0;
+        for (name, kind) in kinds {
+            // analyzed once per robot, as a tracker or a controller does
+            let mut linear = AutoSolver::with_kind(robot.tangent_pattern(), kind).unwrap();
+            let solver = StaticSolver::default();
+            warm.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| {
+                b.iter(|| {
+                    solver
+                        .solve_with(&robot, black_box(&nudged), Some(&q), &mut linear)
+                        .unwrap()
+                })
+            });
+        }
+    }
+    warm.finish();
 }
 
 criterion_group!(benches, newton_step, static_solve, solver_kinds);

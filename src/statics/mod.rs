@@ -18,6 +18,7 @@
 //! sequence of nearby loads, warm, reusing factorizations: what an estimator
 //! or a controller needs; it falls back to [`StaticSolver`].
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
@@ -159,10 +160,10 @@ pub struct StaticSolver {
     pub settings: StaticSettings,
 }
 
-struct Work {
+struct Work<'a> {
     k: SymmetricMatrix,
-    /// Analyzed once per solve on the robot's tangent pattern.
-    solver: AutoSolver,
+    /// Analyzed on the robot's tangent pattern.
+    solver: &'a mut AutoSolver,
     r: Vec<f64>,
     iterations: usize,
     floor: f64,
@@ -195,6 +196,48 @@ impl StaticSolver {
         q0: Option<&[f64]>,
     ) -> Result<Equilibrium> {
         self.settings.validate()?;
+        let mut solver =
+            AutoSolver::with_kind(robot.tangent_pattern(), self.settings.linear_solver)?;
+        self.solve_with(robot, loads, q0, &mut solver)
+    }
+
+    /// [`StaticSolver::solve`] with a linear solver analyzed before on
+    /// [`Robot::tangent_pattern`]: a caller that solves one robot many times
+    /// analyzes its pattern once (`settings.linear_solver` is then not read).
+    ///
+    /// # Errors
+    /// As [`StaticSolver::solve`]; [`Error::InvalidParameter`] (field
+    /// `solver`) for a solver analyzed on another pattern.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::linsolve::{AutoSolver, SolverKind};
+    /// use softrod::statics::StaticSolver;
+    /// let scene = softrod::scene::Scene::two_section();
+    /// let (robot, loads) = (scene.robot()?, scene.loads()?);
+    /// let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), SolverKind::Sparse)?;
+    /// let eq = StaticSolver::default().solve_with(&robot, &loads, None, &mut solver)?;
+    /// assert!(eq.report.status.is_converged());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn solve_with<E: Element>(
+        &self,
+        robot: &Robot<E>,
+        loads: &Loads,
+        q0: Option<&[f64]>,
+        solver: &mut AutoSolver,
+    ) -> Result<Equilibrium> {
+        self.settings.validate()?;
+        let pattern = solver.pattern();
+        if !(Arc::ptr_eq(pattern, robot.tangent_pattern())
+            || **pattern == **robot.tangent_pattern())
+        {
+            return Err(Error::invalid(
+                "solver",
+                pattern.n(),
+                "analyzed on another pattern than the robot's tangent",
+            ));
+        }
         let start = Instant::now();
         let nd = E::NODE_DOFS;
         let dead = robot.dead_force(loads)?;
@@ -226,7 +269,7 @@ impl StaticSolver {
         let n = robot.n_free();
         let mut w = Work {
             k: SymmetricMatrix::zeros(robot.tangent_pattern().clone()),
-            solver: AutoSolver::with_kind(robot.tangent_pattern(), self.settings.linear_solver)?,
+            solver,
             r: vec![0.0; n],
             iterations: 0,
             floor: 0.0,
@@ -339,7 +382,7 @@ impl StaticSolver {
         loads: &Loads,
         offset: &[f64],
         q: &mut [f64],
-        w: &mut Work,
+        w: &mut Work<'_>,
         scale: f64,
     ) -> Result<StaticStatus> {
         let nd = E::NODE_DOFS;
