@@ -6,20 +6,30 @@
 //! - `static_solve_cold/<n>`: a whole solve from the arc configuration,
 //!   5 to 2000 elements;
 //! - `static_solve_warm/<n>`: a whole solve from the previous equilibrium
-//!   after a 0.5 kPa pressure change (a control step), 5 to 2000 elements.
+//!   after a 0.5 kPa pressure change (a control step), 5 to 2000 elements;
+//! - `newton_step_solver/<kind>/<n>` and `static_solve_solver/<kind>/<n>`:
+//!   one Newton step on the tangent pattern (assembly into the symmetric
+//!   matrix, numeric factorization, solve), and the warm solve of the
+//!   generic Newton (`structure::solve`), with the banded and the sparse
+//!   solver, 20, 200 and 2000 elements (the banded-or-sparse decision);
+//!   `static_solve_warm_solver/<kind>/<n>`: `static_solve_warm` with each (the
+//!   solver analyzed once per robot).
 //!
 //! Run: `cargo bench --bench statics -- --warm-up-time 1 --measurement-time 3`
 //! (filter by group: `cargo bench --bench statics -- static_solve_warm`),
 //! then `python3 benches/table.py` for the README tables, or
 //! `python3 benches/fit_exponent.py GROUP 100` for one group's fit.
-#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use softrod::assembly::Robot;
 use softrod::element::PlanarCable;
-use softrod::linsolve::BandedMatrix;
+use softrod::linsolve::{
+    AutoSolver, BandedMatrix, FactorOptions, Factorization, SolverKind, SymmetricMatrix,
+    TangentSolver,
+};
 use softrod::loads::Loads;
 use softrod::params;
 use softrod::statics::StaticSolver;
@@ -88,5 +98,95 @@ fn static_solve(c: &mut Criterion) {
     warm.finish();
 }
 
-criterion_group!(benches, newton_step, static_solve);
+fn solver_kinds(c: &mut Criterion) {
+    // `cargo bench --bench statics -- _solver/`
+    use softrod::structure::solve::{solve_equilibrium_with, NewtonSettings};
+    use softrod::structure::BlockRule;
+    let kinds = [
+        ("banded", SolverKind::Banded),
+        ("sparse", SolverKind::Sparse),
+    ];
+    let mut step = c.benchmark_group("newton_step_solver");
+    for &n in &[20usize, 200, 2000] {
+        let (robot, loads, q) = robot(n);
+        let dead = robot.dead_force(&loads).unwrap();
+        let mut r = vec![0.0; robot.n_free()];
+        let mut k = SymmetricMatrix::zeros(robot.tangent_pattern().clone());
+        for (name, kind) in kinds {
+            let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), kind).unwrap();
+            step.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| {
+                b.iter(|| {
+                    robot
+                        .residual_and_tangent_into(black_box(&q), &dead, &loads, &mut r, &mut k)
+                        .unwrap();
+                    let f = solver.factor(&k, FactorOptions::default()).unwrap();
+                    f.solve_in_place(&mut r).unwrap();
+                    black_box(&r);
+                })
+            });
+        }
+    }
+    step.finish();
+    let mut solve = c.benchmark_group("static_solve_solver");
+    for &n in &[20usize, 200, 2000] {
+        let (robot, loads, q) = robot(n);
+        let mut nudged = loads.clone();
+        nudged.pressures_pa[0] += 500.0;
+        // the free coordinates of the static solver's equilibrium: the
+        // base stretch along the clamp's free direction, then nodes 1 … N
+        let nd = 4;
+        let Some(BlockRule::Affine { offset, directions }) = robot.dof_map().rule(0) else {
+            panic!("the clamp is an affine block");
+        };
+        let t = &directions[0];
+        let b: f64 = (0..nd).map(|i| (q[i] - offset[i]) * t[i]).sum::<f64>()
+            / t.iter().map(|v| v * v).sum::<f64>();
+        let mut u0 = vec![b];
+        u0.extend_from_slice(&q[nd..]);
+        for (name, kind) in kinds {
+            let settings = NewtonSettings::default();
+            let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), kind).unwrap();
+            let eq =
+                solve_equilibrium_with(&robot, &loads, Some(&u0), &settings, &mut solver).unwrap();
+            assert!(eq.converged(), "{name} {n}: {:?}", eq.status);
+            solve.bench_with_input(BenchmarkId::new(name, n), &n, |bch, _| {
+                bch.iter(|| {
+                    let e = solve_equilibrium_with(
+                        &robot,
+                        black_box(&nudged),
+                        Some(&eq.u),
+                        &settings,
+                        &mut solver,
+                    )
+                    .unwrap();
+                    assert!(e.converged());
+                    e
+                })
+            });
+        }
+    }
+    solve.finish();
+    // the static solver itself (load steps, shifts, line search), warm
+    let mut warm = c.benchmark_group("static_solve_warm_solver");
+    for &n in &[20usize, 200, 2000] {
+        let (robot, loads, q) = robot(n);
+        let mut nudged = loads.clone();
+        nudged.pressures_pa[0] += 500.0;
+        for (name, kind) in kinds {
+            // analyzed once per robot, as a tracker or a controller does
+            let mut linear = AutoSolver::with_kind(robot.tangent_pattern(), kind).unwrap();
+            let solver = StaticSolver::default();
+            warm.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| {
+                b.iter(|| {
+                    solver
+                        .solve_with(&robot, black_box(&nudged), Some(&q), &mut linear)
+                        .unwrap()
+                })
+            });
+        }
+    }
+    warm.finish();
+}
+
+criterion_group!(benches, newton_step, static_solve, solver_kinds);
 criterion_main!(benches);

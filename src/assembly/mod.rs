@@ -18,20 +18,24 @@
 //! Equilibrium (17) is `Q(F, q, P) = 0` with `Q = Q_F + Q_E + Q_A` and the
 //! tangent stiffness is `K = −∂Q/∂q`.
 
+use std::sync::Arc;
+
 use crate::element::{ArcPoint, Element};
 use crate::error::{check_all_finite, check_finite, check_len, Result};
-use crate::linsolve::BandedMatrix;
+use crate::linsolve::{BandedMatrix, SymmetricMatrix, SymmetricPattern};
 use crate::loads::Loads;
 use crate::structure::rod::MAX_EDOF;
 use crate::structure::{BlockRule, DofMap, Rod};
 
 mod spec;
+mod tangent;
 
 pub use crate::structure::rod::MAX_ELEMENTS;
 pub use crate::structure::section::{Chamber, Section};
 pub use crate::structure::Clamp;
 use spec::base_direction;
 pub use spec::{Base, RobotSpec};
+pub use tangent::TangentTarget;
 
 /// A robot assembled from elements of type `E`.
 #[derive(Debug, Clone)]
@@ -43,6 +47,9 @@ pub struct Robot<E: Element> {
     /// The map from the free coordinates to all coordinates: the clamped
     /// base node an affine block (its stretch free), nodes 1 … N free.
     dofs: DofMap,
+    /// The tangent's sparsity over the free coordinates: element `e` of
+    /// the pattern is the chain's element `e`.
+    pattern: Arc<SymmetricPattern>,
 }
 
 impl<E: Element> Robot<E> {
@@ -97,12 +104,31 @@ impl<E: Element> Robot<E> {
         });
         blocks.resize(rod.n_nodes(), BlockRule::Free { len: nd });
         let dofs = DofMap::new(blocks).map_err(|e| e.with_prefix("element clamp: "))?;
+        let pattern = Arc::new(tangent_pattern(&dofs, rod.n_elements())?);
         Ok(Robot {
             spec,
             rod,
             base_node,
             dofs,
+            pattern,
         })
+    }
+
+    /// The sparsity pattern of the tangent stiffness over the free
+    /// coordinates, from the element connectivity (element `e` couples the
+    /// free coordinates of nodes `e` and `e + 1`): built once with the
+    /// robot, what a [`crate::linsolve::TangentSolver`] analyzes.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
+    /// let p = robot.tangent_pattern();
+    /// assert_eq!((p.n(), p.n_elements(), p.bandwidth()), (robot.n_free(), 4, 7));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn tangent_pattern(&self) -> &Arc<SymmetricPattern> {
+        &self.pattern
     }
 
     /// The chain: elements, sections and loads in the robot's coordinates.
@@ -405,15 +431,34 @@ impl<E: Element> Robot<E> {
         check_len("dead force", self.n_q(), dead.len())?;
         check_len("residual", self.n_free(), out.len())?;
         self.rod.check_load_structure(loads)?;
-        self.assemble(q, Some((dead, out)), None, loads)
+        self.assemble::<SymmetricMatrix>(q, Some((dead, out)), None, loads)
     }
 
-    /// Tangent stiffness `K = −∂Q/∂q` over the free coordinates, banded with
-    /// `kl = ku = 2 NODE_DOFS − 1`, written into `k` (resized if needed).
+    /// Tangent stiffness `K = −∂Q/∂q` over the free coordinates, written
+    /// into `k`: a [`crate::linsolve::SymmetricMatrix`] on
+    /// [`Robot::tangent_pattern`] (put on it if it is on another), or a band
+    /// matrix with `kl = ku = 2 NODE_DOFS − 1` (resized if needed).
     ///
     /// # Errors
     /// [`crate::Error::DimensionMismatch`] for wrong sizes.
-    pub fn tangent_into(&self, q: &[f64], loads: &Loads, k: &mut BandedMatrix) -> Result<()> {
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// use softrod::linsolve::SymmetricMatrix;
+    /// use softrod::loads::Loads;
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
+    /// let mut k = SymmetricMatrix::zeros(robot.tangent_pattern().clone());
+    /// robot.tangent_into(&robot.reference_configuration(), &Loads::default(), &mut k)?;
+    /// assert!(k.get(1, 1) > 0.0);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn tangent_into<K: TangentTarget>(
+        &self,
+        q: &[f64],
+        loads: &Loads,
+        k: &mut K,
+    ) -> Result<()> {
         check_len("q", self.n_q(), q.len())?;
         self.rod.check_load_structure(loads)?;
         self.assemble(q, None, Some(k), loads)
@@ -424,13 +469,13 @@ impl<E: Element> Robot<E> {
     ///
     /// # Errors
     /// [`crate::Error::DimensionMismatch`] for wrong sizes.
-    pub fn residual_and_tangent_into(
+    pub fn residual_and_tangent_into<K: TangentTarget>(
         &self,
         q: &[f64],
         dead: &[f64],
         loads: &Loads,
         out: &mut [f64],
-        k: &mut BandedMatrix,
+        k: &mut K,
     ) -> Result<()> {
         check_len("q", self.n_q(), q.len())?;
         check_len("dead force", self.n_q(), dead.len())?;
@@ -443,11 +488,11 @@ impl<E: Element> Robot<E> {
     /// load structure checked by the callers). Interior elements add their
     /// gradient and Hessian at a plain offset; the first element's base
     /// node maps through the clamp's free directions.
-    fn assemble(
+    fn assemble<K: TangentTarget>(
         &self,
         q: &[f64],
         mut residual: Option<(&[f64], &mut [f64])>,
-        mut k: Option<&mut BandedMatrix>,
+        mut k: Option<&mut K>,
         loads: &Loads,
     ) -> Result<()> {
         let nd = E::NODE_DOFS;
@@ -456,12 +501,7 @@ impl<E: Element> Robot<E> {
             self.dofs.restrict_into(&[], dead, out)?;
         }
         if let Some(k) = k.as_mut() {
-            let kb = 2 * nd - 1;
-            if k.n() != self.n_free() || k.kl() != kb || k.ku() != kb {
-                **k = BandedMatrix::zeros(self.n_free(), kb, kb);
-            } else {
-                k.fill_zero();
-            }
+            k.reset(self.n_free(), 2 * nd - 1, &self.pattern);
         }
         let mut g = [0.0; MAX_EDOF];
         let mut h = vec![0.0; if k.is_some() { edof * edof } else { 0 }];
@@ -490,8 +530,7 @@ impl<E: Element> Robot<E> {
                     }
                 }
                 if let Some(k) = k.as_mut() {
-                    // off + edof <= n_free and edof - 1 <= kb: in the band
-                    k.add_block_unchecked(off, edof, h);
+                    k.add_chain_block(e, off, edof, h)?;
                 }
                 continue;
             }
@@ -499,7 +538,7 @@ impl<E: Element> Robot<E> {
                 self.scatter_force(e * nd, g, -1.0, out)?;
             }
             if let Some(k) = k.as_mut() {
-                self.scatter_stiffness(e * nd, edof, h, 1.0, k)?;
+                self.scatter_stiffness(e * nd, edof, h, 1.0, &mut **k)?;
             }
         }
         let mut mg = [0.0; MAX_EDOF];
@@ -515,7 +554,7 @@ impl<E: Element> Robot<E> {
                 self.scatter_force(node * nd, mg, 1.0, out)?;
             }
             if let Some(k) = k.as_mut() {
-                self.scatter_stiffness(node * nd, nd, mh, -1.0, k)?;
+                self.scatter_stiffness(node * nd, nd, mh, -1.0, &mut **k)?;
             }
             Ok(())
         })
@@ -532,13 +571,13 @@ impl<E: Element> Robot<E> {
     /// Adds `sign · Tᵀ H T` for a `size × size` matrix `h` over the
     /// coordinates `start .. start + size` into the banded free-coordinate
     /// matrix `k`.
-    fn scatter_stiffness(
+    fn scatter_stiffness<K: TangentTarget>(
         &self,
         start: usize,
         size: usize,
         h: &[f64],
         sign: f64,
-        k: &mut BandedMatrix,
+        k: &mut K,
     ) -> Result<()> {
         let dofs = range_dofs(start, size);
         self.dofs
@@ -700,6 +739,24 @@ impl<E: Element> Robot<E> {
     pub fn node_positions(&self, q: &[f64]) -> Vec<Vec<f64>> {
         self.rod.node_positions(q)
     }
+}
+
+/// The tangent pattern of a chain of `n_elements` two-node elements whose
+/// node `i` is block `i` of `dofs`: element `e` couples the free
+/// coordinates of blocks `e` and `e + 1`, in order.
+fn tangent_pattern(dofs: &DofMap, n_elements: usize) -> Result<SymmetricPattern> {
+    let mut elements = Vec::with_capacity(n_elements);
+    for e in 0..n_elements {
+        let (Some(a), Some(b)) = (dofs.free(e), dofs.free(e + 1)) else {
+            return Err(crate::Error::IndexOutOfRange {
+                name: "element nodes".into(),
+                index: e + 1,
+                len: dofs.n_blocks(),
+            });
+        };
+        elements.push(a.chain(b).collect::<Vec<usize>>());
+    }
+    SymmetricPattern::from_elements(dofs.n_u(), &elements)
 }
 
 /// The coordinate indices `start .. start + len` (at most [`MAX_EDOF`]) in

@@ -218,3 +218,43 @@ fn fused_and_cached_kernels_equal_the_plain_ones() {
     r.restrict_into(&f, &mut uu).unwrap();
     assert_eq!(uu, r.restrict(&f).unwrap());
 }
+
+#[test]
+fn tangent_on_the_connectivity_pattern_equals_the_band() {
+    // both clamps, actuation and a concentrated moment (node blocks whose
+    // (i, j) and (j, i) share one stored entry): every entry of the band is
+    // in the pattern with the same value, and nothing else is stored
+    for clamp in [Clamp::PositionAndDirection, Clamp::Full] {
+        let mut spec = robot(3).spec().clone();
+        spec.base.clamp = clamp;
+        let r = spec.build_planar().unwrap();
+        let loads = Loads {
+            pressures_pa: vec![4e4, 2e4],
+            node_moments: vec![crate::loads::NodeMoment {
+                node: 4,
+                moment_nm: vec![0.01],
+            }],
+            ..Loads::default()
+        };
+        let q = perturbed(&r, 5);
+        let dead = r.dead_force(&loads).unwrap();
+        let mut band = BandedMatrix::zeros(1, 0, 0);
+        let mut rb = vec![0.0; r.n_free()];
+        r.residual_and_tangent_into(&q, &dead, &loads, &mut rb, &mut band)
+            .unwrap();
+        // a matrix on another pattern is put on the robot's
+        let other = Arc::new(SymmetricPattern::from_elements(2, [[0, 1]]).unwrap());
+        let mut k = crate::linsolve::SymmetricMatrix::zeros(other);
+        let mut rs = vec![0.0; r.n_free()];
+        r.residual_and_tangent_into(&q, &dead, &loads, &mut rs, &mut k)
+            .unwrap();
+        assert!(Arc::ptr_eq(k.pattern(), r.tangent_pattern()));
+        assert_eq!(rs, rb);
+        assert_eq!(k.to_banded().unwrap(), band);
+        let mut k2 = k.clone();
+        k2.values_mut().fill(7.0);
+        r.tangent_into(&q, &loads, &mut k2).unwrap();
+        assert_eq!(k2, k);
+        assert!(band.max_abs() > 0.0);
+    }
+}

@@ -382,6 +382,33 @@ impl SymmetricMatrix {
         }
     }
 
+    /// Adds `v` to entry `(i, j)` if it is in the pattern (binary search)
+    /// and says whether it was; no error, no allocation (a scatter that
+    /// drops what the pattern does not hold).
+    ///
+    /// # Example
+    /// ```
+    /// use std::sync::Arc;
+    /// use softrod::linsolve::{SymmetricMatrix, SymmetricPattern};
+    /// let mut k = SymmetricMatrix::zeros(Arc::new(SymmetricPattern::from_elements(3, [[0, 1]])?));
+    /// assert!(k.add_if_present(1, 0, 2.5));
+    /// assert!(!k.add_if_present(0, 2, 1.0) && !k.add_if_present(7, 0, 1.0));
+    /// assert_eq!(k.get(0, 1), 2.5);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn add_if_present(&mut self, i: usize, j: usize, v: f64) -> bool {
+        if i >= self.n() || j >= self.n() {
+            return false;
+        }
+        match self.pattern.position(i, j) {
+            Some(k) => {
+                self.values[k] += v;
+                true
+            }
+            None => false,
+        }
+    }
+
     /// Entry `(i, j)` (zero outside the pattern).
     pub fn get(&self, i: usize, j: usize) -> f64 {
         self.pattern.position(i, j).map_or(0.0, |k| self.values[k])

@@ -51,6 +51,18 @@ impl StiffnessSink for crate::linsolve::BandedMatrix {
     }
 }
 
+impl StiffnessSink for crate::linsolve::SymmetricMatrix {
+    /// Adds an entry of the upper triangle (`row <= col`); entries below
+    /// the diagonal are skipped, as their mirror image is the same stored
+    /// value (a symmetric scatter sends both), and entries outside the
+    /// pattern are dropped, as for the band.
+    fn add(&mut self, row: usize, col: usize, value: f64) {
+        if row <= col {
+            self.add_if_present(row, col, value);
+        }
+    }
+}
+
 /// A conservative, configuration-dependent force: potential `V(q)` (J) over
 /// the model's coordinates `q` (all of them, `n_q` numbers), its generalized
 /// force `−∂V/∂q` and its stiffness `∂²V/∂q²`.

@@ -18,6 +18,7 @@
 //! sequence of nearby loads, warm, reusing factorizations: what an estimator
 //! or a controller needs; it falls back to [`StaticSolver`].
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
@@ -25,7 +26,10 @@ use serde::{Deserialize, Serialize};
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::{check_len, Error, Result};
-use crate::linsolve::BandedMatrix;
+use crate::linsolve::{
+    AutoSolver, FactorOptions, Factorization, LinsolveError, SolverKind, SymmetricMatrix,
+    TangentSolver,
+};
 use crate::loads::Loads;
 use crate::numeric::norm2;
 pub use crate::outcome::{NonFiniteAt, StaticCriterion, StaticReport, StaticStatus};
@@ -59,6 +63,9 @@ pub struct StaticSettings {
     pub max_step_rotation: f64,
     /// Smallest homotopy step before giving up (default 1e-4).
     pub min_load_step: f64,
+    /// The linear solver of the tangent (default [`SolverKind::Auto`]: the
+    /// banded one for the robot's single chain).
+    pub linear_solver: SolverKind,
 }
 
 impl Default for StaticSettings {
@@ -70,6 +77,7 @@ impl Default for StaticSettings {
             increment_tolerance: 1e-12,
             max_step_rotation: 0.5,
             min_load_step: 1e-4,
+            linear_solver: SolverKind::Auto,
         }
     }
 }
@@ -152,8 +160,10 @@ pub struct StaticSolver {
     pub settings: StaticSettings,
 }
 
-struct Work {
-    k: BandedMatrix,
+struct Work<'a> {
+    k: SymmetricMatrix,
+    /// Analyzed on the robot's tangent pattern.
+    solver: &'a mut AutoSolver,
     r: Vec<f64>,
     iterations: usize,
     floor: f64,
@@ -186,6 +196,48 @@ impl StaticSolver {
         q0: Option<&[f64]>,
     ) -> Result<Equilibrium> {
         self.settings.validate()?;
+        let mut solver =
+            AutoSolver::with_kind(robot.tangent_pattern(), self.settings.linear_solver)?;
+        self.solve_with(robot, loads, q0, &mut solver)
+    }
+
+    /// [`StaticSolver::solve`] with a linear solver analyzed before on
+    /// [`Robot::tangent_pattern`]: a caller that solves one robot many times
+    /// analyzes its pattern once (`settings.linear_solver` is then not read).
+    ///
+    /// # Errors
+    /// As [`StaticSolver::solve`]; [`Error::InvalidParameter`] (field
+    /// `solver`) for a solver analyzed on another pattern.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::linsolve::{AutoSolver, SolverKind};
+    /// use softrod::statics::StaticSolver;
+    /// let scene = softrod::scene::Scene::two_section();
+    /// let (robot, loads) = (scene.robot()?, scene.loads()?);
+    /// let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), SolverKind::Sparse)?;
+    /// let eq = StaticSolver::default().solve_with(&robot, &loads, None, &mut solver)?;
+    /// assert!(eq.report.status.is_converged());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn solve_with<E: Element>(
+        &self,
+        robot: &Robot<E>,
+        loads: &Loads,
+        q0: Option<&[f64]>,
+        solver: &mut AutoSolver,
+    ) -> Result<Equilibrium> {
+        self.settings.validate()?;
+        let pattern = solver.pattern();
+        if !(Arc::ptr_eq(pattern, robot.tangent_pattern())
+            || **pattern == **robot.tangent_pattern())
+        {
+            return Err(Error::invalid(
+                "solver",
+                pattern.n(),
+                "analyzed on another pattern than the robot's tangent",
+            ));
+        }
         let start = Instant::now();
         let nd = E::NODE_DOFS;
         let dead = robot.dead_force(loads)?;
@@ -216,7 +268,8 @@ impl StaticSolver {
         q[..nd].copy_from_slice(&base);
         let n = robot.n_free();
         let mut w = Work {
-            k: BandedMatrix::zeros(n, 2 * nd - 1, 2 * nd - 1),
+            k: SymmetricMatrix::zeros(robot.tangent_pattern().clone()),
+            solver,
             r: vec![0.0; n],
             iterations: 0,
             floor: 0.0,
@@ -329,7 +382,7 @@ impl StaticSolver {
         loads: &Loads,
         offset: &[f64],
         q: &mut [f64],
-        w: &mut Work,
+        w: &mut Work<'_>,
         scale: f64,
     ) -> Result<StaticStatus> {
         let nd = E::NODE_DOFS;
@@ -383,15 +436,19 @@ impl StaticSolver {
             // pivoted LU otherwise, neither consuming it)
             let mut found = false;
             for mu in [0.0, 1e-8, 1e-6, 1e-4, 1e-2, 1.0] {
-                let lu = match w.k.factor_scaled_symmetric(mu, "tangent stiffness") {
+                let options = FactorOptions {
+                    shift: mu,
+                    ..FactorOptions::default()
+                };
+                let lu = match w.solver.factor(&w.k, options) {
                     Ok(lu) => lu,
-                    Err(Error::Singular { .. }) => continue,
-                    Err(Error::NonFinite { .. }) => {
+                    Err(LinsolveError::Singular { .. }) => continue,
+                    Err(LinsolveError::NonFinite { .. }) => {
                         return Ok(StaticStatus::NonFinite {
                             at: NonFiniteAt::Tangent,
                         });
                     }
-                    Err(e) => return Err(e),
+                    Err(e) => return Err(e.into()),
                 };
                 dq.copy_from_slice(&w.r);
                 lu.solve_in_place(&mut dq)?;

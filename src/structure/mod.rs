@@ -17,11 +17,14 @@
 //!   (`assemble`) adds element by element through the map: residual
 //!   `R(u) = T(u)ᵀ Q(φ(u))` of the equilibrium (17) and tangent
 //!   `K_u = Tᵀ K T + Σ_i g_i ∂²φ_i/∂u²` as a [`Triplets`] list.
-//! - [`solve`]: Newton's method on `R(u) = 0` with a dense factorization
-//!   behind one function ([`solve::solve_tangent`]).
+//! - [`model`]: what an equilibrium solver needs of a model
+//!   ([`Assembled`], implemented by the structure and the clamped robot).
+//! - [`solve`]: Newton's method on `R(u) = 0` for any [`Assembled`] model,
+//!   the tangent factored by a [`crate::linsolve::AutoSolver`].
 
 mod assemble;
 pub mod dofmap;
+pub mod model;
 pub mod rigid;
 pub mod rod;
 pub mod section;
@@ -34,6 +37,7 @@ use std::sync::Arc;
 
 pub use assemble::JointReaction;
 pub use dofmap::{BlockRule, DofMap};
+pub use model::Assembled;
 pub use rod::Rod;
 pub use section::{Chamber, Section};
 pub use spec::{

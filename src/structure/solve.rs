@@ -1,16 +1,20 @@
-//! Newton's method on a structure's equilibrium (17) in its free
-//! coordinates, `R(u) = 0`, with `K_u du = R` per iteration, equal load
+//! Newton's method on a model's equilibrium (17) in its free
+//! coordinates, `R(u) = 0` with `q = φ(u)`, for any [`Assembled`] model (a
+//! structure, the clamped robot): `K_u du = R` per iteration, equal load
 //! steps and a backtracking line search on the total potential.
 //!
-//! The linear solve is one function, [`solve_tangent`] (a dense LU of the
-//! assembled entries); a sparse factorization with its symbolic analysis
-//! reused across iterations replaces it without touching the rest.
+//! The tangent is assembled on the model's sparsity pattern, analyzed once
+//! per solve by an [`AutoSolver`] (banded or sparse, [`NewtonSettings::linear_solver`])
+//! and factored numerically at every iteration.
 
 use serde::{Deserialize, Serialize};
 
-use super::{Structure, StructureLoads, Triplets};
-use crate::element::Element;
+use super::model::{pattern_of, symmetric_from_triplets};
+use super::{Assembled, Triplets};
 use crate::error::{check_len, Error, Result};
+use crate::linsolve::{
+    AutoSolver, FactorOptions, Factorization, SolverKind, SymmetricMatrix, TangentSolver,
+};
 
 /// Settings of [`solve_equilibrium`].
 ///
@@ -34,6 +38,10 @@ pub struct NewtonSettings {
     /// Number of equal load steps: the loads scaled by `k / load_steps`
     /// (weights always whole) (default 1).
     pub load_steps: usize,
+    /// The linear solver of the tangent (default [`SolverKind::Auto`]:
+    /// banded for a single chain, sparse otherwise).
+    #[serde(default)]
+    pub linear_solver: SolverKind,
 }
 
 impl Default for NewtonSettings {
@@ -42,6 +50,7 @@ impl Default for NewtonSettings {
             max_iterations: 50,
             tolerance: 1e-10,
             load_steps: 1,
+            linear_solver: SolverKind::Auto,
         }
     }
 }
@@ -121,8 +130,9 @@ impl StructureEquilibrium {
     }
 }
 
-/// Solves `K du = r` for the assembled tangent `k` (entries summed into a
-/// dense matrix, LU with partial pivoting).
+/// Solves `K du = r` for the assembled tangent `k` (its symmetric part on
+/// the pattern of its entries, factored by an [`AutoSolver`]: one solve; a
+/// Newton method keeps its solver and factors on the same pattern).
 ///
 /// # Errors
 /// [`Error::DimensionMismatch`] if `r` does not have `k.n()` entries;
@@ -140,21 +150,28 @@ impl StructureEquilibrium {
 /// ```
 pub fn solve_tangent(k: &Triplets, r: &[f64]) -> Result<Vec<f64>> {
     check_len("r", k.n(), r.len())?;
-    let singular = |index: usize| Error::Singular {
-        context: "structure tangent (dense LU)".into(),
-        index,
-        pivot: 0.0,
-        scale: 0.0,
-    };
-    let x = k
-        .to_dense()
-        .lu()
-        .solve(&nalgebra::DVector::from_column_slice(r))
-        .ok_or_else(|| singular(0))?;
+    let pattern = std::sync::Arc::new(pattern_of(k)?);
+    let mut m = SymmetricMatrix::zeros(pattern.clone());
+    symmetric_from_triplets(k, &pattern, &mut m)?;
+    let mut solver = AutoSolver::analyze(&pattern)?;
+    factor_and_solve(&mut solver, &m, r)
+}
+
+/// Factors `k` with `solver` and solves `K x = r`.
+fn factor_and_solve(solver: &mut AutoSolver, k: &SymmetricMatrix, r: &[f64]) -> Result<Vec<f64>> {
+    let mut x = r.to_vec();
+    solver
+        .factor(k, FactorOptions::default())?
+        .solve_in_place(&mut x)?;
     if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-        return Err(singular(i));
+        return Err(Error::Singular {
+            context: "tangent solve (non-finite step)".into(),
+            index: i,
+            pivot: 0.0,
+            scale: 0.0,
+        });
     }
-    Ok(x.as_slice().to_vec())
+    Ok(x)
 }
 
 fn norm_inf(v: &[f64]) -> f64 {
@@ -162,13 +179,13 @@ fn norm_inf(v: &[f64]) -> f64 {
 }
 
 /// Newton's method on `R(u) = 0` from `u0` (default: the straight
-/// reference, [`Structure::reference_free_coordinates`]), in
+/// reference, [`Assembled::reference_free_coordinates`]), in
 /// `settings.load_steps` equal load steps.
 ///
 /// # Errors
-/// The errors of [`NewtonSettings::validate`], [`Structure::dead_force`]
-/// and [`solve_tangent`]; [`Error::DimensionMismatch`] for a `u0` of the
-/// wrong size; [`Error::NonFinite`] if an iterate stops being finite.
+/// The errors of [`NewtonSettings::validate`], [`Assembled::dead_force`]
+/// and the tangent's factorization; [`Error::DimensionMismatch`] for a `u0`
+/// of the wrong size; [`Error::NonFinite`] if an iterate stops being finite.
 ///
 /// # Example
 /// ```
@@ -186,11 +203,49 @@ fn norm_inf(v: &[f64]) -> f64 {
 /// let tip = eq.q[4 * 4 + 1];
 /// assert!((tip + 1e-4 * 0.008 / (3.0 * 0.02)).abs() < 1e-3 * 1e-4 * 0.008 / 0.06);
 /// ```
-pub fn solve_equilibrium<E: Element>(
-    structure: &Structure<E>,
-    loads: &StructureLoads,
+pub fn solve_equilibrium<M: Assembled>(
+    structure: &M,
+    loads: &M::Loads,
     u0: Option<&[f64]>,
     settings: &NewtonSettings,
+) -> Result<StructureEquilibrium> {
+    settings.validate()?;
+    let pattern = structure.tangent_pattern()?;
+    let mut solver = AutoSolver::with_kind(&pattern, settings.linear_solver)?;
+    solve_equilibrium_with(structure, loads, u0, settings, &mut solver)
+}
+
+/// [`solve_equilibrium`] with a solver analyzed before, on the model's
+/// [`Assembled::tangent_pattern`] (a caller that solves one model many
+/// times analyzes once; `settings.linear_solver` is then not read).
+///
+/// # Errors
+/// As [`solve_equilibrium`];
+/// [`crate::Error::InvalidParameter`] (field `solver`) for a solver
+/// analyzed on another pattern.
+///
+/// # Example
+/// ```
+/// use softrod::assembly::{RobotSpec, Section};
+/// use softrod::linsolve::{AutoSolver, SolverKind};
+/// use softrod::loads::Loads;
+/// use softrod::structure::solve::{solve_equilibrium_with, NewtonSettings};
+/// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 8)]).build_planar()?;
+/// let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), SolverKind::Sparse)?;
+/// let settings = NewtonSettings::default();
+/// let a = solve_equilibrium_with(&robot, &Loads::default(), None, &settings, &mut solver)?;
+/// let mut light = Loads::default();
+/// light.point_forces = vec![softrod::loads::PointForce { s_m: 0.2, force_n: vec![0.0, 1e-3] }];
+/// let b = solve_equilibrium_with(&robot, &light, Some(&a.u), &settings, &mut solver)?;
+/// assert!(a.converged() && b.converged() && b.q[b.q.len() - 3] > a.q[a.q.len() - 3]);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn solve_equilibrium_with<M: Assembled>(
+    structure: &M,
+    loads: &M::Loads,
+    u0: Option<&[f64]>,
+    settings: &NewtonSettings,
+    solver: &mut AutoSolver,
 ) -> Result<StructureEquilibrium> {
     settings.validate()?;
     structure.validate_loads(loads)?;
@@ -199,11 +254,22 @@ pub fn solve_equilibrium<E: Element>(
             check_len("u0", structure.n_free(), u0.len())?;
             u0.to_vec()
         }
-        None => structure.reference_free_coordinates().to_vec(),
+        None => structure.reference_free_coordinates(),
     };
     let n = structure.n_free();
+    let pattern = solver.pattern().clone();
+    if pattern.n() != n {
+        return Err(Error::invalid(
+            "solver",
+            pattern.n(),
+            "analyzed for another pattern than the model's tangent",
+        ));
+    }
     let mut r = vec![0.0; n];
-    let mut k = Triplets::new(n);
+    let mut k = SymmetricMatrix::zeros(pattern);
+    let mut q = vec![0.0; structure.n_q()];
+    let mut q_trial = q.clone();
+    let mut r_trial = r.clone();
     let mut iterations = 0;
     let mut floor = 0.0;
     let steps = settings.load_steps;
@@ -212,12 +278,13 @@ pub fn solve_equilibrium<E: Element>(
         let scaled = if steps == 1 {
             loads.clone()
         } else {
-            loads.scaled(factor)
+            structure.scaled_loads(loads, factor)
         };
         let dead = structure.dead_force(&scaled)?;
         let mut applied = vec![0.0; n];
-        structure.dof_map().restrict_into(&u, &dead, &mut applied)?;
-        structure.residual_and_tangent_into(&u, &dead, &scaled, &mut r, &mut k)?;
+        structure.restrict_into(&u, &dead, &mut applied)?;
+        structure.configuration_into(&u, &mut q)?;
+        structure.residual_and_tangent_into(&u, &q, &dead, &scaled, &mut r, &mut k)?;
         let scale = norm_inf(&applied).max(norm_inf(&r));
         let target = settings.tolerance * scale;
         let mut converged = false;
@@ -229,7 +296,7 @@ pub fn solve_equilibrium<E: Element>(
             floor = 10.0 * f64::EPSILON * k.max_abs() * norm_inf(&u);
             let at_floor = norm_inf(&r) <= floor;
             iterations += 1;
-            let du = solve_tangent(&k, &r)?;
+            let du = factor_and_solve(solver, &k, &r)?;
             // backtracking: accept a step that lowers the potential
             // (Armijo) or the residual
             let slope: f64 = r.iter().zip(&du).map(|(a, b)| a * b).sum();
@@ -243,9 +310,10 @@ pub fn solve_equilibrium<E: Element>(
                         context: "structure Newton iterate".into(),
                     });
                 }
-                let dpi = structure.potential_change(&u, &trial, &dead, &scaled)?;
-                let rt = structure.residual(&trial, &dead, &scaled)?;
-                if dpi <= -1e-4 * alpha * slope.max(0.0) || norm_inf(&rt) < r0 {
+                structure.configuration_into(&trial, &mut q_trial)?;
+                let dpi = structure.potential_change(&u, &q, &trial, &q_trial, &dead, &scaled)?;
+                structure.residual_into(&trial, &q_trial, &dead, &scaled, &mut r_trial)?;
+                if dpi <= -1e-4 * alpha * slope.max(0.0) || norm_inf(&r_trial) < r0 {
                     accepted = Some(trial);
                     break;
                 }
@@ -256,7 +324,8 @@ pub fn solve_equilibrium<E: Element>(
                 // residual, and stop
                 if let Some(next) = accepted {
                     u = next;
-                    structure.residual_and_tangent_into(&u, &dead, &scaled, &mut r, &mut k)?;
+                    structure.configuration_into(&u, &mut q)?;
+                    structure.residual_and_tangent_into(&u, &q, &dead, &scaled, &mut r, &mut k)?;
                 }
                 converged = true;
                 break;
@@ -274,7 +343,8 @@ pub fn solve_equilibrium<E: Element>(
                 );
             };
             u = next;
-            structure.residual_and_tangent_into(&u, &dead, &scaled, &mut r, &mut k)?;
+            structure.configuration_into(&u, &mut q)?;
+            structure.residual_and_tangent_into(&u, &q, &dead, &scaled, &mut r, &mut k)?;
         }
         if !converged && norm_inf(&r) > target {
             return finish(
@@ -299,15 +369,16 @@ pub fn solve_equilibrium<E: Element>(
     )
 }
 
-fn finish<E: Element>(
-    structure: &Structure<E>,
+fn finish<M: Assembled>(
+    structure: &M,
     u: Vec<f64>,
     r: &[f64],
     floor: f64,
     iterations: usize,
     status: NewtonStatus,
 ) -> Result<StructureEquilibrium> {
-    let q = structure.configuration(&u)?;
+    let mut q = vec![0.0; structure.n_q()];
+    structure.configuration_into(&u, &mut q)?;
     Ok(StructureEquilibrium {
         u,
         q,
@@ -316,4 +387,59 @@ fn finish<E: Element>(
         residual_floor_n: floor,
         iterations,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The clamped robot, an [`Assembled`] model: Newton in its free
+    /// coordinates with either linear solver reaches the static solver's
+    /// equilibrium of the paper's two-section robot (weight, pressures, a
+    /// tip force, a moment).
+    #[test]
+    fn the_robot_through_the_trait_reaches_the_static_equilibrium() {
+        let scene = crate::scene::Scene::two_section();
+        let robot = scene.robot().unwrap();
+        let loads = scene.loads().unwrap();
+        let reference = crate::statics::StaticSolver::default()
+            .solve(&robot, &loads, None)
+            .unwrap();
+        let scale = reference.q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for kind in [SolverKind::Banded, SolverKind::Sparse] {
+            let settings = NewtonSettings {
+                linear_solver: kind,
+                tolerance: 1e-12,
+                ..NewtonSettings::default()
+            };
+            let eq = solve_equilibrium(&robot, &loads, None, &settings).unwrap();
+            assert!(eq.converged(), "{kind:?}: {:?}", eq.status);
+            let diff =
+                eq.q.iter()
+                    .zip(&reference.q)
+                    .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(diff <= 1e-10 * scale, "{kind:?}: {diff:e} of {scale:e}");
+        }
+    }
+
+    /// The one-shot solve of a list of entries: the symmetric part, on the
+    /// entries' pattern.
+    #[test]
+    fn solve_tangent_solves_a_coupled_system() {
+        use crate::loads::force_field::StiffnessSink;
+        let mut k = Triplets::new(3);
+        for (i, j, v) in [
+            (0, 0, 4.0),
+            (1, 1, 3.0),
+            (2, 2, 2.0),
+            (0, 2, 1.0),
+            (2, 0, 1.0),
+        ] {
+            k.add(i, j, v);
+        }
+        let x = solve_tangent(&k, &[5.0, 3.0, 3.0]).unwrap();
+        for (a, b) in x.iter().zip([1.0, 1.0, 1.0]) {
+            assert!((a - b).abs() < 1e-14, "{x:?}");
+        }
+    }
 }

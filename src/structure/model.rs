@@ -1,0 +1,356 @@
+//! What an equilibrium solver needs of a model, in its free coordinates:
+//! the one trait both the clamped robot ([`crate::assembly::Robot`]) and a
+//! multi-body [`Structure`] implement.
+//!
+//! A model has free coordinates `u` and all coordinates `q = φ(u)` (a
+//! linear clamp map for the robot, rigid ends for a structure); its
+//! equilibrium (17) is `R(u) = T(u)ᵀ Q(φ(u)) = 0` with the tangent
+//! `K_u = −∂R/∂u` assembled on a sparsity pattern fixed by the model's
+//! connectivity, and `R = −∂Π/∂u` for the total potential `Π`, the merit
+//! function of a line search.
+
+use std::sync::Arc;
+
+use super::{Structure, StructureLoads, Triplets};
+use crate::assembly::Robot;
+use crate::element::Element;
+use crate::error::{check_len, Error, Result};
+use crate::linsolve::{SymmetricMatrix, SymmetricPattern};
+use crate::loads::Loads;
+
+/// A model whose equilibrium a static solver finds in the free coordinates
+/// `u`, with `q = φ(u)`.
+///
+/// Every method that takes `u` and `q` expects `q = φ(u)` (the solver
+/// computes it once per iterate with [`Assembled::configuration_into`]); a
+/// model reads whichever is cheaper for it.
+///
+/// # Example
+/// ```
+/// use softrod::assembly::{RobotSpec, Section};
+/// use softrod::linsolve::SymmetricMatrix;
+/// use softrod::loads::Loads;
+/// use softrod::structure::Assembled;
+/// fn residual_norm<M: Assembled>(m: &M, loads: &M::Loads) -> softrod::Result<f64> {
+///     let u = m.reference_free_coordinates();
+///     let mut q = vec![0.0; m.n_q()];
+///     m.configuration_into(&u, &mut q)?;
+///     let dead = m.dead_force(loads)?;
+///     let mut r = vec![0.0; m.n_free()];
+///     let mut k = SymmetricMatrix::zeros(m.tangent_pattern()?);
+///     m.residual_and_tangent_into(&u, &q, &dead, loads, &mut r, &mut k)?;
+///     Ok(r.iter().fold(0.0f64, |a, v| a.max(v.abs())))
+/// }
+/// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
+/// // straight under its own weight: not in equilibrium
+/// assert!(residual_norm(&robot, &Loads::default())? > 0.0);
+/// # Ok::<(), softrod::Error>(())
+/// ```
+pub trait Assembled {
+    /// The model's loads.
+    type Loads: Clone;
+
+    /// Number of free coordinates `n_u`.
+    fn n_free(&self) -> usize;
+
+    /// Number of coordinates `n_q`.
+    fn n_q(&self) -> usize;
+
+    /// `q = φ(u)` into `q`.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for wrong sizes.
+    fn configuration_into(&self, u: &[f64], q: &mut [f64]) -> Result<()>;
+
+    /// The free coordinates of the straight, unstressed reference (where a
+    /// solve starts by default).
+    fn reference_free_coordinates(&self) -> Vec<f64>;
+
+    /// Checks that `loads` fit the model.
+    ///
+    /// # Errors
+    /// A typed error naming the field at fault.
+    fn validate_loads(&self, loads: &Self::Loads) -> Result<()>;
+
+    /// The dead forces over all coordinates (N): self-weight and the known
+    /// configuration-independent loads.
+    ///
+    /// # Errors
+    /// As the model's load checks.
+    fn dead_force(&self, loads: &Self::Loads) -> Result<Vec<f64>>;
+
+    /// `loads` scaled by `factor` (a load step).
+    fn scaled_loads(&self, loads: &Self::Loads, factor: f64) -> Self::Loads;
+
+    /// `T(u)ᵀ f` for a force `f` over all coordinates into `out` (the dead
+    /// force seen by the free coordinates: the scale of a residual).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for wrong sizes.
+    fn restrict_into(&self, u: &[f64], f: &[f64], out: &mut [f64]) -> Result<()>;
+
+    /// The residual `R(u)` (N) into `out`.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for wrong sizes.
+    fn residual_into(
+        &self,
+        u: &[f64],
+        q: &[f64],
+        dead: &[f64],
+        loads: &Self::Loads,
+        out: &mut [f64],
+    ) -> Result<()>;
+
+    /// The residual into `out` and the tangent `K_u = −∂R/∂u` into `k`
+    /// (put on [`Assembled::tangent_pattern`] if it is on another).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for wrong sizes.
+    fn residual_and_tangent_into(
+        &self,
+        u: &[f64],
+        q: &[f64],
+        dead: &[f64],
+        loads: &Self::Loads,
+        out: &mut [f64],
+        k: &mut SymmetricMatrix,
+    ) -> Result<()>;
+
+    /// `Π(to) − Π(from)` (J).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for wrong sizes.
+    #[allow(clippy::too_many_arguments)]
+    fn potential_change(
+        &self,
+        from_u: &[f64],
+        from_q: &[f64],
+        to_u: &[f64],
+        to_q: &[f64],
+        dead: &[f64],
+        loads: &Self::Loads,
+    ) -> Result<f64>;
+
+    /// The sparsity pattern of the tangent over the free coordinates (what a
+    /// solver analyzes once).
+    ///
+    /// # Errors
+    /// [`Error::TooLarge`] if it cannot be stored.
+    fn tangent_pattern(&self) -> Result<Arc<SymmetricPattern>>;
+}
+
+impl<E: Element> Assembled for Robot<E> {
+    type Loads = Loads;
+
+    fn n_free(&self) -> usize {
+        Robot::n_free(self)
+    }
+
+    fn n_q(&self) -> usize {
+        Robot::n_q(self)
+    }
+
+    fn configuration_into(&self, u: &[f64], q: &mut [f64]) -> Result<()> {
+        self.dof_map().configuration_into(u, q)
+    }
+
+    fn reference_free_coordinates(&self) -> Vec<f64> {
+        // the clamp's free directions at zero, the nodes where they lie
+        let q = self.reference_configuration();
+        let mut u = vec![0.0; self.n_base_free()];
+        u.extend_from_slice(q.get(E::NODE_DOFS..).unwrap_or(&[]));
+        u
+    }
+
+    fn validate_loads(&self, loads: &Loads) -> Result<()> {
+        Robot::validate_loads(self, loads)
+    }
+
+    fn dead_force(&self, loads: &Loads) -> Result<Vec<f64>> {
+        Robot::dead_force(self, loads)
+    }
+
+    fn scaled_loads(&self, loads: &Loads, factor: f64) -> Loads {
+        loads.scaled(factor)
+    }
+
+    fn restrict_into(&self, _u: &[f64], f: &[f64], out: &mut [f64]) -> Result<()> {
+        Robot::restrict_into(self, f, out)
+    }
+
+    fn residual_into(
+        &self,
+        _u: &[f64],
+        q: &[f64],
+        dead: &[f64],
+        loads: &Loads,
+        out: &mut [f64],
+    ) -> Result<()> {
+        Robot::residual_into(self, q, dead, loads, out)
+    }
+
+    fn residual_and_tangent_into(
+        &self,
+        _u: &[f64],
+        q: &[f64],
+        dead: &[f64],
+        loads: &Loads,
+        out: &mut [f64],
+        k: &mut SymmetricMatrix,
+    ) -> Result<()> {
+        Robot::residual_and_tangent_into(self, q, dead, loads, out, k)
+    }
+
+    fn potential_change(
+        &self,
+        _from_u: &[f64],
+        from_q: &[f64],
+        _to_u: &[f64],
+        to_q: &[f64],
+        dead: &[f64],
+        loads: &Loads,
+    ) -> Result<f64> {
+        Robot::potential_change(self, from_q, to_q, dead, loads)
+    }
+
+    fn tangent_pattern(&self) -> Result<Arc<SymmetricPattern>> {
+        Ok(Robot::tangent_pattern(self).clone())
+    }
+}
+
+impl<E: Element> Assembled for Structure<E> {
+    type Loads = StructureLoads;
+
+    fn n_free(&self) -> usize {
+        Structure::n_free(self)
+    }
+
+    fn n_q(&self) -> usize {
+        Structure::n_q(self)
+    }
+
+    fn configuration_into(&self, u: &[f64], q: &mut [f64]) -> Result<()> {
+        self.dof_map().configuration_into(u, q)
+    }
+
+    fn reference_free_coordinates(&self) -> Vec<f64> {
+        Structure::reference_free_coordinates(self).to_vec()
+    }
+
+    fn validate_loads(&self, loads: &StructureLoads) -> Result<()> {
+        Structure::validate_loads(self, loads)
+    }
+
+    fn dead_force(&self, loads: &StructureLoads) -> Result<Vec<f64>> {
+        Structure::dead_force(self, loads)
+    }
+
+    fn scaled_loads(&self, loads: &StructureLoads, factor: f64) -> StructureLoads {
+        loads.scaled(factor)
+    }
+
+    fn restrict_into(&self, u: &[f64], f: &[f64], out: &mut [f64]) -> Result<()> {
+        self.dof_map().restrict_into(u, f, out)
+    }
+
+    fn residual_into(
+        &self,
+        u: &[f64],
+        _q: &[f64],
+        dead: &[f64],
+        loads: &StructureLoads,
+        out: &mut [f64],
+    ) -> Result<()> {
+        check_len("residual", Structure::n_free(self), out.len())?;
+        out.copy_from_slice(&Structure::residual(self, u, dead, loads)?);
+        Ok(())
+    }
+
+    fn residual_and_tangent_into(
+        &self,
+        u: &[f64],
+        _q: &[f64],
+        dead: &[f64],
+        loads: &StructureLoads,
+        out: &mut [f64],
+        k: &mut SymmetricMatrix,
+    ) -> Result<()> {
+        let mut t = Triplets::new(Structure::n_free(self));
+        Structure::residual_and_tangent_into(self, u, dead, loads, out, &mut t)?;
+        let pattern = if k.n() == t.n() {
+            k.pattern().clone()
+        } else {
+            Assembled::tangent_pattern(self)?
+        };
+        symmetric_from_triplets(&t, &pattern, k)
+    }
+
+    fn potential_change(
+        &self,
+        from_u: &[f64],
+        _from_q: &[f64],
+        to_u: &[f64],
+        _to_q: &[f64],
+        dead: &[f64],
+        loads: &StructureLoads,
+    ) -> Result<f64> {
+        Structure::potential_change(self, from_u, to_u, dead, loads)
+    }
+
+    /// The entries the assembly writes at the reference (each element's,
+    /// each joined block's, each force field's coordinates through the map,
+    /// whatever their values): the pattern of every tangent of this
+    /// structure.
+    fn tangent_pattern(&self) -> Result<Arc<SymmetricPattern>> {
+        let u = Structure::reference_free_coordinates(self);
+        let loads = StructureLoads::default();
+        let dead = vec![0.0; Structure::n_q(self)];
+        let mut r = vec![0.0; Structure::n_free(self)];
+        let mut t = Triplets::new(Structure::n_free(self));
+        Structure::residual_and_tangent_into(self, u, &dead, &loads, &mut r, &mut t)?;
+        Ok(Arc::new(pattern_of(&t)?))
+    }
+}
+
+/// The symmetric pattern holding every entry of `t` (and its mirror).
+pub(crate) fn pattern_of(t: &Triplets) -> Result<SymmetricPattern> {
+    let mut pairs: Vec<[usize; 2]> = t
+        .entries()
+        .iter()
+        .filter(|e| e.0 != e.1)
+        .map(|&(i, j, _)| [i.min(j), i.max(j)])
+        .collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    SymmetricPattern::from_elements(t.n(), &pairs)
+}
+
+/// `k = (T + Tᵀ)/2` for the entries `t` (the symmetric part: a tangent
+/// that is symmetric up to round-off), on `pattern`.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] (field `tangent`) for an entry outside the
+/// pattern (a force field whose coupling changes with the configuration).
+pub(crate) fn symmetric_from_triplets(
+    t: &Triplets,
+    pattern: &Arc<SymmetricPattern>,
+    k: &mut SymmetricMatrix,
+) -> Result<()> {
+    if Arc::ptr_eq(k.pattern(), pattern) {
+        k.fill_zero();
+    } else {
+        *k = SymmetricMatrix::zeros(pattern.clone());
+    }
+    for &(i, j, v) in t.entries() {
+        let w = if i == j { v } else { 0.5 * v };
+        if !k.add_if_present(i, j, w) {
+            return Err(Error::invalid(
+                "tangent",
+                format!("({i}, {j})"),
+                "entry outside the structure's tangent pattern",
+            ));
+        }
+    }
+    Ok(())
+}
