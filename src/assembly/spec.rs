@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::{Clamp, Robot, Section};
 use crate::element::{PlanarCable, SpatialCable, DEFAULT_GAUSS_POINTS};
 use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::structure::spec::{default_gauss, default_gravity};
 
 /// Pose of the clamped base.
 ///
@@ -76,13 +77,6 @@ pub struct RobotSpec {
     /// Gauss points of the bending integral (3 matches exudyn's ANCFCable2D).
     #[serde(default = "default_gauss")]
     pub bending_gauss_points: usize,
-}
-
-fn default_gravity() -> Vec<f64> {
-    vec![0.0, -9.81]
-}
-fn default_gauss() -> usize {
-    DEFAULT_GAUSS_POINTS
 }
 
 impl RobotSpec {

@@ -261,10 +261,12 @@ pub struct StructureSpec {
     pub bending_gauss_points: usize,
 }
 
-fn default_gravity() -> Vec<f64> {
+/// Gravity a spec gets when it states none (m/s²; shared by the robot's spec).
+pub(crate) fn default_gravity() -> Vec<f64> {
     vec![0.0, -9.81]
 }
-fn default_gauss() -> usize {
+/// Gauss points of either integral when a spec states none.
+pub(crate) fn default_gauss() -> usize {
     DEFAULT_GAUSS_POINTS
 }
 
