@@ -15,6 +15,7 @@ use crate::error::{check_len, Error, Result};
 use crate::linsolve::{
     AutoSolver, FactorOptions, Factorization, SolverKind, SymmetricMatrix, TangentSolver,
 };
+use crate::outcome::{StaticCriterion, StaticStatus};
 
 /// Settings of [`solve_equilibrium`].
 ///
@@ -84,27 +85,6 @@ impl NewtonSettings {
     }
 }
 
-/// How [`solve_equilibrium`] ended.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum NewtonStatus {
-    /// `‖R‖∞ ≤ tolerance · scale` at the full load.
-    Converged {
-        /// Newton iterations over all load steps.
-        iterations: usize,
-    },
-    /// A load step used up its iterations.
-    IterationLimit {
-        /// The load factor of the step that did not converge.
-        load_factor: f64,
-    },
-    /// No step length in the line search lowered the potential or the
-    /// residual.
-    LineSearchFailed {
-        /// The load factor of the step that stalled.
-        load_factor: f64,
-    },
-}
-
 /// The outcome of [`solve_equilibrium`]: the last iterate and its status
 /// (not converged is not an error: the caller decides).
 #[derive(Debug, Clone, PartialEq)]
@@ -113,8 +93,12 @@ pub struct StructureEquilibrium {
     pub u: Vec<f64>,
     /// All coordinates, `φ(u)`.
     pub q: Vec<f64>,
-    /// How the solve ended.
-    pub status: NewtonStatus,
+    /// How the solve ended (the static solver's status: converged by the
+    /// residual test or at the round-off floor, iteration limit of a load
+    /// step, line search failed).
+    pub status: StaticStatus,
+    /// The load fraction of the last load step taken (1 when converged).
+    pub load_fraction: f64,
     /// `‖R‖∞` at `u` (N).
     pub residual_n: f64,
     /// The round-off floor of `‖R‖∞` at the last tangent (N).
@@ -126,7 +110,7 @@ pub struct StructureEquilibrium {
 impl StructureEquilibrium {
     /// Whether the solve converged.
     pub fn converged(&self) -> bool {
-        matches!(self.status, NewtonStatus::Converged { .. })
+        self.status.is_converged()
     }
 }
 
@@ -272,6 +256,7 @@ pub fn solve_equilibrium_with<M: Assembled>(
     let mut r_trial = r.clone();
     let mut iterations = 0;
     let mut floor = 0.0;
+    let mut criterion = StaticCriterion::Residual;
     let steps = settings.load_steps;
     for step in 1..=steps {
         let factor = step as f64 / steps as f64;
@@ -291,6 +276,7 @@ pub fn solve_equilibrium_with<M: Assembled>(
         for _ in 0..settings.max_iterations {
             if norm_inf(&r) <= target {
                 converged = true;
+                criterion = StaticCriterion::Residual;
                 break;
             }
             floor = 10.0 * f64::EPSILON * k.max_abs() * norm_inf(&u);
@@ -328,6 +314,7 @@ pub fn solve_equilibrium_with<M: Assembled>(
                     structure.residual_and_tangent_into(&u, &q, &dead, &scaled, &mut r, &mut k)?;
                 }
                 converged = true;
+                criterion = StaticCriterion::RoundOffFloor;
                 break;
             }
             let Some(next) = accepted else {
@@ -337,9 +324,8 @@ pub fn solve_equilibrium_with<M: Assembled>(
                     &r,
                     floor,
                     iterations,
-                    NewtonStatus::LineSearchFailed {
-                        load_factor: factor,
-                    },
+                    StaticStatus::LineSearchFailed,
+                    factor,
                 );
             };
             u = next;
@@ -353,9 +339,8 @@ pub fn solve_equilibrium_with<M: Assembled>(
                 &r,
                 floor,
                 iterations,
-                NewtonStatus::IterationLimit {
-                    load_factor: factor,
-                },
+                StaticStatus::IterationLimit { iterations },
+                factor,
             );
         }
     }
@@ -365,7 +350,8 @@ pub fn solve_equilibrium_with<M: Assembled>(
         &r,
         floor,
         iterations,
-        NewtonStatus::Converged { iterations },
+        StaticStatus::Converged(criterion),
+        1.0,
     )
 }
 
@@ -375,7 +361,8 @@ fn finish<M: Assembled>(
     r: &[f64],
     floor: f64,
     iterations: usize,
-    status: NewtonStatus,
+    status: StaticStatus,
+    load_fraction: f64,
 ) -> Result<StructureEquilibrium> {
     let mut q = vec![0.0; structure.n_q()];
     structure.configuration_into(&u, &mut q)?;
@@ -383,6 +370,7 @@ fn finish<M: Assembled>(
         u,
         q,
         status,
+        load_fraction,
         residual_n: norm_inf(r),
         residual_floor_n: floor,
         iterations,
@@ -420,6 +408,31 @@ mod tests {
                     .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
             assert!(diff <= 1e-10 * scale, "{kind:?}: {diff:e} of {scale:e}");
         }
+    }
+
+    /// The statuses are the static solver's: a converged solve names its
+    /// test, a load step that runs out of iterations says so with the
+    /// iterations spent and the load fraction it was at.
+    #[test]
+    fn statuses_are_the_static_solvers() {
+        let scene = crate::scene::Scene::two_section();
+        let robot = scene.robot().unwrap();
+        let loads = scene.loads().unwrap();
+        let eq = solve_equilibrium(&robot, &loads, None, &NewtonSettings::default()).unwrap();
+        assert!(
+            matches!(eq.status, StaticStatus::Converged(_)) && eq.load_fraction == 1.0,
+            "{:?}",
+            eq.status
+        );
+        let settings = NewtonSettings {
+            max_iterations: 1,
+            load_steps: 4,
+            ..NewtonSettings::default()
+        };
+        let eq = solve_equilibrium(&robot, &loads, None, &settings).unwrap();
+        assert!(!eq.converged());
+        assert_eq!(eq.status, StaticStatus::IterationLimit { iterations: 1 });
+        assert_eq!(eq.load_fraction, 0.25);
     }
 
     /// The one-shot solve of a list of entries: the symmetric part, on the
