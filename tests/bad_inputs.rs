@@ -9,6 +9,8 @@
 //! and checked with `Scene::validate`, exactly what `Scene::from_json` runs.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+mod common;
+
 use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
@@ -23,7 +25,7 @@ use softrod::quadrature::GaussRule;
 use softrod::scene::{Marker, RefinementTarget, Scene, SceneLoad};
 use softrod::statics::{StaticSettings, StaticSolver, StaticStatus};
 use softrod::structure::{
-    BodyLoad, EndSupport, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec,
+    BodyLoad, EndSupport, JointSpec, RigidBodySpec, RodEnd, StructureLoads, StructureSpec,
 };
 use softrod::Error;
 
@@ -171,30 +173,9 @@ fn structure(f: impl FnOnce(&mut StructureSpec)) -> Result<(), Error> {
     spec.build_planar().map(|_| ())
 }
 
+/// The two-leg platform of `tests/structure.rs` (4 elements a leg, 50 g).
 fn two_legs() -> StructureSpec {
-    let leg = |x: f64| {
-        RodSpec::clamped(
-            vec![Section::uniform(0.2, 300.0, 0.02, 4)],
-            vec![x, 0.0],
-            vec![0.0, 1.0],
-        )
-    };
-    let joint = |rod| JointSpec::RodToBody {
-        rod,
-        end: RodEnd::End,
-        body: 0,
-        point_m: None,
-        direction: None,
-    };
-    StructureSpec::new(
-        vec![leg(-0.05), leg(0.05)],
-        vec![RigidBodySpec {
-            mass_kg: 0.05,
-            position_m: vec![0.0, 0.2],
-            orientation_rad: vec![0.0],
-        }],
-        vec![joint(0), joint(1)],
-    )
+    common::two_legs(4, 0.05, true)
 }
 
 /// The dead forces of the two-leg platform under `loads`.

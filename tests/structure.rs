@@ -13,6 +13,8 @@
 //!   two clamped–guided beams with axial stiffness says.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+mod common;
+
 use std::sync::Arc;
 
 use softrod::assembly::{Chamber, Section};
@@ -29,42 +31,11 @@ use softrod::structure::{
 
 /// Leg length, half spacing, stiffnesses (the paper's simulated robot: EI
 /// 0.02 N·m², EA 300 N).
-const L: f64 = 0.2;
-const RHO: f64 = 0.05;
-const EI: f64 = 0.02;
-const EA: f64 = 300.0;
-
-/// Two vertical legs of `n` elements at x = ±ρ, clamped at y = 0, tips fixed
-/// to a platform at (0, L) of mass `mass_kg`.
-fn two_legs(n: usize, mass_kg: f64, gravity: bool) -> StructureSpec {
-    let leg = |x: f64| {
-        RodSpec::clamped(
-            vec![Section::uniform(L, EA, EI, n)],
-            vec![x, 0.0],
-            vec![0.0, 1.0],
-        )
-    };
-    let joint = |rod| JointSpec::RodToBody {
-        rod,
-        end: RodEnd::End,
-        body: 0,
-        point_m: None,
-        direction: None,
-    };
-    let mut spec = StructureSpec::new(
-        vec![leg(-RHO), leg(RHO)],
-        vec![RigidBodySpec {
-            mass_kg,
-            position_m: vec![0.0, L],
-            orientation_rad: vec![0.0],
-        }],
-        vec![joint(0), joint(1)],
-    );
-    if !gravity {
-        spec.gravity_m_per_s2 = vec![0.0, 0.0];
-    }
-    spec
-}
+const L: f64 = common::LEG_L;
+const RHO: f64 = common::LEG_RHO;
+const EI: f64 = common::LEG_EI;
+const EA: f64 = common::LEG_EA;
+use common::two_legs;
 
 fn platform_load(force: [f64; 2], moment: f64) -> StructureLoads {
     StructureLoads {
