@@ -642,25 +642,12 @@ impl<E: Element> Robot<E> {
         dead: &[f64],
         loads: &Loads,
     ) -> Result<f64> {
-        let nd = E::NODE_DOFS;
+        // the line search's kernel with the energies at `from` taken here:
+        // the same arithmetic, term by term
         check_len("q", self.n_q(), from.len())?;
-        check_len("q", self.n_q(), to.len())?;
-        check_len("dead force", self.n_q(), dead.len())?;
-        self.rod.check_load_structure(loads)?;
-        let mut d = 0.0;
-        for (e, el) in self.rod.elements().iter().enumerate() {
-            let r = e * nd..(e + 2) * nd;
-            d += el.energy(&to[r.clone()]) - el.energy(&from[r]);
-        }
-        for i in nd..self.n_q() {
-            d -= dead[i] * (to[i] - from[i]);
-        }
-        self.rod.for_each_node_moment(loads, |node, m| {
-            let r = node * nd..(node + 1) * nd;
-            d -= E::moment_work_between(&self.base_node, &from[r.clone()], &to[r], m);
-            Ok(())
-        })?;
-        Ok(d)
+        let mut from_energies = vec![0.0; self.rod.n_elements()];
+        self.element_energies_into(from, &mut from_energies)?;
+        self.potential_change_from(from, &from_energies, to, dead, loads)
     }
 
     /// The elastic energy of every element at `q` into `out` (J; one entry
