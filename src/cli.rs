@@ -41,9 +41,10 @@ enum Command {
     Solve {
         /// Scene file (JSON).
         scene: PathBuf,
-        /// Chamber pressures in Pa, comma-separated (overrides the scene's).
-        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
-        pressures: Option<Vec<f64>>,
+        /// Chamber pressures in Pa, separated by commas and/or spaces, e.g.
+        /// `--pressures 20e3,-5e3` or `--pressures "20e3, -5e3"` (overrides the scene's).
+        #[arg(long, value_parser = parse_pressures, allow_hyphen_values = true)]
+        pressures: Option<PressuresArg>,
         /// Output file (default: standard output).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -66,6 +67,10 @@ enum Command {
         /// Markers file (JSON, see above).
         #[arg(long)]
         markers: Option<PathBuf>,
+        /// Chamber pressures in Pa of the known actuation, separated by commas
+        /// and/or spaces (overrides the scene's; as in `solve`).
+        #[arg(long, value_parser = parse_pressures, allow_hyphen_values = true)]
+        pressures: Option<PressuresArg>,
         /// Output file (default: standard output).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -74,8 +79,9 @@ enum Command {
     /// estimators, against exudyn references: writes pareto.{png,svg,json},
     /// stability_*.{png,svg}, stability.json and stability.md.
     Report {
-        /// Output directory.
-        #[arg(long, default_value = "validation/figures")]
+        /// Output directory (the committed figures of the README were made
+        /// with `--out validation/figures`).
+        #[arg(long, default_value = "target/report")]
         out: PathBuf,
         /// A tiny sweep (seconds) instead of the full one (minutes).
         #[arg(long)]
@@ -87,6 +93,26 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+}
+
+/// Chamber pressures from the command line, in Pa.
+#[derive(Clone, Debug)]
+struct PressuresArg(Vec<f64>);
+
+/// `--pressures`: numbers separated by commas and/or whitespace; negatives
+/// allowed (a chamber under vacuum).
+fn parse_pressures(text: &str) -> std::result::Result<PressuresArg, String> {
+    let mut out = Vec::new();
+    for (i, item) in text.split(|c: char| c == ',' || c.is_whitespace()).filter(|t| !t.is_empty()).enumerate() {
+        // non-finite values parse and are refused by the scene's own check,
+        // which names `pressures_pa[i]`
+        let p: f64 = item.parse().map_err(|_| format!("pressure {i} (`{item}`) is not a number in Pa"))?;
+        out.push(p);
+    }
+    if out.is_empty() {
+        return Err("no pressures given".into());
+    }
+    Ok(PressuresArg(out))
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -243,6 +269,8 @@ struct EstimateOut {
     backend: String,
     /// Where the observation came from.
     observation: String,
+    /// The known chamber pressures (Pa) the estimate is for.
+    pressures_pa: Vec<f64>,
     /// Node coordinates of the estimated shape (m).
     nodes: Vec<NodeOut>,
     /// The estimated distributed load on an evenly spaced grid of `load_grid_points` arc coordinates.
@@ -275,6 +303,7 @@ fn estimate_out<E: Element>(scene: &Scene, robot: &Robot<E>, e: &Estimate, obser
         scene: scene.name.clone(),
         backend: e.report.backend.name().to_string(),
         observation,
+        pressures_pa: Vec::new(),
         nodes,
         load: e.sample_load(LOAD_GRID).into_iter().map(|(s, w)| LoadSample { s, w }).collect(),
         load_grid_points: LOAD_GRID,
@@ -347,9 +376,10 @@ fn estimate_with<E: Element + 'static>(scene: &Scene, robot: Robot<E>, backend: 
             (obs, "synthesized: the scene solved forward with its own loads, seeded 0.01 mm noise added to the marker positions (seed 1); the estimated load should be near zero".to_string())
         }
     };
+    let pressures = known.pressures_pa.clone();
     let mut est = settings.backend.build(robot.clone(), known, settings)?;
     let e = est.step(&obs)?;
-    Ok(estimate_out(scene, &robot, &e, source))
+    Ok(EstimateOut { pressures_pa: pressures, ..estimate_out(scene, &robot, &e, source) })
 }
 
 /// Resolves "elements": "auto" sections by refinement (the observation for a
@@ -471,6 +501,7 @@ pub fn run() -> Result<()> {
     match cli.command {
         None => default_run(),
         Some(Command::Solve { scene, pressures, out }) => {
+            let pressures = pressures.map(|p| p.0);
             let mut scene = Scene::from_file(&scene)?;
             if let (true, Some(p)) = (scene.has_auto_elements(), &pressures) {
                 // the refinement solves with the pressures the result is for
@@ -481,8 +512,13 @@ pub fn run() -> Result<()> {
             result.refinement = refinement;
             write_json(&result, out.as_ref())
         }
-        Some(Command::Estimate { scene, backend, markers, out }) => {
+        Some(Command::Estimate { scene, backend, markers, pressures, out }) => {
             let mut scene = Scene::from_file(&scene)?;
+            if let Some(p) = pressures {
+                // the known actuation the estimate is for; checked like the scene's own
+                scene.pressures_pa = p.0;
+                scene.validate()?;
+            }
             if let Some(b) = backend {
                 // the refinement estimates with the backend the result is for
                 scene.solver.estimator.backend = b.into();

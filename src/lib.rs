@@ -21,7 +21,12 @@
 //! - [`outcome`]: how a solve ended: the status enums and the reports errors carry.
 //! - [`refine`]: `"elements": "auto"`, the smallest mesh meeting a tolerance.
 //! - [`linsolve`]: linear solvers for the tangent (banded, faer sparse); [`quadrature`]: Gauss rules.
-//! - [`report`]: `softrod report`, the speed–accuracy chart and the stability map.
+//! - `report` (feature `report`): `softrod report`, the speed–accuracy chart and the stability map.
+//!
+//! Features: the library needs only its numerical dependencies (nalgebra,
+//! faer, clarabel, serde). `report` adds the charts, progress bars and the
+//! report sweeps (plotters, indicatif, rayon); `cli` adds the `softrod`
+//! command line (clap) on top of `report`.
 //!
 //! All quantities are SI (m, N, Pa, rad).
 //!
@@ -49,6 +54,7 @@ pub mod outcome;
 pub mod params;
 pub mod quadrature;
 pub mod refine;
+#[cfg(feature = "report")]
 pub mod report;
 pub mod scene;
 pub mod sensitivity;

@@ -103,6 +103,34 @@ fn every_bad_invocation_is_one_line_and_a_non_zero_exit() {
     }
 }
 
+/// `--pressures` takes negatives and spaces, in `solve` and in `estimate`,
+/// and the pressures given are the ones the result is for.
+#[test]
+fn pressures_take_negatives_spaces_and_reach_estimate() {
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/two_section.json");
+    for args in [
+        vec!["solve", example, "--pressures", "5e3, 10e3 0,0"],
+        vec!["solve", example, "--pressures=5e3,10e3,0,0"],
+        vec!["estimate", example, "--pressures", "5e3 10e3 0 0"],
+    ] {
+        let (code, stdout, stderr) = run(&args);
+        assert_eq!(code, 0, "{args:?}: {stderr}");
+        let out: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+        let p: Vec<f64> = serde_json::from_value(out["pressures_pa"].clone()).unwrap();
+        assert_eq!(p, vec![5e3, 10e3, 0.0, 0.0], "{args:?}");
+    }
+    // a negative pressure is read as a number (not as a flag) and checked
+    // against the chamber's bounds, which this scene's chambers put at 0
+    for sub in ["solve", "estimate"] {
+        let (code, _, stderr) = run(&[sub, example, "--pressures", "-5e3, 0 0 0"]);
+        assert_ne!(code, 0);
+        assert!(
+            stderr.contains("`pressures_pa[0]` = -5000: must lie in [0, 100000] Pa"),
+            "{sub}: {stderr}"
+        );
+    }
+}
+
 #[test]
 fn help_version_and_a_good_solve_exit_zero() {
     let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/two_section.json");

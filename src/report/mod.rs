@@ -24,11 +24,17 @@
 //! # Ok::<(), softrod::Error>(())
 //! ```
 
+#[doc(hidden)]
 pub mod auto_point;
+#[doc(hidden)]
 pub mod pareto;
+#[doc(hidden)]
 pub mod plot;
+#[doc(hidden)]
 pub mod reference;
+#[doc(hidden)]
 pub mod stability;
+#[doc(hidden)]
 pub mod sweep;
 
 use std::io::IsTerminal;

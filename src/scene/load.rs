@@ -180,7 +180,17 @@ pub(super) fn validate_scene_load<E: Element>(robot: &Robot<E>, load: &SceneLoad
         check_all_finite(name, v)
     };
     match load {
-        SceneLoad::Distributed(l) => l.validate("", d),
+        SceneLoad::Distributed(l) => {
+            l.validate("", d)?;
+            match l {
+                // a bump centred off the robot acts only through its tail:
+                // almost surely a typo (a length in mm, the wrong section)
+                LineLoad::Gaussian { center_m, .. } => {
+                    robot.locate("center_m", *center_m).map(|_| ())
+                }
+                _ => Ok(()),
+            }
+        }
         SceneLoad::TipForce { force_n } => vector("force_n", force_n),
         SceneLoad::PointForce { s_m, force_n } => {
             vector("force_n", force_n)?;

@@ -1,0 +1,130 @@
+//! The README is true: every `json` block is a scene that builds and solves,
+//! or a fragment that, merged into an example scene, is accepted; every `sh`
+//! block's commands run (the test command is the one CI runs).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use std::process::Command;
+
+use serde_json::Value;
+
+const README: &str = include_str!("../README.md");
+const CI: &str = include_str!("../.ci/run");
+
+/// The fenced blocks of the README in language `lang`, with the line each starts on.
+fn blocks(lang: &str) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    let mut current: Option<(usize, String)> = None;
+    for (i, line) in README.lines().enumerate() {
+        match (&mut current, line.trim_start().strip_prefix("```")) {
+            (None, Some(tag)) if tag.trim() == lang => current = Some((i + 1, String::new())),
+            (Some(_), Some("")) => out.push(current.take().unwrap()),
+            (Some((_, text)), _) => {
+                text.push_str(line);
+                text.push('\n');
+            }
+            _ => {}
+        }
+    }
+    assert!(current.is_none(), "README: unterminated ```{lang} block");
+    out
+}
+
+fn softrod(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_softrod"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn temp_file(name: &str, text: &str) -> String {
+    let path = std::env::temp_dir().join(format!("softrod-readme-{}-{name}", std::process::id()));
+    std::fs::write(&path, text).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+#[test]
+fn json_blocks_are_scenes_that_solve_or_fragments_that_are_accepted() {
+    let base: Value = serde_json::from_str(include_str!("../examples/auto_load.json")).unwrap();
+    let (mut scenes, mut fragments) = (0, 0);
+    for (line, text) in blocks("json") {
+        let value: Value = serde_json::from_str(&text)
+            .unwrap_or_else(|e| panic!("README line {line}: not JSON: {e}\n{text}"));
+        if value.get("robot").is_some() {
+            // a whole scene: `softrod solve` accepts it and converges
+            let path = temp_file(&format!("scene-{line}.json"), &text);
+            let (code, stdout, stderr) = softrod(&["solve", &path]);
+            assert_eq!(code, 0, "README line {line}: {stderr}");
+            let out: Value = serde_json::from_str(&stdout).unwrap();
+            assert!(
+                out["report"]["status"]["converged"].is_string(),
+                "README line {line}: {}",
+                out["report"]
+            );
+            assert!(stderr.is_empty(), "README line {line}: {stderr}");
+            scenes += 1;
+        } else {
+            // a fragment: its fields replace those of an auto-element example
+            let mut merged = base.clone();
+            for (k, v) in value.as_object().unwrap() {
+                merged[k] = v.clone();
+            }
+            let text = serde_json::to_string(&merged).unwrap();
+            softrod::scene::Scene::from_json(&text)
+                .and_then(|s| s.validate())
+                .unwrap_or_else(|e| panic!("README line {line}: fragment refused: {e}"));
+            fragments += 1;
+        }
+    }
+    assert!(
+        scenes >= 1 && fragments >= 2,
+        "{scenes} scenes, {fragments} fragments"
+    );
+}
+
+#[test]
+fn sh_blocks_run_and_the_test_command_is_ci_s() {
+    let mut ran = 0;
+    let mut test_commands = 0;
+    for (line, text) in blocks("sh") {
+        for cmd in text.lines() {
+            let cmd = cmd.split('#').next().unwrap().trim();
+            if cmd.is_empty() {
+                continue;
+            }
+            if cmd.starts_with("cargo test") {
+                assert!(
+                    CI.lines().any(|l| l.trim() == cmd),
+                    "README line {line}: `{cmd}` is not the test command of .ci/run"
+                );
+                test_commands += 1;
+                continue;
+            }
+            let rest = cmd
+                .strip_prefix("cargo run --release --features cli")
+                .unwrap_or_else(|| {
+                    panic!("README line {line}: `{cmd}` is not a command this test knows")
+                });
+            let args: Vec<&str> = rest
+                .trim()
+                .strip_prefix("--")
+                .unwrap_or(rest)
+                .split_whitespace()
+                .collect();
+            let (code, stdout, stderr) = softrod(&args);
+            assert_eq!(code, 0, "README line {line}: `{cmd}`: {stderr}");
+            assert!(
+                !stdout.is_empty(),
+                "README line {line}: `{cmd}` printed nothing"
+            );
+            ran += 1;
+        }
+    }
+    assert_eq!(test_commands, 1, "the README names the test command once");
+    assert!(ran >= 3, "only {ran} commands ran");
+}
