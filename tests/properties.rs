@@ -350,7 +350,8 @@ fn scene_strategy() -> impl Strategy<Value = Scene> {
                     },
                     SceneLoad::Distributed(LineLoad::Gaussian {
                         amplitude_n_per_m: vec![a, b],
-                        center_m: s_frac,
+                        // on the robot (a bump centred off it is refused)
+                        center_m: s_frac / 0.24 * total,
                         width_m: tol,
                     }),
                     SceneLoad::Distributed(LineLoad::Linear {

@@ -341,6 +341,7 @@ impl Scene {
             load::validate_scene_load(&robot, load)
                 .map_err(|e| e.with_prefix(&format!("loads[{i}].")))?;
         }
+        self.check_pressure_bounds()?;
         robot.validate_loads(&mesh.loads()?)?;
         self.solver
             .statics
@@ -349,7 +350,8 @@ impl Scene {
         self.solver
             .estimator
             .validate()
-            .map_err(|e| e.with_prefix("solver.estimator."))?;
+            // (the estimator names its fields `estimator.…`)
+            .map_err(|e| e.with_prefix("solver."))?;
         let total = robot.length();
         let mut seen: Vec<f64> = Vec::new();
         for (i, m) in self.markers.iter().enumerate() {
@@ -392,6 +394,32 @@ impl Scene {
         } else {
             self.check_unknown_load(&robot, false)
         }
+    }
+
+    /// Each given pressure within its chamber's bounds; the error names the
+    /// pressure and the two bounds by their paths in the file (which of them
+    /// is wrong only the user knows).
+    fn check_pressure_bounds(&self) -> Result<()> {
+        let chambers = self
+            .robot
+            .sections
+            .iter()
+            .enumerate()
+            .flat_map(|(i, s)| s.chambers.iter().enumerate().map(move |(c, ch)| (i, c, ch)));
+        for (k, (p, (i, c, ch))) in self.pressures_pa.iter().zip(chambers).enumerate() {
+            if p.is_finite() && (*p < ch.pressure_min_pa || *p > ch.pressure_max_pa) {
+                let b = format!("robot.sections[{i}].chambers[{c}]");
+                return Err(Error::invalid(
+                    format!("pressures_pa[{k}]"),
+                    p,
+                    format!(
+                        "must lie in [{}, {}] Pa, the bounds `{b}.pressure_min_pa` and `{b}.pressure_max_pa`",
+                        ch.pressure_min_pa, ch.pressure_max_pa
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Whether any section asks for `"elements": "auto"`.

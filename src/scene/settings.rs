@@ -45,7 +45,12 @@ fn max_refined() -> usize {
 /// assert_eq!(t.max_elements(), 400);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "quantity", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(
+    tag = "quantity",
+    rename_all = "snake_case",
+    deny_unknown_fields,
+    try_from = "RefinementFile"
+)]
 pub enum RefinementTarget {
     /// The tip position of the scene's static equilibrium (its loads and
     /// pressures): the Euclidean norm of its error at most `tolerance_m`.
@@ -68,6 +73,59 @@ pub enum RefinementTarget {
         #[serde(default = "max_refined")]
         max_elements: usize,
     },
+}
+
+/// `refinement` as written in the file: a plain struct, so that an error in
+/// one of its fields is reported under that field's path (a tagged enum
+/// would report every error at `refinement`).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RefinementFile {
+    quantity: RefinementQuantity,
+    tolerance_m: Option<f64>,
+    tolerance_n: Option<f64>,
+    #[serde(default = "max_refined")]
+    max_elements: usize,
+}
+
+#[derive(Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum RefinementQuantity {
+    TipPosition,
+    LoadResultant,
+}
+
+impl TryFrom<RefinementFile> for RefinementTarget {
+    type Error = String;
+    fn try_from(f: RefinementFile) -> std::result::Result<Self, String> {
+        let max_elements = f.max_elements;
+        match (f.quantity, f.tolerance_m, f.tolerance_n) {
+            (RefinementQuantity::TipPosition, Some(tolerance_m), None) => {
+                Ok(RefinementTarget::TipPosition {
+                    tolerance_m,
+                    max_elements,
+                })
+            }
+            (RefinementQuantity::LoadResultant, None, Some(tolerance_n)) => {
+                Ok(RefinementTarget::LoadResultant {
+                    tolerance_n,
+                    max_elements,
+                })
+            }
+            (RefinementQuantity::TipPosition, _, Some(_)) => Err(
+                "unknown field `tolerance_n` for quantity tip_position: its tolerance is `tolerance_m` (m)".into(),
+            ),
+            (RefinementQuantity::LoadResultant, Some(_), _) => Err(
+                "unknown field `tolerance_m` for quantity load_resultant: its tolerance is `tolerance_n` (N)".into(),
+            ),
+            (RefinementQuantity::TipPosition, None, _) => {
+                Err("missing field `tolerance_m` (m) of quantity tip_position".into())
+            }
+            (RefinementQuantity::LoadResultant, _, None) => {
+                Err("missing field `tolerance_n` (N) of quantity load_resultant".into())
+            }
+        }
+    }
 }
 
 impl RefinementTarget {

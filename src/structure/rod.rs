@@ -28,6 +28,60 @@ pub const MAX_ELEMENTS: usize = 200_000;
 /// Largest element dof count any element type has (full 3-D ANCF: 24).
 pub(crate) const MAX_EDOF: usize = 24;
 
+/// Longest section a rod may have (m). Far beyond any soft robot; a length
+/// above it is a unit mistake or a value that can only overflow.
+pub const MAX_SECTION_LENGTH_M: f64 = 1e6;
+
+/// Largest ratio of the longest to the shortest section of a rod. The
+/// tolerances on arc positions are relative to the rod's length; beyond this
+/// ratio they cannot tell positions on the shortest section apart.
+pub const MAX_SECTION_LENGTH_RATIO: f64 = 1e6;
+
+/// Refuses a section longer than [`MAX_SECTION_LENGTH_M`] and sections whose
+/// lengths differ by more than [`MAX_SECTION_LENGTH_RATIO`], naming the
+/// longest (lengths already checked finite and positive).
+fn check_section_lengths(path: &str, sections: &[Section]) -> Result<()> {
+    let (mut long, mut short) = (0, 0);
+    for (i, s) in sections.iter().enumerate() {
+        if s.length_m > sections[long].length_m {
+            long = i;
+        }
+        if s.length_m < sections[short].length_m {
+            short = i;
+        }
+    }
+    let Some(l) = sections.get(long).map(|s| s.length_m) else {
+        return Ok(());
+    };
+    let name = format!("{path}.sections[{long}].length_m");
+    if l > MAX_SECTION_LENGTH_M {
+        return Err(Error::invalid(
+            name,
+            l,
+            format!("must be at most {MAX_SECTION_LENGTH_M:e} m (lengths are in m)"),
+        ));
+    }
+    let shortest = sections[short].length_m;
+    if l > MAX_SECTION_LENGTH_RATIO * shortest {
+        // name the one farther from the metre scale; mention the other
+        let (bad, other) = if l.ln().abs() >= shortest.ln().abs() {
+            (long, short)
+        } else {
+            (short, long)
+        };
+        return Err(Error::invalid(
+            format!("{path}.sections[{bad}].length_m"),
+            sections[bad].length_m,
+            format!(
+                "differs from `{path}.sections[{other}].length_m` = {:e} m by more than a factor \
+                 {MAX_SECTION_LENGTH_RATIO:e}: arc positions on the shorter section cannot be resolved",
+                sections[other].length_m
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// A flattened chamber: section index, gain, bounds.
 #[derive(Debug, Clone)]
 pub(crate) struct ChamberRef {
@@ -162,11 +216,16 @@ impl<E: Element> Rod<E> {
                     return Err(Error::invalid(
                         pc("pressure_max_pa"),
                         ch.pressure_max_pa,
-                        format!("must be >= pressure_min_pa = {}", ch.pressure_min_pa),
+                        format!(
+                            "must be >= `{}` = {}: one of the two is wrong",
+                            pc("pressure_min_pa"),
+                            ch.pressure_min_pa
+                        ),
                     ));
                 }
             }
         }
+        check_section_lengths(path, sections)?;
         Ok(total)
     }
 
