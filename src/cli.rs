@@ -17,7 +17,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use serde::Serialize;
 
-use softrod::assembly::Robot;
+use softrod::assembly::{Robot, ValidityWarning};
 use softrod::element::Element;
 use softrod::estimate::{Backend, Estimate, EstimateReport, MarkerObservation, Observation};
 use softrod::loads::{LineLoad, PointForce};
@@ -164,6 +164,8 @@ struct SolveOut {
     #[serde(skip_serializing_if = "Option::is_none")]
     tip_angle_from_base_rad: Option<f64>,
     report: StaticReport,
+    /// Where the result leaves the model's validity (also on stderr).
+    warnings: Vec<ValidityWarning>,
     /// How the counts of "elements": "auto" sections were chosen.
     #[serde(skip_serializing_if = "Option::is_none")]
     refinement: Option<Refinement>,
@@ -191,6 +193,7 @@ fn solve_out<E: Element>(scene: &Scene, robot: &Robot<E>, pressures: Vec<f64>, q
         tip_angle_from_base_rad: None,
         nodes: node_outs(robot, q),
         report,
+        warnings: robot.validity(q).unwrap_or_default(),
         refinement: None,
     }
 }
@@ -288,6 +291,8 @@ struct EstimateOut {
     /// The marker noise the covariances are stated for (m).
     noise_sigma_m: f64,
     report: EstimateReport,
+    /// Where the estimated shape leaves the model's validity (also on stderr).
+    warnings: Vec<ValidityWarning>,
     /// How the counts of "elements": "auto" sections were chosen.
     #[serde(skip_serializing_if = "Option::is_none")]
     refinement: Option<Refinement>,
@@ -318,6 +323,7 @@ fn estimate_out<E: Element>(scene: &Scene, robot: &Robot<E>, e: &Estimate, obser
         max_load_parameter_std: e.std_f().into_iter().fold(0.0, f64::max),
         noise_sigma_m: e.noise_sigma_m,
         report: e.report.clone(),
+        warnings: robot.validity(&e.q).unwrap_or_default(),
         refinement: None,
     }
 }
@@ -495,6 +501,13 @@ fn solve_summary() -> Result<()> {
     Ok(())
 }
 
+/// Each warning as one line on standard error.
+fn warn_all(warnings: &[ValidityWarning]) {
+    for w in warnings {
+        eprintln!("softrod: warning: {w}");
+    }
+}
+
 /// Runs the command line.
 pub fn run() -> Result<()> {
     let cli = parse_args()?;
@@ -510,6 +523,7 @@ pub fn run() -> Result<()> {
             let (scene, refinement) = refine(scene, None)?;
             let mut result = solve(&scene, pressures)?;
             result.refinement = refinement;
+            warn_all(&result.warnings);
             write_json(&result, out.as_ref())
         }
         Some(Command::Estimate { scene, backend, markers, pressures, out }) => {
@@ -533,6 +547,7 @@ pub fn run() -> Result<()> {
             if markers.is_none() {
                 eprintln!("softrod: no markers file: {}", result.observation);
             }
+            warn_all(&result.warnings);
             write_json(&result, out.as_ref())?;
             // the last iterate is written (its report says how it ended); the
             // exit status says that it is not an estimate

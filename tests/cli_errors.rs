@@ -131,6 +131,46 @@ fn pressures_take_negatives_spaces_and_reach_estimate() {
     }
 }
 
+/// A solve that converges outside the model's validity (a −1e4 N tip force
+/// pushes the 0.24 m robot back through its clamp) says so: a warning in the
+/// JSON and one line per warning on stderr; a valid solve has none.
+#[test]
+fn a_result_outside_the_model_s_validity_carries_warnings() {
+    let text = include_str!("../examples/two_section.json");
+    let mut scene: serde_json::Value = serde_json::from_str(text).unwrap();
+    scene["loads"] = serde_json::json!([{"type": "tip_force", "force_n": [-1e4, 0.0]}]);
+    let path = temp_file("through_clamp.json", &scene.to_string());
+    let (code, stdout, stderr) = run(&["solve", &path]);
+    assert_eq!(code, 0, "{stderr}");
+    let out: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let kinds: Vec<&str> = out["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        kinds,
+        ["axial_strain", "behind_clamp"],
+        "{}",
+        out["warnings"]
+    );
+    // flipped through the clamp, the rod is stretched to x = −8 m (≈ 4600 %)
+    assert!(out["warnings"][0]["strain"].as_f64().unwrap() > 10.0);
+    assert_eq!(
+        stderr
+            .lines()
+            .filter(|l| l.starts_with("softrod: warning: "))
+            .count(),
+        2,
+        "{stderr}"
+    );
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/two_section.json");
+    let (_, stdout, _) = run(&["solve", example]);
+    let out: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(out["warnings"], serde_json::json!([]));
+}
+
 #[test]
 fn help_version_and_a_good_solve_exit_zero() {
     let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/two_section.json");

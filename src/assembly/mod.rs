@@ -30,6 +30,7 @@ use crate::structure::{BlockRule, DofMap, Rod};
 mod model;
 mod spec;
 mod tangent;
+mod validity;
 
 pub use crate::structure::rod::MAX_ELEMENTS;
 pub use crate::structure::section::{Chamber, Section};
@@ -37,6 +38,7 @@ pub use crate::structure::Clamp;
 use spec::base_direction;
 pub use spec::{Base, RobotSpec};
 pub use tangent::TangentTarget;
+pub use validity::{ValidityWarning, MAX_AXIAL_STRAIN};
 
 /// A robot assembled from elements of type `E`.
 #[derive(Debug, Clone)]
