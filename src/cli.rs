@@ -18,7 +18,7 @@ use clap::{Parser, Subcommand};
 use serde::Serialize;
 
 use softrod::assembly::{Robot, ValidityWarning};
-use softrod::element::Element;
+use softrod::element::{Element, PlanarCable};
 use softrod::estimate::{Backend, Estimate, EstimateReport, MarkerObservation, Observation};
 use softrod::loads::{LineLoad, PointForce};
 use softrod::refine::{Quantity, Refinement};
@@ -145,6 +145,19 @@ struct NodeOut {
     position_m: Vec<f64>,
     /// Slope r' (dimensionless; its norm is 1 + axial strain).
     slope: Vec<f64>,
+    /// Planar: the tangent's angle from the x axis (rad), unwrapped along
+    /// the backbone (a full circle ends at 2π).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    angle_rad: Option<f64>,
+}
+
+/// Fills in the planar robot's unwrapped node angles; returns the tip's.
+fn fill_angles(robot: &Robot<PlanarCable>, q: &[f64], nodes: &mut [NodeOut]) -> Result<Option<f64>> {
+    let angles = robot.node_angles(q)?;
+    for (n, a) in nodes.iter_mut().zip(&angles) {
+        n.angle_rad = Some(*a);
+    }
+    Ok(angles.last().copied())
 }
 
 /// The result of `softrod solve`.
@@ -164,6 +177,9 @@ struct SolveOut {
     #[serde(skip_serializing_if = "Option::is_none")]
     tip_angle_from_base_rad: Option<f64>,
     report: StaticReport,
+    /// The configuration (not written).
+    #[serde(skip)]
+    q: Vec<f64>,
     /// Where the result leaves the model's validity (also on stderr).
     warnings: Vec<ValidityWarning>,
     /// How the counts of "elements": "auto" sections were chosen.
@@ -178,7 +194,7 @@ fn node_outs<E: Element>(robot: &Robot<E>, q: &[f64]) -> Vec<NodeOut> {
         .node_arc()
         .iter()
         .enumerate()
-        .map(|(i, &s)| NodeOut { s_m: s, position_m: q[i * nd..i * nd + d].to_vec(), slope: q[i * nd + d..i * nd + 2 * d].to_vec() })
+        .map(|(i, &s)| NodeOut { s_m: s, position_m: q[i * nd..i * nd + d].to_vec(), slope: q[i * nd + d..i * nd + 2 * d].to_vec(), angle_rad: None })
         .collect()
 }
 
@@ -193,6 +209,7 @@ fn solve_out<E: Element>(scene: &Scene, robot: &Robot<E>, pressures: Vec<f64>, q
         tip_angle_from_base_rad: None,
         nodes: node_outs(robot, q),
         report,
+        q: q.to_vec(),
         warnings: robot.validity(q).unwrap_or_default(),
         refinement: None,
     }
@@ -213,7 +230,7 @@ fn solve(scene: &Scene, pressures: Option<Vec<f64>>) -> Result<SolveOut> {
     match scene.build()? {
         SceneRobot::Planar(robot) => {
             let mut out = solve_with(scene, &robot, pressures)?;
-            out.tip_angle_rad = out.nodes.last().map(|n| n.slope[1].atan2(n.slope[0]));
+            out.tip_angle_rad = fill_angles(&robot, &out.q, &mut out.nodes)?;
             Ok(out)
         }
         SceneRobot::Spatial(robot) => {
@@ -291,6 +308,9 @@ struct EstimateOut {
     /// The marker noise the covariances are stated for (m).
     noise_sigma_m: f64,
     report: EstimateReport,
+    /// The estimated configuration (not written).
+    #[serde(skip)]
+    q: Vec<f64>,
     /// Where the estimated shape leaves the model's validity (also on stderr).
     warnings: Vec<ValidityWarning>,
     /// How the counts of "elements": "auto" sections were chosen.
@@ -323,6 +343,7 @@ fn estimate_out<E: Element>(scene: &Scene, robot: &Robot<E>, e: &Estimate, obser
         max_load_parameter_std: e.std_f().into_iter().fold(0.0, f64::max),
         noise_sigma_m: e.noise_sigma_m,
         report: e.report.clone(),
+        q: e.q.clone(),
         warnings: robot.validity(&e.q).unwrap_or_default(),
         refinement: None,
     }
@@ -361,7 +382,11 @@ fn observe<E: Element>(scene: &Scene, robot: &Robot<E>, q: &[f64]) -> Result<Obs
 
 fn estimate(scene: &Scene, backend: Option<Backend>, markers: Option<&PathBuf>) -> Result<EstimateOut> {
     match scene.build()? {
-        SceneRobot::Planar(robot) => estimate_with(scene, robot, backend, markers),
+        SceneRobot::Planar(robot) => {
+            let mut out = estimate_with(scene, robot.clone(), backend, markers)?;
+            fill_angles(&robot, &out.q, &mut out.nodes)?;
+            Ok(out)
+        }
         SceneRobot::Spatial(robot) => estimate_with(scene, robot, backend, markers),
     }
 }

@@ -27,6 +27,7 @@ use crate::loads::Loads;
 use crate::structure::rod::MAX_EDOF;
 use crate::structure::{BlockRule, DofMap, Rod};
 
+mod angles;
 mod model;
 mod spec;
 mod tangent;
