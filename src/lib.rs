@@ -9,6 +9,7 @@
 //! Modules, one concept each:
 //! - [`element`]: the cable element (14)–(16), energy, gradient, tangent.
 //! - [`assembly`]: a multi-section robot, loads (22), actuation (18).
+//! - [`contact`]: rigid obstacles and frictionless contact in the static model.
 //! - [`statics`]: Newton's method on the equilibrium (17), and its warm
 //!   tracker for equilibria at nearby loads.
 //! - [`structure`]: rods, rigid bodies and joints; the map `q = φ(u)` from free
@@ -43,6 +44,7 @@
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
 
 pub mod assembly;
+pub mod contact;
 pub mod element;
 pub mod error;
 pub mod estimate;

@@ -133,7 +133,7 @@ impl std::fmt::Display for EstimateStatus {
 }
 
 /// clarabel's `SolverStatus` as its variant name (it has no serde support).
-mod solver_status {
+pub(super) mod solver_status {
     use clarabel::solver::SolverStatus;
     use serde::{Deserialize, Deserializer, Serializer};
 

@@ -28,10 +28,12 @@
 //! assert_eq!(s.to_string(), "iteration limit (30 iterations)");
 //! ```
 
+mod contact;
 mod estimate;
 mod refine;
 mod statics;
 
+pub use contact::{ContactReport, ContactStatus};
 pub use estimate::{EstimateCriterion, EstimateStatus};
 pub use refine::{Phase, Quantity, RefinementFailure, RefinementStop, Trial, TrialFailure};
 pub use statics::{StaticCriterion, StaticReport, StaticStatus};

@@ -1,0 +1,772 @@
+//! The contact solver: SQP with clarabel QPs, then Newton on the KKT system
+//! of the active contacts.
+
+use std::time::Instant;
+
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus, SupportedConeT,
+};
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+use super::{Gap, Obstacles};
+use crate::assembly::Robot;
+use crate::element::PlanarCable;
+use crate::error::{check_all_finite, check_at_most, check_len, check_positive, Error, Result};
+use crate::linsolve::BandedMatrix;
+use crate::loads::Loads;
+use crate::numeric::norm2;
+use crate::outcome::{ContactReport, ContactStatus, NonFiniteAt};
+use crate::statics::{residual_floor, StaticSolver};
+
+/// Settings of the contact solver; every field has a documented default.
+///
+/// # Example
+/// ```
+/// let s = softrod::contact::ContactSettings { penetration_tolerance_m: 1e-11, ..Default::default() };
+/// s.validate().unwrap();
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ContactSettings {
+    /// SQP iterations (default 200).
+    pub max_iterations: usize,
+    /// Newton iterations on the KKT system per active set (default 30).
+    pub max_newton_iterations: usize,
+    /// Changes of the active set after the SQP (default 20).
+    pub max_active_set_changes: usize,
+    /// Tolerance of the equilibrium residual with the contact forces,
+    /// relative to the applied generalized forces (default 1e-10).
+    pub residual_tolerance: f64,
+    /// Largest penetration a converged solution may have (m; default
+    /// 1e-10, at most 1e-9).
+    pub penetration_tolerance_m: f64,
+    /// Largest change of a node slope in one step, about the rotation in
+    /// rad (default 0.5).
+    pub max_step_rotation: f64,
+}
+
+impl Default for ContactSettings {
+    fn default() -> Self {
+        ContactSettings {
+            max_iterations: 200,
+            max_newton_iterations: 30,
+            max_active_set_changes: 20,
+            residual_tolerance: 1e-10,
+            penetration_tolerance_m: 1e-10,
+            max_step_rotation: 0.5,
+        }
+    }
+}
+
+impl ContactSettings {
+    /// Checks every field: counts in `1..=100000`, tolerances positive (the
+    /// relative one below 1, the penetration at most 1e-9 m), the step
+    /// rotation positive.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] or [`Error::TooLarge`] naming the field.
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [
+            ("max_iterations", self.max_iterations),
+            ("max_newton_iterations", self.max_newton_iterations),
+            ("max_active_set_changes", self.max_active_set_changes),
+        ] {
+            if v == 0 {
+                return Err(Error::invalid(name, v, "must be >= 1"));
+            }
+            check_at_most(name, v, 100_000)?;
+        }
+        check_positive("residual_tolerance", self.residual_tolerance)?;
+        if self.residual_tolerance >= 1.0 {
+            return Err(Error::invalid(
+                "residual_tolerance",
+                self.residual_tolerance,
+                "must be < 1",
+            ));
+        }
+        check_positive("penetration_tolerance_m", self.penetration_tolerance_m)?;
+        if self.penetration_tolerance_m > 1e-9 {
+            return Err(Error::invalid(
+                "penetration_tolerance_m",
+                self.penetration_tolerance_m,
+                "must be <= 1e-9",
+            ));
+        }
+        check_positive("max_step_rotation", self.max_step_rotation)
+    }
+}
+
+/// An active contact of a solution.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ContactForce {
+    /// Index of the obstacle.
+    pub obstacle: usize,
+    /// Undeformed arc coordinate of the contact point (m).
+    pub s_m: f64,
+    /// The centreline point in contact (m); the obstacle's surface is
+    /// `rod_radius_m + gap_m` from it along `−normal`.
+    pub point_m: [f64; 2],
+    /// Outward normal of the obstacle: the direction of the force on the rod.
+    pub normal: [f64; 2],
+    /// Magnitude of the contact force on the rod (N, `>= 0`).
+    pub force_n: f64,
+    /// The gap there (m; zero to the tolerance).
+    pub gap_m: f64,
+}
+
+/// The result of a contact solve: the last iterate, its contacts and the
+/// report. Only a [`ContactStatus::Converged`] status certifies the shape.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactSolution {
+    /// All coordinates, base node included.
+    pub q: Vec<f64>,
+    /// Every contact with a force, base to tip.
+    pub contacts: Vec<ContactForce>,
+    /// What the solver did.
+    pub report: ContactReport,
+}
+
+impl ContactSolution {
+    /// Whether the solve converged to a non-penetrating equilibrium.
+    pub fn is_converged(&self) -> bool {
+        self.report.status.is_converged()
+    }
+}
+
+/// The contact solver (see the module docs).
+#[derive(Debug, Clone, Default)]
+pub struct ContactSolver {
+    /// Settings.
+    pub settings: ContactSettings,
+}
+
+/// One active contact during the solve: its obstacle, where it is, its force.
+#[derive(Debug, Clone, Copy)]
+struct Active {
+    obstacle: usize,
+    s: f64,
+    lambda: f64,
+}
+
+/// The map of one element's 8 coordinates into the free coordinates.
+struct ElementMap {
+    /// For element 0: the base node's coordinates per free base direction.
+    base_cols: Vec<Vec<f64>>,
+    nbf: usize,
+}
+
+impl ElementMap {
+    fn new(robot: &Robot<PlanarCable>) -> Result<Self> {
+        let nbf = robot.n_base_free();
+        let mut base_cols = Vec::with_capacity(nbf);
+        for j in 0..nbf {
+            let mut u = vec![0.0; robot.n_free()];
+            u[j] = 1.0;
+            base_cols.push(robot.expand_step(&u)?[..4].to_vec());
+        }
+        Ok(ElementMap { base_cols, nbf })
+    }
+    /// `(u index, coefficient)` pairs of element coordinate `a` of element `e`.
+    fn of(&self, e: usize, a: usize) -> Vec<(usize, f64)> {
+        let qi = 4 * e + a;
+        if qi >= 4 {
+            vec![(qi - 4 + self.nbf, 1.0)]
+        } else {
+            self.base_cols
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c[qi] != 0.0)
+                .map(|(j, c)| (j, c[qi]))
+                .collect()
+        }
+    }
+    fn gradient(&self, g: &Gap, n: usize) -> Vec<f64> {
+        let mut out = vec![0.0; n];
+        for a in 0..8 {
+            for (u, c) in self.of(g.element, a) {
+                out[u] += c * g.gradient[a];
+            }
+        }
+        out
+    }
+    fn add_hessian(&self, g: &Gap, scale: f64, h: &mut DMatrix<f64>) {
+        for a in 0..8 {
+            for (ua, ca) in self.of(g.element, a) {
+                for b in 0..8 {
+                    for (ub, cb) in self.of(g.element, b) {
+                        h[(ua, ub)] += scale * ca * cb * g.hessian[a * 8 + b];
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Everything fixed during one solve.
+struct Ctx<'a> {
+    robot: &'a Robot<PlanarCable>,
+    loads: &'a Loads,
+    obstacles: &'a Obstacles,
+    dead: Vec<f64>,
+    map: ElementMap,
+    n: usize,
+    /// Norm of the applied generalized forces (N).
+    scale: f64,
+}
+
+impl Ctx<'_> {
+    fn residual(&self, q: &[f64]) -> Result<Vec<f64>> {
+        self.robot.residual(q, &self.dead, self.loads)
+    }
+    fn tangent(&self, q: &[f64]) -> Result<DMatrix<f64>> {
+        let hb = 7;
+        let mut band = BandedMatrix::zeros(self.n, hb, hb);
+        self.robot.tangent_into(q, self.loads, &mut band)?;
+        let mut k = DMatrix::zeros(self.n, self.n);
+        for i in 0..self.n {
+            for j in i.saturating_sub(hb)..(i + hb + 1).min(self.n) {
+                k[(i, j)] = band.get(i, j);
+            }
+        }
+        Ok(k)
+    }
+    fn expand(&self, du: &[f64]) -> Result<Vec<f64>> {
+        self.robot.expand_step(du)
+    }
+    /// The tolerance of the KKT residual at `q` with tangent `k` (N).
+    fn tolerance(&self, q: &[f64], k: &DMatrix<f64>, rel: f64) -> f64 {
+        let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let qmax = q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        (rel * self.scale).max(4.0 * residual_floor(kmax, qmax, self.n))
+    }
+    /// Total penetration `Σ max(0, −g)` (m) and the smallest gap.
+    fn penetration(&self, q: &[f64]) -> Result<(f64, f64)> {
+        let gaps = self.obstacles.gaps(self.robot, q)?;
+        let pen = gaps.iter().map(|g| (-g.gap_m).max(0.0)).sum();
+        let min = gaps.iter().map(|g| g.gap_m).fold(f64::MAX, f64::min);
+        Ok((pen, min))
+    }
+    /// The largest change of a node slope in `dq`.
+    fn slope_change(&self, dq: &[f64]) -> f64 {
+        dq.chunks(4)
+            .flat_map(|c| c[2..].iter())
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+    }
+}
+
+/// The gap of `gaps` that continues the active contact `a`: the same
+/// obstacle, nearest in arc, not taken already.
+fn continue_gap(gaps: &[Gap], a: &Active, taken: &[usize]) -> Option<usize> {
+    gaps.iter()
+        .enumerate()
+        .filter(|(i, g)| g.obstacle == a.obstacle && !taken.contains(i))
+        .min_by(|(_, x), (_, y)| (x.s_m - a.s).abs().total_cmp(&(y.s_m - a.s).abs()))
+        .map(|(i, _)| i)
+}
+
+impl ContactSolver {
+    /// A solver with the given settings.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] if the settings are invalid.
+    pub fn new(settings: ContactSettings) -> Result<Self> {
+        settings.validate()?;
+        Ok(ContactSolver { settings })
+    }
+
+    /// The equilibrium of `robot` under `loads` among `obstacles`, from `q0`
+    /// (all `n_q` coordinates) or, cold, from the equilibrium without
+    /// obstacles if it does not penetrate, else from the reference
+    /// configuration.
+    ///
+    /// # Errors
+    /// Bad input only: the settings ([`ContactSettings::validate`]), the
+    /// loads ([`Robot::validate_loads`]), an obstacle overlapping the
+    /// robot's base or reference configuration
+    /// ([`Obstacles::check_robot`]), a `q0` of the wrong size or not finite.
+    /// A solve that fails returns its last iterate with the status that
+    /// says why.
+    pub fn solve(
+        &self,
+        robot: &Robot<PlanarCable>,
+        loads: &Loads,
+        obstacles: &Obstacles,
+        q0: Option<&[f64]>,
+    ) -> Result<ContactSolution> {
+        let start = Instant::now();
+        self.settings.validate()?;
+        obstacles.check_robot(robot)?;
+        let dead = robot.dead_force(loads)?;
+        let n = robot.n_free();
+        let mut applied = robot.restrict(&dead)?;
+        let mut m = vec![0.0; n];
+        robot.moment_force_into(&robot.reference_configuration(), loads, &mut m)?;
+        applied.iter_mut().zip(&m).for_each(|(a, b)| *a += b);
+        let ctx = Ctx {
+            robot,
+            loads,
+            obstacles,
+            dead,
+            map: ElementMap::new(robot)?,
+            n,
+            scale: norm2(&applied),
+        };
+        let mut report = ContactReport::default();
+        let mut q = match q0 {
+            Some(q0) => {
+                check_len("q0", robot.n_q(), q0.len())?;
+                check_all_finite("q0", q0)?;
+                self.with_clamp(robot, q0)?
+            }
+            None => {
+                // no contact at the free equilibrium: that is the answer
+                if let Ok(eq) = StaticSolver::default().solve(robot, loads, None) {
+                    let (pen, min) = ctx.penetration(&eq.q)?;
+                    if pen == 0.0 {
+                        report.status = ContactStatus::Converged;
+                        report.min_gap_m = min;
+                        report.residual_norm_n = eq.report.residual_norm_n;
+                        report.residual_tolerance_n = eq
+                            .report
+                            .residual_tolerance_n
+                            .max(eq.report.residual_floor_n);
+                        report.wall_time_s = start.elapsed().as_secs_f64();
+                        return Ok(ContactSolution {
+                            q: eq.q,
+                            contacts: Vec::new(),
+                            report,
+                        });
+                    }
+                }
+                let arc = robot.arc_configuration(&loads.pressures_pa);
+                if ctx.penetration(&arc)?.0 == 0.0 {
+                    arc
+                } else {
+                    robot.reference_configuration()
+                }
+            }
+        };
+        let (status, active) = self.sqp(&ctx, &mut q, &mut report)?;
+        report.status = status;
+        let (_, min) = ctx.penetration(&q)?;
+        report.min_gap_m = if min.is_finite() { min } else { f64::MAX };
+        // never a penetrating shape as converged
+        if report.status.is_converged() && !(min >= -self.settings.penetration_tolerance_m) {
+            report.status = ContactStatus::Infeasible {
+                penetration_m: -min,
+            };
+        }
+        let gaps = obstacles.gaps(robot, &q)?;
+        let mut contacts = Vec::new();
+        let mut taken = Vec::new();
+        for a in active.iter().filter(|a| a.lambda > 0.0) {
+            if let Some(i) = continue_gap(&gaps, a, &taken) {
+                taken.push(i);
+                let g = &gaps[i];
+                contacts.push(ContactForce {
+                    obstacle: g.obstacle,
+                    s_m: g.s_m,
+                    point_m: g.point_m,
+                    normal: g.normal,
+                    force_n: a.lambda,
+                    gap_m: g.gap_m,
+                });
+            }
+        }
+        contacts.sort_by(|a, b| a.s_m.total_cmp(&b.s_m));
+        report.wall_time_s = start.elapsed().as_secs_f64();
+        Ok(ContactSolution {
+            q,
+            contacts,
+            report,
+        })
+    }
+
+    /// `q0` with the clamp's base position and direction reset (its
+    /// stretch kept).
+    fn with_clamp(&self, robot: &Robot<PlanarCable>, q0: &[f64]) -> Result<Vec<f64>> {
+        let base = robot.base_node();
+        let mut u = vec![0.0; robot.n_free()];
+        let nbf = robot.n_base_free();
+        for j in 0..nbf {
+            let mut e = vec![0.0; robot.n_free()];
+            e[j] = 1.0;
+            let col = robot.expand_step(&e)?;
+            let num: f64 = (0..4).map(|i| col[i] * (q0[i] - base[i])).sum();
+            let den: f64 = (0..4).map(|i| col[i] * col[i]).sum();
+            if den > 0.0 {
+                u[j] = num / den;
+            }
+        }
+        let dq = robot.expand_step(&u)?;
+        let mut q = q0.to_vec();
+        for i in 0..4 {
+            q[i] = base[i] + dq[i];
+        }
+        Ok(q)
+    }
+
+    /// SQP iterations from `q` (updated in place), then the polish.
+    fn sqp(
+        &self,
+        ctx: &Ctx<'_>,
+        q: &mut Vec<f64>,
+        report: &mut ContactReport,
+    ) -> Result<(ContactStatus, Vec<Active>)> {
+        let n = ctx.n;
+        let l = ctx.robot.length();
+        let mut active: Vec<Active> = Vec::new();
+        let mut prev_set: Vec<usize> = Vec::new();
+        let mut nu = 0.0f64;
+        for it in 0..self.settings.max_iterations {
+            report.sqp_iterations = it + 1;
+            let gaps = ctx.obstacles.gaps(ctx.robot, q)?;
+            let r = ctx.residual(q)?;
+            let mut h = ctx.tangent(q)?;
+            if !(norm2(&r).is_finite() && h.iter().all(|v| v.is_finite())) {
+                return Ok((
+                    ContactStatus::NonFinite {
+                        at: NonFiniteAt::Residual,
+                    },
+                    active,
+                ));
+            }
+            // the Lagrangian's Hessian with the last forces
+            let mut taken = Vec::new();
+            for a in &active {
+                if let Some(i) = continue_gap(&gaps, a, &taken) {
+                    taken.push(i);
+                    ctx.map.add_hessian(&gaps[i], -a.lambda, &mut h);
+                }
+            }
+            let grads: Vec<Vec<f64>> = gaps.iter().map(|g| ctx.map.gradient(g, n)).collect();
+            let (du, lambda) = match self.qp(&h, &r, &gaps, &grads) {
+                Ok(x) => x,
+                Err(status) => {
+                    let pen = gaps.iter().map(|g| (-g.gap_m).max(0.0)).fold(0.0, f64::max);
+                    return Ok((
+                        match status {
+                            SolverStatus::PrimalInfeasible
+                            | SolverStatus::AlmostPrimalInfeasible => {
+                                ContactStatus::Infeasible { penetration_m: pen }
+                            }
+                            other => ContactStatus::QpFailed { status: other },
+                        },
+                        active,
+                    ));
+                }
+            };
+            let lmax = lambda.iter().fold(0.0f64, |m, v| m.max(*v));
+            active = gaps
+                .iter()
+                .zip(&lambda)
+                .filter(|(_, lam)| **lam > 1e-9 * lmax.max(1e-300))
+                .map(|(g, lam)| Active {
+                    obstacle: g.obstacle,
+                    s: g.s_m,
+                    lambda: *lam,
+                })
+                .collect();
+            let set: Vec<usize> = gaps
+                .iter()
+                .zip(&lambda)
+                .filter(|(_, lam)| **lam > 1e-9 * lmax.max(1e-300))
+                .map(|(g, _)| g.obstacle)
+                .collect();
+            let dq = ctx.expand(&du)?;
+            let step = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            // polish once the step is small or the active set settled
+            if step <= 1e-6 * l || (set == prev_set && step <= 1e-2 * l) {
+                let mut trial = q.clone();
+                let mut act = active.clone();
+                if self.polish(ctx, &mut trial, &mut act, report)? {
+                    *q = trial;
+                    return Ok((ContactStatus::Converged, act));
+                }
+            }
+            prev_set = set;
+            // line search on Π + ν Σ max(0, −g)
+            nu = nu.max(2.0 * lmax);
+            let pen0: f64 = gaps.iter().map(|g| (-g.gap_m).max(0.0)).sum();
+            let slope: f64 = -r.iter().zip(&du).map(|(a, b)| a * b).sum::<f64>() - nu * pen0;
+            let sc = ctx.slope_change(&dq);
+            let mut t = if sc > self.settings.max_step_rotation {
+                self.settings.max_step_rotation / sc
+            } else {
+                1.0
+            };
+            let mut accepted = false;
+            let mut trial = q.clone();
+            for _ in 0..40 {
+                for ((x, a), b) in trial.iter_mut().zip(q.iter()).zip(&dq) {
+                    *x = a + t * b;
+                }
+                let dpi = ctx
+                    .robot
+                    .potential_change(q, &trial, &ctx.dead, ctx.loads)?;
+                let (pen, _) = ctx.penetration(&trial)?;
+                let dphi = dpi + nu * (pen - pen0);
+                if dphi.is_finite() && dphi <= 1e-4 * t * slope.min(0.0) {
+                    accepted = true;
+                    break;
+                }
+                t *= 0.5;
+            }
+            if !accepted {
+                let mut trial = q.clone();
+                let mut act = active.clone();
+                if self.polish(ctx, &mut trial, &mut act, report)? {
+                    *q = trial;
+                    return Ok((ContactStatus::Converged, act));
+                }
+                return Ok((ContactStatus::LineSearchFailed, active));
+            }
+            q.copy_from_slice(&trial);
+            if step * t <= 1e-13 * l {
+                let mut trial = q.clone();
+                let mut act = active.clone();
+                if self.polish(ctx, &mut trial, &mut act, report)? {
+                    *q = trial;
+                    return Ok((ContactStatus::Converged, act));
+                }
+            }
+        }
+        Ok((
+            ContactStatus::IterationLimit {
+                iterations: self.settings.max_iterations,
+            },
+            active,
+        ))
+    }
+
+    /// The QP `min ½ duᵀ H du − Qᵀ du` subject to `g + G du >= 0` by
+    /// clarabel, on Jacobi-scaled unknowns, `H` shifted to positive
+    /// definite if needed: the step and the multipliers.
+    fn qp(
+        &self,
+        h: &DMatrix<f64>,
+        r: &[f64],
+        gaps: &[Gap],
+        grads: &[Vec<f64>],
+    ) -> std::result::Result<(Vec<f64>, Vec<f64>), SolverStatus> {
+        let n = h.nrows();
+        let d: Vec<f64> = (0..n)
+            .map(|i| {
+                let v = h[(i, i)].abs();
+                if v > 0.0 && v.is_finite() {
+                    1.0 / v.sqrt()
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        let mut p = DMatrix::from_fn(n, n, |i, j| d[i] * h[(i, j)] * d[j]);
+        let p0 = p.clone();
+        for mu in [0.0, 1e-10, 1e-8, 1e-6, 1e-4, 1e-2, 1.0, 10.0] {
+            p = p0.clone();
+            for i in 0..n {
+                p[(i, i)] += mu;
+            }
+            if p.clone().cholesky().is_some() {
+                break;
+            }
+        }
+        let (mut ri, mut ci, mut vi) = (Vec::new(), Vec::new(), Vec::new());
+        for j in 0..n {
+            for i in 0..=j {
+                let v = p[(i, j)];
+                if v != 0.0 {
+                    ri.push(i);
+                    ci.push(j);
+                    vi.push(v);
+                }
+            }
+        }
+        let p_mat = CscMatrix::new_from_triplets(n, n, ri, ci, vi);
+        let c: Vec<f64> = (0..n).map(|i| -d[i] * r[i]).collect();
+        let m = gaps.len();
+        let (mut ri, mut ci, mut vi) = (Vec::new(), Vec::new(), Vec::new());
+        for (row, g) in grads.iter().enumerate() {
+            for (j, v) in g.iter().enumerate() {
+                if *v != 0.0 {
+                    ri.push(row);
+                    ci.push(j);
+                    vi.push(-v * d[j]);
+                }
+            }
+        }
+        let a_mat = CscMatrix::new_from_triplets(m, n, ri, ci, vi);
+        let b: Vec<f64> = gaps.iter().map(|g| g.gap_m).collect();
+        let cones: Vec<SupportedConeT<f64>> = if m > 0 {
+            vec![NonnegativeConeT(m)]
+        } else {
+            Vec::new()
+        };
+        let settings = DefaultSettingsBuilder::default()
+            .verbose(false)
+            .tol_gap_abs(1e-12)
+            .tol_gap_rel(1e-12)
+            .tol_feas(1e-12)
+            .max_iter(200)
+            .build()
+            .map_err(|_| SolverStatus::Unsolved)?;
+        let mut solver = DefaultSolver::new(&p_mat, &c, &a_mat, &b, &cones, settings)
+            .map_err(|_| SolverStatus::Unsolved)?;
+        solver.solve();
+        let sol = &solver.solution;
+        if !matches!(
+            sol.status,
+            SolverStatus::Solved | SolverStatus::AlmostSolved
+        ) {
+            return Err(sol.status);
+        }
+        let du: Vec<f64> = sol.x.iter().zip(&d).map(|(x, d)| x * d).collect();
+        let lambda: Vec<f64> = sol.z.iter().map(|z| z.max(0.0)).collect();
+        if !du.iter().chain(&lambda).all(|v| v.is_finite()) {
+            return Err(SolverStatus::NumericalError);
+        }
+        Ok((du, lambda))
+    }
+
+    /// Newton's method on the KKT system of the active set `act` from `q`:
+    /// `−Q − Gᵀλ = 0`, `g_A = 0`, then the checks (every force pushes, no
+    /// other gap below the penetration tolerance), changing the set while
+    /// they fail. `true` with `q` and `act` at the solution.
+    fn polish(
+        &self,
+        ctx: &Ctx<'_>,
+        q: &mut Vec<f64>,
+        act: &mut Vec<Active>,
+        report: &mut ContactReport,
+    ) -> Result<bool> {
+        let n = ctx.n;
+        let l = ctx.robot.length();
+        let gtol = 1e-14 * l.max(q.iter().fold(0.0f64, |m, v| m.max(v.abs())));
+        for _ in 0..self.settings.max_active_set_changes {
+            let mut converged = false;
+            let mut last = (f64::INFINITY, f64::INFINITY);
+            for _ in 0..self.settings.max_newton_iterations {
+                let gaps = ctx.obstacles.gaps(ctx.robot, q)?;
+                let mut idx = Vec::with_capacity(act.len());
+                for a in act.iter() {
+                    match continue_gap(&gaps, a, &idx) {
+                        Some(i) => idx.push(i),
+                        None => return Ok(false),
+                    }
+                }
+                for (a, &i) in act.iter_mut().zip(&idx) {
+                    a.s = gaps[i].s_m;
+                }
+                let r = ctx.residual(q)?;
+                let k = ctx.tangent(q)?;
+                let mut hl = k.clone();
+                let mut f: Vec<f64> = r.iter().map(|v| -v).collect();
+                let grads: Vec<Vec<f64>> =
+                    idx.iter().map(|&i| ctx.map.gradient(&gaps[i], n)).collect();
+                for (a, (&i, gr)) in act.iter().zip(idx.iter().zip(&grads)) {
+                    ctx.map.add_hessian(&gaps[i], -a.lambda, &mut hl);
+                    f.iter_mut().zip(gr).for_each(|(x, g)| *x -= a.lambda * g);
+                }
+                let fnorm = norm2(&f);
+                let cmax = idx.iter().map(|&i| gaps[i].gap_m.abs()).fold(0.0, f64::max);
+                let tol = ctx.tolerance(q, &k, self.settings.residual_tolerance);
+                report.residual_norm_n = fnorm;
+                report.residual_tolerance_n = tol;
+                if !(fnorm.is_finite() && cmax.is_finite()) {
+                    return Ok(false);
+                }
+                if fnorm <= tol && cmax <= gtol {
+                    converged = true;
+                    break;
+                }
+                // stagnation at round-off after the tolerances are met loosely
+                if fnorm >= 0.5 * last.0
+                    && cmax >= 0.5 * last.1
+                    && fnorm <= 10.0 * tol
+                    && cmax <= 1e3 * gtol
+                {
+                    converged = true;
+                    break;
+                }
+                last = (fnorm, cmax);
+                let m = act.len();
+                let mut kkt = DMatrix::zeros(n + m, n + m);
+                kkt.view_mut((0, 0), (n, n)).copy_from(&hl);
+                let mut rhs = DVector::zeros(n + m);
+                for i in 0..n {
+                    rhs[i] = -f[i];
+                }
+                for (j, (gr, &i)) in grads.iter().zip(&idx).enumerate() {
+                    for (c, v) in gr.iter().enumerate() {
+                        kkt[(c, n + j)] = -v;
+                        kkt[(n + j, c)] = -v;
+                    }
+                    rhs[n + j] = gaps[i].gap_m;
+                }
+                let Some(x) = kkt.lu().solve(&rhs) else {
+                    return Ok(false);
+                };
+                if !x.iter().all(|v| v.is_finite()) {
+                    return Ok(false);
+                }
+                report.newton_iterations += 1;
+                let du: Vec<f64> = x.iter().take(n).copied().collect();
+                let dq = ctx.expand(&du)?;
+                let sc = ctx.slope_change(&dq);
+                let t = if sc > self.settings.max_step_rotation {
+                    self.settings.max_step_rotation / sc
+                } else {
+                    1.0
+                };
+                q.iter_mut().zip(&dq).for_each(|(a, b)| *a += t * b);
+                for (j, a) in act.iter_mut().enumerate() {
+                    a.lambda += t * x[n + j];
+                }
+            }
+            if !converged {
+                return Ok(false);
+            }
+            // every force pushes
+            let lmax = act.iter().fold(0.0f64, |m, a| m.max(a.lambda.abs()));
+            if let Some((j, a)) = act
+                .iter()
+                .enumerate()
+                .min_by(|x, y| x.1.lambda.total_cmp(&y.1.lambda))
+            {
+                if a.lambda < -1e-9 * lmax.max(ctx.scale) {
+                    act.remove(j);
+                    continue;
+                }
+            }
+            // no other gap is closed
+            let gaps = ctx.obstacles.gaps(ctx.robot, q)?;
+            let mut idx = Vec::new();
+            for a in act.iter() {
+                if let Some(i) = continue_gap(&gaps, a, &idx) {
+                    idx.push(i);
+                }
+            }
+            let worst = gaps
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| !idx.contains(i))
+                .min_by(|x, y| x.1.gap_m.total_cmp(&y.1.gap_m));
+            match worst {
+                Some((_, g)) if g.gap_m < -self.settings.penetration_tolerance_m => {
+                    act.push(Active {
+                        obstacle: g.obstacle,
+                        s: g.s_m,
+                        lambda: 0.0,
+                    });
+                }
+                _ => {
+                    act.iter_mut().for_each(|a| a.lambda = a.lambda.max(0.0));
+                    return Ok(true);
+                }
+            }
+        }
+        Ok(false)
+    }
+}
