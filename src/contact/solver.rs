@@ -18,7 +18,7 @@ use crate::linsolve::BandedMatrix;
 use crate::loads::Loads;
 use crate::numeric::norm2;
 use crate::outcome::{ContactReport, ContactStatus, NonFiniteAt};
-use crate::statics::{residual_floor, StaticSolver};
+use crate::statics::residual_floor;
 
 /// Settings of the contact solver; every field has a documented default.
 ///
@@ -277,9 +277,13 @@ impl ContactSolver {
     }
 
     /// The equilibrium of `robot` under `loads` among `obstacles`, from `q0`
-    /// (all `n_q` coordinates) or, cold, from the equilibrium without
-    /// obstacles if it does not penetrate, else from the reference
-    /// configuration.
+    /// (all `n_q` coordinates) or, cold, from the configuration of the
+    /// actuation alone ([`Robot::arc_configuration`]) if it does not
+    /// penetrate, else from the reference configuration. The SQP's steps
+    /// are bounded and their linearized gaps keep them on the near side of
+    /// every obstacle, so the solve follows the loading from the start: an
+    /// obstacle the free equilibrium would pass through is met, not
+    /// tunnelled.
     ///
     /// # Errors
     /// Bad input only: the settings ([`ContactSettings::validate`]), the
@@ -321,25 +325,8 @@ impl ContactSolver {
                 self.with_clamp(robot, q0)?
             }
             None => {
-                // no contact at the free equilibrium: that is the answer
-                if let Ok(eq) = StaticSolver::default().solve(robot, loads, None) {
-                    let (pen, min) = ctx.penetration(&eq.q)?;
-                    if pen == 0.0 {
-                        report.status = ContactStatus::Converged;
-                        report.min_gap_m = min;
-                        report.residual_norm_n = eq.report.residual_norm_n;
-                        report.residual_tolerance_n = eq
-                            .report
-                            .residual_tolerance_n
-                            .max(eq.report.residual_floor_n);
-                        report.wall_time_s = start.elapsed().as_secs_f64();
-                        return Ok(ContactSolution {
-                            q: eq.q,
-                            contacts: Vec::new(),
-                            report,
-                        });
-                    }
-                }
+                // not the free equilibrium, even if it does not penetrate: it
+                // may lie beyond an obstacle the loading path meets
                 let arc = robot.arc_configuration(&loads.pressures_pa);
                 if ctx.penetration(&arc)?.0 == 0.0 {
                     arc

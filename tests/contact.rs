@@ -1,0 +1,134 @@
+//! Contact against references not computed with softrod: the propped
+//! cantilever's closed form and the elastica on a point obstacle by
+//! shooting (validation/contact_*.py write reference/contact_*.json).
+
+mod common;
+
+use common::reference;
+use softrod::assembly::{RobotSpec, Section};
+use softrod::contact::{ContactSolution, ContactSolver, Obstacle, Obstacles};
+use softrod::element::PlanarCable;
+use softrod::loads::{Loads, PointForce};
+
+fn robot(p: &serde_json::Value, elements: usize) -> softrod::assembly::Robot<PlanarCable> {
+    let f = |k: &str| p[k].as_f64().unwrap();
+    let mut spec = RobotSpec::new(vec![Section::uniform(
+        f("length_m"),
+        f("ea_n"),
+        f("ei_nm2"),
+        elements,
+    )]);
+    spec.gravity_m_per_s2 = vec![0.0, 0.0];
+    spec.build_planar().unwrap()
+}
+
+fn tip_load(l: f64, force: [f64; 2]) -> Loads {
+    Loads {
+        point_forces: vec![PointForce {
+            s_m: l,
+            force_n: force.to_vec(),
+        }],
+        ..Loads::default()
+    }
+}
+
+fn check_solution(sol: &ContactSolution) {
+    assert!(sol.is_converged(), "{}", sol.report);
+    assert!(sol.report.min_gap_m >= -1e-9, "{}", sol.report);
+    assert!(sol.report.residual_norm_n <= sol.report.residual_tolerance_n);
+}
+
+#[test]
+fn propped_cantilever_reaction_matches_the_closed_form() {
+    let doc = reference("contact_propped_cantilever");
+    let p = &doc["params"];
+    let l = p["length_m"].as_f64().unwrap();
+    let load = p["tip_load_n"].as_f64().unwrap();
+    let rho = p["support_radius_m"].as_f64().unwrap();
+    for s in doc["values"]["supports"].as_array().unwrap() {
+        let a = s["a_m"].as_f64().unwrap();
+        let r_ref = s["reaction_n"].as_f64().unwrap();
+        // the support touches the straight rod's underside at x = a
+        let obstacles = Obstacles::new(
+            vec![Obstacle::Circle {
+                center_m: [a, -rho],
+                radius_m: rho,
+            }],
+            0.0,
+        )
+        .unwrap();
+        // meshes with a node at the support: Hermite cubics are exact for the
+        // linear beam between point loads, so every mesh gives the limit
+        for n in [4, 8, 16] {
+            let robot = robot(p, n);
+            let mut per_load = Vec::new();
+            // the linear limit: the tip deflects about 1e-5 L at the reference
+            // load, so the geometric nonlinearity changes R/P by about 1e-10;
+            // R/P at a tenth of the load agrees
+            for scale in [1.0, 0.1] {
+                let sol = ContactSolver::default()
+                    .solve(&robot, &tip_load(l, [0.0, -scale * load]), &obstacles, None)
+                    .unwrap();
+                check_solution(&sol);
+                assert_eq!(sol.contacts.len(), 1, "{:?}", sol.contacts);
+                let c = &sol.contacts[0];
+                assert!((c.s_m - a).abs() < 1e-6, "contact at {} for a = {a}", c.s_m);
+                per_load.push(c.force_n / (scale * load));
+                let rel = (c.force_n / (scale * r_ref) - 1.0).abs();
+                println!(
+                    "a = {a}, {n} elements, P = {:.1e} N: R = {:.12e} N (closed form {:.12e}), relative error {rel:.2e}",
+                    scale * load,
+                    c.force_n,
+                    scale * r_ref
+                );
+                assert!(rel < 1e-6, "relative error {rel:e}");
+            }
+            assert!(
+                (per_load[0] / per_load[1] - 1.0).abs() < 1e-8,
+                "{per_load:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn elastica_on_a_point_obstacle_matches_shooting() {
+    for name in ["contact_elastica_down", "contact_elastica_oblique"] {
+        let doc = reference(name);
+        let p = &doc["params"];
+        let v = &doc["values"];
+        let l = p["length_m"].as_f64().unwrap();
+        let o = &p["obstacle"];
+        let c = o["center_m"].as_array().unwrap();
+        let obstacles = Obstacles::new(
+            vec![Obstacle::Circle {
+                center_m: [c[0].as_f64().unwrap(), c[1].as_f64().unwrap()],
+                radius_m: o["radius_m"].as_f64().unwrap(),
+            }],
+            0.0,
+        )
+        .unwrap();
+        let f = p["tip_load_n"].as_array().unwrap();
+        let loads = tip_load(l, [f[0].as_f64().unwrap(), f[1].as_f64().unwrap()]);
+        let r_ref = v["reaction_n"].as_f64().unwrap();
+        let s_ref = v["contact_s_m"].as_f64().unwrap();
+        let mut last = None;
+        for n in [16, 32, 64, 128] {
+            let robot = robot(p, n);
+            let sol = ContactSolver::default()
+                .solve(&robot, &loads, &obstacles, None)
+                .unwrap();
+            check_solution(&sol);
+            assert_eq!(sol.contacts.len(), 1, "{:?}", sol.contacts);
+            let k = &sol.contacts[0];
+            let (er, es) = ((k.force_n / r_ref - 1.0).abs(), (k.s_m / s_ref - 1.0).abs());
+            println!(
+                "{name}, {n} elements: R = {:.10e} N (shooting {r_ref:.10e}), s = {:.10} m (shooting {s_ref:.10}); relative errors {er:.2e}, {es:.2e}; {}",
+                k.force_n, k.s_m, sol.report
+            );
+            last = Some((er, es));
+        }
+        let (er, es) = last.unwrap();
+        assert!(er < 1e-5 && es < 1e-5, "{name}: {er:e} {es:e}");
+    }
+}
