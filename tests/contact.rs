@@ -132,3 +132,65 @@ fn elastica_on_a_point_obstacle_matches_shooting() {
         assert!(er < 1e-5 && es < 1e-5, "{name}: {er:e} {es:e}");
     }
 }
+
+#[test]
+fn exudyn_penalty_contact_tends_to_the_exact_force() {
+    let doc = reference("contact_exudyn_penalty");
+    let p = &doc["params"];
+    let l = p["length_m"].as_f64().unwrap();
+    let o = &p["obstacle"];
+    let c = o["center_m"].as_array().unwrap();
+    let obstacles = Obstacles::new(
+        vec![Obstacle::Circle {
+            center_m: [c[0].as_f64().unwrap(), c[1].as_f64().unwrap()],
+            radius_m: o["radius_m"].as_f64().unwrap(),
+        }],
+        0.0,
+    )
+    .unwrap();
+    let f = p["tip_load_n"].as_array().unwrap();
+    let loads = tip_load(l, [f[0].as_f64().unwrap(), f[1].as_f64().unwrap()]);
+    // the same mesh as exudyn's
+    let robot = robot(p, p["elements"].as_u64().unwrap() as usize);
+    let sol = ContactSolver::default()
+        .solve(&robot, &loads, &obstacles, None)
+        .unwrap();
+    check_solution(&sol);
+    assert_eq!(sol.contacts.len(), 1);
+    let exact = &sol.contacts[0];
+    let fx = [
+        exact.force_n * exact.normal[0],
+        exact.force_n * exact.normal[1],
+    ];
+    println!("softrod: R = {:.10e} N, force {fx:?} N", exact.force_n);
+    let mut errors = Vec::new();
+    for run in doc["values"]["runs"].as_array().unwrap() {
+        assert!(run["converged"].as_bool().unwrap());
+        let k = run["contact_stiffness_n_per_m"].as_f64().unwrap();
+        let r = run["reaction_n"].as_f64().unwrap();
+        let v = run["contact_force_n"].as_array().unwrap();
+        let dir =
+            (v[0].as_f64().unwrap() - fx[0]).hypot(v[1].as_f64().unwrap() - fx[1]) / exact.force_n;
+        let rel = (r / exact.force_n - 1.0).abs();
+        println!(
+            "k = {k:.0e} N/m: exudyn R = {r:.10e} N, relative difference {rel:.2e} (k × difference {:.2}), force vector {dir:.2e}",
+            k * rel
+        );
+        errors.push((k, rel, dir));
+    }
+    // the penalty's bias is O(1/k): visible at small k, shrinking tenfold
+    // per decade, until exudyn's own discretization of the gap (straight
+    // segments, 12 per element: chords within ~1e-6 m of the cubic) is
+    // reached at a few 1e-5 in magnitude; the direction of a segment's
+    // normal differs from the cubic's by up to κ h / 2 (h = 2.6 mm), a few
+    // 1e-4 here
+    let (k0, e0, _) = errors[0];
+    let (_, e1, _) = errors[1];
+    assert!(k0 == 1e2 && e0 > 1e-2 && e1 < e0 / 5.0, "{errors:?}");
+    for &(k, e, _) in &errors {
+        assert!(e <= 10.0 / k + 5e-5, "k = {k}: {e}");
+    }
+    for &(_, e, d) in &errors[errors.len() - 2..] {
+        assert!(e < 5e-5 && d < 5e-4, "{errors:?}");
+    }
+}

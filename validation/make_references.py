@@ -1,6 +1,6 @@
 """Regenerate (or check) every reference file under reference/.
 
-    python validation/make_references.py [--venv] [--only cheap|exudyn|family|spatial|elastica|skfem]
+    python validation/make_references.py [--venv] [--only cheap|exudyn|family|spatial|elastica|skfem|contact]
                                          [--out-dir DIR] [--check]
 
 --venv     create validation/.venv if absent, pip-install validation/requirements.txt
@@ -9,7 +9,8 @@
 --only     cheap: one planar exudyn case, one spatial exudyn case and one scikit-fem
            case (what CI runs); exudyn / elastica / skfem: that generator only (exudyn
            includes the load family of exudyn_load_family.py and the spatial cable of
-           exudyn_spatial_cable.py; family, spatial: those only).
+           exudyn_spatial_cable.py; family, spatial: those only; contact: the contact
+           references of validation/contact_*.py).
 --out-dir  where to write the JSON files (default: reference/).
 --check    generate into a temporary directory and compare with the committed files
            in --out-dir: every number (outside "versions" and "timing_s") must agree to
@@ -122,6 +123,14 @@ def generate(only, out_dir):
             jobs = [(s, n) for s in skfem_strip.STRIPS for n in skfem_strip.SKFEM_CASES]
         for strip, name in jobs:
             rows += skfem_strip.run_case(name, out_dir, strip)
+    if only in (None, "contact"):
+        import contact_elastica_obstacle
+        import contact_exudyn_penalty
+        import contact_propped_cantilever
+
+        rows += contact_propped_cantilever.run_all(out_dir)
+        rows += contact_elastica_obstacle.run_all(out_dir)
+        rows += contact_exudyn_penalty.run_all(out_dir)
     return rows
 
 
@@ -204,7 +213,7 @@ def check(rows, tmp_dir, ref_dir, full, strict=False):
             print(f"ok       {fname}")
     if full:
         stale = sorted(f for f in os.listdir(ref_dir) if f.endswith(".json") and f not in generated)
-        stale = [f for f in stale if f.split("_")[0] in ("exudyn", "elastica", "skfem")]
+        stale = [f for f in stale if f.split("_")[0] in ("exudyn", "elastica", "skfem", "contact")]
         for f in stale:
             print(f"MISMATCH {f}: committed but no generator writes it any more")
             bad += 1
@@ -214,7 +223,7 @@ def check(rows, tmp_dir, ref_dir, full, strict=False):
 def main():
     ap = argparse.ArgumentParser(description="Regenerate or check the reference/*.json files.")
     ap.add_argument("--venv", action="store_true", help="run inside validation/.venv (created/updated as needed)")
-    ap.add_argument("--only", choices=["cheap", "exudyn", "family", "spatial", "elastica", "skfem"], default=None)
+    ap.add_argument("--only", choices=["cheap", "exudyn", "family", "spatial", "elastica", "skfem", "contact"], default=None)
     ap.add_argument("--out-dir", default=DEFAULT_OUT)
     ap.add_argument("--check", action="store_true")
     ap.add_argument("--strict", action="store_true", help="with --check: compare solver diagnostics too")
