@@ -1,6 +1,8 @@
 //! Contact against references not computed with softrod: the propped
 //! cantilever's closed form and the elastica on a point obstacle by
-//! shooting (validation/contact_*.py write reference/contact_*.json).
+//! shooting, exudyn's penalty contact (validation/contact_*.py write
+//! reference/contact_*.json).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 mod common;
 
@@ -193,4 +195,159 @@ fn exudyn_penalty_contact_tends_to_the_exact_force() {
     for &(_, e, d) in &errors[errors.len() - 2..] {
         assert!(e < 5e-5 && d < 5e-4, "{errors:?}");
     }
+}
+
+#[test]
+fn propped_cantilever_with_the_support_inside_an_element_converges_in_the_mesh() {
+    let doc = reference("contact_propped_cantilever");
+    let p = &doc["params"];
+    let l = p["length_m"].as_f64().unwrap();
+    let load = p["tip_load_n"].as_f64().unwrap();
+    let rho = p["support_radius_m"].as_f64().unwrap();
+    // a = 0.3 m: inside an element for 8, 16, 32, 64 elements (nodes at k/n)
+    let a = 0.3;
+    let r_ref = load * (3.0 * l - a) / (2.0 * a);
+    let obstacles = Obstacles::new(
+        vec![Obstacle::Circle {
+            center_m: [a, -rho],
+            radius_m: rho,
+        }],
+        0.0,
+    )
+    .unwrap();
+    let mut errors = Vec::new();
+    for n in [8, 16, 32, 64] {
+        let robot = robot(p, n);
+        let sol = ContactSolver::default()
+            .solve(&robot, &tip_load(l, [0.0, -load]), &obstacles, None)
+            .unwrap();
+        check_solution(&sol);
+        let c = &sol.contacts[0];
+        let rel = (c.force_n / r_ref - 1.0).abs();
+        println!("a = {a} (inside an element), {n} elements: R = {:.12e} N, closed form {r_ref:.12e} N, relative error {rel:.2e}, contact at s = {:.9} m", c.force_n, c.s_m);
+        errors.push(rel);
+    }
+    assert!(errors[3] < 1e-6, "{errors:?}");
+}
+
+/// The equilibrium with the contact forces as dead point forces: the
+/// multipliers are forces if the robot is then in equilibrium without the
+/// obstacles.
+fn contact_forces_balance(
+    robot: &softrod::assembly::Robot<PlanarCable>,
+    loads: &Loads,
+    sol: &ContactSolution,
+) -> f64 {
+    let mut with = loads.clone();
+    for c in &sol.contacts {
+        with.point_forces.push(PointForce {
+            s_m: c.s_m,
+            force_n: vec![c.force_n * c.normal[0], c.force_n * c.normal[1]],
+        });
+    }
+    let dead = robot.dead_force(&with).unwrap();
+    let r = robot.residual(&sol.q, &dead, &with).unwrap();
+    let scale = robot
+        .restrict(&dead)
+        .unwrap()
+        .iter()
+        .map(|v| v * v)
+        .sum::<f64>()
+        .sqrt();
+    r.iter().map(|v| v * v).sum::<f64>().sqrt() / scale
+}
+
+#[test]
+fn a_robot_sagging_onto_a_capsule_and_a_polygon_balances_its_contact_forces() {
+    // the 0.24 m robot of the examples under its weight and a tip load,
+    // rod radius 8 mm, a capsule under its middle and a wedge under its tip
+    let mut spec = RobotSpec::new(vec![Section {
+        mass_per_length_kg_per_m: 0.2,
+        ..Section::uniform(0.24, 300.0, 0.025, 16)
+    }]);
+    spec.gravity_m_per_s2 = vec![0.0, -9.81];
+    let robot = spec.build_planar().unwrap();
+    let obstacles = Obstacles::new(
+        vec![
+            Obstacle::Capsule {
+                start_m: [0.08, -0.03],
+                end_m: [0.14, -0.025],
+                radius_m: 0.01,
+            },
+            Obstacle::Polygon {
+                vertices_m: vec![[0.18, -0.08], [0.26, -0.08], [0.22, -0.03]],
+            },
+        ],
+        0.008,
+    )
+    .unwrap();
+    let loads = tip_load(0.24, [0.0, -1.0]);
+    let sol = ContactSolver::default()
+        .solve(&robot, &loads, &obstacles, None)
+        .unwrap();
+    check_solution(&sol);
+    println!("{}", sol.report);
+    for c in &sol.contacts {
+        println!("{c:?}");
+        assert!(c.force_n > 0.0 && c.gap_m.abs() <= 1e-9);
+    }
+    let touched: Vec<usize> = sol.contacts.iter().map(|c| c.obstacle).collect();
+    assert!(touched.contains(&0) && touched.contains(&1), "{touched:?}");
+    let balance = contact_forces_balance(&robot, &loads, &sol);
+    println!("equilibrium with the contact forces as point loads: relative residual {balance:.2e}");
+    assert!(balance < 1e-8, "{balance:e}");
+    // every gap along the rod is closed or open, none negative, on a fine
+    // sampling independent of the gap search
+    for k in 0..=2400 {
+        let s = 0.24 * k as f64 / 2400.0;
+        let r = robot.position_at(&sol.q, s).unwrap();
+        for o in obstacles.obstacles() {
+            let d = o.signed_distance(&[r[0], r[1]]).distance_m - 0.008;
+            assert!(d >= -1e-9, "penetration {d:e} at s = {s}");
+        }
+    }
+}
+
+#[test]
+fn a_start_pinched_between_two_obstacles_is_infeasible() {
+    // two overlapping disks either side of a straight rod turned up by 0.8
+    // rad, both 1 cm into it at the same point: the linearized gaps ask
+    // for a step both ways
+    let mut spec = RobotSpec::new(vec![Section::uniform(0.3, 300.0, 0.02, 6)]);
+    spec.gravity_m_per_s2 = vec![0.0, 0.0];
+    let robot = spec.build_planar().unwrap();
+    let (t, nrm) = (
+        [0.8f64.cos(), 0.8f64.sin()],
+        [-(0.8f64.sin()), 0.8f64.cos()],
+    );
+    let p = [0.2 * t[0], 0.2 * t[1]];
+    let obstacles = Obstacles::new(
+        vec![
+            Obstacle::Circle {
+                center_m: [p[0] + 0.03 * nrm[0], p[1] + 0.03 * nrm[1]],
+                radius_m: 0.04,
+            },
+            Obstacle::Circle {
+                center_m: [p[0] - 0.03 * nrm[0], p[1] - 0.03 * nrm[1]],
+                radius_m: 0.04,
+            },
+        ],
+        0.0,
+    )
+    .unwrap();
+    let q0: Vec<f64> = robot
+        .node_arc()
+        .iter()
+        .flat_map(|&s| [s * t[0], s * t[1], t[0], t[1]])
+        .collect();
+    let sol = ContactSolver::default()
+        .solve(&robot, &Loads::default(), &obstacles, Some(&q0))
+        .unwrap();
+    println!("{}", sol.report);
+    assert!(
+        matches!(sol.report.status, softrod::outcome::ContactStatus::Infeasible { penetration_m } if penetration_m > 0.009),
+        "{}",
+        sol.report
+    );
+    assert!(!sol.is_converged() && sol.report.min_gap_m < -0.009);
 }

@@ -195,9 +195,9 @@ impl Cubic {
         match f {
             Feature::Point { c, .. } => {
                 let mut p = vec![0.0; 6];
-                for i in 0..2 {
+                for (i, ci) in c.iter().enumerate() {
                     let mut w = self.component(i);
-                    w[0] -= c[i];
+                    w[0] -= ci;
                     let d = [w[1], 2.0 * w[2], 3.0 * w[3]];
                     for (k, v) in poly_mul(&w, &d).iter().enumerate() {
                         p[k] += v;

@@ -132,7 +132,7 @@ impl Obstacles {
         let base = [base[0], base[1]];
         for (i, o) in self.obstacles.iter().enumerate() {
             let g = o.signed_distance(&base).distance_m - self.rod_radius_m;
-            if !(g >= -tol) {
+            if g.is_nan() || g < -tol {
                 return Err(Error::invalid(
                     format!("obstacles[{i}]"),
                     format!("{o:?}"),
@@ -142,7 +142,7 @@ impl Obstacles {
         }
         let q = robot.reference_configuration();
         for g in self.gaps(robot, &q)? {
-            if !(g.gap_m >= -tol) {
+            if g.gap_m.is_nan() || g.gap_m < -tol {
                 return Err(Error::invalid(
                     format!("obstacles[{}]", g.obstacle),
                     format!("{:?}", self.obstacles[g.obstacle]),

@@ -340,7 +340,9 @@ impl ContactSolver {
         let (_, min) = ctx.penetration(&q)?;
         report.min_gap_m = if min.is_finite() { min } else { f64::MAX };
         // never a penetrating shape as converged
-        if report.status.is_converged() && !(min >= -self.settings.penetration_tolerance_m) {
+        if report.status.is_converged()
+            && (min.is_nan() || min < -self.settings.penetration_tolerance_m)
+        {
             report.status = ContactStatus::Infeasible {
                 penetration_m: -min,
             };
@@ -624,7 +626,7 @@ impl ContactSolver {
     fn polish(
         &self,
         ctx: &Ctx<'_>,
-        q: &mut Vec<f64>,
+        q: &mut [f64],
         act: &mut Vec<Active>,
         report: &mut ContactReport,
     ) -> Result<bool> {
