@@ -99,6 +99,23 @@ impl ContactSettings {
 }
 
 /// An active contact of a solution.
+///
+/// # Example
+/// ```
+/// use softrod::assembly::{RobotSpec, Section};
+/// use softrod::contact::{ContactSolver, Obstacle, Obstacles};
+/// use softrod::loads::{Loads, PointForce};
+/// let robot = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 12)]).build_planar()?;
+/// // a disk 3 cm below the rod's middle, rod radius 5 mm
+/// let obstacles = Obstacles::new(vec![Obstacle::Circle { center_m: [0.12, -0.045], radius_m: 0.01 }], 0.005)?;
+/// let loads = Loads { point_forces: vec![PointForce { s_m: 0.24, force_n: vec![0.0, -1.0] }], ..Loads::default() };
+/// let sol = ContactSolver::default().solve(&robot, &loads, &obstacles, None)?;
+/// let c = &sol.contacts[0];
+/// assert!(c.obstacle == 0 && c.force_n > 0.0 && c.gap_m.abs() < 1e-9);
+/// // the force on the rod pushes it away from the disk: up
+/// assert!(c.normal[1] > 0.0);
+/// # Ok::<(), softrod::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ContactForce {
     /// Index of the obstacle.
@@ -118,6 +135,21 @@ pub struct ContactForce {
 
 /// The result of a contact solve: the last iterate, its contacts and the
 /// report. Only a [`ContactStatus::Converged`] status certifies the shape.
+///
+/// # Example
+/// ```
+/// use softrod::assembly::{RobotSpec, Section};
+/// use softrod::contact::{ContactSolver, Obstacle, Obstacles};
+/// use softrod::loads::{Loads, PointForce};
+/// let robot = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 12)]).build_planar()?;
+/// // a disk 3 cm below the rod's middle, rod radius 5 mm
+/// let obstacles = Obstacles::new(vec![Obstacle::Circle { center_m: [0.12, -0.045], radius_m: 0.01 }], 0.005)?;
+/// let loads = Loads { point_forces: vec![PointForce { s_m: 0.24, force_n: vec![0.0, -1.0] }], ..Loads::default() };
+/// let sol = ContactSolver::default().solve(&robot, &loads, &obstacles, None)?;
+/// assert!(sol.is_converged() && sol.report.min_gap_m >= -1e-10);
+/// assert_eq!(sol.q.len(), robot.n_q());
+/// # Ok::<(), softrod::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct ContactSolution {
     /// All coordinates, base node included.
@@ -136,6 +168,24 @@ impl ContactSolution {
 }
 
 /// The contact solver (see the module docs).
+///
+/// Cost: the KKT systems are dense (`O(n³)` in the free coordinates), meant
+/// for robots of up to a few hundred elements.
+///
+/// # Example
+/// ```
+/// use softrod::assembly::{RobotSpec, Section};
+/// use softrod::contact::{ContactSolver, Obstacle, Obstacles};
+/// use softrod::loads::{Loads, PointForce};
+/// let robot = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 12)]).build_planar()?;
+/// // a disk 3 cm below the rod's middle, rod radius 5 mm
+/// let obstacles = Obstacles::new(vec![Obstacle::Circle { center_m: [0.12, -0.045], radius_m: 0.01 }], 0.005)?;
+/// let loads = Loads { point_forces: vec![PointForce { s_m: 0.24, force_n: vec![0.0, -1.0] }], ..Loads::default() };
+/// let sol = ContactSolver::default().solve(&robot, &loads, &obstacles, None)?;
+/// assert!(sol.is_converged());
+/// println!("{}", sol.report);
+/// # Ok::<(), softrod::Error>(())
+/// ```
 #[derive(Debug, Clone, Default)]
 pub struct ContactSolver {
     /// Settings.
@@ -271,6 +321,13 @@ impl ContactSolver {
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] if the settings are invalid.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::contact::{ContactSettings, ContactSolver};
+    /// let bad = ContactSettings { penetration_tolerance_m: 1e-6, ..Default::default() };
+    /// assert_eq!(ContactSolver::new(bad).unwrap_err().field(), Some("penetration_tolerance_m"));
+    /// ```
     pub fn new(settings: ContactSettings) -> Result<Self> {
         settings.validate()?;
         Ok(ContactSolver { settings })
