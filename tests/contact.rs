@@ -351,3 +351,40 @@ fn a_start_pinched_between_two_obstacles_is_infeasible() {
     );
     assert!(!sol.is_converged() && sol.report.min_gap_m < -0.009);
 }
+
+#[test]
+fn an_actuated_robot_bending_into_a_disk_stops_on_it() {
+    // the two-section robot of the examples, pressurized, with a disk placed
+    // across its free equilibrium (but clear of the straight robot)
+    let scene = softrod::scene::Scene::two_section();
+    let (robot, loads) = (scene.robot().unwrap(), scene.loads().unwrap());
+    let free = softrod::statics::StaticSolver::default()
+        .solve(&robot, &loads, None)
+        .unwrap();
+    let l = robot.length();
+    let s = 0.8 * l;
+    let r = robot.position_at(&free.q, s).unwrap();
+    // 1 cm radius, its centre 5 mm inside the free shape's side, off the x axis
+    let base_y = robot.base_node()[1];
+    assert!((r[1] - base_y).abs() > 0.03, "{r:?}");
+    let obstacles = Obstacles::new(
+        vec![Obstacle::Circle {
+            center_m: [r[0], r[1]],
+            radius_m: 0.01,
+        }],
+        0.004,
+    )
+    .unwrap();
+    let sol = ContactSolver::default()
+        .solve(&robot, &loads, &obstacles, None)
+        .unwrap();
+    println!("{}", sol.report);
+    for c in &sol.contacts {
+        println!("{c:?}");
+    }
+    check_solution(&sol);
+    assert!(!sol.contacts.is_empty());
+    let balance = contact_forces_balance(&robot, &loads, &sol);
+    println!("relative residual with the contact forces as point loads {balance:.2e}");
+    assert!(balance < 1e-8, "{balance:e}");
+}
