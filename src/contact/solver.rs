@@ -201,14 +201,14 @@ struct Active {
 }
 
 /// The map of one element's 8 coordinates into the free coordinates.
-struct ElementMap {
+pub(super) struct ElementMap {
     /// For element 0: the base node's coordinates per free base direction.
     base_cols: Vec<Vec<f64>>,
     nbf: usize,
 }
 
 impl ElementMap {
-    fn new(robot: &Robot<PlanarCable>) -> Result<Self> {
+    pub(super) fn new(robot: &Robot<PlanarCable>) -> Result<Self> {
         let nbf = robot.n_base_free();
         let mut base_cols = Vec::with_capacity(nbf);
         for j in 0..nbf {
@@ -232,7 +232,7 @@ impl ElementMap {
                 .collect()
         }
     }
-    fn gradient(&self, g: &Gap, n: usize) -> Vec<f64> {
+    pub(super) fn gradient(&self, g: &Gap, n: usize) -> Vec<f64> {
         let mut out = vec![0.0; n];
         for a in 0..8 {
             for (u, c) in self.of(g.element, a) {
@@ -241,7 +241,7 @@ impl ElementMap {
         }
         out
     }
-    fn add_hessian(&self, g: &Gap, scale: f64, h: &mut DMatrix<f64>) {
+    pub(super) fn add_hessian(&self, g: &Gap, scale: f64, h: &mut DMatrix<f64>) {
         for a in 0..8 {
             for (ua, ca) in self.of(g.element, a) {
                 for b in 0..8 {

@@ -157,6 +157,102 @@ fn gap_gradient_and_hessian_match_finite_differences() {
     }
 }
 
+/// Central differences of the gap continuing `g` in the free coordinates
+/// against [`ElementMap`]'s gradient and Hessian (the clamp's stretch
+/// included), and of the element gradient against the element Hessian.
+fn check_free_derivatives(robot: &Robot<PlanarCable>, obstacles: &Obstacles, q: &[f64], g: &Gap) {
+    let map = super::solver::ElementMap::new(robot).unwrap();
+    let n = robot.n_free();
+    let grad = map.gradient(g, n);
+    let mut hess = nalgebra::DMatrix::zeros(n, n);
+    map.add_hessian(g, 1.0, &mut hess);
+    let h = 1e-6;
+    let at = |du: &[f64]| -> (f64, Vec<f64>) {
+        let dq = robot.expand_step(du).unwrap();
+        let qq: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
+        let x = obstacles
+            .gaps(robot, &qq)
+            .unwrap()
+            .into_iter()
+            .filter(|x| x.obstacle == g.obstacle)
+            .min_by(|a, b| (a.s_m - g.s_m).abs().total_cmp(&(b.s_m - g.s_m).abs()))
+            .unwrap();
+        (x.gap_m, map.gradient(&x, n))
+    };
+    let scale = hess.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+    let mut touched = 0;
+    for i in 0..n {
+        let mut du = vec![0.0; n];
+        du[i] = h;
+        let (gp, dp) = at(&du);
+        du[i] = -h;
+        let (gm, dm) = at(&du);
+        let fd = (gp - gm) / (2.0 * h);
+        assert!(
+            (fd - grad[i]).abs() < 1e-7,
+            "u {i}: fd {fd} analytic {}",
+            grad[i]
+        );
+        for j in 0..n {
+            let fd = (dp[j] - dm[j]) / (2.0 * h);
+            assert!(
+                (fd - hess[(j, i)]).abs() < 1e-5 * scale,
+                "hessian ({j}, {i}): fd {fd} analytic {}",
+                hess[(j, i)]
+            );
+        }
+        if grad[i] != 0.0 {
+            touched += 1;
+        }
+    }
+    assert!(touched >= 2, "{grad:?}");
+}
+
+#[test]
+fn gap_derivatives_in_the_free_coordinates_match_finite_differences() {
+    let robot = robot(6);
+    let q = bent(&robot);
+    // beside the first element (the clamp's stretch is a free coordinate)
+    // and beyond the tip (a fixed material point, no sliding term)
+    let tip = [q[q.len() - 4], q[q.len() - 3]];
+    let (tx, ty) = (q[q.len() - 2], q[q.len() - 1]);
+    for (o, stationary) in [
+        (
+            Obstacle::Circle {
+                center_m: [0.02, -0.04],
+                radius_m: 0.02,
+            },
+            true,
+        ),
+        (
+            Obstacle::Circle {
+                center_m: [
+                    tip[0] + 0.05 * tx - 0.01 * ty,
+                    tip[1] + 0.05 * ty + 0.01 * tx,
+                ],
+                radius_m: 0.02,
+            },
+            false,
+        ),
+    ] {
+        let obstacles = Obstacles::new(vec![o], 0.003).unwrap();
+        let gaps = obstacles.gaps(&robot, &q).unwrap();
+        let g = gaps
+            .iter()
+            .min_by(|a, b| a.gap_m.total_cmp(&b.gap_m))
+            .unwrap();
+        assert_eq!(g.stationary, stationary, "{g:?}");
+        assert!(
+            stationary == (g.element == 0) && (stationary || g.xi == 1.0),
+            "{g:?}"
+        );
+        check_free_derivatives(&robot, &obstacles, &q, g);
+        // the element-0 gap moves with the clamp's stretch
+        let map = super::solver::ElementMap::new(&robot).unwrap();
+        assert_eq!(map.gradient(g, robot.n_free())[0] != 0.0, stationary);
+    }
+}
+
 #[test]
 fn the_tip_gap_is_a_fixed_material_point() {
     let robot = robot(4);
