@@ -126,6 +126,17 @@ fn a_structure_restarts_from_its_configuration() {
         .solve(&s, &loads, Some(&eq.q))
         .unwrap();
     assert!(warm.report.iterations <= 1, "{}", warm.report);
+    // a start of the wrong size or not finite is refused, naming `q0`
+    match StaticSolver::default().solve(&s, &loads, Some(&eq.u)) {
+        Err(Error::DimensionMismatch { name, .. }) => assert_eq!(name, "q0"),
+        other => panic!("{other:?}"),
+    }
+    let mut bad = eq.q.clone();
+    bad[3] = f64::NAN;
+    match StaticSolver::default().solve(&s, &loads, Some(&bad)) {
+        Err(e) => assert_eq!(e.field(), Some("q0[3]"), "{e:?}"),
+        Ok(_) => panic!("a NaN start was accepted"),
+    }
     let robot = crate::scene::Scene::two_section().robot().unwrap();
     let mut other = AutoSolver::analyze(robot.tangent_pattern()).unwrap();
     match StaticSolver::default().solve_with(&s, &loads, None, &mut other) {

@@ -146,6 +146,18 @@ pub trait Assembled {
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] for a `q` of the wrong size.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// use softrod::structure::Assembled;
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
+    /// let u = robot.reference_free_coordinates();
+    /// let mut q = vec![0.0; robot.n_q()];
+    /// robot.configuration_into(&u, &mut q)?;
+    /// assert_eq!(robot.free_coordinates_of(&q)?, u);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     fn free_coordinates_of(&self, q: &[f64]) -> Result<Vec<f64>>;
 
     /// Where a solve without a start point starts: the straight reference
@@ -154,6 +166,17 @@ pub trait Assembled {
     ///
     /// # Errors
     /// As [`Assembled::validate_loads`].
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// use softrod::structure::Assembled;
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
+    /// // without actuation the arcs are straight: the reference
+    /// let u = robot.start_free_coordinates(&softrod::loads::Loads::default())?;
+    /// assert_eq!(u, robot.reference_free_coordinates());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     fn start_free_coordinates(&self, loads: &Self::Loads) -> Result<Vec<f64>> {
         self.validate_loads(loads)?;
         Ok(self.reference_free_coordinates())
@@ -166,6 +189,21 @@ pub trait Assembled {
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] for wrong sizes.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// use softrod::structure::Assembled;
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
+    /// let loads = softrod::loads::Loads::default();
+    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration());
+    /// let dead = robot.dead_force(&loads)?;
+    /// let mut f = vec![0.0; robot.n_free()];
+    /// robot.applied_force_into(&u, &q, &dead, &loads, &mut f)?;
+    /// // a weightless robot without loads: nothing applied
+    /// assert!(f.iter().all(|v| *v == 0.0));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     fn applied_force_into(
         &self,
         u: &[f64],
@@ -180,6 +218,20 @@ pub trait Assembled {
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] for wrong sizes.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// use softrod::structure::Assembled;
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
+    /// let loads = softrod::loads::Loads::default();
+    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration());
+    /// let dead = robot.dead_force(&loads)?;
+    /// let mut k = softrod::linsolve::SymmetricMatrix::zeros(Assembled::tangent_pattern(&robot)?);
+    /// Assembled::tangent_into(&robot, &u, &q, &dead, &loads, &mut k)?;
+    /// assert!(k.get(1, 1) > 0.0);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     fn tangent_into(
         &self,
         u: &[f64],
@@ -197,6 +249,21 @@ pub trait Assembled {
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] for wrong sizes.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// use softrod::structure::Assembled;
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
+    /// // a step of the base stretch turns into a step of the base slope
+    /// let mut du = vec![0.0; robot.n_free()];
+    /// du[0] = 0.01;
+    /// let mut dq = vec![0.0; robot.n_q()];
+    /// robot.step_into(&robot.reference_free_coordinates(), &du, &mut dq)?;
+    /// assert_eq!(dq[2], 0.01);
+    /// assert_eq!(robot.step_rotation(&dq), 0.01);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     fn step_into(&self, u: &[f64], du: &[f64], dq: &mut [f64]) -> Result<()>;
 
     /// The point `u + s du` into `u_to` and its configuration into `q_to`,
@@ -207,6 +274,22 @@ pub trait Assembled {
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] for wrong sizes.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// use softrod::structure::Assembled;
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
+    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration());
+    /// let mut du = vec![0.0; robot.n_free()];
+    /// du[2] = 0.01; // node 1's y
+    /// let mut dq = vec![0.0; robot.n_q()];
+    /// robot.step_into(&u, &du, &mut dq)?;
+    /// let (mut u1, mut q1) = (u.clone(), q.clone());
+    /// robot.advance_into(&u, &q, &du, &dq, 0.5, &mut u1, &mut q1)?;
+    /// assert_eq!(q1[5], 0.005);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     #[allow(clippy::too_many_arguments)]
     fn advance_into(
         &self,
@@ -231,10 +314,32 @@ pub trait Assembled {
     /// The largest rotation a step `dq` over all coordinates makes (rad,
     /// roughly): the largest change of a rod node's slope `r'` (unit length
     /// at rest) or of a rigid body's angle. A solver caps it per step.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// use softrod::structure::Assembled;
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
+    /// // node 2's slope turns by 0.1, its position moves by 0.3 m
+    /// let mut dq = vec![0.0; robot.n_q()];
+    /// dq[8] = 0.3;
+    /// dq[11] = 0.1;
+    /// assert_eq!(robot.step_rotation(&dq), 0.1);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     fn step_rotation(&self, dq: &[f64]) -> f64;
 
     /// A length of the model (m): the scale of a step tolerance (the
     /// robot's length, the total length of a structure's rods).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// use softrod::structure::Assembled;
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
+    /// assert_eq!(robot.length_m(), 0.2);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     fn length_m(&self) -> f64;
 
     /// Energies at `q` that [`Assembled::potential_change_from`] may reuse
@@ -243,6 +348,18 @@ pub trait Assembled {
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] for a `q` of the wrong size.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// use softrod::structure::Assembled;
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
+    /// let mut e = Vec::new();
+    /// robot.energies_into(&robot.reference_configuration(), &mut e)?;
+    /// // one per element, nothing stored at rest (up to round-off)
+    /// assert!(e.len() == 4 && e.iter().all(|v| v.abs() < 1e-20));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     fn energies_into(&self, q: &[f64], out: &mut Vec<f64>) -> Result<()> {
         let _ = q;
         out.clear();
@@ -255,6 +372,24 @@ pub trait Assembled {
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] for wrong sizes.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// use softrod::structure::Assembled;
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
+    /// let loads = softrod::loads::Loads::default();
+    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration());
+    /// let dead = robot.dead_force(&loads)?;
+    /// let (mut u1, mut q1) = (u.clone(), q.clone());
+    /// u1[2] += 1e-3;
+    /// q1[5] += 1e-3; // node 1 lifted: bending stores energy
+    /// let mut e = Vec::new();
+    /// robot.energies_into(&q, &mut e)?;
+    /// let d = Assembled::potential_change_from(&robot, &u, &q, &e, &u1, &q1, &dead, &loads)?;
+    /// assert!(d > 0.0 && d == Assembled::potential_change(&robot, &u, &q, &u1, &q1, &dead, &loads)?);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     #[allow(clippy::too_many_arguments)]
     fn potential_change_from(
         &self,
