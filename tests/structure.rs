@@ -24,7 +24,6 @@ use softrod::loads::force_field::PointSpring;
 use softrod::loads::{Loads, NodeMoment, PointForce};
 use softrod::scene::Scene;
 use softrod::statics::StaticSolver;
-use softrod::structure::solve::{solve_equilibrium, NewtonSettings};
 use softrod::structure::{
     BodyLoad, JointSpec, RigidBodySpec, RodEnd, RodSpec, Structure, StructureLoads, StructureSpec,
 };
@@ -48,13 +47,10 @@ fn platform_load(force: [f64; 2], moment: f64) -> StructureLoads {
     }
 }
 
-fn solve(s: &Structure<PlanarCable>, loads: &StructureLoads, steps: usize) -> Vec<f64> {
-    let settings = NewtonSettings {
-        load_steps: steps,
-        ..NewtonSettings::default()
-    };
-    let eq = solve_equilibrium(s, loads, None, &settings).unwrap();
-    assert!(eq.converged(), "{:?} after {}", eq.status, eq.iterations);
+/// The static solver's equilibrium of the structure, its free coordinates.
+fn solve(s: &Structure<PlanarCable>, loads: &StructureLoads) -> Vec<f64> {
+    let eq = StaticSolver::default().solve(s, loads, None).unwrap();
+    assert!(eq.report.status.is_converged(), "{}", eq.report);
     eq.u
 }
 
@@ -139,12 +135,10 @@ fn one_clamped_rod_is_the_single_chain() {
     // the equilibria
     let eq = StaticSolver::default().solve(&robot, &loads, None).unwrap();
     assert!(eq.report.status.is_converged());
-    let settings = NewtonSettings {
-        load_steps: 4,
-        ..NewtonSettings::default()
-    };
-    let seq = solve_equilibrium(&structure, &sloads, None, &settings).unwrap();
-    assert!(seq.converged(), "{:?}", seq.status);
+    let seq = StaticSolver::default()
+        .solve(&structure, &sloads, None)
+        .unwrap();
+    assert!(seq.report.status.is_converged(), "{}", seq.report);
     let dq =
         eq.q.iter()
             .zip(&seq.q)
@@ -293,7 +287,7 @@ fn closed_form(h: f64, v: f64, t: f64) -> [f64; 3] {
 /// The platform's displacement `(u_x, u_y, θ)` at equilibrium under
 /// `(H, V, T)` (weightless legs and platform).
 fn platform_motion(s: &Structure<PlanarCable>, h: f64, v: f64, t: f64) -> [f64; 3] {
-    let u = solve(s, &platform_load([h, v], t), 1);
+    let u = solve(s, &platform_load([h, v], t));
     let p = s.body_free_coordinates(0).unwrap().start;
     [u[p], u[p + 1] - L, u[p + 2]]
 }
@@ -384,7 +378,7 @@ fn joint_reactions_balance_the_platform_and_the_legs() {
     let s = two_legs(8, 0.05, true).build_planar().unwrap();
     let (h, t) = (0.5, 0.02);
     let loads = platform_load([h, 0.0], t);
-    let u = solve(&s, &loads, 4);
+    let u = solve(&s, &loads);
     let q = s.configuration(&u).unwrap();
     let dead = s.dead_force(&loads).unwrap();
     let weight = -0.05 * 9.81;
@@ -495,7 +489,7 @@ fn a_gripper_on_a_fixed_palm_holds_each_finger_like_a_clamp() {
             .collect(),
         ..StructureLoads::default()
     };
-    let u = solve(&s, &loads, 4);
+    let u = solve(&s, &loads);
     let q = s.configuration(&u).unwrap();
     for (rod, x) in [(0usize, -0.02), (1, 0.02)] {
         let mut rs = softrod::assembly::RobotSpec::new(finger_sections());

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use super::Robot;
 use crate::element::Element;
-use crate::error::Result;
+use crate::error::{check_len, Result};
 use crate::linsolve::{SymmetricMatrix, SymmetricPattern};
 use crate::loads::Loads;
 use crate::structure::Assembled;
@@ -86,5 +86,117 @@ impl<E: Element> Assembled for Robot<E> {
 
     fn tangent_pattern(&self) -> Result<Arc<SymmetricPattern>> {
         Ok(Robot::tangent_pattern(self).clone())
+    }
+
+    /// The clamp resets the base position and direction and keeps the
+    /// stretch along its free direction; nodes 1 … N are taken as given.
+    fn free_coordinates_of(&self, q: &[f64]) -> Result<Vec<f64>> {
+        let nd = E::NODE_DOFS;
+        check_len("q0", self.n_q(), q.len())?;
+        let mut d = vec![0.0; self.n_q()];
+        d[..nd]
+            .iter_mut()
+            .zip(q.iter().zip(self.base_node()))
+            .for_each(|(d, (a, b))| *d = a - b);
+        let stretch = self.restrict(&d)?;
+        let nb = self.n_base_free();
+        let mut u = Vec::with_capacity(self.n_free());
+        u.extend_from_slice(&stretch[..nb]);
+        u.extend_from_slice(&q[nd..]);
+        Ok(u)
+    }
+
+    /// The arcs of the actuation ([`Robot::arc_configuration`]).
+    fn start_free_coordinates(&self, loads: &Loads) -> Result<Vec<f64>> {
+        self.validate_loads(loads)?;
+        self.free_coordinates_of(&self.arc_configuration(&loads.pressures_pa))
+    }
+
+    fn applied_force_into(
+        &self,
+        _u: &[f64],
+        q: &[f64],
+        dead: &[f64],
+        loads: &Loads,
+        out: &mut [f64],
+    ) -> Result<()> {
+        Robot::restrict_into(self, dead, out)?;
+        let mut m = vec![0.0; self.n_free()];
+        self.moment_force_into(q, loads, &mut m)?;
+        out.iter_mut().zip(&m).for_each(|(a, b)| *a += b);
+        Ok(())
+    }
+
+    /// The robot's tangent does not depend on the dead forces.
+    fn tangent_into(
+        &self,
+        _u: &[f64],
+        q: &[f64],
+        _dead: &[f64],
+        loads: &Loads,
+        k: &mut SymmetricMatrix,
+    ) -> Result<()> {
+        Robot::tangent_into(self, q, loads, k)
+    }
+
+    fn step_into(&self, _u: &[f64], du: &[f64], dq: &mut [f64]) -> Result<()> {
+        self.expand_step_into(du, dq)
+    }
+
+    /// The clamp is affine: `q + s dq` (the arithmetic of the robot's
+    /// solver since wave 1).
+    fn advance_into(
+        &self,
+        u: &[f64],
+        q: &[f64],
+        du: &[f64],
+        dq: &[f64],
+        s: f64,
+        u_to: &mut [f64],
+        q_to: &mut [f64],
+    ) -> Result<()> {
+        check_len("u", self.n_free(), u.len())?;
+        check_len("du", self.n_free(), du.len())?;
+        check_len("u", self.n_free(), u_to.len())?;
+        check_len("q", self.n_q(), q.len())?;
+        check_len("dq", self.n_q(), dq.len())?;
+        check_len("q", self.n_q(), q_to.len())?;
+        for ((v, a), b) in u_to.iter_mut().zip(u).zip(du) {
+            *v = a + s * b;
+        }
+        for ((v, a), b) in q_to.iter_mut().zip(q).zip(dq) {
+            *v = a + s * b;
+        }
+        Ok(())
+    }
+
+    fn step_rotation(&self, dq: &[f64]) -> f64 {
+        let (nd, d) = (E::NODE_DOFS, E::DIM);
+        dq.chunks(nd)
+            .flat_map(|node| node.get(d..2 * d).unwrap_or(&[]))
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+    }
+
+    fn length_m(&self) -> f64 {
+        self.length()
+    }
+
+    /// The element energies ([`Robot::element_energies_into`]).
+    fn energies_into(&self, q: &[f64], out: &mut Vec<f64>) -> Result<()> {
+        out.resize(self.n_elements(), 0.0);
+        self.element_energies_into(q, out)
+    }
+
+    fn potential_change_from(
+        &self,
+        _from_u: &[f64],
+        from_q: &[f64],
+        from_energies: &[f64],
+        _to_u: &[f64],
+        to_q: &[f64],
+        dead: &[f64],
+        loads: &Loads,
+    ) -> Result<f64> {
+        Robot::potential_change_from(self, from_q, from_energies, to_q, dead, loads)
     }
 }

@@ -1,10 +1,15 @@
-//! Static equilibrium: Newton's method on `Q(F, q, P) = 0` (17).
+//! Static equilibrium: Newton's method on `Q(F, q, P) = 0` (17), the one
+//! equilibrium solver of every model: a clamped [`Robot`](crate::assembly::Robot), a multi-body
+//! [`crate::structure::Structure`], any [`Assembled`] model, iterated in its
+//! free coordinates `u` with `q = φ(u)` (the equilibrium is
+//! `R(u) = T(u)ᵀ Q(φ(u)) = 0`).
 //!
-//! Globalization: a backtracking line search on `|Q|²` (the Newton direction
-//! always descends it, whatever the tangent's definiteness), a cap on the
-//! rotation of the node slopes per step, and, when the full problem fails
-//! from the start point, a homotopy `Q(q) − (1 − λ) Q(q_0) = 0` from `λ = 0`
-//! (where the start point is exact) to `λ = 1` with adaptive steps.
+//! Globalization: a backtracking line search that accepts a decrease of the
+//! total potential or of `|R|²` (the Newton direction always descends the
+//! latter, whatever the tangent's definiteness), a cap on the rotation of
+//! the node slopes (and rigid bodies) per step, and, when the full problem
+//! fails from the start point, a homotopy `R(u) − (1 − λ) R(u_0) = 0` from
+//! `λ = 0` (where the start point is exact) to `λ = 1` with adaptive steps.
 //!
 //! Convergence is scale-aware. The residual test is relative to the applied
 //! generalized forces, but never asks for less than the round-off floor
@@ -19,21 +24,15 @@
 //! or a controller needs; it falls back to [`StaticSolver`].
 
 use std::sync::Arc;
-use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::assembly::Robot;
-use crate::element::Element;
 use crate::error::{check_len, Error, Result};
-use crate::linsolve::{
-    AutoSolver, FactorOptions, Factorization, LinsolveError, SolverKind, SymmetricMatrix,
-    TangentSolver,
-};
-use crate::loads::Loads;
-use crate::numeric::norm2;
+use crate::linsolve::{AutoSolver, SolverKind, TangentSolver};
 pub use crate::outcome::{NonFiniteAt, StaticCriterion, StaticReport, StaticStatus};
+use crate::structure::Assembled;
 
+mod newton;
 pub mod tracker;
 
 pub use tracker::{EquilibriumTracker, LinearLoad, TrackedEquilibrium};
@@ -134,15 +133,31 @@ impl StaticSettings {
 pub const MAX_ITERATIONS: usize = 100_000;
 
 /// A converged equilibrium.
+///
+/// # Example
+/// ```
+/// use softrod::{scene::Scene, structure::Assembled, statics::StaticSolver};
+/// let scene = Scene::two_section();
+/// let robot = scene.robot()?;
+/// let eq = StaticSolver::default().solve(&robot, &scene.loads()?, None)?;
+/// // q = φ(u): the clamped base node, then the free nodes as they are
+/// assert_eq!((eq.q.len(), eq.u.len()), (robot.n_q(), Assembled::n_free(&robot)));
+/// assert_eq!(eq.q[4..], eq.u[robot.n_base_free()..]);
+/// # Ok::<(), softrod::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct Equilibrium {
-    /// All coordinates, base node included.
+    /// All coordinates, base node included (`φ(u)`).
     pub q: Vec<f64>,
+    /// The free coordinates (a robot: its base stretch, then nodes 1 … N;
+    /// a structure: block by block, see [`crate::structure::DofMap`]).
+    pub u: Vec<f64>,
     /// What the solver did.
     pub report: StaticReport,
 }
 
-/// Newton solver for the static equilibrium of a [`Robot`].
+/// Newton solver for the static equilibrium of a [`Robot`](crate::assembly::Robot) or any other
+/// [`Assembled`] model (see [`StaticSolver::solve`] for a structure).
 ///
 /// # Example
 /// ```
@@ -160,50 +175,84 @@ pub struct StaticSolver {
     pub settings: StaticSettings,
 }
 
-struct Work<'a> {
-    k: SymmetricMatrix,
-    /// Analyzed on the robot's tangent pattern.
-    solver: &'a mut AutoSolver,
-    r: Vec<f64>,
-    iterations: usize,
-    floor: f64,
-    last_step: f64,
-}
-
 impl StaticSolver {
     /// A solver with the given settings.
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] if the settings are invalid.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::statics::{StaticSettings, StaticSolver};
+    /// assert!(StaticSolver::new(StaticSettings { max_iterations: 0, ..Default::default() }).is_err());
+    /// ```
     pub fn new(settings: StaticSettings) -> Result<Self> {
         settings.validate()?;
         Ok(StaticSolver { settings })
     }
 
-    /// Solves `Q(q) = 0` for the given loads, starting from `q0` (all `n_q`
-    /// coordinates; the clamp resets its base position and direction) or,
-    /// cold, from [`Robot::arc_configuration`].
+    /// Solves the equilibrium `R(u) = 0` of `model` (a [`Robot`](crate::assembly::Robot), a
+    /// [`crate::structure::Structure`], any [`Assembled`] model) for the
+    /// given loads, in its free coordinates `u` with `q = φ(u)`, starting
+    /// from `q0` (all `n_q` coordinates, taken to the map by
+    /// [`Assembled::free_coordinates_of`]: a robot's clamp resets its base
+    /// position and direction) or, cold, from
+    /// [`Assembled::start_free_coordinates`] (a robot: the arcs of its
+    /// actuation, [`Robot::arc_configuration`](crate::assembly::Robot::arc_configuration)).
     ///
     /// # Errors
     /// [`Error::NotConverged`] with the report when no equilibrium is found
-    /// within the budget; the errors of [`Robot::validate_loads`] for bad
-    /// loads; [`Error::DimensionMismatch`] or [`Error::InvalidParameter`] for
-    /// a bad `q0`.
-    pub fn solve<E: Element>(
+    /// within the budget; the errors of [`Assembled::validate_loads`] for
+    /// bad loads; [`Error::DimensionMismatch`] or
+    /// [`Error::InvalidParameter`] for a bad `q0`; the settings' errors
+    /// ([`StaticSettings::validate`]).
+    ///
+    /// # Example
+    /// A structure: two clamped legs whose tips hold a 50 g platform, pushed
+    /// sideways; at equilibrium both legs lean the same way.
+    /// ```
+    /// use softrod::assembly::Section;
+    /// use softrod::statics::StaticSolver;
+    /// use softrod::structure::{BodyLoad, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec};
+    /// let leg = |x: f64| RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 6)], vec![x, 0.0], vec![0.0, 1.0]);
+    /// let joint = |rod| JointSpec::RodToBody { rod, end: RodEnd::End, body: 0, point_m: None, direction: None };
+    /// let s = StructureSpec::new(
+    ///     vec![leg(-0.05), leg(0.05)],
+    ///     vec![RigidBodySpec { mass_kg: 0.05, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
+    ///     vec![joint(0), joint(1)],
+    /// ).build_planar()?;
+    /// let loads = StructureLoads {
+    ///     bodies: vec![BodyLoad { body: 0, force_n: vec![0.1, 0.0], moment_nm: vec![0.0] }],
+    ///     ..StructureLoads::default()
+    /// };
+    /// let eq = StaticSolver::default().solve(&s, &loads, None)?;
+    /// assert!(eq.report.status.is_converged());
+    /// let x = s.body_free_coordinates(0)?.start;
+    /// assert!(eq.u[x] > 0.0);
+    /// // warm: from the equilibrium, a little more force
+    /// let more = StructureLoads { bodies: vec![BodyLoad { body: 0, force_n: vec![0.11, 0.0], moment_nm: vec![0.0] }], ..loads };
+    /// let warm = StaticSolver::default().solve(&s, &more, Some(&eq.q))?;
+    /// assert!(warm.u[x] > eq.u[x]);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn solve<M: Assembled>(
         &self,
-        robot: &Robot<E>,
-        loads: &Loads,
+        model: &M,
+        loads: &M::Loads,
         q0: Option<&[f64]>,
     ) -> Result<Equilibrium> {
         self.settings.validate()?;
-        let mut solver =
-            AutoSolver::with_kind(robot.tangent_pattern(), self.settings.linear_solver)?;
-        self.solve_with(robot, loads, q0, &mut solver)
+        let pattern = model.tangent_pattern()?;
+        let mut solver = AutoSolver::with_kind(&pattern, self.settings.linear_solver)?;
+        let u = self.start(model, loads, q0)?;
+        self.run(model, loads, u, &mut solver)
     }
 
-    /// [`StaticSolver::solve`] with a linear solver analyzed before on
-    /// [`Robot::tangent_pattern`]: a caller that solves one robot many times
-    /// analyzes its pattern once (`settings.linear_solver` is then not read).
+    /// [`StaticSolver::solve`] with a linear solver analyzed before on the
+    /// model's [`Assembled::tangent_pattern`] (a robot's
+    /// [`Robot::tangent_pattern`](crate::assembly::Robot::tangent_pattern)): a caller that solves one model many
+    /// times analyzes its pattern once (`settings.linear_solver` is then not
+    /// read).
     ///
     /// # Errors
     /// As [`StaticSolver::solve`]; [`Error::InvalidParameter`] (field
@@ -220,318 +269,43 @@ impl StaticSolver {
     /// assert!(eq.report.status.is_converged());
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
-    pub fn solve_with<E: Element>(
+    pub fn solve_with<M: Assembled>(
         &self,
-        robot: &Robot<E>,
-        loads: &Loads,
+        model: &M,
+        loads: &M::Loads,
         q0: Option<&[f64]>,
         solver: &mut AutoSolver,
     ) -> Result<Equilibrium> {
         self.settings.validate()?;
         let pattern = solver.pattern();
-        if !(Arc::ptr_eq(pattern, robot.tangent_pattern())
-            || **pattern == **robot.tangent_pattern())
-        {
+        let expected = model.tangent_pattern()?;
+        if !(Arc::ptr_eq(pattern, &expected) || **pattern == *expected) {
             return Err(Error::invalid(
                 "solver",
                 pattern.n(),
-                "analyzed on another pattern than the robot's tangent",
+                "analyzed on another pattern than the model's tangent",
             ));
         }
-        let start = Instant::now();
-        let nd = E::NODE_DOFS;
-        let dead = robot.dead_force(loads)?;
-        let mut q = match q0 {
-            Some(q0) => {
-                check_len("q0", robot.n_q(), q0.len())?;
-                crate::error::check_all_finite("q0", q0)?;
-                q0.to_vec()
-            }
-            None => robot.arc_configuration(&loads.pressures_pa),
-        };
-        // the clamp: base position and direction prescribed, stretch kept
-        let mut base = robot.base_node().to_vec();
-        let stretch = robot.restrict(&{
-            let mut d = vec![0.0; robot.n_q()];
-            d[..nd]
-                .iter_mut()
-                .zip(q.iter().zip(robot.base_node()))
-                .for_each(|(d, (a, b))| *d = a - b);
-            d
-        })?;
-        let free_dirs = robot.expand_step(&{
-            let mut u = vec![0.0; robot.n_free()];
-            u[..robot.n_base_free()].copy_from_slice(&stretch[..robot.n_base_free()]);
-            u
-        })?;
-        base.iter_mut().zip(&free_dirs).for_each(|(b, d)| *b += d);
-        q[..nd].copy_from_slice(&base);
-        let n = robot.n_free();
-        let mut w = Work {
-            k: SymmetricMatrix::zeros(robot.tangent_pattern().clone()),
-            solver,
-            r: vec![0.0; n],
-            iterations: 0,
-            floor: 0.0,
-            last_step: 0.0,
-        };
-        let scale = load_scale(robot, &dead, loads, &q)?;
-        let offset = vec![0.0; n];
-        let q_start = q.clone();
-        let mut load_steps = 0;
-        // loads so large that their norm overflows (or a start point where the
-        // forces do): no tolerance can be stated, so no solve is attempted
-        let mut status = if scale.is_finite() {
-            self.newton(robot, &dead, loads, &offset, &mut q, &mut w, scale)?
-        } else {
-            StaticStatus::NonFinite {
-                at: NonFiniteAt::Loads,
-            }
-        };
-        if !status.is_converged() && scale.is_finite() {
-            // Homotopy from the start point: R_λ(q) = Q(q; λ loads) − (1 − λ) Q(q_start; no loads).
-            // At λ = 0 the start point is exact; the load-dependent part of the
-            // tangent (the torques' Hessian) grows with λ, so iterates stay
-            // near equilibria, where the tangent is positive definite.
-            q.copy_from_slice(&q_start);
-            let unloaded = loads.scaled(0.0);
-            let zero_dead = vec![0.0; robot.n_q()];
-            let mut r0 = vec![0.0; n];
-            robot.residual_into(&q, &zero_dead, &unloaded, &mut r0)?;
-            let mut lambda = 0.0;
-            let mut step: f64 = 0.25;
-            status = StaticStatus::LoadStepTooSmall { load_fraction: 0.0 };
-            while w.iterations < self.settings.max_total_iterations {
-                let target = (lambda + step).min(1.0);
-                let off: Vec<f64> = r0.iter().map(|v| (1.0 - target) * v).collect();
-                let dead_t: Vec<f64> = dead.iter().map(|v| target * v).collect();
-                let loads_t = loads.scaled(target);
-                let saved = q.clone();
-                let before = w.iterations;
-                let step_status =
-                    self.newton(robot, &dead_t, &loads_t, &off, &mut q, &mut w, scale)?;
-                if step_status.is_converged() {
-                    load_steps += 1;
-                    lambda = target;
-                    if lambda >= 1.0 {
-                        status = step_status;
-                        break;
-                    }
-                    if w.iterations - before <= 6 {
-                        step *= 2.0;
-                    }
-                } else {
-                    q = saved;
-                    step *= 0.5;
-                    if step < self.settings.min_load_step {
-                        // a load step that ran out of iterations or found no
-                        // descent: the homotopy stalled
-                        status = match step_status {
-                            StaticStatus::IterationLimit { .. }
-                            | StaticStatus::LineSearchFailed => StaticStatus::LoadStepTooSmall {
-                                load_fraction: lambda,
-                            },
-                            other => other,
-                        };
-                        break;
-                    }
-                }
-            }
-            if w.iterations >= self.settings.max_total_iterations && !status.is_converged() {
-                status = StaticStatus::IterationLimit {
-                    iterations: w.iterations,
-                };
-            }
-        }
-        // final residual for the report
-        robot.residual_into(&q, &dead, loads, &mut w.r)?;
-        let res = norm2(&w.r);
-        // no NaN leaves the library: a "converged" state with a non-finite
-        // coordinate or residual is a failure
-        if !(res.is_finite() && q.iter().all(|v| v.is_finite())) {
-            status = StaticStatus::NonFinite {
-                at: NonFiniteAt::Solution,
-            };
-        }
-        let report = StaticReport {
-            status,
-            iterations: w.iterations,
-            load_steps,
-            residual_norm_n: finite_or_max(res),
-            residual_tolerance_n: finite_or_max(self.settings.residual_tolerance * scale),
-            residual_floor_n: finite_or_max(w.floor),
-            load_scale_n: finite_or_max(scale),
-            increment_norm_m: finite_or_max(w.last_step),
-            wall_time_s: start.elapsed().as_secs_f64(),
-        };
-        if status.is_converged() {
-            Ok(Equilibrium { q, report })
-        } else {
-            Err(Error::NotConverged {
-                report: Box::new(report),
-            })
-        }
+        let u = self.start(model, loads, q0)?;
+        self.run(model, loads, u, solver)
     }
 
-    /// Newton iterations on `Q(q) − offset = 0` from `q` (updated in place).
-    #[allow(clippy::too_many_arguments)]
-    fn newton<E: Element>(
+    /// The start point in free coordinates: `q0` taken to the map, or the
+    /// model's cold start.
+    fn start<M: Assembled>(
         &self,
-        robot: &Robot<E>,
-        dead: &[f64],
-        loads: &Loads,
-        offset: &[f64],
-        q: &mut [f64],
-        w: &mut Work<'_>,
-        scale: f64,
-    ) -> Result<StaticStatus> {
-        let nd = E::NODE_DOFS;
-        let d = E::DIM;
-        let n = robot.n_free();
-        let nq = robot.n_q();
-        let tol = self.settings.residual_tolerance * scale;
-        let xtol = self.settings.increment_tolerance * robot.length();
-        let eval = |q: &[f64], r: &mut Vec<f64>| -> Result<f64> {
-            robot.residual_into(q, dead, loads, r)?;
-            r.iter_mut().zip(offset).for_each(|(a, b)| *a -= b);
-            Ok(norm2(r))
-        };
-        let mut rn = eval(q, &mut w.r)?;
-        let mut trial = q.to_vec();
-        let mut r_trial = vec![0.0; n];
-        let mut dq = vec![0.0; n];
-        let mut energies = vec![0.0; robot.n_elements()];
-        for _ in 0..self.settings.max_iterations {
-            if !rn.is_finite() {
-                return Ok(StaticStatus::NonFinite {
-                    at: NonFiniteAt::Residual,
-                });
+        model: &M,
+        loads: &M::Loads,
+        q0: Option<&[f64]>,
+    ) -> Result<Vec<f64>> {
+        match q0 {
+            Some(q0) => {
+                check_len("q0", model.n_q(), q0.len())?;
+                crate::error::check_all_finite("q0", q0)?;
+                model.free_coordinates_of(q0)
             }
-            if rn <= tol {
-                return Ok(StaticStatus::Converged(StaticCriterion::Residual));
-            }
-            if w.iterations >= self.settings.max_total_iterations {
-                return Ok(StaticStatus::IterationLimit {
-                    iterations: w.iterations,
-                });
-            }
-            robot.tangent_into(q, loads, &mut w.k)?;
-            let qmax = q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            w.floor = residual_floor(w.k.max_abs(), qmax, n);
-            // At the round-off floor the residual cannot certify more digits,
-            // but one more Newton step still can gain them (the floor does not
-            // shrink with the load; stopping here left small-load solves 1e-11 m
-            // short): take it, keep it unless it raises the residual, stop.
-            let at_floor = rn <= w.floor;
-            w.iterations += 1;
-            // Newton direction; if it does not descend the potential (Q·dq <= 0,
-            // an indefinite tangent far from equilibrium), shift the diagonal:
-            // K + μ diag|K| with growing μ, until it does.
-            // Jacobi-scaled factorization (the rows of a fine cable's tangent
-            // span many orders of magnitude: bending ∝ L_e⁻³, axial on the
-            // slopes ∝ L_e). If the direction does not descend the potential
-            // (Q·dq <= 0: an indefinite tangent far from equilibrium), shift
-            // the scaled diagonal with growing μ until it does.
-            // (the tangent is symmetric: L D Lᵀ when positive definite, the
-            // pivoted LU otherwise, neither consuming it)
-            let mut found = false;
-            for mu in [0.0, 1e-8, 1e-6, 1e-4, 1e-2, 1.0] {
-                let options = FactorOptions {
-                    shift: mu,
-                    ..FactorOptions::default()
-                };
-                let lu = match w.solver.factor(&w.k, options) {
-                    Ok(lu) => lu,
-                    Err(LinsolveError::Singular { .. }) => continue,
-                    Err(LinsolveError::NonFinite { .. }) => {
-                        return Ok(StaticStatus::NonFinite {
-                            at: NonFiniteAt::Tangent,
-                        });
-                    }
-                    Err(e) => return Err(e.into()),
-                };
-                dq.copy_from_slice(&w.r);
-                lu.solve_in_place(&mut dq)?;
-                let slope: f64 = w.r.iter().zip(&dq).map(|(a, b)| a * b).sum();
-                if slope > 0.0 && dq.iter().all(|v| v.is_finite()) {
-                    found = true;
-                    break;
-                }
-            }
-            if !found {
-                return Ok(StaticStatus::SingularTangent);
-            }
-            let dq_full = robot.expand_step(&dq)?;
-            // cap the slope change
-            let mut slope_change = 0.0f64;
-            for node in 0..nq / nd {
-                for i in d..2 * d {
-                    slope_change = slope_change.max(dq_full[node * nd + i].abs());
-                }
-            }
-            let mut t = if slope_change > self.settings.max_step_rotation {
-                self.settings.max_step_rotation / slope_change
-            } else {
-                1.0
-            };
-            let step_inf = dq_full.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            if at_floor {
-                for ((v, a), b) in trial.iter_mut().zip(q.iter()).zip(&dq_full) {
-                    *v = a + b;
-                }
-                let rt = eval(&trial, &mut r_trial)?;
-                if rt.is_finite() && rt <= rn {
-                    q.copy_from_slice(&trial);
-                    std::mem::swap(&mut w.r, &mut r_trial);
-                    w.last_step = step_inf;
-                }
-                return Ok(StaticStatus::Converged(StaticCriterion::RoundOffFloor));
-            }
-            // the element energies at q, once for all trials
-            robot.element_energies_into(q, &mut energies)?;
-            let offset_slope: f64 = offset.iter().zip(&dq).map(|(a, b)| a * b).sum();
-            // Π decreases along dq when Q·dq > 0 (K positive along dq).
-            let slope: f64 = w.r.iter().zip(&dq).map(|(a, b)| a * b).sum();
-            let mut accepted = false;
-            for _ in 0..30 {
-                for ((v, a), b) in trial.iter_mut().zip(q.iter()).zip(&dq_full) {
-                    *v = a + t * b;
-                }
-                let rt = eval(&trial, &mut r_trial)?;
-                if rt.is_finite() {
-                    let offset_work = t * offset_slope;
-                    let dpi = robot.potential_change_from(q, &energies, &trial, dead, loads)?
-                        + offset_work;
-                    let energy_ok = dpi <= -1e-4 * t * slope;
-                    let residual_ok = rt * rt <= (1.0 - 1e-4 * t) * rn * rn;
-                    if energy_ok || residual_ok {
-                        accepted = true;
-                        break;
-                    }
-                }
-                t *= 0.5;
-            }
-            if !accepted {
-                // no decrease along the Newton direction: at the floor or stuck
-                if step_inf <= xtol {
-                    return Ok(StaticStatus::Converged(StaticCriterion::Increment));
-                }
-                return Ok(StaticStatus::LineSearchFailed);
-            }
-            q.copy_from_slice(&trial);
-            std::mem::swap(&mut w.r, &mut r_trial);
-            rn = norm2(&w.r);
-            w.last_step = t * step_inf;
-            if t == 1.0 && step_inf <= xtol {
-                return Ok(StaticStatus::Converged(StaticCriterion::Increment));
-            }
+            None => model.start_free_coordinates(loads),
         }
-        if rn <= tol.max(w.floor) {
-            return Ok(StaticStatus::Converged(StaticCriterion::Residual));
-        }
-        Ok(StaticStatus::IterationLimit {
-            iterations: w.iterations,
-        })
     }
 }
 
@@ -565,17 +339,6 @@ pub fn residual_floor(k_max_abs: f64, q_max_abs: f64, n_free: usize) -> f64 {
 /// conservative floor costs no accuracy.
 const FLOOR_SQRT_N: f64 = 0.05;
 
-/// Norm of the applied generalized forces at `q`: dead loads plus actuation
-/// and concentrated moments (N).
-fn load_scale<E: Element>(robot: &Robot<E>, dead: &[f64], loads: &Loads, q: &[f64]) -> Result<f64> {
-    let mut applied = robot.restrict(dead)?;
-    // the moment terms (actuation and concentrated moments), directly
-    let mut m = vec![0.0; robot.n_free()];
-    robot.moment_force_into(q, loads, &mut m)?;
-    applied.iter_mut().zip(&m).for_each(|(a, b)| *a += b);
-    Ok(norm2(&applied))
-}
-
 /// `v`, or `f64::MAX` in place of an infinity or NaN: every number of a
 /// report is finite.
 fn finite_or_max(v: f64) -> f64 {
@@ -585,3 +348,6 @@ fn finite_or_max(v: f64) -> f64 {
         f64::MAX
     }
 }
+
+#[cfg(test)]
+mod tests;

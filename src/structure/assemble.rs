@@ -484,6 +484,72 @@ impl<E: Element> Structure<E> {
         Ok(d)
     }
 
+    /// The applied generalized forces over the free coordinates at `u`
+    /// (`q = φ(u)`) into `out` (N): `T(u)ᵀ` of the dead forces `dead` plus
+    /// the actuation and the concentrated moments, without the elastic and
+    /// force-field terms. Its norm is the load scale of a static solve.
+    ///
+    /// # Errors
+    /// As [`Structure::residual`]; [`Error::DimensionMismatch`] for a `q`
+    /// or `out` of the wrong size.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::Section;
+    /// use softrod::loads::{Loads, PointForce};
+    /// use softrod::structure::{RodSpec, StructureLoads, StructureSpec};
+    /// let mut spec = StructureSpec::new(
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![1.0, 0.0])],
+    ///     vec![], vec![],
+    /// );
+    /// spec.gravity_m_per_s2 = vec![0.0, 0.0];
+    /// let s = spec.build_planar().unwrap();
+    /// let tip = Loads { point_forces: vec![PointForce { s_m: 0.2, force_n: vec![0.0, -0.5] }], ..Loads::default() };
+    /// let loads = StructureLoads { rods: vec![tip], ..StructureLoads::default() };
+    /// let dead = s.dead_force(&loads).unwrap();
+    /// let u = s.reference_free_coordinates();
+    /// let q = s.configuration(u).unwrap();
+    /// let mut f = vec![0.0; s.n_free()];
+    /// s.applied_force_into(u, &q, &dead, &loads, &mut f).unwrap();
+    /// // the tip force on the tip node's y (free coordinate 1 + 3·4 + 1), nothing else
+    /// assert_eq!(f[14], -0.5);
+    /// assert_eq!(f.iter().map(|v| v.abs()).sum::<f64>(), 0.5);
+    /// ```
+    pub fn applied_force_into(
+        &self,
+        u: &[f64],
+        q: &[f64],
+        dead: &[f64],
+        loads: &StructureLoads,
+        out: &mut [f64],
+    ) -> Result<()> {
+        self.check_sizes(u, dead, loads)?;
+        check_len("q", self.n_q(), q.len())?;
+        check_len("out", self.n_free(), out.len())?;
+        let nd = E::NODE_DOFS;
+        let mut f = dead.to_vec();
+        let mut mg = [0.0; MAX_EDOF];
+        let mut mh = vec![0.0; nd * nd];
+        for (i, rod) in self.rods.iter().enumerate() {
+            let Some(l) = self.rod_loads(loads, i) else {
+                continue;
+            };
+            let node0 = self.rod_node0[i];
+            let reference = &self.rod_reference[i];
+            rod.for_each_node_moment(l, |node, m| {
+                let start = (node0 + node) * nd;
+                let mg = &mut mg[..nd];
+                mg.fill(0.0);
+                E::add_moment_work(reference, &q[start..start + nd], m, mg, &mut mh);
+                for (fi, v) in f[start..start + nd].iter_mut().zip(mg.iter()) {
+                    *fi += v;
+                }
+                Ok(())
+            })?;
+        }
+        self.dofs.restrict_into(u, &f, out)
+    }
+
     /// The generalized force `Q = −∂Π/∂q` over all coordinates at `φ(u)`
     /// (N, N·m): zero on free coordinates at equilibrium only through `Tᵀ`;
     /// on a clamped node its position entries are what the rod pushes on the
@@ -531,7 +597,7 @@ impl<E: Element> Structure<E> {
     ///
     /// # Example
     /// ```
-    /// use softrod::structure::solve::{solve_equilibrium, NewtonSettings};
+    /// use softrod::statics::StaticSolver;
     /// use softrod::assembly::Section;
     /// use softrod::structure::{BodyLoad, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec};
     /// let spec = StructureSpec::new(
@@ -543,7 +609,7 @@ impl<E: Element> Structure<E> {
     /// let loads = StructureLoads::default();
     /// let dead = s.dead_force(&loads).unwrap();
     /// let u = s.reference_free_coordinates();
-    /// let eq = solve_equilibrium(&s, &loads, None, &NewtonSettings::default()).unwrap();
+    /// let eq = StaticSolver::default().solve(&s, &loads, None).unwrap();
     /// let r = s.joint_reactions(&eq.u, &dead, &loads).unwrap();
     /// // the rod holds the body up: its reaction carries the weight
     /// assert!((r[0].force_n[1] - 0.1 * 9.81).abs() < 1e-9);

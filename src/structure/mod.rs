@@ -18,9 +18,8 @@
 //!   `R(u) = T(u)ᵀ Q(φ(u))` of the equilibrium (17) and tangent
 //!   `K_u = Tᵀ K T + Σ_i g_i ∂²φ_i/∂u²` as a [`Triplets`] list.
 //! - [`model`]: what an equilibrium solver needs of a model
-//!   ([`Assembled`], implemented by the structure and the clamped robot).
-//! - [`solve`]: Newton's method on `R(u) = 0` for any [`Assembled`] model,
-//!   the tangent factored by a [`crate::linsolve::AutoSolver`].
+//!   ([`Assembled`], implemented by the structure and the clamped robot);
+//!   the solver is [`crate::statics::StaticSolver`], one for every model.
 
 mod assemble;
 pub mod dofmap;
@@ -28,7 +27,6 @@ pub mod model;
 pub mod rigid;
 pub mod rod;
 pub mod section;
-pub mod solve;
 pub mod spec;
 mod triplets;
 

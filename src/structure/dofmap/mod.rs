@@ -439,6 +439,82 @@ impl DofMap {
         Ok(q)
     }
 
+    /// The free coordinates of a configuration `q` over all coordinates:
+    /// the `u` with `φ(u) = q` when `q` lies on the map, else its nearest
+    /// reach block by block (free blocks copied; an affine block's free
+    /// directions by least squares, its prescribed part kept; a rigid end's
+    /// stretch `σ = (R(θ) d)·r' − 1` at its body's pose from `q`).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `q` has the wrong size;
+    /// [`Error::InvalidParameter`] for affine directions that are linearly
+    /// dependent.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::structure::{BlockRule, DofMap};
+    /// let map = DofMap::new(vec![
+    ///     BlockRule::Affine { offset: vec![0.0, 0.0, 1.0, 0.0], directions: vec![vec![0.0, 0.0, 1.0, 0.0]] },
+    ///     BlockRule::Free { len: 4 },
+    /// ]).unwrap();
+    /// let u = vec![0.5, 0.1, 0.0, 1.0, 0.0];
+    /// let q = map.configuration(&u).unwrap();
+    /// assert_eq!(map.free_coordinates_of(&q).unwrap(), u);
+    /// ```
+    pub fn free_coordinates_of(&self, q: &[f64]) -> Result<Vec<f64>> {
+        check_len("q", self.n_q, q.len())?;
+        let mut u = vec![0.0; self.n_u];
+        for &(q0, u0, len) in &self.runs {
+            u[u0..u0 + len].copy_from_slice(&q[q0..q0 + len]);
+        }
+        for b in self.constrained.iter().filter_map(|&i| self.blocks.get(i)) {
+            let qb = &q[b.q0..b.q0 + b.len];
+            match &b.rule {
+                BlockRule::Free { len } => u[b.u0..b.u0 + len].copy_from_slice(qb),
+                BlockRule::Affine { offset, directions } => {
+                    // normal equations of min |offset + Σ t_k u_k − q_b|
+                    let m = directions.len();
+                    if m == 0 {
+                        continue;
+                    }
+                    let gram = nalgebra::DMatrix::from_fn(m, m, |i, j| {
+                        directions[i]
+                            .iter()
+                            .zip(&directions[j])
+                            .map(|(a, c)| a * c)
+                            .sum::<f64>()
+                    });
+                    let rhs = nalgebra::DVector::from_fn(m, |i, _| {
+                        directions[i]
+                            .iter()
+                            .zip(qb.iter().zip(offset))
+                            .map(|(t, (x, o))| t * (x - o))
+                            .sum::<f64>()
+                    });
+                    let x = gram.cholesky().map(|c| c.solve(&rhs)).ok_or_else(|| {
+                        Error::invalid(
+                            "dof_map.directions",
+                            m,
+                            "linearly dependent free directions",
+                        )
+                    })?;
+                    u[b.u0..b.u0 + m].copy_from_slice(x.as_slice());
+                }
+                BlockRule::PlanarRigidEnd { .. } => {}
+            }
+        }
+        // rigid ends after every pose is known
+        for b in self.constrained.iter().filter_map(|&i| self.blocks.get(i)) {
+            if let BlockRule::PlanarRigidEnd { attachment, .. } = &b.rule {
+                let theta = u.get(b.pose_u + 2).copied().unwrap_or(0.0);
+                let e = super::rigid::rotate(theta, attachment.direction);
+                let slope = &q[b.q0 + 2..b.q0 + 4];
+                u[b.u0] = e[0] * slope[0] + e[1] * slope[1] - 1.0;
+            }
+        }
+        Ok(u)
+    }
+
     /// A step of the free coordinates mapped to all coordinates,
     /// `dq = T(u) du`, into `dq`.
     ///

@@ -1,0 +1,331 @@
+//! The static solver's Newton iterations and load homotopy, for any
+//! [`Assembled`] model, in its free coordinates `u` (`q = φ(u)`).
+//!
+//! Per iteration: the tangent `K_u` on the model's pattern, factored by the
+//! caller's [`AutoSolver`] (analyzed once), the Newton direction
+//! `K_u du = R` (17), a cap on the rotation of the step, and a
+//! backtracking line search that accepts a decrease of the total
+//! potential or of `|R|_2`. When the full load fails from the start point,
+//! a homotopy `R(u; λ) − (1 − λ) R(u_0; 0) = 0` goes from `λ = 0` (where
+//! the start point is exact) to `λ = 1` with adaptive steps.
+
+use std::time::Instant;
+
+use super::{finite_or_max, residual_floor, Equilibrium, StaticSolver};
+use crate::error::{Error, Result};
+use crate::linsolve::{
+    AutoSolver, FactorOptions, Factorization, LinsolveError, SymmetricMatrix, TangentSolver,
+};
+use crate::numeric::norm2;
+use crate::outcome::{NonFiniteAt, StaticCriterion, StaticReport, StaticStatus};
+use crate::structure::Assembled;
+
+/// The buffers and counters of one solve.
+struct Work<'a> {
+    k: SymmetricMatrix,
+    /// Analyzed on the model's tangent pattern.
+    solver: &'a mut AutoSolver,
+    /// The residual at the current iterate (offset subtracted).
+    r: Vec<f64>,
+    /// `φ(u)` at the current iterate.
+    q: Vec<f64>,
+    iterations: usize,
+    floor: f64,
+    last_step: f64,
+}
+
+/// The loads of one Newton run: the dead forces, the model's loads and
+/// the homotopy's offset.
+struct Target<'a, M: Assembled> {
+    dead: &'a [f64],
+    loads: &'a M::Loads,
+    offset: &'a [f64],
+}
+
+impl StaticSolver {
+    /// The solve behind [`StaticSolver::solve`] and
+    /// [`StaticSolver::solve_with`]: `u` is the start (already checked),
+    /// `solver` analyzed on the model's pattern.
+    pub(super) fn run<M: Assembled>(
+        &self,
+        model: &M,
+        loads: &M::Loads,
+        mut u: Vec<f64>,
+        solver: &mut AutoSolver,
+    ) -> Result<Equilibrium> {
+        let start = Instant::now();
+        let dead = model.dead_force(loads)?;
+        let n = model.n_free();
+        let mut w = Work {
+            k: SymmetricMatrix::zeros(solver.pattern().clone()),
+            solver,
+            r: vec![0.0; n],
+            q: vec![0.0; model.n_q()],
+            iterations: 0,
+            floor: 0.0,
+            last_step: 0.0,
+        };
+        model.configuration_into(&u, &mut w.q)?;
+        let scale = {
+            let mut applied = vec![0.0; n];
+            model.applied_force_into(&u, &w.q, &dead, loads, &mut applied)?;
+            norm2(&applied)
+        };
+        let zero = vec![0.0; n];
+        let (u_start, q_start) = (u.clone(), w.q.clone());
+        let mut load_steps = 0;
+        // loads so large that their norm overflows (or a start point where the
+        // forces do): no tolerance can be stated, so no solve is attempted
+        let mut status = if scale.is_finite() {
+            let full = Target::<M> {
+                dead: &dead,
+                loads,
+                offset: &zero,
+            };
+            self.newton(model, &full, &mut u, &mut w, scale)?
+        } else {
+            StaticStatus::NonFinite {
+                at: NonFiniteAt::Loads,
+            }
+        };
+        if !status.is_converged() && scale.is_finite() {
+            // Homotopy from the start point: R_λ(u) = R(u; λ loads) − (1 − λ) R(u_start; no loads).
+            // At λ = 0 the start point is exact; the load-dependent part of the
+            // tangent (the torques' Hessian) grows with λ, so iterates stay
+            // near equilibria, where the tangent is positive definite.
+            u.copy_from_slice(&u_start);
+            w.q.copy_from_slice(&q_start);
+            let unloaded = model.scaled_loads(loads, 0.0);
+            let zero_dead = vec![0.0; model.n_q()];
+            let mut r0 = vec![0.0; n];
+            model.residual_into(&u, &w.q, &zero_dead, &unloaded, &mut r0)?;
+            let mut lambda = 0.0;
+            let mut step: f64 = 0.25;
+            status = StaticStatus::LoadStepTooSmall { load_fraction: 0.0 };
+            while w.iterations < self.settings.max_total_iterations {
+                let target = (lambda + step).min(1.0);
+                let off: Vec<f64> = r0.iter().map(|v| (1.0 - target) * v).collect();
+                let dead_t: Vec<f64> = dead.iter().map(|v| target * v).collect();
+                let loads_t = model.scaled_loads(loads, target);
+                let saved = (u.clone(), w.q.clone());
+                let before = w.iterations;
+                let t = Target::<M> {
+                    dead: &dead_t,
+                    loads: &loads_t,
+                    offset: &off,
+                };
+                let step_status = self.newton(model, &t, &mut u, &mut w, scale)?;
+                if step_status.is_converged() {
+                    load_steps += 1;
+                    lambda = target;
+                    if lambda >= 1.0 {
+                        status = step_status;
+                        break;
+                    }
+                    if w.iterations - before <= 6 {
+                        step *= 2.0;
+                    }
+                } else {
+                    (u, w.q) = saved;
+                    step *= 0.5;
+                    if step < self.settings.min_load_step {
+                        // a load step that ran out of iterations or found no
+                        // descent: the homotopy stalled
+                        status = match step_status {
+                            StaticStatus::IterationLimit { .. }
+                            | StaticStatus::LineSearchFailed => StaticStatus::LoadStepTooSmall {
+                                load_fraction: lambda,
+                            },
+                            other => other,
+                        };
+                        break;
+                    }
+                }
+            }
+            if w.iterations >= self.settings.max_total_iterations && !status.is_converged() {
+                status = StaticStatus::IterationLimit {
+                    iterations: w.iterations,
+                };
+            }
+        }
+        // final residual for the report
+        model.residual_into(&u, &w.q, &dead, loads, &mut w.r)?;
+        let res = norm2(&w.r);
+        // no NaN leaves the library: a "converged" state with a non-finite
+        // coordinate or residual is a failure
+        if !(res.is_finite() && w.q.iter().all(|v| v.is_finite())) {
+            status = StaticStatus::NonFinite {
+                at: NonFiniteAt::Solution,
+            };
+        }
+        let report = StaticReport {
+            status,
+            iterations: w.iterations,
+            load_steps,
+            residual_norm_n: finite_or_max(res),
+            residual_tolerance_n: finite_or_max(self.settings.residual_tolerance * scale),
+            residual_floor_n: finite_or_max(w.floor),
+            load_scale_n: finite_or_max(scale),
+            increment_norm_m: finite_or_max(w.last_step),
+            wall_time_s: start.elapsed().as_secs_f64(),
+        };
+        if status.is_converged() {
+            Ok(Equilibrium { q: w.q, u, report })
+        } else {
+            Err(Error::NotConverged {
+                report: Box::new(report),
+            })
+        }
+    }
+
+    /// Newton iterations on `R(u) − offset = 0` from `u` (updated in place,
+    /// `w.q = φ(u)` kept with it).
+    fn newton<M: Assembled>(
+        &self,
+        model: &M,
+        t: &Target<'_, M>,
+        u: &mut [f64],
+        w: &mut Work<'_>,
+        scale: f64,
+    ) -> Result<StaticStatus> {
+        let n = model.n_free();
+        let nq = model.n_q();
+        let tol = self.settings.residual_tolerance * scale;
+        let xtol = self.settings.increment_tolerance * model.length_m();
+        let (dead, loads, offset) = (t.dead, t.loads, t.offset);
+        let eval = |u: &[f64], q: &[f64], r: &mut Vec<f64>| -> Result<f64> {
+            model.residual_into(u, q, dead, loads, r)?;
+            r.iter_mut().zip(offset).for_each(|(a, b)| *a -= b);
+            Ok(norm2(r))
+        };
+        let mut rn = eval(u, &w.q, &mut w.r)?;
+        let mut trial = u.to_vec();
+        let mut q_trial = w.q.clone();
+        let mut r_trial = vec![0.0; n];
+        let mut du = vec![0.0; n];
+        let mut dq = vec![0.0; nq];
+        let mut energies = Vec::new();
+        for _ in 0..self.settings.max_iterations {
+            if !rn.is_finite() {
+                return Ok(StaticStatus::NonFinite {
+                    at: NonFiniteAt::Residual,
+                });
+            }
+            if rn <= tol {
+                return Ok(StaticStatus::Converged(StaticCriterion::Residual));
+            }
+            if w.iterations >= self.settings.max_total_iterations {
+                return Ok(StaticStatus::IterationLimit {
+                    iterations: w.iterations,
+                });
+            }
+            model.tangent_into(u, &w.q, dead, loads, &mut w.k)?;
+            let qmax = w.q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            w.floor = residual_floor(w.k.max_abs(), qmax, n);
+            // At the round-off floor the residual cannot certify more digits,
+            // but one more Newton step still can gain them (the floor does not
+            // shrink with the load; stopping here left small-load solves 1e-11 m
+            // short): take it, keep it unless it raises the residual, stop.
+            let at_floor = rn <= w.floor;
+            w.iterations += 1;
+            // Newton direction from the Jacobi-scaled factorization (the rows
+            // of a fine cable's tangent span many orders of magnitude: bending
+            // ∝ L_e⁻³, axial on the slopes ∝ L_e). If it does not descend the
+            // potential (R·du <= 0: an indefinite tangent far from
+            // equilibrium), shift the scaled diagonal with growing μ until it
+            // does. (The tangent is symmetric: L D Lᵀ when positive definite,
+            // the pivoted LU otherwise, neither consuming it.)
+            let mut found = false;
+            for mu in [0.0, 1e-8, 1e-6, 1e-4, 1e-2, 1.0] {
+                let options = FactorOptions {
+                    shift: mu,
+                    ..FactorOptions::default()
+                };
+                let lu = match w.solver.factor(&w.k, options) {
+                    Ok(lu) => lu,
+                    Err(LinsolveError::Singular { .. }) => continue,
+                    Err(LinsolveError::NonFinite { .. }) => {
+                        return Ok(StaticStatus::NonFinite {
+                            at: NonFiniteAt::Tangent,
+                        });
+                    }
+                    Err(e) => return Err(e.into()),
+                };
+                du.copy_from_slice(&w.r);
+                lu.solve_in_place(&mut du)?;
+                let slope: f64 = w.r.iter().zip(&du).map(|(a, b)| a * b).sum();
+                if slope > 0.0 && du.iter().all(|v| v.is_finite()) {
+                    found = true;
+                    break;
+                }
+            }
+            if !found {
+                return Ok(StaticStatus::SingularTangent);
+            }
+            model.step_into(u, &du, &mut dq)?;
+            // cap the rotation of the step
+            let rotation = model.step_rotation(&dq);
+            let mut s = if rotation > self.settings.max_step_rotation {
+                self.settings.max_step_rotation / rotation
+            } else {
+                1.0
+            };
+            let step_inf = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if at_floor {
+                model.advance_into(u, &w.q, &du, &dq, 1.0, &mut trial, &mut q_trial)?;
+                let rt = eval(&trial, &q_trial, &mut r_trial)?;
+                if rt.is_finite() && rt <= rn {
+                    u.copy_from_slice(&trial);
+                    std::mem::swap(&mut w.q, &mut q_trial);
+                    std::mem::swap(&mut w.r, &mut r_trial);
+                    w.last_step = step_inf;
+                }
+                return Ok(StaticStatus::Converged(StaticCriterion::RoundOffFloor));
+            }
+            // what the model keeps of the energies at u, once for all trials
+            model.energies_into(&w.q, &mut energies)?;
+            let offset_slope: f64 = offset.iter().zip(&du).map(|(a, b)| a * b).sum();
+            // Π decreases along du when R·du > 0 (K positive along du).
+            let slope: f64 = w.r.iter().zip(&du).map(|(a, b)| a * b).sum();
+            let mut accepted = false;
+            for _ in 0..30 {
+                model.advance_into(u, &w.q, &du, &dq, s, &mut trial, &mut q_trial)?;
+                let rt = eval(&trial, &q_trial, &mut r_trial)?;
+                if rt.is_finite() {
+                    let offset_work = s * offset_slope;
+                    let dpi = model
+                        .potential_change_from(u, &w.q, &energies, &trial, &q_trial, dead, loads)?
+                        + offset_work;
+                    let energy_ok = dpi <= -1e-4 * s * slope;
+                    let residual_ok = rt * rt <= (1.0 - 1e-4 * s) * rn * rn;
+                    if energy_ok || residual_ok {
+                        accepted = true;
+                        break;
+                    }
+                }
+                s *= 0.5;
+            }
+            if !accepted {
+                // no decrease along the Newton direction: at the floor or stuck
+                if step_inf <= xtol {
+                    return Ok(StaticStatus::Converged(StaticCriterion::Increment));
+                }
+                return Ok(StaticStatus::LineSearchFailed);
+            }
+            u.copy_from_slice(&trial);
+            std::mem::swap(&mut w.q, &mut q_trial);
+            std::mem::swap(&mut w.r, &mut r_trial);
+            rn = norm2(&w.r);
+            w.last_step = s * step_inf;
+            if s == 1.0 && step_inf <= xtol {
+                return Ok(StaticStatus::Converged(StaticCriterion::Increment));
+            }
+        }
+        if rn <= tol.max(w.floor) {
+            return Ok(StaticStatus::Converged(StaticCriterion::Residual));
+        }
+        Ok(StaticStatus::IterationLimit {
+            iterations: w.iterations,
+        })
+    }
+}
