@@ -7,13 +7,13 @@
 //!   5 to 2000 elements;
 //! - `static_solve_warm/<n>`: a whole solve from the previous equilibrium
 //!   after a 0.5 kPa pressure change (a control step), 5 to 2000 elements;
-//! - `newton_step_solver/<kind>/<n>` and `static_solve_solver/<kind>/<n>`:
-//!   one Newton step on the tangent pattern (assembly into the symmetric
-//!   matrix, numeric factorization, solve), and the warm solve of the
-//!   generic Newton (`structure::solve`), with the banded and the sparse
-//!   solver, 20, 200 and 2000 elements (the banded-or-sparse decision);
-//!   `static_solve_warm_solver/<kind>/<n>`: `static_solve_warm` with each (the
-//!   solver analyzed once per robot).
+//! - `newton_step_solver/<kind>/<n>`: one Newton step on the tangent
+//!   pattern (assembly into the symmetric matrix, numeric factorization,
+//!   solve) with the banded and the sparse solver, 20, 200 and 2000
+//!   elements; `static_solve_warm_solver/<kind>/<n>`: `static_solve_warm`
+//!   with each (the solver analyzed once per robot). With
+//!   `estimate_warm_solver` of `benches/estimate.rs`, the banded-or-sparse
+//!   decision.
 //!
 //! Run: `cargo bench --bench statics -- --warm-up-time 1 --measurement-time 3`
 //! (filter by group: `cargo bench --bench statics -- static_solve_warm`),
@@ -100,8 +100,6 @@ fn static_solve(c: &mut Criterion) {
 
 fn solver_kinds(c: &mut Criterion) {
     // `cargo bench --bench statics -- _solver/`
-    use softrod::structure::solve::{solve_equilibrium_with, NewtonSettings};
-    use softrod::structure::BlockRule;
     let kinds = [
         ("banded", SolverKind::Banded),
         ("sparse", SolverKind::Sparse),
@@ -127,45 +125,6 @@ fn solver_kinds(c: &mut Criterion) {
         }
     }
     step.finish();
-    let mut solve = c.benchmark_group("static_solve_solver");
-    for &n in &[20usize, 200, 2000] {
-        let (robot, loads, q) = robot(n);
-        let mut nudged = loads.clone();
-        nudged.pressures_pa[0] += 500.0;
-        // the free coordinates of the static solver's equilibrium: the
-        // base stretch along the clamp's free direction, then nodes 1 … N
-        let nd = 4;
-        let Some(BlockRule::Affine { offset, directions }) = robot.dof_map().rule(0) else {
-            panic!("the clamp is an affine block");
-        };
-        let t = &directions[0];
-        let b: f64 = (0..nd).map(|i| (q[i] - offset[i]) * t[i]).sum::<f64>()
-            / t.iter().map(|v| v * v).sum::<f64>();
-        let mut u0 = vec![b];
-        u0.extend_from_slice(&q[nd..]);
-        for (name, kind) in kinds {
-            let settings = NewtonSettings::default();
-            let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), kind).unwrap();
-            let eq =
-                solve_equilibrium_with(&robot, &loads, Some(&u0), &settings, &mut solver).unwrap();
-            assert!(eq.converged(), "{name} {n}: {:?}", eq.status);
-            solve.bench_with_input(BenchmarkId::new(name, n), &n, |bch, _| {
-                bch.iter(|| {
-                    let e = solve_equilibrium_with(
-                        &robot,
-                        black_box(&nudged),
-                        Some(&eq.u),
-                        &settings,
-                        &mut solver,
-                    )
-                    .unwrap();
-                    assert!(e.converged());
-                    e
-                })
-            });
-        }
-    }
-    solve.finish();
     // the static solver itself (load steps, shifts, line search), warm
     let mut warm = c.benchmark_group("static_solve_warm_solver");
     for &n in &[20usize, 200, 2000] {
