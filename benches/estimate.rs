@@ -18,9 +18,6 @@
 //! - `estimate_warm_step_bounded/sqp/<n>el_5mk`: the sqp warm step with one
 //!   load bound (`w_y ≥ −0.3 N/m` at mid-length, active at the solution), 20
 //!   and 80 elements.
-//! - `estimate_warm_solver/BACKEND/<kind>_<n>`: the warm step with 5 markers
-//!   for `n ∈ {20, 200, 2000}` with each linear solver `kind ∈ {banded,
-//!   sparse}` (`EstimatorSettings::statics.linear_solver`).
 //!
 //! Run everything (a few minutes; short warm-up and measurement times are
 //! set below, the command line overrides them):
@@ -40,10 +37,9 @@ use softrod::estimate::{
     Backend, BoundFrame, Estimate, Estimator, EstimatorSettings, LoadBound, MarkerObservation,
     Observation,
 };
-use softrod::linsolve::SolverKind;
 use softrod::loads::{LineLoad, Loads, PointForce};
 use softrod::scene::Scene;
-use softrod::statics::{StaticSettings, StaticSolver};
+use softrod::statics::StaticSolver;
 
 const ELEMENTS: [usize; 6] = [5, 10, 20, 40, 80, 160];
 const MARKERS: [usize; 5] = [2, 3, 5, 8, 11];
@@ -329,35 +325,6 @@ fn warm_scaling(c: &mut Criterion) {
     group.finish();
 }
 
-fn warm_solver(c: &mut Criterion) {
-    // `cargo bench --bench estimate -- 'estimate_warm_solver/'`
-    let kinds = [
-        ("banded", SolverKind::Banded),
-        ("sparse", SolverKind::Sparse),
-    ];
-    let mut group = c.benchmark_group("estimate_warm_solver");
-    for n in [20usize, 200, 2000] {
-        for backend in BACKENDS {
-            for (name, kind) in kinds {
-                let id = ("estimate_warm_solver", backend, format!("{name}_{n}"));
-                bench_warm(&mut group, id, || {
-                    let c = case(n, 5);
-                    let s = EstimatorSettings {
-                        statics: StaticSettings {
-                            linear_solver: kind,
-                            ..StaticSettings::default()
-                        },
-                        ..settings()
-                    };
-                    let w = warm(&c, backend, s);
-                    (c, w)
-                });
-            }
-        }
-    }
-    group.finish();
-}
-
 fn warm_step_bounded(c: &mut Criterion) {
     // `cargo bench --bench estimate -- 'estimate_warm_step_bounded/'`
     let mut group = c.benchmark_group("estimate_warm_step_bounded");
@@ -400,6 +367,6 @@ criterion_group! {
         .sample_size(10)
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_secs(1));
-    targets = warm_step, warm_step_bounded, warm_scaling, warm_solver, cold_step, alpha_search
+    targets = warm_step, warm_step_bounded, warm_scaling, cold_step, alpha_search
 }
 criterion_main!(benches);

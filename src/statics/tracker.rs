@@ -221,12 +221,9 @@ impl<E: Element> EquilibriumTracker<E> {
         &self.solver.settings
     }
 
-    /// The linear solver in use ([`SolverKind::Banded`] or
-    /// [`SolverKind::Sparse`]; [`SolverKind::Auto`] resolved at
+    /// The linear solver in use ([`SolverKind::Auto`] resolved at
     /// [`EquilibriumTracker::new`]).
     ///
-    /// [`SolverKind::Banded`]: crate::linsolve::SolverKind::Banded
-    /// [`SolverKind::Sparse`]: crate::linsolve::SolverKind::Sparse
     /// [`SolverKind::Auto`]: crate::linsolve::SolverKind::Auto
     pub fn solver_kind(&self) -> crate::linsolve::SolverKind {
         self.linear.kind()

@@ -394,7 +394,7 @@ mod tests {
             .solve(&robot, &loads, None)
             .unwrap();
         let scale = reference.q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for kind in [SolverKind::Banded, SolverKind::Sparse] {
+        for kind in [SolverKind::Auto, SolverKind::Sparse] {
             let settings = NewtonSettings {
                 linear_solver: kind,
                 tolerance: 1e-12,

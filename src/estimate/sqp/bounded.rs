@@ -12,7 +12,7 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use crate::element::{ArcPoint, Element};
 use crate::error::{Error, Result};
-use crate::linsolve::{AutoFactors, BandedLu, SymmetricMatrix};
+use crate::linsolve::{AutoFactors, Factorization, SymmetricMatrix};
 use crate::numeric::{dot, norm2};
 use crate::observe::ObservationOperator;
 
@@ -373,14 +373,14 @@ pub(super) struct Reduced<'a> {
     /// The adjoint fields, column `i` each.
     z: &'a DMatrix<f64>,
     chol: Cholesky<f64, Dyn>,
-    gram_lu: Option<&'a BandedLu>,
+    gram_lu: Option<&'a AutoFactors>,
     alpha: f64,
 }
 
 impl<'a> Reduced<'a> {
     pub(super) fn new<E: Element>(
         problem: &Problem<E>,
-        gram_lu: Option<&'a BandedLu>,
+        gram_lu: Option<&'a AutoFactors>,
         dv: &'a Derivs,
         op: &ObservationOperator,
         alpha: f64,
@@ -468,7 +468,6 @@ mod tests {
     #![allow(clippy::unwrap_used)]
     use super::super::super::{EstimatorSettings, LoadBound, Observation};
     use super::*;
-    use crate::linsolve::Factorization;
     use crate::loads::LineLoad;
     use crate::scene::Scene;
     use crate::statics::StaticSolver;

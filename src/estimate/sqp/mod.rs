@@ -61,7 +61,11 @@ use clarabel::solver::SolverStatus;
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::{Error, Result};
-use crate::linsolve::{AutoFactors, BandedLu, Factorization, SymmetricMatrix};
+use crate::linsolve::SolverKind;
+use crate::linsolve::{
+    AutoFactors, AutoSolver, FactorOptions, Factorization, SymmetricMatrix, SymmetricPattern,
+    TangentSolver,
+};
 use crate::loads::Loads;
 use crate::numeric::{dot, max_abs, norm2};
 use crate::observe::ObservationOperator;
@@ -135,7 +139,7 @@ pub struct SqpEstimator<E: Element> {
     /// Upper-triangle triplets of `H` (constant).
     h_upper: Vec<(usize, usize, f64)>,
     /// The factored load Gram matrix `B` (distributed load with bounds).
-    gram_lu: Option<BandedLu>,
+    gram_lu: Option<AutoFactors>,
     /// The bounds active in the last QP's solution (indices into the rows
     /// of the bounds' inequalities): the first guess for the next QP
     /// (`None` before the first: clarabel then finds one).
@@ -170,13 +174,10 @@ impl<E: Element> SqpEstimator<E> {
             }
         }
         let gram_lu = match problem.load() {
-            LoadModel::Distributed if !problem.settings().bounds.is_empty() => Some(
-                problem
-                    .robot()
-                    .load_gram()
-                    .clone()
-                    .factor_scaled(0.0, "load Gram matrix")?,
-            ),
+            LoadModel::Distributed if !problem.settings().bounds.is_empty() => Some(gram_factors(
+                problem.robot(),
+                problem.settings().statics.linear_solver,
+            )?),
             _ => None,
         };
         Ok(SqpEstimator {
@@ -578,6 +579,22 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
             },
         })
     }
+}
+
+/// The factors of the load Gram matrix `B = ∫ Sᵀ S dX` (22) over all
+/// `n_q` coordinates: element `e` couples the coordinates of its two nodes.
+fn gram_factors<E: Element>(robot: &Robot<E>, kind: SolverKind) -> Result<AutoFactors> {
+    let nd = E::NODE_DOFS;
+    let elements = (0..robot.n_elements()).map(|e| (e * nd..(e + 2) * nd).collect::<Vec<_>>());
+    let pattern = std::sync::Arc::new(SymmetricPattern::from_elements(robot.n_q(), elements)?);
+    let gram = robot.load_gram();
+    let mut b = SymmetricMatrix::zeros(pattern.clone());
+    let slots: Vec<(usize, usize)> = b.iter_upper().map(|(i, j, _)| (i, j)).collect();
+    for (i, j) in slots {
+        b.add(i, j, gram.get(i, j))?;
+    }
+    let mut solver = AutoSolver::with_kind(&pattern, kind)?;
+    Ok(solver.factor(&b, FactorOptions::default())?)
 }
 
 /// One SQP subproblem's solution.
