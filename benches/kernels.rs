@@ -6,9 +6,9 @@
 //! - `residual`, `tangent`, `residual_and_tangent`: the assembled
 //!   generalized force and tangent stiffness (`Robot::residual_into`,
 //!   `Robot::tangent_into`, both in one pass);
-//! - `factor_lu`, `factor_ldlt`: the Jacobi-scaled tangent, by the pivoted
-//!   banded LU (the fallback) and by `L D Lᵀ` (what `factor_scaled` takes
-//!   for a symmetric positive definite tangent);
+//! - `factor_ldlt`, `factor_lu`: the Jacobi-scaled tangent by the library's
+//!   solver (faer's sparse `L D Lᵀ`, analysis done once), and, for a
+//!   tangent shifted to be indefinite, by its pivoted LU fallback;
 //! - `solve`: one right-hand side with the `L D Lᵀ` factors;
 //! - `adjoint_solves`: the 10 right-hand sides of the marker Jacobian
 //!   (5 markers × 2 components) in one sweep;
@@ -25,7 +25,9 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use softrod::assembly::Robot;
 use softrod::element::{Element, PlanarCable};
 use softrod::estimate::{EstimatorSettings, NewtonEstimator, Observation};
-use softrod::linsolve::BandedMatrix;
+use softrod::linsolve::{
+    AutoSolver, FactorMethod, FactorOptions, Factorization, SymmetricMatrix, TangentSolver,
+};
 use softrod::loads::Loads;
 use softrod::scene::Scene;
 use softrod::statics::StaticSolver;
@@ -52,7 +54,7 @@ fn kernels(c: &mut Criterion) {
         let dead = robot.dead_force(&loads).unwrap();
         let nf = robot.n_free();
         let mut r = vec![0.0; nf];
-        let mut k = BandedMatrix::zeros(nf, 7, 7);
+        let mut k = SymmetricMatrix::zeros(robot.tangent_pattern().clone());
         if n == SIZES[0] {
             let el = &robot.elements()[n / 2];
             let qe = &q[4 * (n / 2)..4 * (n / 2) + 8];
@@ -83,20 +85,23 @@ fn kernels(c: &mut Criterion) {
             })
         });
         robot.tangent_into(&q, &loads, &mut k).unwrap();
-        // the LU path of factor_scaled: an unsymmetric copy (one entry's
-        // mirror nudged by a relative 1e-15) is not recognized as symmetric
+        let mut solver = AutoSolver::analyze(robot.tangent_pattern()).unwrap();
+        // the LU path: the tangent shifted by −2 |k_ii| is indefinite
         let mut k_lu = k.clone();
-        let v = k_lu.get(nf - 1, nf - 2);
-        k_lu.add(nf - 1, nf - 2, v * 1e-15);
-        assert!(!k_lu.is_symmetric());
+        for i in 0..nf {
+            let v = k_lu.get(i, i);
+            k_lu.add(i, i, -2.0 * v.abs()).unwrap();
+        }
+        let f_lu = solver.factor(&k_lu, FactorOptions::default()).unwrap();
+        assert_eq!(f_lu.method(), FactorMethod::Lu);
         group.bench_with_input(BenchmarkId::new("factor_lu", n), &n, |b, _| {
-            b.iter(|| black_box(k_lu.clone().factor_scaled(0.0, "K").unwrap()))
+            b.iter(|| black_box(solver.factor(&k_lu, FactorOptions::default()).unwrap()))
         });
         group.bench_with_input(BenchmarkId::new("factor_ldlt", n), &n, |b, _| {
-            b.iter(|| black_box(k.factor_scaled_symmetric(0.0, "K").unwrap()))
+            b.iter(|| black_box(solver.factor(&k, FactorOptions::default()).unwrap()))
         });
-        let f = k.factor_scaled_symmetric(0.0, "K").unwrap();
-        assert!(f.is_ldlt());
+        let f = solver.factor(&k, FactorOptions::default()).unwrap();
+        assert_eq!(f.method(), FactorMethod::Ldlt);
         let rhs: Vec<f64> = (0..nf).map(|i| ((i * 7919) % 101) as f64 - 50.0).collect();
         let mut x = rhs.clone();
         group.bench_with_input(BenchmarkId::new("solve", n), &n, |b, _| {
@@ -111,15 +116,16 @@ fn kernels(c: &mut Criterion) {
         let mut b0 = vec![0.0; nf * m];
         for (c, node) in nodes.iter().enumerate() {
             for comp in 0..2 {
-                // node >= 1: free coordinate (node − 1)·4 + comp + 1
-                b0[(robot.n_base_free() + (node - 1) * 4 + comp) * m + 2 * c + comp] = 1.0;
+                // node >= 1: free coordinate (node − 1)·4 + comp + 1;
+                // right-hand side 2 c + comp, column after column
+                b0[(2 * c + comp) * nf + robot.n_base_free() + (node - 1) * 4 + comp] = 1.0;
             }
         }
         let mut bm = b0.clone();
         group.bench_with_input(BenchmarkId::new("adjoint_solves", n), &n, |b, _| {
             b.iter(|| {
                 bm.copy_from_slice(&b0);
-                f.solve_many_in_place(black_box(&mut bm), m).unwrap();
+                f.solve_columns_in_place(black_box(&mut bm), m).unwrap();
             })
         });
         let obs = Observation::at_nodes(&robot, &q, &nodes).with_noise(1e-5, 3);

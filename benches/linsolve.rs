@@ -1,13 +1,9 @@
 //! Linear-solver benches: factor + solve of the real tangent stiffness of
 //! the two-section robot at its equilibrium under the scene's loads (a
 //! loaded, positive definite tangent), 20, 200 and 2000 elements, for
-//! every solver behind `TangentSolver` and the banded kernels they wrap:
+//! faer's sparse solver in its settings (the banded solver these were
+//! compared with was removed: README, "Performance"):
 //!
-//! - `banded_ldlt`: `BandedSolver::factor` (Jacobi-scaled `L D Lᵀ` straight
-//!   from the pattern's values) + solve;
-//! - `banded_ldlt_matrix`: today's path, `BandedMatrix::factor_scaled_symmetric`
-//!   on the assembled band + solve;
-//! - `banded_lu`: the pivoted band LU (the fallback for indefinite tangents);
 //! - `sparse_ldlt`, `sparse_llt`: faer with the AMD ordering, the symbolic
 //!   analysis done once and reused; `sparse_ldlt_natural`: the chain's own
 //!   order;
@@ -29,8 +25,8 @@ use softrod::assembly::{Robot, RobotSpec};
 use softrod::element::PlanarCable;
 use softrod::linsolve::sparse::Ordering;
 use softrod::linsolve::{
-    BandedMatrix, BandedSolver, CholeskyKind, FactorMethod, FactorOptions, Factorization,
-    SparseSettings, SparseSolver, SymmetricMatrix, SymmetricPattern, TangentSolver,
+    BandedMatrix, CholeskyKind, FactorMethod, FactorOptions, Factorization, SparseSettings,
+    SparseSolver, SymmetricMatrix, SymmetricPattern, TangentSolver,
 };
 use softrod::scene::Scene;
 use softrod::statics::StaticSolver;
@@ -133,68 +129,9 @@ fn bench_solver<S: TangentSolver>(
 fn linsolve(c: &mut Criterion) {
     let mut group = c.benchmark_group("linsolve");
     for n in SIZES {
-        let (kb, ks) = setup(n);
+        let (_, ks) = setup(n);
         let nf = ks.n();
         let p = ks.pattern().clone();
-
-        let mut banded = BandedSolver::analyze(&p).unwrap();
-        assert_eq!(banded.bandwidth(), 7);
-        bench_solver(
-            &mut group,
-            "banded_ldlt",
-            n,
-            &mut banded,
-            &ks,
-            FactorMethod::Ldlt,
-        );
-
-        // today's path: the band matrix the assembler fills
-        let (b1, b10) = (rhs(nf, 1), rhs(nf, NRHS));
-        let (mut x1, mut x10) = (b1.clone(), vec![0.0; nf * NRHS]);
-        let b10_rows: Vec<f64> = (0..nf * NRHS)
-            .map(|k| b10[(k % NRHS) * nf + k / NRHS])
-            .collect();
-        group.bench_with_input(BenchmarkId::new("banded_ldlt_matrix", n), &n, |b, _| {
-            b.iter(|| {
-                let f = black_box(&kb).factor_scaled_symmetric(0.0, "K").unwrap();
-                x1.copy_from_slice(&b1);
-                f.solve_in_place(&mut x1).unwrap();
-            })
-        });
-        group.bench_with_input(
-            BenchmarkId::new(format!("banded_ldlt_matrix_{NRHS}rhs"), n),
-            &n,
-            |b, _| {
-                b.iter(|| {
-                    let f = black_box(&kb).factor_scaled_symmetric(0.0, "K").unwrap();
-                    x10.copy_from_slice(&b10_rows);
-                    f.solve_many_in_place(&mut x10, NRHS).unwrap();
-                })
-            },
-        );
-        // the LU path of factor_scaled: a copy nudged out of symmetry
-        let mut k_lu = kb.clone();
-        let v = k_lu.get(nf - 1, nf - 2);
-        k_lu.add(nf - 1, nf - 2, v * 1e-15);
-        assert!(!k_lu.clone().factor_scaled(0.0, "K").unwrap().is_ldlt());
-        group.bench_with_input(BenchmarkId::new("banded_lu", n), &n, |b, _| {
-            b.iter(|| {
-                let f = black_box(&k_lu).clone().factor_scaled(0.0, "K").unwrap();
-                x1.copy_from_slice(&b1);
-                f.solve_in_place(&mut x1).unwrap();
-            })
-        });
-        group.bench_with_input(
-            BenchmarkId::new(format!("banded_lu_{NRHS}rhs"), n),
-            &n,
-            |b, _| {
-                b.iter(|| {
-                    let f = black_box(&k_lu).clone().factor_scaled(0.0, "K").unwrap();
-                    x10.copy_from_slice(&b10_rows);
-                    f.solve_many_in_place(&mut x10, NRHS).unwrap();
-                })
-            },
-        );
 
         for (name, settings, method) in [
             ("sparse_ldlt", SparseSettings::default(), FactorMethod::Ldlt),

@@ -2,17 +2,12 @@
 //! `n/2 + (n − n/2)` between the sections) under its weight and the default
 //! pressures:
 //! - `newton_step/<n>`: one Newton step (assembly of residual and tangent,
-//!   banded LU, solve) at the equilibrium, 10 to 2000 elements;
+//!   the library's sparse `L D Lᵀ`, analyzed once, solve) at the
+//!   equilibrium, 10 to 2000 elements;
 //! - `static_solve_cold/<n>`: a whole solve from the arc configuration,
 //!   5 to 2000 elements;
 //! - `static_solve_warm/<n>`: a whole solve from the previous equilibrium
 //!   after a 0.5 kPa pressure change (a control step), 5 to 2000 elements;
-//! - `newton_step_solver/<kind>/<n>`: one Newton step on the tangent
-//!   pattern (assembly into the symmetric matrix, numeric factorization,
-//!   solve) with the banded and the sparse solver, 20, 200 and 2000
-//!   elements (the banded-or-sparse decision);
-//!   `static_solve_warm_solver/<kind>/<n>`: `static_solve_warm` with each (the
-//!   solver analyzed once per robot).
 //!
 //! Run: `cargo bench --bench statics -- --warm-up-time 1 --measurement-time 3`
 //! (filter by group: `cargo bench --bench statics -- static_solve_warm`),
@@ -25,10 +20,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use softrod::assembly::Robot;
 use softrod::element::PlanarCable;
-use softrod::linsolve::{
-    AutoSolver, BandedMatrix, FactorOptions, Factorization, SolverKind, SymmetricMatrix,
-    TangentSolver,
-};
+use softrod::linsolve::{AutoSolver, FactorOptions, Factorization, SymmetricMatrix, TangentSolver};
 use softrod::loads::Loads;
 use softrod::params;
 use softrod::statics::StaticSolver;
@@ -54,15 +46,15 @@ fn newton_step(c: &mut Criterion) {
         let (robot, loads, q) = robot(n);
         let dead = robot.dead_force(&loads).unwrap();
         let mut r = vec![0.0; robot.n_free()];
-        let mut k = BandedMatrix::zeros(robot.n_free(), 7, 7);
+        let mut k = SymmetricMatrix::zeros(robot.tangent_pattern().clone());
+        let mut solver = AutoSolver::analyze(robot.tangent_pattern()).unwrap();
         group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
             b.iter(|| {
                 robot
-                    .residual_into(black_box(&q), &dead, &loads, &mut r)
+                    .residual_and_tangent_into(black_box(&q), &dead, &loads, &mut r, &mut k)
                     .unwrap();
-                robot.tangent_into(black_box(&q), &loads, &mut k).unwrap();
-                let lu = k.clone().factor_scaled(0.0, "K").unwrap();
-                lu.solve_in_place(&mut r).unwrap();
+                let f = solver.factor(&k, FactorOptions::default()).unwrap();
+                f.solve_in_place(&mut r).unwrap();
                 black_box(&r);
             })
         });
@@ -97,54 +89,5 @@ fn static_solve(c: &mut Criterion) {
     warm.finish();
 }
 
-fn solver_kinds(c: &mut Criterion) {
-    // `cargo bench --bench statics -- _solver/`
-    let kinds = [
-        ("banded", SolverKind::Banded),
-        ("sparse", SolverKind::Sparse),
-    ];
-    let mut step = c.benchmark_group("newton_step_solver");
-    for &n in &[20usize, 200, 2000] {
-        let (robot, loads, q) = robot(n);
-        let dead = robot.dead_force(&loads).unwrap();
-        let mut r = vec![0.0; robot.n_free()];
-        let mut k = SymmetricMatrix::zeros(robot.tangent_pattern().clone());
-        for (name, kind) in kinds {
-            let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), kind).unwrap();
-            step.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| {
-                b.iter(|| {
-                    robot
-                        .residual_and_tangent_into(black_box(&q), &dead, &loads, &mut r, &mut k)
-                        .unwrap();
-                    let f = solver.factor(&k, FactorOptions::default()).unwrap();
-                    f.solve_in_place(&mut r).unwrap();
-                    black_box(&r);
-                })
-            });
-        }
-    }
-    step.finish();
-    // the static solver itself (load steps, shifts, line search), warm
-    let mut warm = c.benchmark_group("static_solve_warm_solver");
-    for &n in &[20usize, 200, 2000] {
-        let (robot, loads, q) = robot(n);
-        let mut nudged = loads.clone();
-        nudged.pressures_pa[0] += 500.0;
-        for (name, kind) in kinds {
-            // analyzed once per robot, as a tracker or a controller does
-            let mut linear = AutoSolver::with_kind(robot.tangent_pattern(), kind).unwrap();
-            let solver = StaticSolver::default();
-            warm.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| {
-                b.iter(|| {
-                    solver
-                        .solve_with(&robot, black_box(&nudged), Some(&q), &mut linear)
-                        .unwrap()
-                })
-            });
-        }
-    }
-    warm.finish();
-}
-
-criterion_group!(benches, newton_step, static_solve, solver_kinds);
+criterion_group!(benches, newton_step, static_solve);
 criterion_main!(benches);

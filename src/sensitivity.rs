@@ -21,6 +21,13 @@
 //! The estimator's marker Jacobian (28)–(30) and a controller's (43), (50)
 //! are this one machinery.
 //!
+//! A [`Sensitivity`] is made from the robot and any factors of its tangent
+//! at the equilibrium ([`Factorization`]: those an
+//! [`EquilibriumTracker`](crate::statics::EquilibriumTracker) returns, or
+//! one's own from a [`TangentSolver`](crate::linsolve::TangentSolver));
+//! many right-hand sides are solved in one sweep over the factors
+//! ([`Factorization::solve_columns_in_place`]).
+//!
 //! # Example
 //! ```
 //! use softrod::{estimate::LoadModel, scene::Scene, sensitivity::Sensitivity, statics::EquilibriumTracker};
@@ -41,25 +48,54 @@
 //! assert!((grad[(1, 0)] - dq_df[(n - 3, 1)]).abs() < 1e-12 * grad[(1, 0)].abs());
 //! # Ok::<(), softrod::Error>(())
 //! ```
+//!
+//! The same from factors made by hand: the tangent assembled on the robot's
+//! pattern and factored by a solver of one's choice.
+//! ```
+//! use softrod::linsolve::{AutoSolver, FactorOptions, SolverKind, SymmetricMatrix, TangentSolver};
+//! use softrod::{scene::Scene, sensitivity::Sensitivity, statics::StaticSolver};
+//! let scene = Scene::two_section();
+//! let (robot, loads) = (scene.robot()?, scene.loads()?);
+//! let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+//! let mut k = SymmetricMatrix::zeros(robot.tangent_pattern().clone());
+//! robot.tangent_into(&eq.q, &loads, &mut k)?;
+//! let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), SolverKind::Sparse)?;
+//! let factors = solver.factor(&k, FactorOptions::default())?;
+//! let s = Sensitivity::new(&robot, &factors)?;
+//! // (43): raising a chamber's pressure moves the shape
+//! let dq_dp = s.dq_dp(&eq.q)?;
+//! assert_eq!(dq_dp.shape(), (robot.n_q(), robot.n_pressures()));
+//! assert!(dq_dp.amax() > 0.0);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 use nalgebra::DMatrix;
 
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::{check_len, Error, Result};
-use crate::linsolve::BandedLu;
+use crate::linsolve::{AutoFactors, Factorization};
 use crate::statics::LinearLoad;
 
-/// The sensitivities of one equilibrium of `robot`, from the factors of its
-/// tangent `K` there (as [`crate::statics::EquilibriumTracker`] returns them).
+/// The sensitivities of one equilibrium of `robot`, from the factors `F` of
+/// its tangent `K` there (as [`crate::statics::EquilibriumTracker`] returns
+/// them: [`AutoFactors`], the default; any [`Factorization`] will do).
 ///
 /// # Example
 /// See the [module documentation](self).
-#[derive(Debug, Clone, Copy)]
-pub struct Sensitivity<'a, E: Element> {
+#[derive(Debug)]
+pub struct Sensitivity<'a, E: Element, F: Factorization = AutoFactors> {
     robot: &'a Robot<E>,
-    factors: &'a BandedLu,
+    factors: &'a F,
 }
+
+impl<E: Element, F: Factorization> Clone for Sensitivity<'_, E, F> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<E: Element, F: Factorization> Copy for Sensitivity<'_, E, F> {}
 
 /// Adjoint fields of `m` outputs `y_i = c_i · q`, column `i` each.
 ///
@@ -73,13 +109,16 @@ pub struct Adjoints {
     pub full: DMatrix<f64>,
 }
 
-impl<'a, E: Element> Sensitivity<'a, E> {
-    /// The sensitivities at an equilibrium whose tangent's factors are
-    /// `factors`.
+impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
+    /// The sensitivities at an equilibrium whose tangent's factors (over
+    /// the free coordinates) are `factors`.
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] if the factors are not `n_free` square.
-    pub fn new(robot: &'a Robot<E>, factors: &'a BandedLu) -> Result<Self> {
+    ///
+    /// # Example
+    /// See the [module documentation](self).
+    pub fn new(robot: &'a Robot<E>, factors: &'a F) -> Result<Self> {
         check_len("factors", robot.n_free(), factors.n())?;
         Ok(Sensitivity { robot, factors })
     }
@@ -105,16 +144,12 @@ impl<'a, E: Element> Sensitivity<'a, E> {
         let nfree = self.robot.n_free();
         let mut b = vec![0.0; nfree * nf];
         let mut ej = vec![0.0; nf];
-        let mut u = vec![0.0; nfree];
-        for j in 0..nf {
+        for (j, col) in b.chunks_exact_mut(nfree.max(1)).enumerate() {
             ej.iter_mut()
                 .enumerate()
                 .for_each(|(k, v)| *v = f64::from(u8::from(k == j)));
             self.robot
-                .restrict_into(&load.force(self.robot, &ej)?, &mut u)?;
-            for (k, v) in u.iter().enumerate() {
-                b[k * nf + j] = *v;
-            }
+                .restrict_into(&load.force(self.robot, &ej)?, col)?;
         }
         self.expand_columns(b, nf)
     }
@@ -126,7 +161,16 @@ impl<'a, E: Element> Sensitivity<'a, E> {
     /// [`Error::DimensionMismatch`] if `q` is not `n_q` long.
     pub fn dq_dp(&self, q: &[f64]) -> Result<DMatrix<f64>> {
         let np = self.robot.n_pressures();
-        self.expand_columns(self.robot.pressure_jacobian(q)?, np)
+        let nfree = self.robot.n_free();
+        // row-major n_free × n_p, to columns
+        let jac = self.robot.pressure_jacobian(q)?;
+        let mut b = vec![0.0; jac.len()];
+        for (k, row) in jac.chunks_exact(np.max(1)).enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                b[j * nfree + k] = *v;
+            }
+        }
+        self.expand_columns(b, np)
     }
 
     /// The adjoint fields of the outputs `rows` (each sparse over all `n_q`
@@ -143,37 +187,30 @@ impl<'a, E: Element> Sensitivity<'a, E> {
         let nfree = self.robot.n_free();
         let rows: Vec<&[(usize, f64)]> = rows.into_iter().collect();
         let m = rows.len();
-        // right-hand sides Mᵀ c_i, row-major n_free × m
-        let mut b = vec![0.0; nfree * m];
+        // right-hand sides Mᵀ c_i, column i each (n_free × m, column-major)
+        let mut free = DMatrix::zeros(nfree, m);
         let mut c = vec![0.0; nq];
-        let mut u = vec![0.0; nfree];
-        for (i, row) in rows.iter().enumerate() {
+        for (row, col) in rows
+            .iter()
+            .zip(free.as_mut_slice().chunks_exact_mut(nfree.max(1)))
+        {
             for &(j, w) in row.iter() {
                 crate::error::check_index("output row index", j, nq)?;
                 c[j] += w;
             }
-            self.robot.restrict_into(&c, &mut u)?;
-            for (k, v) in u.iter().enumerate() {
-                if *v != 0.0 {
-                    b[k * m + i] = *v;
-                }
-            }
+            self.robot.restrict_into(&c, col)?;
             for &(j, _) in row.iter() {
                 c[j] = 0.0;
             }
         }
-        self.factors.solve_many_in_place(&mut b, m)?;
-        let mut free = DMatrix::zeros(nfree, m);
+        self.factors
+            .solve_columns_in_place(free.as_mut_slice(), m)?;
         let mut full = DMatrix::zeros(nq, m);
-        for (i, (fi, zi)) in free
-            .as_mut_slice()
-            .chunks_exact_mut(nfree.max(1))
+        for (fi, zi) in free
+            .as_slice()
+            .chunks_exact(nfree.max(1))
             .zip(full.as_mut_slice().chunks_exact_mut(nq.max(1)))
-            .enumerate()
         {
-            for (k, v) in fi.iter_mut().enumerate() {
-                *v = b[k * m + i];
-            }
             self.robot.expand_step_into(fi, zi)?;
         }
         Ok(Adjoints { free, full })
@@ -220,7 +257,7 @@ impl<'a, E: Element> Sensitivity<'a, E> {
         Ok(jac.tr_mul(&adjoints.free))
     }
 
-    /// Solves `K X = B` for the `ncols` columns of `b` (row-major
+    /// Solves `K X = B` for the `ncols` columns of `b` (column-major
     /// `n_free × ncols`) and expands each to all coordinates (`n_q × ncols`).
     fn expand_columns(&self, mut b: Vec<f64>, ncols: usize) -> Result<DMatrix<f64>> {
         let nfree = self.robot.n_free();
@@ -232,14 +269,13 @@ impl<'a, E: Element> Sensitivity<'a, E> {
                 got: b.len(),
             });
         }
-        self.factors.solve_many_in_place(&mut b, ncols)?;
+        self.factors.solve_columns_in_place(&mut b, ncols)?;
         let mut out = DMatrix::zeros(nq, ncols);
-        let mut u = vec![0.0; nfree];
-        for (j, col) in out.as_mut_slice().chunks_exact_mut(nq.max(1)).enumerate() {
-            for (k, v) in u.iter_mut().enumerate() {
-                *v = b[k * ncols + j];
-            }
-            self.robot.expand_step_into(&u, col)?;
+        for (u, col) in b
+            .chunks_exact(nfree.max(1))
+            .zip(out.as_mut_slice().chunks_exact_mut(nq.max(1)))
+        {
+            self.robot.expand_step_into(u, col)?;
         }
         Ok(out)
     }

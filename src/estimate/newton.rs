@@ -36,7 +36,7 @@
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::Result;
-use crate::linsolve::BandedLu;
+use crate::linsolve::AutoFactors;
 use crate::loads::Loads;
 use crate::numeric::{dot, norm2};
 use crate::observe::{ObsRow, ObservationOperator};
@@ -142,13 +142,13 @@ impl<E: Element> NewtonEstimator<E> {
         &mut self,
         observation: &Observation,
         f: &[f64],
-    ) -> Result<(Vec<f64>, BandedLu, ObservationOperator)> {
+    ) -> Result<(Vec<f64>, AutoFactors, ObservationOperator)> {
         let op = self.stream.problem.operator(observation)?;
         crate::error::check_len("f", self.stream.problem.n_f(), f.len())?;
         let (_, q0) = self.stream.start()?;
         let problem = &mut self.stream.problem;
         let eq = problem.equilibrium(f, &q0)?;
-        let lu = problem.factor(&eq.q)?;
+        let lu = problem.factor_tangent(&eq.q)?.factors;
         Ok((eq.q, lu, op))
     }
 }

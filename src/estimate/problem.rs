@@ -17,11 +17,12 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::{check_len, Error, Result};
-use crate::linsolve::{BandedLu, BandedMatrix};
+use crate::linsolve::AutoFactors;
 use crate::loads::{Loads, PointForce};
 use crate::numeric::dot;
 use crate::observe::{Observation, ObservationOperator};
 use crate::sensitivity::Sensitivity;
+use crate::statics::tracker::FactoredTangent;
 use crate::statics::{EquilibriumTracker, LinearLoad, StaticSolver, TrackedEquilibrium};
 
 use super::{BoundFrame, EstimatorSettings, LoadModel};
@@ -230,21 +231,10 @@ impl<E: Element> Problem<E> {
         self.tracker.solve(&load, f, q0)
     }
 
-    /// The factors of the tangent at `q`.
-    pub fn factor(&self, q: &[f64]) -> Result<BandedLu> {
-        let mut k = self.tracker.tangent_buffer();
-        self.tracker.tangent_into(q, &mut k)
-    }
-
-    /// The tangent at `q` into `k` and its factors (see
-    /// [`EquilibriumTracker::tangent_into`]).
-    pub fn tangent_into(&self, q: &[f64], k: &mut BandedMatrix) -> Result<BandedLu> {
-        self.tracker.tangent_into(q, k)
-    }
-
-    /// A band matrix of the tangent's shape.
-    pub fn tangent_buffer(&self) -> BandedMatrix {
-        self.tracker.tangent_buffer()
+    /// The tangent at `q` and its factors, with the tracker's linear
+    /// solver (see [`EquilibriumTracker::factor_tangent`]).
+    pub fn factor_tangent(&mut self, q: &[f64]) -> Result<FactoredTangent> {
+        self.tracker.factor_tangent(q)
     }
 
     /// The equilibrium and the free start: zero load and the shape of the
@@ -260,7 +250,7 @@ impl<E: Element> Problem<E> {
     /// the tangent's factors `lu`: row `i` of `∂(Aq)/∂F` is
     /// `Gᵀ M K⁻¹ Mᵀ a_iᵀ` (K symmetric), the `n_ob` adjoint systems in one
     /// sweep over the factors.
-    pub fn derivs(&self, lu: &BandedLu, op: &ObservationOperator) -> Result<Derivs> {
+    pub fn derivs(&self, lu: &AutoFactors, op: &ObservationOperator) -> Result<Derivs> {
         let s = Sensitivity::new(self.robot(), lu)?;
         let adj = s.adjoints(op.rows().iter().map(|r| r.entries()))?;
         let jt = s.load_gradients(&self.load(), &adj)?;

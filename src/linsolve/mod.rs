@@ -26,11 +26,14 @@
 //! Implementations:
 //! - [`SparseSolver`] (faer): any pattern, fill-reducing ordering,
 //!   symbolic analysis shared by all factorizations.
-//! - [`BandedSolver`]: band storage, for single chains (bandwidth `2b − 1`
-//!   with `b` dofs per node), about twice as fast as the sparse solver on
-//!   them (`benches/linsolve.rs`).
-//! - [`AutoSolver`]: one of the two, chosen at analysis by a [`SolverKind`]
-//!   (by default: banded for a narrow band, sparse otherwise).
+//! - [`AutoSolver`]: the solver a [`SolverKind`] names (today the sparse
+//!   one for every kind: a banded solver for single chains was measured
+//!   against it end to end and removed, see the README's performance
+//!   section).
+//!
+//! [`BandedMatrix`] remains as plain band storage (the load Gram matrix)
+//! with its own small factorization ([`BandedLu`]); no tangent is factored
+//! by it.
 //!
 //! # Example
 //! ```
@@ -64,8 +67,8 @@ pub mod sparse;
 #[cfg(test)]
 mod tests;
 
-pub use auto::{AutoFactors, AutoSolver, SolverKind, AUTO_MAX_BANDWIDTH};
-pub use banded::{BandedLu, BandedMatrix, BandedSolver};
+pub use auto::{AutoFactors, AutoSolver, SolverKind};
+pub use banded::{BandedLu, BandedMatrix};
 pub use pattern::{SymmetricMatrix, SymmetricPattern, MAX_ELEMENT_DOFS};
 pub use sparse::{CholeskyKind, SparseFactors, SparseSettings, SparseSolver};
 
@@ -313,7 +316,7 @@ impl Inertia {
 /// let p = Arc::new(SymmetricPattern::from_elements(2, [[0, 1]])?);
 /// let mut k = SymmetricMatrix::zeros(p.clone());
 /// k.add_element(0, &[2.0, 1.0, 1.0, 2.0])?;
-/// let f = BandedSolver::analyze(&p)?.factor(&k, FactorOptions::default())?;
+/// let f = SparseSolver::analyze(&p)?.factor(&k, FactorOptions::default())?;
 /// // two right-hand sides, column after column
 /// let mut b = vec![3.0, 3.0, 1.0, -1.0];
 /// f.solve_columns_in_place(&mut b, 2)?;
@@ -375,7 +378,7 @@ pub trait Factorization: Clone + std::fmt::Debug + Send + Sync {
 /// k.add_element(0, &[2.0, 1.0, 1.0, 2.0])?;
 /// let (mut x, mut y) = (vec![3.0, 3.0], vec![3.0, 3.0]);
 /// solve::<SparseSolver>(&k, &mut x)?;
-/// solve::<BandedSolver>(&k, &mut y)?;
+/// solve::<AutoSolver>(&k, &mut y)?;
 /// assert!((x[0] - 1.0).abs() < 1e-14 && (y[1] - 1.0).abs() < 1e-14);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```

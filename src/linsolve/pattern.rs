@@ -511,22 +511,6 @@ impl SymmetricMatrix {
             }
         }
     }
-
-    /// The Jacobi scaling `d_i = |a_ii|^-1/2` (1 for a zero diagonal).
-    pub(crate) fn jacobi_scaling(&self) -> Vec<f64> {
-        self.pattern
-            .diag
-            .iter()
-            .map(|&k| {
-                let a = self.values[k].abs();
-                if a > 0.0 && a.is_finite() {
-                    1.0 / a.sqrt()
-                } else {
-                    1.0
-                }
-            })
-            .collect()
-    }
 }
 
 #[cfg(test)]

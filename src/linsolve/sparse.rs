@@ -9,10 +9,11 @@
 
 use std::sync::Arc;
 
-use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
 use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
 use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::simplicial::{SimplicialLdltRef, SimplicialLltRef};
 use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky,
@@ -143,9 +144,42 @@ pub struct SparseSolver {
     /// each of its entries the stored entry it copies: built when an LU is
     /// first needed.
     full: Option<Arc<(SymbolicSparseColMat<usize>, Vec<usize>)>>,
-    /// Scratch of one factorization: the scaled, shifted, permuted values
-    /// and the largest entry of each (permuted) row.
+    /// Scratch of one factorization: the scaled, shifted, permuted values.
     scaled: Vec<f64>,
+    /// Scratch: the pivots of the last `L D Lᵀ` / `L Lᵀ` (elimination order).
+    pivots: Vec<f64>,
+    /// faer's workspace of the numeric factorizations, allocated at the
+    /// first one and reused by all later ones.
+    workspace: Workspace,
+}
+
+/// A faer workspace kept across calls (a clone starts without one).
+#[derive(Default)]
+struct Workspace(Option<MemBuffer>);
+
+impl Clone for Workspace {
+    fn clone(&self) -> Self {
+        Workspace(None)
+    }
+}
+
+impl std::fmt::Debug for Workspace {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Workspace")
+    }
+}
+
+impl Workspace {
+    /// The workspace, allocated for `req` when there is none yet.
+    fn stack(&mut self, req: StackReq) -> Result<&mut MemStack, LinsolveError> {
+        if self.0.is_none() {
+            self.0 = Some(MemBuffer::try_new(req).map_err(|_| LinsolveError::OutOfMemory)?);
+        }
+        match &mut self.0 {
+            Some(mem) => Ok(MemStack::new(mem)),
+            None => Err(LinsolveError::OutOfMemory),
+        }
+    }
 }
 
 impl SparseSolver {
@@ -231,6 +265,8 @@ impl SparseSolver {
             }),
             full: None,
             scaled: Vec::new(),
+            pivots: Vec::with_capacity(n),
+            workspace: Workspace::default(),
         })
     }
 
@@ -253,20 +289,17 @@ impl SparseSolver {
 
     /// The numeric `L Lᵀ` (`llt`) or `L D Lᵀ` of the scaled matrix with the
     /// shared symbolic structure; on success its pivots (`D`, or `L_kk²`)
-    /// in elimination order.
-    fn cholesky(&self, llt: bool) -> Result<CholeskyOutcome, LinsolveError> {
-        let n = self.pattern.n();
+    /// in elimination order are left in `self.pivots`.
+    fn cholesky(&mut self, llt: bool) -> Result<CholeskyOutcome, LinsolveError> {
         let sym = &self.symbolic;
         let pm = &self.perm;
         let a = SparseColMatRef::new(pm.tri.as_ref(), &self.scaled[..]);
         let mut values = try_zeros(sym.len_val())?;
-        let req = if llt {
-            sym.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
-        } else {
-            sym.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default())
-        };
-        let mut mem = MemBuffer::try_new(req).map_err(|_| LinsolveError::OutOfMemory)?;
-        let stack = MemStack::new(&mut mem);
+        // one workspace for both factorizations
+        let req = sym
+            .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
+            .or(sym.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()));
+        let stack = self.workspace.stack(req)?;
         let failed_at = if llt {
             match sym.factorize_numeric_llt(
                 &mut values,
@@ -304,10 +337,11 @@ impl SparseSolver {
                 index: pm.fwd.get(k).copied().unwrap_or(0),
             });
         }
-        let mut pivots = Vec::with_capacity(n);
+        let pivots = &mut self.pivots;
+        pivots.clear();
         match sym.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => {
-                pivots.extend(s.col_ptr()[..n].iter().map(|&p| values[p]));
+                pivots.extend(s.col_ptr()[..s.nrows()].iter().map(|&p| values[p]));
             }
             SymbolicCholeskyRaw::Supernodal(s) => {
                 let f = SupernodalLdltRef::new(s, &values);
@@ -320,18 +354,18 @@ impl SparseSolver {
         if llt {
             pivots.iter_mut().for_each(|l| *l *= *l);
         }
-        Ok(CholeskyOutcome::Done { values, pivots })
+        Ok(CholeskyOutcome::Done { values })
     }
 
-    /// Whether the pivots `d` (elimination order) of an `L D Lᵀ` or `L Lᵀ`
-    /// are all clearly positive: above `n ε` times their row's diagonal
+    /// Whether the pivots `d` (elimination order, `self.pivots`) of an
+    /// `L D Lᵀ` or `L Lᵀ` are all clearly positive: above `n ε` times their row's diagonal
     /// in the scaled matrix (a positive definite matrix has no larger
     /// entry). `Ok` with the smallest such ratio, else the first pivot
     /// that is not (its original row and value).
-    fn positive_definite(&self, pivots: &[f64]) -> Result<f64, (usize, f64)> {
+    fn positive_definite(&self) -> Result<f64, (usize, f64)> {
         let rel = pivot_tolerance(self.pattern.n());
         let mut min_ratio = f64::INFINITY;
-        for ((&d, &at), &row) in pivots.iter().zip(&self.perm.diag).zip(&self.perm.fwd) {
+        for ((&d, &at), &row) in self.pivots.iter().zip(&self.perm.diag).zip(&self.perm.fwd) {
             let scale = self.scaled[at].abs();
             if !exceeds(d, rel * scale) {
                 return Err((row, d));
@@ -359,9 +393,10 @@ impl SparseSolver {
         rowmax
     }
 
-    /// The inertia from the pivots of an `L D Lᵀ`, if every pivot is
+    /// The inertia from the pivots of an `L D Lᵀ` (`self.pivots`), if every pivot is
     /// clearly nonzero (above `n ε` times its row's largest entry).
-    fn inertia_of(&self, pivots: &[f64], rowmax: &[f64]) -> Option<Inertia> {
+    fn inertia_of(&self, rowmax: &[f64]) -> Option<Inertia> {
+        let pivots = &self.pivots;
         let rel = pivot_tolerance(self.pattern.n());
         let nonzero = pivots
             .iter()
@@ -500,8 +535,11 @@ impl SparseSolver {
 enum CholeskyOutcome {
     /// faer stopped at a pivot (zero, non-finite, or for `L Lᵀ` not positive).
     Failed { index: usize },
-    /// The factor values and the pivots in elimination order.
-    Done { values: Vec<f64>, pivots: Vec<f64> },
+    /// The factor values (the pivots are in `SparseSolver::pivots`).
+    Done { values: Vec<f64> },
+    /// An `L D Lᵀ` that exists but is not positive definite (its pivots in
+    /// `SparseSolver::pivots`).
+    Indefinite,
 }
 
 impl TangentSolver for SparseSolver {
@@ -522,8 +560,22 @@ impl TangentSolver for SparseSolver {
     ) -> Result<SparseFactors, LinsolveError> {
         check_factor_input(&self.pattern, matrix, &options)?;
         let n = matrix.n();
-        let d = matrix.jacobi_scaling();
-        let d_perm: Vec<f64> = self.perm.fwd.iter().map(|&i| d[i]).collect();
+        // the Jacobi scaling |k_ii|^-1/2 (1 for a zero or non-finite
+        // diagonal), in the permuted order
+        let (values, diag) = (matrix.values(), self.pattern.diagonal_slots());
+        let d_perm: Vec<f64> = self
+            .perm
+            .fwd
+            .iter()
+            .map(|&i| {
+                let a = values[diag[i]].abs();
+                if a > 0.0 && a.is_finite() {
+                    1.0 / a.sqrt()
+                } else {
+                    1.0
+                }
+            })
+            .collect();
         self.scale_and_permute(matrix, &d_perm, options.shift)?;
         let d_perm = Arc::new(d_perm);
         let (symbolic, perm) = (self.symbolic.clone(), self.perm.clone());
@@ -543,23 +595,28 @@ impl TangentSolver for SparseSolver {
         });
         let mut outcome = self.cholesky(llt_first)?;
         if llt_first {
-            if let CholeskyOutcome::Done { values, pivots } = &outcome {
-                if let Ok(ratio) = self.positive_definite(pivots) {
-                    return Ok(factors(Numeric::Llt(values.clone()), all_positive, ratio));
+            if let CholeskyOutcome::Done { values } = outcome {
+                if let Ok(ratio) = self.positive_definite() {
+                    return Ok(factors(Numeric::Llt(values), all_positive, ratio));
                 }
             }
             // not positive definite: L D Lᵀ for the pivot and the inertia
             outcome = self.cholesky(false)?;
         }
-        let rowmax = self.row_scales();
-        let inertia = match outcome {
-            CholeskyOutcome::Done { values, pivots } => match self.positive_definite(&pivots) {
+        if let CholeskyOutcome::Done { values } = outcome {
+            match self.positive_definite() {
                 Ok(ratio) => return Ok(factors(Numeric::Ldlt(values), all_positive, ratio)),
                 Err((index, pivot)) if options.require_positive_definite => {
                     return Err(LinsolveError::NotPositiveDefinite { index, pivot });
                 }
-                Err(_) => self.inertia_of(&pivots, &rowmax),
-            },
+                Err(_) => outcome = CholeskyOutcome::Indefinite,
+            }
+        }
+        // not positive definite: the row scales of the pivot tests, the
+        // inertia if the L D Lᵀ exists, and the pivoted LU
+        let rowmax = self.row_scales();
+        let inertia = match outcome {
+            CholeskyOutcome::Done { .. } | CholeskyOutcome::Indefinite => self.inertia_of(&rowmax),
             CholeskyOutcome::Failed { index } => {
                 if options.require_positive_definite {
                     return Err(LinsolveError::NotPositiveDefinite { index, pivot: 0.0 });
@@ -612,51 +669,97 @@ pub struct SparseFactors {
 
 impl SparseFactors {
     /// The solve for `k >= 1` column-major right-hand sides (sizes checked):
-    /// permuted and scaled into a workspace, solved there, back.
+    /// permuted and scaled into a workspace (kept per thread, so repeated
+    /// solves do not allocate), solved there, back.
     fn solve_cols(&self, b: &mut [f64], k: usize) -> Result<(), LinsolveError> {
+        thread_local! {
+            static SCRATCH: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+        }
+        let kept = SCRATCH.try_with(|cell| match cell.try_borrow_mut() {
+            Ok(mut x) => Some(self.solve_cols_with(b, k, &mut x)),
+            Err(_) => None,
+        });
+        match kept {
+            Ok(Some(result)) => result,
+            _ => self.solve_cols_with(b, k, &mut Vec::new()),
+        }
+    }
+
+    /// [`SparseFactors::solve_cols`] with the workspace `x`.
+    fn solve_cols_with(
+        &self,
+        b: &mut [f64],
+        k: usize,
+        x: &mut Vec<f64>,
+    ) -> Result<(), LinsolveError> {
         let n = self.n;
         let fwd = &self.perm.fwd;
-        let mut x = try_zeros(n * k)?;
-        for (xc, bc) in x.chunks_exact_mut(n).zip(b.chunks_exact(n)) {
-            for ((xi, &i), d) in xc.iter_mut().zip(fwd).zip(self.scaling.iter()) {
-                *xi = bc[i] * d;
-            }
+        x.clear();
+        x.try_reserve(n * k)
+            .map_err(|_| LinsolveError::OutOfMemory)?;
+        for bc in b.chunks_exact(n) {
+            x.extend(fwd.iter().zip(self.scaling.iter()).map(|(&i, d)| bc[i] * d));
         }
-        let req = match &self.numeric {
-            Numeric::Llt(_) | Numeric::Ldlt(_) => {
-                self.symbolic.solve_in_place_scratch::<f64>(k, Par::Seq)
+        let rhs = MatMut::from_column_major_slice_mut(&mut x[..], n, k);
+        match (&self.numeric, self.symbolic.raw()) {
+            // the simplicial factors solve in place without a workspace
+            (Numeric::Llt(values), SymbolicCholeskyRaw::Simplicial(s)) => {
+                SimplicialLltRef::new(s, values).solve_in_place_with_conj(
+                    Conj::No,
+                    rhs,
+                    Par::Seq,
+                    MemStack::new(&mut []),
+                );
             }
-            Numeric::Lu { .. } => lu_solve_scratch::<usize, f64>(n, k, Par::Seq),
-        };
-        let mut mem = MemBuffer::try_new(req).map_err(|_| LinsolveError::OutOfMemory)?;
-        let stack = MemStack::new(&mut mem);
-        let rhs = MatMut::from_column_major_slice_mut(&mut x, n, k);
-        match &self.numeric {
-            Numeric::Llt(values) => {
+            (Numeric::Ldlt(values), SymbolicCholeskyRaw::Simplicial(s)) => {
+                SimplicialLdltRef::new(s, values).solve_in_place_with_conj(
+                    Conj::No,
+                    rhs,
+                    Par::Seq,
+                    MemStack::new(&mut []),
+                );
+            }
+            (Numeric::Llt(values), _) => {
+                let req = self.symbolic.solve_in_place_scratch::<f64>(k, Par::Seq);
+                let mut mem = MemBuffer::try_new(req).map_err(|_| LinsolveError::OutOfMemory)?;
                 LltRef::new(&self.symbolic, values).solve_in_place_with_conj(
                     Conj::No,
                     rhs,
                     Par::Seq,
-                    stack,
+                    MemStack::new(&mut mem),
                 );
             }
-            Numeric::Ldlt(values) => {
+            (Numeric::Ldlt(values), _) => {
+                let req = self.symbolic.solve_in_place_scratch::<f64>(k, Par::Seq);
+                let mut mem = MemBuffer::try_new(req).map_err(|_| LinsolveError::OutOfMemory)?;
                 LdltRef::new(&self.symbolic, values).solve_in_place_with_conj(
                     Conj::No,
                     rhs,
                     Par::Seq,
-                    stack,
+                    MemStack::new(&mut mem),
                 );
             }
-            Numeric::Lu {
-                lu,
-                row_fwd,
-                row_inv,
-            } => {
+            (
+                Numeric::Lu {
+                    lu,
+                    row_fwd,
+                    row_inv,
+                },
+                _,
+            ) => {
+                let req = lu_solve_scratch::<usize, f64>(n, k, Par::Seq);
+                let mut mem = MemBuffer::try_new(req).map_err(|_| LinsolveError::OutOfMemory)?;
                 let id = &self.perm.identity;
                 let row_perm = PermRef::new_checked(row_fwd, row_inv, n);
                 let col_perm = PermRef::new_checked(id, id, n);
-                lu.solve_in_place_with_conj(row_perm, col_perm, Conj::No, rhs, Par::Seq, stack);
+                lu.solve_in_place_with_conj(
+                    row_perm,
+                    col_perm,
+                    Conj::No,
+                    rhs,
+                    Par::Seq,
+                    MemStack::new(&mut mem),
+                );
             }
         }
         for (xc, bc) in x.chunks_exact(n).zip(b.chunks_exact_mut(n)) {

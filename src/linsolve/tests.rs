@@ -140,11 +140,6 @@ fn solvers(p: &Arc<SymmetricPattern>) -> Vec<(&'static str, Factor)> {
         "auto",
         Box::new(move |k, o| a.factor(k, o).map(|f| Box::new(f) as Box<dyn Solve>)),
     ));
-    let mut b = BandedSolver::analyze(p).unwrap();
-    out.push((
-        "banded",
-        Box::new(move |k, o| b.factor(k, o).map(|f| Box::new(f) as Box<dyn Solve>)),
-    ));
     out
 }
 
@@ -310,7 +305,6 @@ fn a_refactorization_equals_a_fresh_one() {
         let k3 = random_matrix(n, &els, true, 0.3, &mut seed);
         let b: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
         let mut reused = SparseSolver::analyze(k1.pattern()).unwrap();
-        let mut banded = BandedSolver::analyze(k1.pattern()).unwrap();
         for k in [&k1, &k2, &k3] {
             // the same pattern, another Arc: accepted
             let fresh_pattern = Arc::new((**k.pattern()).clone());
@@ -329,19 +323,6 @@ fn a_refactorization_equals_a_fresh_one() {
                 .solve_in_place(&mut y)
                 .unwrap();
             assert_eq!(x, y, "{name}: sparse");
-            let (mut x, mut y) = (b.clone(), b.clone());
-            banded
-                .factor(k, FactorOptions::default())
-                .unwrap()
-                .solve_in_place(&mut x)
-                .unwrap();
-            BandedSolver::analyze(&fresh_pattern)
-                .unwrap()
-                .factor(&k_fresh, FactorOptions::default())
-                .unwrap()
-                .solve_in_place(&mut y)
-                .unwrap();
-            assert_eq!(x, y, "{name}: banded");
         }
     }
 }

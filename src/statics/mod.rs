@@ -35,7 +35,7 @@ use crate::structure::Assembled;
 mod newton;
 pub mod tracker;
 
-pub use tracker::{EquilibriumTracker, LinearLoad, TrackedEquilibrium};
+pub use tracker::{EquilibriumTracker, FactoredTangent, LinearLoad, TrackedEquilibrium};
 
 /// Settings of the static solver; every field has a documented default.
 ///
@@ -62,8 +62,8 @@ pub struct StaticSettings {
     pub max_step_rotation: f64,
     /// Smallest homotopy step before giving up (default 1e-4).
     pub min_load_step: f64,
-    /// The linear solver of the tangent (default [`SolverKind::Auto`]: the
-    /// banded one for the robot's single chain).
+    /// The linear solver of the tangent (default [`SolverKind::Auto`]:
+    /// faer's sparse `LDLᵀ`, with an LU fallback for indefinite tangents).
     pub linear_solver: SolverKind,
 }
 

@@ -17,11 +17,19 @@
 //! factors of `K` at its solution (fresh, unless the solution did not move
 //! from the point the kept factors belong to), which the sensitivities
 //! ([`crate::sensitivity`]) of that equilibrium use.
+//!
+//! The tangent is factored by an [`AutoSolver`] of the kind
+//! [`StaticSettings::linear_solver`] asks for, analyzed once on the
+//! robot's tangent pattern when the tracker is made: every later
+//! factorization (chord, Newton, fallback, [`EquilibriumTracker::factor_tangent`])
+//! reuses that analysis.
 
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::{check_len, Result};
-use crate::linsolve::{BandedLu, BandedMatrix};
+use crate::linsolve::{
+    AutoFactors, AutoSolver, FactorOptions, Factorization, SymmetricMatrix, TangentSolver,
+};
 use crate::loads::Loads;
 use crate::numeric::norm2;
 
@@ -85,9 +93,35 @@ pub struct TrackedEquilibrium {
     pub q: Vec<f64>,
     /// The factors of the tangent `K` at `q` (see the [module
     /// documentation](self) for the one exception).
-    pub factors: BandedLu,
+    pub factors: AutoFactors,
     /// `|Q|_2` at `q` (N).
     pub residual_n: f64,
+}
+
+/// A tangent stiffness `K` over the free coordinates and its factors, as
+/// one call of [`EquilibriumTracker::factor_tangent`] made them: whoever
+/// needs `K` itself (its entries for a QP, its largest entry for a
+/// round-off floor) takes it from here, next to the factors of the same
+/// matrix.
+///
+/// # Example
+/// ```
+/// use softrod::linsolve::Factorization;
+/// use softrod::{scene::Scene, statics::EquilibriumTracker};
+/// let scene = Scene::two_section();
+/// let mut tracker = EquilibriumTracker::new(scene.robot()?, scene.loads()?, Default::default())?;
+/// let q = tracker.robot().reference_configuration();
+/// let t = tracker.factor_tangent(&q)?;
+/// assert!(t.factors.is_positive_definite()); // the straight robot is stable
+/// assert_eq!(t.matrix.n(), t.factors.n());
+/// # Ok::<(), softrod::Error>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct FactoredTangent {
+    /// `K = −∂Q/∂q` over the free coordinates (N/m and N per unit slope).
+    pub matrix: SymmetricMatrix,
+    /// Its factors.
+    pub factors: AutoFactors,
 }
 
 /// The last solved state: its load, shape and residual.
@@ -125,27 +159,44 @@ pub struct EquilibriumTracker<E: Element> {
     /// Dead force of the known loads (`n_q`).
     dead_known: Vec<f64>,
     solver: StaticSolver,
+    /// The linear solver, analyzed once on the robot's tangent pattern.
+    linear: AutoSolver,
     /// Tangent buffer.
-    kmat: BandedMatrix,
+    kmat: SymmetricMatrix,
     /// The last factorization of `K` and the shape it was taken at.
-    factors: Option<(Vec<f64>, BandedLu)>,
+    factors: Option<(Vec<f64>, AutoFactors)>,
     /// The last solved equilibrium.
     state: Option<State>,
 }
 
 impl<E: Element> EquilibriumTracker<E> {
     /// A tracker for `robot` under the known loads `known`; `settings` are
-    /// those of the globalized fallback solve.
+    /// those of the globalized fallback solve, and
+    /// [`StaticSettings::linear_solver`] picks the linear solver of every
+    /// factorization (its pattern analyzed here, once).
     ///
     /// # Errors
     /// [`crate::Error::InvalidParameter`] for invalid settings; the errors of
-    /// [`Robot::dead_force`].
+    /// [`Robot::dead_force`]; [`crate::Error::TooLarge`] if the tangent's
+    /// factors cannot be stored.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::linsolve::SolverKind;
+    /// use softrod::{scene::Scene, statics::{EquilibriumTracker, StaticSettings}};
+    /// let scene = Scene::two_section();
+    /// let settings = StaticSettings { linear_solver: SolverKind::Sparse, ..Default::default() };
+    /// let tracker = EquilibriumTracker::new(scene.robot()?, scene.loads()?, settings)?;
+    /// assert_eq!(tracker.solver_kind(), SolverKind::Sparse);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn new(robot: Robot<E>, known: Loads, settings: StaticSettings) -> Result<Self> {
+        let linear = AutoSolver::with_kind(robot.tangent_pattern(), settings.linear_solver)?;
         let solver = StaticSolver::new(settings)?;
         let dead_known = robot.dead_force(&known)?;
-        let nd = E::NODE_DOFS;
         Ok(EquilibriumTracker {
-            kmat: BandedMatrix::zeros(robot.n_free(), 2 * nd - 1, 2 * nd - 1),
+            kmat: SymmetricMatrix::zeros(robot.tangent_pattern().clone()),
+            linear,
             robot,
             known,
             dead_known,
@@ -170,6 +221,14 @@ impl<E: Element> EquilibriumTracker<E> {
         &self.solver.settings
     }
 
+    /// The linear solver in use ([`SolverKind::Auto`] resolved at
+    /// [`EquilibriumTracker::new`]).
+    ///
+    /// [`SolverKind::Auto`]: crate::linsolve::SolverKind::Auto
+    pub fn solver_kind(&self) -> crate::linsolve::SolverKind {
+        self.linear.kind()
+    }
+
     /// The dead force of the known loads plus `G F` (`n_q`, N).
     ///
     /// # Errors
@@ -191,40 +250,23 @@ impl<E: Element> EquilibriumTracker<E> {
         self.robot.residual(q, &dead, &self.known)
     }
 
-    /// A zero band matrix of the tangent's shape (`n_free` square), for
-    /// [`EquilibriumTracker::tangent_into`].
-    pub fn tangent_buffer(&self) -> BandedMatrix {
-        let nd = E::NODE_DOFS;
-        BandedMatrix::zeros(self.robot.n_free(), 2 * nd - 1, 2 * nd - 1)
-    }
-
-    /// The tangent `K = −∂Q/∂q` at `q` over the free coordinates, into `k`
-    /// (from [`EquilibriumTracker::tangent_buffer`]), and its factors (`L D
-    /// Lᵀ` of the Jacobi-scaled tangent, which is symmetric and positive
-    /// definite near a stable equilibrium; the pivoted LU if it is not
-    /// positive definite). `k` is left holding `K`.
+    /// The tangent `K = −∂Q/∂q` at `q` over the free coordinates and its
+    /// factors (`L D Lᵀ` of the Jacobi-scaled tangent, which is symmetric
+    /// and positive definite near a stable equilibrium; a pivoted LU if it
+    /// is not positive definite), with the tracker's linear solver.
     ///
     /// # Errors
     /// [`crate::Error::Singular`] or [`crate::Error::NonFinite`] if the
-    /// factorization fails; [`crate::Error::DimensionMismatch`] for a `q` or
-    /// a `k` of the wrong size.
+    /// factorization fails; [`crate::Error::DimensionMismatch`] for a `q`
+    /// of the wrong size.
     ///
     /// # Example
-    /// ```
-    /// use softrod::{scene::Scene, statics::EquilibriumTracker};
-    /// let scene = Scene::two_section();
-    /// let tracker = EquilibriumTracker::new(scene.robot()?, scene.loads()?, Default::default())?;
-    /// let mut k = tracker.tangent_buffer();
-    /// let q = tracker.robot().reference_configuration();
-    /// let lu = tracker.tangent_into(&q, &mut k)?;
-    /// assert_eq!(lu.negative_pivots(), 0); // the straight robot is stable
-    /// assert!(k.max_abs() > 0.0);
-    /// # Ok::<(), softrod::Error>(())
-    /// ```
-    pub fn tangent_into(&self, q: &[f64], k: &mut BandedMatrix) -> Result<BandedLu> {
-        self.robot.tangent_into(q, &self.known, k)?;
-        debug_assert!(k.is_symmetric());
-        k.factor_scaled_symmetric(0.0, "tangent stiffness")
+    /// See [`FactoredTangent`].
+    pub fn factor_tangent(&mut self, q: &[f64]) -> Result<FactoredTangent> {
+        let mut matrix = SymmetricMatrix::zeros(self.robot.tangent_pattern().clone());
+        self.robot.tangent_into(q, &self.known, &mut matrix)?;
+        let factors = self.linear.factor(&matrix, FactorOptions::default())?;
+        Ok(FactoredTangent { matrix, factors })
     }
 
     /// Keeps `factors`, taken at `q`, for the chord steps of the next solve.
@@ -232,7 +274,7 @@ impl<E: Element> EquilibriumTracker<E> {
     /// # Errors
     /// [`crate::Error::DimensionMismatch`] if `q` or the factors do not fit
     /// the robot.
-    pub fn keep_factors(&mut self, q: &[f64], factors: BandedLu) -> Result<()> {
+    pub fn keep_factors(&mut self, q: &[f64], factors: AutoFactors) -> Result<()> {
         check_len("q", self.robot.n_q(), q.len())?;
         check_len("factors", self.robot.n_free(), factors.n())?;
         self.factors = Some((q.to_vec(), factors));
@@ -341,7 +383,7 @@ impl<E: Element> EquilibriumTracker<E> {
     fn plain_step(
         &self,
         q: &mut [f64],
-        lu: &BandedLu,
+        lu: &AutoFactors,
         r: &[f64],
         du: &mut [f64],
         dq: &mut [f64],
@@ -432,8 +474,7 @@ impl<E: Element> EquilibriumTracker<E> {
                         &mut r,
                         &mut self.kmat,
                     )?;
-                    self.kmat
-                        .factor_scaled_symmetric(0.0, "tangent stiffness")?
+                    self.linear.factor(&self.kmat, FactorOptions::default())?
                 };
                 return Ok(Some(self.solved(f, q, lu, r)));
             }
@@ -445,7 +486,7 @@ impl<E: Element> EquilibriumTracker<E> {
             // Newton: residual and tangent at q in one pass
             self.robot
                 .residual_and_tangent_into(&q, &dead, &self.known, &mut r, &mut self.kmat)?;
-            let lu = match self.kmat.factor_scaled_symmetric(0.0, "tangent stiffness") {
+            let lu = match self.linear.factor(&self.kmat, FactorOptions::default()) {
                 Ok(lu) => lu,
                 Err(_) => break,
             };
@@ -475,12 +516,12 @@ impl<E: Element> EquilibriumTracker<E> {
         let dead = self.dead_with(load, f)?;
         let mut r = vec![0.0; self.robot.n_free()];
         let loads = load.add_to(&self.robot, &self.known, f);
-        let eq = self.solver.solve(&self.robot, &loads, Some(q0))?;
+        let eq = self
+            .solver
+            .solve_with(&self.robot, &loads, Some(q0), &mut self.linear)?;
         self.robot
             .residual_and_tangent_into(&eq.q, &dead, &self.known, &mut r, &mut self.kmat)?;
-        let lu = self
-            .kmat
-            .factor_scaled_symmetric(0.0, "tangent stiffness")?;
+        let lu = self.linear.factor(&self.kmat, FactorOptions::default())?;
         let mut out = self.solved(f, eq.q, lu, r);
         out.residual_n = eq.report.residual_norm_n;
         Ok(out)
@@ -509,7 +550,13 @@ impl<E: Element> EquilibriumTracker<E> {
 
     /// Records a solved equilibrium (`r` its residual, `lu` the factors at
     /// `q`) and returns it.
-    fn solved(&mut self, f: &[f64], q: Vec<f64>, lu: BandedLu, r: Vec<f64>) -> TrackedEquilibrium {
+    fn solved(
+        &mut self,
+        f: &[f64],
+        q: Vec<f64>,
+        lu: AutoFactors,
+        r: Vec<f64>,
+    ) -> TrackedEquilibrium {
         let residual_n = norm2(&r);
         self.factors = Some((q.clone(), lu.clone()));
         self.state = Some(State {

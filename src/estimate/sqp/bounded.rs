@@ -12,7 +12,7 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use crate::element::{ArcPoint, Element};
 use crate::error::{Error, Result};
-use crate::linsolve::{BandedLu, BandedMatrix};
+use crate::linsolve::{AutoFactors, Factorization, SymmetricMatrix};
 use crate::numeric::{dot, norm2};
 use crate::observe::ObservationOperator;
 
@@ -119,8 +119,8 @@ impl<E: Element> SqpEstimator<E> {
     #[allow(clippy::too_many_arguments)]
     pub(super) fn bounded_qp(
         &self,
-        k: &BandedMatrix,
-        lu: &BandedLu,
+        k: &SymmetricMatrix,
+        lu: &AutoFactors,
         op: &ObservationOperator,
         q: &[f64],
         f: &[f64],
@@ -180,7 +180,7 @@ impl<E: Element> SqpEstimator<E> {
     /// the tangent `k`: its load step and the bounds active in its solution.
     pub(super) fn clarabel_df(
         &self,
-        k: &BandedMatrix,
+        k: &SymmetricMatrix,
         op: &ObservationOperator,
         r: &[f64],
         alpha: f64,
@@ -193,7 +193,6 @@ impl<E: Element> SqpEstimator<E> {
         let nq = robot.n_q();
         let nf = problem.n_f();
         let n = nfree + nf;
-        let nd = E::NODE_DOFS;
         // objective
         let mut pt: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
         let mut dense = vec![0.0; nq];
@@ -235,14 +234,14 @@ impl<E: Element> SqpEstimator<E> {
         let c_s: Vec<f64> = c.iter().map(|v| v / (pmax * gamma)).collect();
         let (mut ri, mut ci, mut vi) = (Vec::new(), Vec::new(), Vec::new());
         // the linearized equilibrium: −K du + Mᵀ G dF = −Q
-        for i in 0..nfree {
-            let lo = i.saturating_sub(2 * nd - 1);
-            let hi = (i + 2 * nd).min(nfree);
-            for j in lo..hi {
-                let v = k.get(i, j);
-                if v != 0.0 {
-                    ri.push(i);
-                    ci.push(j);
+        for (i, j, v) in k.iter_upper() {
+            if v != 0.0 {
+                ri.push(i);
+                ci.push(j);
+                vi.push(-v);
+                if i != j {
+                    ri.push(j);
+                    ci.push(i);
                     vi.push(-v);
                 }
             }
@@ -374,14 +373,14 @@ pub(super) struct Reduced<'a> {
     /// The adjoint fields, column `i` each.
     z: &'a DMatrix<f64>,
     chol: Cholesky<f64, Dyn>,
-    gram_lu: Option<&'a BandedLu>,
+    gram_lu: Option<&'a AutoFactors>,
     alpha: f64,
 }
 
 impl<'a> Reduced<'a> {
     pub(super) fn new<E: Element>(
         problem: &Problem<E>,
-        gram_lu: Option<&'a BandedLu>,
+        gram_lu: Option<&'a AutoFactors>,
         dv: &'a Derivs,
         op: &ObservationOperator,
         alpha: f64,
@@ -512,17 +511,17 @@ mod tests {
             bounds,
             ..EstimatorSettings::default()
         };
-        let est = SqpEstimator::new(robot, known, settings).unwrap();
+        let mut est = SqpEstimator::new(robot, known, settings).unwrap();
+        let (f, q) = est.stream.start().unwrap();
+        let t = est.stream.problem.factor_tangent(&q).unwrap();
+        let (k, lu) = (&t.matrix, &t.factors);
         let problem = &est.stream.problem;
         let op = problem.operator(&obs).unwrap();
-        let (f, q) = est.stream.start().unwrap();
         let (_, _, e) = problem.objective(&op, &q, &f, alpha).unwrap();
         let r = problem.residual(&q, &f).unwrap();
-        let mut k = problem.tangent_buffer();
-        let lu = problem.tangent_into(&q, &mut k).unwrap();
         let c = est.linear_term(&op, &f, &e, alpha).unwrap();
         let ineq = est.inequalities(&q, &f).unwrap();
-        let un = est.unconstrained(&lu, &op, &f, &e, &r, alpha).unwrap();
+        let un = est.unconstrained(lu, &op, &f, &e, &r, alpha).unwrap();
         let mut w0 = r.clone();
         lu.solve_in_place(&mut w0).unwrap();
         let dq0 = problem.robot().expand_step(&w0).unwrap();
@@ -535,7 +534,7 @@ mod tests {
             wr + alpha * problem.penalty(&ft).unwrap()
         };
         let red = Reduced::new(problem, est.gram_lu.as_ref(), &un.dv, &op, alpha).unwrap();
-        let (df_ip, act_ip) = est.clarabel_df(&k, &op, &r, alpha, &c, &ineq).unwrap();
+        let (df_ip, act_ip) = est.clarabel_df(k, &op, &r, alpha, &c, &ineq).unwrap();
         let (df_a, act_a) = active_set_solve(&red, &ineq, &f, &un.df0, &[]).unwrap();
         let (df_b, act_b) = active_set_solve(&red, &ineq, &f, &un.df0, &act_ip).unwrap();
         assert!(!act_a.is_empty(), "the test needs active bounds");

@@ -18,7 +18,7 @@
 //!
 //! - **No bounds** (`EstimatorSettings::bounds` empty): the QP has equality
 //!   constraints only, and its KKT system is solved directly, without an
-//!   interior-point method: block elimination with the banded LU of `K`
+//!   interior-point method: block elimination with the factors of `K`
 //!   (`du = K⁻¹ (Q + Mᵀ G dF)`) leaves for `dF` the Gauss–Newton system of
 //!   the reduced problem at the linearized residual `e' = e + A M K⁻¹ Q`,
 //!   solved in the representer form (an `n_ob × n_ob` Cholesky, see
@@ -37,7 +37,7 @@
 //!   solve, and only if that fails too is clarabel's step used as it is.
 //!   For clarabel the QP data are rescaled so that its absolute tolerances
 //!   act as relative ones (the QP is homogeneous in its right-hand sides);
-//!   `du` is always recomputed from `dF` with the banded factorization of
+//!   `du` is always recomputed from `dF` with the factorization of
 //!   `K`, so the linearized equilibrium holds to round-off. (Clarabel alone
 //!   resolves the weakly penalized directions, the slopes `w'`, only to
 //!   about 1e-5 of `|F|`; the exact solve does not have that limit.)
@@ -61,12 +61,17 @@ use clarabel::solver::SolverStatus;
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::{Error, Result};
-use crate::linsolve::{BandedLu, BandedMatrix};
+use crate::linsolve::SolverKind;
+use crate::linsolve::{
+    AutoFactors, AutoSolver, FactorOptions, Factorization, SymmetricMatrix, SymmetricPattern,
+    TangentSolver,
+};
 use crate::loads::Loads;
 use crate::numeric::{dot, max_abs, norm2};
 use crate::observe::ObservationOperator;
 use crate::outcome::NonFiniteAt;
 use crate::statics::residual_floor;
+use crate::statics::tracker::FactoredTangent;
 
 use super::driver::{run_step, Method, Solved, Stream};
 use super::problem::{columns, Derivs, Problem};
@@ -129,16 +134,12 @@ impl QpError {
 #[derive(Debug, Clone)]
 pub struct SqpEstimator<E: Element> {
     stream: Stream<E>,
-    /// The tangent `K` of the current QP (assembled at its `q`).
-    tangent: BandedMatrix,
     /// Triplets `(free row, F column, value)` of `Mᵀ G` (constant).
     g_free: Vec<(usize, usize, f64)>,
     /// Upper-triangle triplets of `H` (constant).
     h_upper: Vec<(usize, usize, f64)>,
-    /// The factored tangent of the last QP (for the second-order correction).
-    last_lu: Option<BandedLu>,
     /// The factored load Gram matrix `B` (distributed load with bounds).
-    gram_lu: Option<BandedLu>,
+    gram_lu: Option<AutoFactors>,
     /// The bounds active in the last QP's solution (indices into the rows
     /// of the bounds' inequalities): the first guess for the next QP
     /// (`None` before the first: clarabel then finds one).
@@ -173,21 +174,16 @@ impl<E: Element> SqpEstimator<E> {
             }
         }
         let gram_lu = match problem.load() {
-            LoadModel::Distributed if !problem.settings().bounds.is_empty() => Some(
-                problem
-                    .robot()
-                    .load_gram()
-                    .clone()
-                    .factor_scaled(0.0, "load Gram matrix")?,
-            ),
+            LoadModel::Distributed if !problem.settings().bounds.is_empty() => Some(gram_factors(
+                problem.robot(),
+                problem.settings().statics.linear_solver,
+            )?),
             _ => None,
         };
         Ok(SqpEstimator {
-            tangent: problem.tangent_buffer(),
             stream: Stream::new(problem),
             g_free,
             h_upper,
-            last_lu: None,
             gram_lu,
             active_set: None,
         })
@@ -198,15 +194,15 @@ impl<E: Element> SqpEstimator<E> {
         self.stream.problem.robot()
     }
 
-    /// One QP at `(q, F)`: the tangent `K` assembled and factored at `q`
-    /// (into [`SqpEstimator::tangent`], which the bounded QP's clarabel
-    /// matrix reads), then the step `(du, dF)`, the largest equality
-    /// multiplier, the objective's linear term `c` and whether a bound is
-    /// active. Without bounds the QP is the equality-constrained one, solved
-    /// exactly through the banded factorization of `K`
-    /// ([`SqpEstimator::equality_qp`]); with bounds `bounded_qp`. The
-    /// factors are kept (the second-order correction, and the tracker's
-    /// chord steps).
+    /// One QP at `(q, F)`: the tangent `K` assembled and factored at `q`,
+    /// then the step `(du, dF)`, the largest equality multiplier, the
+    /// objective's linear term `c` and whether a bound is active. Without
+    /// bounds the QP is the equality-constrained one, solved exactly
+    /// through the factorization of `K` ([`SqpEstimator::equality_qp`]);
+    /// with bounds `bounded_qp` (whose clarabel matrix reads `K` itself).
+    /// Returns the step and the factored tangent it was computed with (for
+    /// the second-order correction); the tracker keeps the factors for its
+    /// chord steps.
     fn qp(
         &mut self,
         op: &ObservationOperator,
@@ -215,19 +211,22 @@ impl<E: Element> SqpEstimator<E> {
         e: &[f64],
         r: &[f64],
         alpha: f64,
-    ) -> std::result::Result<QpStep, QpError> {
-        let lu = self.stream.problem.tangent_into(q, &mut self.tangent)?;
+    ) -> std::result::Result<(QpStep, FactoredTangent), QpError> {
+        let tangent = self.stream.problem.factor_tangent(q)?;
+        let (k, lu) = (&tangent.matrix, &tangent.factors);
         let c = self.linear_term(op, f, e, alpha)?;
         let step = if self.stream.problem.settings().bounds.is_empty() {
-            self.equality_qp(&self.tangent, &lu, op, f, e, r, alpha, c)?
+            self.equality_qp(k, lu, op, f, e, r, alpha, c)?
         } else {
-            let (step, act) = self.bounded_qp(&self.tangent, &lu, op, q, f, e, r, alpha, c)?;
+            let (step, act) = self.bounded_qp(k, lu, op, q, f, e, r, alpha, c)?;
             self.active_set = Some(act);
             step
         };
-        self.stream.problem.tracker().keep_factors(q, lu.clone())?;
-        self.last_lu = Some(lu);
-        Ok(step)
+        self.stream
+            .problem
+            .tracker()
+            .keep_factors(q, tangent.factors.clone())?;
+        Ok((step, tangent))
     }
 
     /// The QP objective's linear term `c = 2 [Mᵀ AᵀW e; α H F]`.
@@ -251,8 +250,8 @@ impl<E: Element> SqpEstimator<E> {
     }
 
     /// The equality-constrained QP (no bounds), exactly: its KKT system
-    /// `[P, A_eqᵀ; A_eq, 0]` is solved by block elimination with the banded
-    /// LU of `K` (`du = K⁻¹ (Q + Mᵀ G dF)`) and, for `dF`, the Gauss–Newton
+    /// `[P, A_eqᵀ; A_eq, 0]` is solved by block elimination with the
+    /// factors of `K` (`du = K⁻¹ (Q + Mᵀ G dF)`) and, for `dF`, the Gauss–Newton
     /// system of the reduced problem at the linearized residual
     /// `e' = e + A M K⁻¹ Q` (the Gauss–Newton step (30): an `n_ob × n_ob` Cholesky in
     /// the representer form). The equality multipliers follow from the `du`
@@ -260,8 +259,8 @@ impl<E: Element> SqpEstimator<E> {
     #[allow(clippy::too_many_arguments)]
     fn equality_qp(
         &self,
-        k: &BandedMatrix,
-        lu: &BandedLu,
+        k: &SymmetricMatrix,
+        lu: &AutoFactors,
         op: &ObservationOperator,
         f: &[f64],
         e: &[f64],
@@ -292,7 +291,7 @@ impl<E: Element> SqpEstimator<E> {
     /// Gauss–Newton load step there and the reduced gradient at `e'`.
     fn unconstrained(
         &self,
-        lu: &BandedLu,
+        lu: &AutoFactors,
         op: &ObservationOperator,
         f: &[f64],
         e: &[f64],
@@ -315,7 +314,7 @@ impl<E: Element> SqpEstimator<E> {
     }
 
     /// `du` from the linearized equilibrium, `K du = Q + Mᵀ G dF`.
-    fn du_from(&self, lu: &BandedLu, r: &[f64], df: &[f64]) -> Result<Vec<f64>> {
+    fn du_from(&self, lu: &AutoFactors, r: &[f64], df: &[f64]) -> Result<Vec<f64>> {
         let mut rhs = r.to_vec();
         for &(i, j, v) in &self.g_free {
             rhs[i] += v * df[j];
@@ -378,6 +377,9 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
         let (mut wr, mut pen, mut e) = self.stream.problem.objective(op, &q, &f, alpha)?;
         // derivatives and covariance factor of the last QP, taken at q
         let mut at_q: Option<(Derivs, Vec<f64>)> = None;
+        // the factored tangent of the last QP (the second-order correction,
+        // the final chord step)
+        let mut last: Option<FactoredTangent> = None;
         loop {
             let obj = wr + pen;
             let load = norm2(&self.stream.problem.robot().restrict(&dead)?).max(1e-12);
@@ -386,18 +388,21 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 status = EstimateStatus::IterationLimit { iterations };
                 break;
             }
-            let QpStep {
-                mut du,
-                mut df,
-                lambda_max: lmax,
-                c,
-                active,
-                exact,
-                bound_violation,
-                dec_opt,
-                derivs,
-                tangent_max_abs,
-            } = match self.qp(op, &q, &f, &e, &r, alpha) {
+            let (
+                QpStep {
+                    mut du,
+                    mut df,
+                    lambda_max: lmax,
+                    c,
+                    active,
+                    exact,
+                    bound_violation,
+                    dec_opt,
+                    derivs,
+                    tangent_max_abs,
+                },
+                tangent,
+            ) = match self.qp(op, &q, &f, &e, &r, alpha) {
                 Ok(s) => s,
                 Err(err) => {
                     status = err.status()?;
@@ -405,6 +410,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 }
             };
             at_q = derivs;
+            let lu = &last.insert(tangent).factors;
             iterations += 1;
             let mut dm = du.clone();
             dm.extend_from_slice(&df);
@@ -469,7 +475,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 let problem = &self.stream.problem;
                 let dead_t = problem.dead_with(&ft)?;
                 let mut rt = problem.robot().residual(&qt, &dead_t, problem.known())?;
-                if let Some(lu) = &self.last_lu {
+                {
                     // up to four chord steps while the residual shrinks
                     let mut rn_t = norm2(&rt);
                     for _ in 0..4 {
@@ -526,7 +532,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
         // factorization (taken at q) does it, and that QP's derivatives are
         // exact; otherwise the equilibrium is re-solved and re-factored
         let mut finish = None;
-        if let (Some((dv, l)), Some(lu)) = (at_q.take(), &self.last_lu) {
+        if let (Some((dv, l)), Some(FactoredTangent { factors: lu, .. })) = (at_q.take(), &last) {
             let mut w = r.clone();
             lu.solve_in_place(&mut w)?;
             let step = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -573,6 +579,22 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
             },
         })
     }
+}
+
+/// The factors of the load Gram matrix `B = ∫ Sᵀ S dX` (22) over all
+/// `n_q` coordinates: element `e` couples the coordinates of its two nodes.
+fn gram_factors<E: Element>(robot: &Robot<E>, kind: SolverKind) -> Result<AutoFactors> {
+    let nd = E::NODE_DOFS;
+    let elements = (0..robot.n_elements()).map(|e| (e * nd..(e + 2) * nd).collect::<Vec<_>>());
+    let pattern = std::sync::Arc::new(SymmetricPattern::from_elements(robot.n_q(), elements)?);
+    let gram = robot.load_gram();
+    let mut b = SymmetricMatrix::zeros(pattern.clone());
+    let slots: Vec<(usize, usize)> = b.iter_upper().map(|(i, j, _)| (i, j)).collect();
+    for (i, j) in slots {
+        b.add(i, j, gram.get(i, j))?;
+    }
+    let mut solver = AutoSolver::with_kind(&pattern, kind)?;
+    Ok(solver.factor(&b, FactorOptions::default())?)
 }
 
 /// One SQP subproblem's solution.

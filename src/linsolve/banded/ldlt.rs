@@ -4,7 +4,7 @@
 
 use super::factors::{BandedLu, Kind};
 use super::{axpy_neg, dot, BandedMatrix};
-use crate::linsolve::{Inertia, SymmetricMatrix};
+use crate::linsolve::Inertia;
 
 /// Why an `L D Lᵀ` factorization stopped.
 #[derive(Debug)]
@@ -80,57 +80,6 @@ impl Ldlt {
                 let m = full.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                 m.max((full[len - 1] + shift).abs())
             };
-        }
-        if bad.is_nan() {
-            return Err(LdltFailure::NonFinite);
-        }
-        Self::factor_band(n, kb, ld, rowmax, require_pd)
-    }
-
-    /// Factors `S A S + shift I` of a symmetric matrix on a pattern whose
-    /// bandwidth is at most `kb` (`S = diag(scale)`): the band is filled
-    /// from the pattern's columns (column `i` of the upper triangle is row
-    /// `i` of the lower band). The pivot test as in [`Ldlt::new`],
-    /// against the scaled matrix's rows.
-    pub(super) fn from_symmetric(
-        a: &SymmetricMatrix,
-        kb: usize,
-        scale: &[f64],
-        shift: f64,
-        require_pd: bool,
-    ) -> std::result::Result<Self, LdltFailure> {
-        let n = a.n();
-        let w = kb + 1;
-        let mut ld = vec![0.0; n * w];
-        let mut rowmax = vec![0.0f64; n];
-        let (col_ptr, row_idx) = (a.pattern().col_ptr(), a.pattern().row_idx());
-        let values = a.values();
-        // v − v is 0 for finite v and NaN for NaN or ±∞
-        let mut bad = 0.0f64;
-        for i in 0..n {
-            let si = scale[i];
-            for k in col_ptr[i]..col_ptr[i + 1] {
-                let j = row_idx[k]; // j <= i: entry (i, j) of the lower band
-                #[allow(clippy::eq_op)]
-                {
-                    bad += values[k] - values[k];
-                }
-                let mut v = values[k] * si * scale[j];
-                if i == j {
-                    v += shift;
-                }
-                if let Some(x) = (j + kb).checked_sub(i).and_then(|o| ld.get_mut(i * w + o)) {
-                    *x = v;
-                }
-                if require_pd {
-                    if i == j {
-                        rowmax[i] = v.abs();
-                    }
-                } else {
-                    rowmax[i] = rowmax[i].max(v.abs());
-                    rowmax[j] = rowmax[j].max(v.abs());
-                }
-            }
         }
         if bad.is_nan() {
             return Err(LdltFailure::NonFinite);
