@@ -249,7 +249,7 @@ fn ancf3d_agrees_with_exudyns_ancf_beam_where_it_converges() {
     for case in CASES {
         let r = reference(&format!("exudyn_beam3d_{case}"));
         let l = f(&r["params"]["length_m"]);
-        let Some((p_ex, _, disc)) = extrapolated(&r["values"]["ancf_beam"]) else {
+        let Some((p_ex, phi_ex, disc)) = extrapolated(&r["values"]["ancf_beam"]) else {
             println!("{case:<16} ObjectANCFBeam: not converged on three meshes");
             continue;
         };
@@ -260,14 +260,18 @@ fn ancf3d_agrees_with_exudyns_ancf_beam_where_it_converges() {
             );
             continue;
         }
-        let (p, _) = solve(&r, ELEMENTS);
-        let dp = dist(&p, &p_ex);
+        let (p, phi) = solve(&r, ELEMENTS);
+        let (dp, dphi) = (dist(&p, &p_ex), dist(&phi, &phi_ex));
         println!(
-            "{case:<16} ObjectANCFBeam |Δ tip| = {:.2e} L (its disc. {:.1e} L)",
+            "{case:<16} ObjectANCFBeam |Δ tip| = {:.2e} L  |Δ rotation| = {dphi:.2e} rad (its disc. {:.1e} L)",
             dp / l,
             disc / l
         );
         assert!(dp < 1e-4 * l, "{case}: tip {p:?} vs exudyn ANCF {p_ex:?}");
+        assert!(
+            dphi < 1e-4,
+            "{case}: rotation {phi:?} vs exudyn ANCF {phi_ex:?}"
+        );
         compared += 1;
     }
     assert!(compared >= 1, "the ANCF beam converged on no case");

@@ -39,9 +39,9 @@
 //!   else in the crate (the cables' `EA ε² + EI |κ|²`, eq. (19)) plus the
 //!   torsion the section frame makes possible, with the stiffnesses an
 //!   engineer measures (EA, EI about both section axes, GJ). A continuum
-//!   (Saint-Venant–Kirchhoff) energy of this element is known to lock in
-//!   bending and in Poisson's effect, and asks for section integrals
-//!   nobody measures on a pneumatic actuator.
+//!   (Saint-Venant–Kirchhoff) energy of this element is reported in the
+//!   ANCF literature to lock in bending and through Poisson's effect, and it
+//!   asks for section integrals nobody measures on a pneumatic actuator.
 //! - Bending is read from the cubic centreline, not from the derivative of
 //!   the linearly interpolated section gradients: the element bends exactly
 //!   like the spatial cable (a cubic is represented exactly, no shear
@@ -53,8 +53,11 @@
 //!   the nodes, where the linear `r_Y`, `r_Z` can meet it exactly (applied at
 //!   interior Gauss points it would force the linear section gradients to
 //!   follow the quadratic `r_X` and lock). The section penalty keeps
-//!   `[r_Y r_Z]` orthonormal at the nodes; the twist alone stresses it,
-//!   weakly (a section-shape change of order `GJ τ / (k_c L_e)`).
+//!   `[r_Y r_Z]` orthonormal at the nodes; only the twist stresses it
+//!   (the frame is invariant to a common scaling of `r_Y, r_Z`, not to a
+//!   change of their shape); with the default `k_c = EA` the closed-form
+//!   twist `TL/GJ` of 1.5 rad is met to 2e-6 rad at 16 elements, converging
+//!   at fourth order (tests/ancf3d.rs).
 //! - Rigid motions: every measure is built from dot and cross products of
 //!   the gradients, so the energy is invariant under any rotation and
 //!   translation (a test).
