@@ -539,19 +539,15 @@ impl<E: Element> Rod<E> {
     pub fn position_at(&self, q: &[f64], s: f64) -> Result<Vec<f64>> {
         check_len("q", self.n_q(), q.len())?;
         let p = self.arc_point("s_m", s)?;
-        let mut r = vec![0.0; E::DIM];
-        if E::NODE_DOFS == 2 * E::DIM {
-            p.value_into(q, &mut r)?;
-        } else {
-            // further gradients after r' in each node: the slots by offset
-            let base = p.element * E::NODE_DOFS;
-            for (i, ri) in r.iter_mut().enumerate() {
-                *ri = (0..4)
+        // the Hermite slots by offset (as ArcPoint::value_into for a cable)
+        let base = p.element * E::NODE_DOFS;
+        Ok((0..E::DIM)
+            .map(|i| {
+                (0..4)
                     .map(|k| p.values[k] * q[base + slot::<E>(k) + i])
-                    .sum();
-            }
-        }
-        Ok(r)
+                    .sum()
+            })
+            .collect())
     }
 
     /// The element, `ξ` and Hermite weights at arc coordinate `s` (m): the
