@@ -1,16 +1,17 @@
 """Regenerate (or check) every reference file under reference/.
 
-    python validation/make_references.py [--venv] [--only cheap|exudyn|family|spatial|elastica|skfem|contact]
+    python validation/make_references.py [--venv] [--only cheap|exudyn|family|spatial|beam3d|elastica|skfem|contact]
                                          [--out-dir DIR] [--check]
 
 --venv     create validation/.venv if absent, pip-install validation/requirements.txt
            into it (again whenever requirements.txt changes) and re-run this script
            with the venv's Python.
---only     cheap: one planar exudyn case, one spatial exudyn case and one scikit-fem
-           case (what CI runs); exudyn / elastica / skfem: that generator only (exudyn
-           includes the load family of exudyn_load_family.py and the spatial cable of
-           exudyn_spatial_cable.py; family, spatial: those only; contact: the contact
-           references of validation/contact_*.py).
+--only     cheap: one planar exudyn case, one spatial exudyn case, one 3-D beam case and
+           one scikit-fem case (what CI runs); exudyn / elastica / skfem: that generator
+           only (exudyn includes the load family of exudyn_load_family.py, the spatial
+           cable of exudyn_spatial_cable.py and the 3-D beams of exudyn_beam3d.py;
+           family, spatial, beam3d: those only; contact: the contact references of
+           validation/contact_*.py).
 --out-dir  where to write the JSON files (default: reference/).
 --check    generate into a temporary directory and compare with the committed files
            in --out-dir: every number (outside "versions" and "timing_s") must agree to
@@ -114,6 +115,12 @@ def generate(only, out_dir):
         names = exudyn_spatial_cable.CHEAP if only == "cheap" else list(exudyn_spatial_cable.CASES)
         for name in names:
             rows += exudyn_spatial_cable.run_case(name, out_dir)
+    if only in (None, "exudyn", "beam3d", "cheap"):
+        import exudyn_beam3d
+
+        names = exudyn_beam3d.CHEAP if only == "cheap" else list(exudyn_beam3d.CASES)
+        for name in names:
+            rows += exudyn_beam3d.run_case(name, out_dir)
     if only in (None, "skfem", "cheap"):
         import skfem_strip
 
@@ -223,7 +230,9 @@ def check(rows, tmp_dir, ref_dir, full, strict=False):
 def main():
     ap = argparse.ArgumentParser(description="Regenerate or check the reference/*.json files.")
     ap.add_argument("--venv", action="store_true", help="run inside validation/.venv (created/updated as needed)")
-    ap.add_argument("--only", choices=["cheap", "exudyn", "family", "spatial", "elastica", "skfem", "contact"], default=None)
+    ap.add_argument(
+        "--only", choices=["cheap", "exudyn", "family", "spatial", "beam3d", "elastica", "skfem", "contact"], default=None
+    )
     ap.add_argument("--out-dir", default=DEFAULT_OUT)
     ap.add_argument("--check", action="store_true")
     ap.add_argument("--strict", action="store_true", help="with --check: compare solver diagnostics too")

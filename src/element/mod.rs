@@ -28,9 +28,11 @@
 use crate::error::{check_len, check_positive, Error, Result};
 use crate::quadrature::GaussRule;
 
+mod ancf3d;
 mod planar_cable;
 mod spatial_cable;
 
+pub use ancf3d::{Ancf3d, Ancf3dStiffness};
 pub use planar_cable::PlanarCable;
 pub use spatial_cable::SpatialCable;
 

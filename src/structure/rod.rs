@@ -352,7 +352,8 @@ impl<E: Element> Rod<E> {
             for (k, mk) in m.iter().enumerate() {
                 for (l, mkl) in mk.iter().enumerate() {
                     for i in 0..d {
-                        self.gram.add(e * nd + k * d + i, e * nd + l * d + i, *mkl);
+                        self.gram
+                            .add(e * nd + slot::<E>(k) + i, e * nd + slot::<E>(l) + i, *mkl);
                     }
                 }
             }
@@ -396,8 +397,8 @@ impl<E: Element> Rod<E> {
         for (e, m) in self.elem_gram.iter().enumerate() {
             for k in 0..4 {
                 for i in 0..d {
-                    let v: f64 = (0..4).map(|l| m[k][l] * f[e * nd + l * d + i]).sum();
-                    out[e * nd + k * d + i] += v;
+                    let v: f64 = (0..4).map(|l| m[k][l] * f[e * nd + slot::<E>(l) + i]).sum();
+                    out[e * nd + slot::<E>(k) + i] += v;
                 }
             }
         }
@@ -538,9 +539,15 @@ impl<E: Element> Rod<E> {
     pub fn position_at(&self, q: &[f64], s: f64) -> Result<Vec<f64>> {
         check_len("q", self.n_q(), q.len())?;
         let p = self.arc_point("s_m", s)?;
-        let mut r = vec![0.0; E::DIM];
-        p.value_into(q, &mut r)?;
-        Ok(r)
+        // the Hermite slots by offset (as ArcPoint::value_into for a cable)
+        let base = p.element * E::NODE_DOFS;
+        Ok((0..E::DIM)
+            .map(|i| {
+                (0..4)
+                    .map(|k| p.values[k] * q[base + slot::<E>(k) + i])
+                    .sum()
+            })
+            .collect())
     }
 
     /// The element, `ξ` and Hermite weights at arc coordinate `s` (m): the
@@ -773,13 +780,22 @@ impl<E: Element> Rod<E> {
     }
 }
 
-/// Adds `scale · S(ξ)ᵀ f` into the element vector `out` (cable layout).
+/// Offset in the element coordinates of the centreline's Hermite slot `k`
+/// (`r_1, r_1', r_2, r_2'`): node `k / 2`, position or first gradient. For
+/// a cable (`NODE_DOFS = 2 DIM`) this is `k · DIM`; the full 3-D element
+/// has further gradients after `r'` in each node.
+fn slot<E: Element>(k: usize) -> usize {
+    (k / 2) * E::NODE_DOFS + (k % 2) * E::DIM
+}
+
+/// Adds `scale · S(ξ)ᵀ f` into the element vector `out` (the centreline's
+/// Hermite slots).
 fn add_shape_force<E: Element>(el: &E, xi: f64, f: &[f64], scale: f64, out: &mut [f64]) {
     let d = E::DIM;
     let s = el.shape(xi);
     for k in 0..4 {
         for i in 0..d {
-            out[k * d + i] += scale * s[k] * f[i];
+            out[slot::<E>(k) + i] += scale * s[k] * f[i];
         }
     }
 }
