@@ -31,7 +31,7 @@ use softrod::assembly::Section;
 use softrod::element::{Ancf3d, Ancf3dStiffness, NodeKinematics};
 use softrod::loads::force_field::{ForceField, StiffnessSink};
 use softrod::loads::{Loads, NodeMoment, PointForce};
-use softrod::structure::solve::{solve_equilibrium, NewtonSettings};
+use softrod::statics::StaticSolver;
 use softrod::structure::{RodSpec, Structure, StructureLoads, StructureSpec};
 
 const CASES: [&str; 4] = [
@@ -134,8 +134,7 @@ fn solve(r: &Value, n: usize) -> ([f64; 3], Vec<f64>) {
     }
     // load steps by hand: the section forces are a field the solver does not scale
     let steps = f(&p["discretization"]["load_steps"]) as usize;
-    let mut u: Option<Vec<f64>> = None;
-    let mut q = Vec::new();
+    let mut q: Vec<f64> = Vec::new();
     for k in 1..=steps {
         let s = k as f64 / steps as f64;
         let mut model = base.clone();
@@ -145,9 +144,13 @@ fn solve(r: &Value, n: usize) -> ([f64; 3], Vec<f64>) {
             rods: vec![loads.scaled(s)],
             ..Default::default()
         };
-        let eq = solve_equilibrium(&model, &sl, u.as_deref(), &NewtonSettings::default()).unwrap();
-        assert!(eq.converged(), "step {k}/{steps}: {:?}", eq.status);
-        u = Some(eq.u);
+        let q0 = (!q.is_empty()).then_some(q.as_slice());
+        let eq = StaticSolver::default().solve(&model, &sl, q0).unwrap();
+        assert!(
+            eq.report.status.is_converged(),
+            "step {k}/{steps}: {}",
+            eq.report
+        );
         q = eq.q;
     }
     let node = &q[tip];
