@@ -21,6 +21,7 @@
 //! - [`outcome`]: how a solve ended: the status enums and the reports errors carry.
 //! - [`refine`]: `"elements": "auto"`, the smallest mesh meeting a tolerance.
 //! - [`linsolve`]: linear solvers for the tangent (banded, faer sparse); [`quadrature`]: Gauss rules.
+//! - [`control`]: inverse kinematics, the parameter updater (31), the closed loop.
 //! - [`plant`]: the robot a controller acts on; a simulated plant that is not the model.
 //! - `report` (feature `report`): `softrod report`, the speed–accuracy chart and the stability map.
 //!
@@ -44,6 +45,7 @@
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
 
 pub mod assembly;
+pub mod control;
 pub mod element;
 pub mod error;
 pub mod estimate;
