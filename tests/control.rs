@@ -360,3 +360,64 @@ fn bad_input_is_a_typed_error_naming_the_field() {
         ClosedLoop::new(robot, scene.loads().unwrap(), &[], LoopSettings::default()).unwrap_err();
     assert_eq!(field(e), "markers");
 }
+
+#[test]
+fn virtual_payload_recorded_without_payload_leaves_the_real_one() {
+    // Fig. 5: against a plant with model error the estimator reports a load
+    // on the unloaded robot; recorded along a payload-free run (keyed by the
+    // desired tip position) and subtracted, a 20 g tip mass remains
+    use softrod::control::VirtualPayload;
+    let scene = Scene::two_section();
+    let robot = scene.robot().unwrap();
+    let arcs = marker_arcs(&scene);
+    let c = [0.1911, 0.1203];
+    let traj = Trajectory::line(
+        [c[0] - 0.003, c[1] - 0.003],
+        [c[0] + 0.003, c[1] + 0.003],
+        8.0,
+        8.0,
+        2.0,
+    )
+    .unwrap();
+    let run = |payloads: PayloadSchedule| {
+        let settings = PlantSettings {
+            payloads,
+            ..Default::default()
+        };
+        let mut plant = SimulatedPlant::new(&scene, &arcs, settings).unwrap();
+        let mut lp = ClosedLoop::new(
+            robot.clone(),
+            scene.loads().unwrap(),
+            &arcs,
+            LoopSettings::default(),
+        )
+        .unwrap();
+        let ts = lp.run(&mut plant, &traj, |_| None).unwrap();
+        (lp, ts)
+    };
+    let (_, free) = run(PayloadSchedule::none());
+    let mut vp = VirtualPayload::new(4);
+    for s in free.samples.iter().filter(|s| s.time_s >= 1.0) {
+        vp.record(&s.desired_m, &s.f_bar).unwrap();
+    }
+    let (lp, loaded) = run(PayloadSchedule::tip_mass(0.02, 0.24));
+    let weight = -0.02 * 9.81;
+    let (mut raw, mut sub, mut k) = (0.0, 0.0, 0.0);
+    for s in loaded.samples.iter().filter(|s| s.time_s >= 2.0) {
+        raw += s.f_bar_resultant_n[1];
+        sub += lp.resultant(&vp.subtract(&s.desired_m, &s.f_bar).unwrap())[1];
+        k += 1.0;
+    }
+    let (raw, sub) = (raw / k, sub / k);
+    let virtual_y = raw - sub;
+    println!("resultant y: estimated {raw:.4} N, minus the virtual payload {sub:.4} N, true {weight:.4} N");
+    assert!(
+        virtual_y.abs() > 0.02,
+        "the virtual payload is only {virtual_y} N"
+    );
+    assert!(
+        (sub - weight).abs() < 0.25 * weight.abs(),
+        "payload {sub} N vs {weight} N (raw {raw} N)"
+    );
+    assert!((sub - weight).abs() < (raw - weight).abs());
+}

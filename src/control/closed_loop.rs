@@ -128,7 +128,11 @@ pub struct LoopSample {
     pub measured_tip_m: Vec<f64>,
     /// The true tip, if the caller's inspection supplied it (m).
     pub true_tip_m: Option<Vec<f64>>,
-    /// Resultant of the estimator's load `F̄` (N).
+    /// The estimator's load `F̄` (the distributed field of (8), `n_q`
+    /// entries; zeros when not run), after subtracting the virtual payload
+    /// if one is set.
+    pub f_bar: Vec<f64>,
+    /// Resultant of `F̄` (N).
     pub f_bar_resultant_n: Vec<f64>,
     /// Resultant of the updater's load `F̂` used by the feedforward (N).
     pub f_hat_resultant_n: Vec<f64>,
@@ -261,8 +265,8 @@ impl<E: Element + 'static> ClosedLoop<E> {
         self.updater.estimate()
     }
 
-    /// Resultant `∫ w dX` of a distributed load field on the model (N).
-    fn resultant(&self, f: &[f64]) -> Vec<f64> {
+    /// Resultant `∫ w dX` of a distributed load field `f` on the model (N).
+    pub fn resultant(&self, f: &[f64]) -> Vec<f64> {
         let d = E::DIM;
         let Ok(g) = self.model.apply_load_gram(f) else {
             return vec![f64::NAN; d];
@@ -309,6 +313,60 @@ impl<E: Element + 'static> ClosedLoop<E> {
         }
     }
 
+    /// One control instant: the markers `frame` (taken at the time whose
+    /// desired position is `x_now`) in, the pressures for the interval
+    /// ending at `x_next` out (in the sample, and kept as the command the
+    /// next estimate assumes). The caller sends them to the plant.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for targets of the wrong dimension; the
+    /// inverse kinematics' errors (no equilibrium found). An estimator
+    /// failure is not an error: the sample's `estimate` says so.
+    pub fn control_step(
+        &mut self,
+        frame: &crate::plant::MarkerFrame,
+        x_now: &[f64],
+        x_next: &[f64],
+    ) -> Result<LoopSample> {
+        check_len("x_d", E::DIM, x_now.len())?;
+        let start = Instant::now();
+        let zeros = vec![0.0; self.model.n_q()];
+        let (f_bar, flag, f_hat) = match self.settings.controller {
+            ControllerKind::Ff => (zeros.clone(), EstimateFlag::NotRun, zeros),
+            ControllerKind::FfUpdater => {
+                let (mut f_bar, flag) = self.estimate(frame);
+                if let Some(vp) = &self.virtual_payload {
+                    if let Ok(f) = vp.subtract(x_now, &f_bar) {
+                        f_bar = f;
+                    }
+                }
+                let f_hat = self.updater.step(&f_bar)?.to_vec();
+                (f_bar, flag, f_hat)
+            }
+        };
+        let sol = self.ik.solve(x_next, &f_hat)?;
+        let step_time_s = start.elapsed().as_secs_f64();
+        self.commanded_pa.clone_from(&sol.pressures_pa);
+        Ok(LoopSample {
+            time_s: frame.time_s,
+            desired_m: x_now.to_vec(),
+            measured_tip_m: frame.positions_m.last().cloned().unwrap_or_default(),
+            true_tip_m: None,
+            f_bar_resultant_n: self.resultant(&f_bar),
+            f_bar,
+            f_hat_resultant_n: self.resultant(&f_hat),
+            pressures_pa: sol.pressures_pa,
+            ik: sol.status,
+            estimate: flag,
+            step_time_s,
+        })
+    }
+
+    /// The pressures last commanded (Pa).
+    pub fn commanded_pa(&self) -> &[f64] {
+        &self.commanded_pa
+    }
+
     /// Runs the loop on `plant` along `trajectory`, from its start to its
     /// end at the control rate; `inspect` is called on the plant after
     /// every frame and may return the true tip for scoring (it must not
@@ -344,37 +402,12 @@ impl<E: Element + 'static> ClosedLoop<E> {
             let frame = plant.advance(dt)?;
             let t = t0 + k as f64 * dt;
             let true_tip_m = inspect(plant);
-            let start = Instant::now();
-            let x_next = trajectory.at(t + dt);
-            let (f_bar, flag, f_hat) = match self.settings.controller {
-                ControllerKind::Ff => (zeros.clone(), EstimateFlag::NotRun, zeros.clone()),
-                ControllerKind::FfUpdater => {
-                    let (mut f_bar, flag) = self.estimate(&frame);
-                    if let Some(vp) = &self.virtual_payload {
-                        if let Ok(f) = vp.subtract(&trajectory.at(t), &f_bar) {
-                            f_bar = f;
-                        }
-                    }
-                    let f_hat = self.updater.step(&f_bar)?.to_vec();
-                    (f_bar, flag, f_hat)
-                }
-            };
-            let sol = self.ik.solve(&x_next, &f_hat)?;
-            let step_time_s = start.elapsed().as_secs_f64();
-            self.commanded_pa.clone_from(&sol.pressures_pa);
+            let mut sample =
+                self.control_step(&frame, &trajectory.at(t), &trajectory.at(t + dt))?;
+            sample.time_s = t;
+            sample.true_tip_m = true_tip_m;
             plant.command(&self.commanded_pa)?;
-            series.samples.push(LoopSample {
-                time_s: t,
-                desired_m: trajectory.at(t),
-                measured_tip_m: frame.positions_m.last().cloned().unwrap_or_default(),
-                true_tip_m,
-                f_bar_resultant_n: self.resultant(&f_bar),
-                f_hat_resultant_n: self.resultant(&f_hat),
-                pressures_pa: sol.pressures_pa,
-                ik: sol.status,
-                estimate: flag,
-                step_time_s,
-            });
+            series.samples.push(sample);
         }
         Ok(series)
     }
