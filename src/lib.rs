@@ -22,6 +22,8 @@
 //! - [`outcome`]: how a solve ended: the status enums and the reports errors carry.
 //! - [`refine`]: `"elements": "auto"`, the smallest mesh meeting a tolerance.
 //! - [`linsolve`]: linear solvers for the tangent (banded, faer sparse); [`quadrature`]: Gauss rules.
+//! - [`control`]: inverse kinematics, the parameter updater (31), the closed loop.
+//! - [`plant`]: the robot a controller acts on; a simulated plant that is not the model.
 //! - `report` (feature `report`): `softrod report`, the speed–accuracy chart and the stability map.
 //!
 //! Features: the library needs only its numerical dependencies (nalgebra,
@@ -45,6 +47,7 @@
 
 pub mod assembly;
 pub mod contact;
+pub mod control;
 pub mod element;
 pub mod error;
 pub mod estimate;
@@ -54,6 +57,7 @@ pub(crate) mod numeric;
 pub mod observe;
 pub mod outcome;
 pub mod params;
+pub mod plant;
 pub mod quadrature;
 pub mod refine;
 #[cfg(feature = "report")]

@@ -1,0 +1,49 @@
+//! The two places the controller reaches into the sensitivity and
+//! estimator machinery; kept here, small, so that a change of how those are
+//! constructed touches one function each.
+
+use nalgebra::DMatrix;
+
+use crate::assembly::Robot;
+use crate::element::Element;
+use crate::error::Result;
+use crate::estimate::{Estimator, EstimatorSettings};
+use crate::linsolve::{AutoSolver, FactorOptions, SolverKind, SymmetricMatrix, TangentSolver};
+use crate::loads::Loads;
+use crate::sensitivity::Sensitivity;
+
+/// (43) `∂q/∂P = −(∂Q/∂q)⁻¹ ∂Q/∂P` (`n_q × n_pressures`, m/Pa) at the
+/// equilibrium `q` of `robot` under `loads` (whose pressures and load field
+/// enter the tangent).
+pub(crate) fn dq_dp<E: Element>(
+    robot: &Robot<E>,
+    loads: &Loads,
+    q: &[f64],
+) -> Result<DMatrix<f64>> {
+    let pattern = robot.tangent_pattern();
+    let mut k = SymmetricMatrix::zeros(pattern.clone());
+    robot.tangent_into(q, loads, &mut k)?;
+    let mut solver = AutoSolver::with_kind(pattern, SolverKind::Auto)?;
+    let factors = solver.factor(&k, FactorOptions::default())?;
+    Sensitivity::new(robot, &factors)?.dq_dp(q)
+}
+
+/// The estimator of `settings.backend` for `robot` under the known loads
+/// `known` at the chamber pressures `pressures_pa`.
+///
+/// The estimators take their known loads, pressures included, when they are
+/// built, and have no call to change them; a loop whose pressures change
+/// every step therefore builds one per step (and loses the warm start of
+/// `(F, q)`; `α` is kept by the caller through `settings.alpha`).
+pub(crate) fn estimator_at<E: Element + 'static>(
+    robot: &Robot<E>,
+    known: &Loads,
+    pressures_pa: &[f64],
+    settings: &EstimatorSettings,
+) -> Result<Box<dyn Estimator>> {
+    let mut loads = known.clone();
+    loads.pressures_pa = pressures_pa.to_vec();
+    settings
+        .backend
+        .build(robot.clone(), loads, settings.clone())
+}

@@ -1,0 +1,414 @@
+//! The closed loop of Fig. 6(b): at every control instant `t_k`
+//!
+//! 1. the plant's markers at `t_k` (the only thing read from it);
+//! 2. the estimator's load `F̄` with the pressures commanded over the last
+//!    interval (warm `α`); on an estimator failure the last good `F̄` is kept
+//!    and the sample says so;
+//! 3. the updater (31) moves `F̂` towards `F̄` (feedforward only: `F̂ = 0`);
+//! 4. `f_IK(x_d(t_{k+1}), F̂)` gives the pressures for the next interval;
+//! 5. the plant advances to `t_{k+1}` under them.
+
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use crate::assembly::Robot;
+use crate::element::Element;
+use crate::error::{check_len, Error, Result};
+use crate::estimate::{EstimateStatus, EstimatorSettings};
+use crate::loads::Loads;
+use crate::plant::Plant;
+
+use super::{adapter, IkSettings, IkStatus, InverseKinematics, ParameterUpdater, Trajectory};
+use super::{UpdaterGains, VirtualPayload};
+
+/// The highest control rate accepted (Hz).
+const MAX_RATE_HZ: f64 = 10_000.0;
+
+/// Which controller runs.
+///
+/// # Example
+/// ```
+/// let c: softrod::control::ControllerKind = serde_json::from_str("\"ff_updater\"").unwrap();
+/// assert_eq!(c, softrod::control::ControllerKind::FfUpdater);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ControllerKind {
+    /// Feedforward only: `f_IK(x_d, 0)`, the model's own load only.
+    Ff,
+    /// Feedforward with the estimated load through the updater (31).
+    #[default]
+    FfUpdater,
+}
+
+/// Settings of the loop; every field has a documented default.
+///
+/// # Example
+/// ```
+/// let s = softrod::control::LoopSettings { control_rate_hz: 0.0, ..Default::default() };
+/// assert_eq!(s.validate().unwrap_err().field(), Some("loop.control_rate_hz"));
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LoopSettings {
+    /// Control rate (Hz, in (0, 10 000]; default 30, the paper's).
+    pub control_rate_hz: f64,
+    /// The controller (default feedforward + updater).
+    pub controller: ControllerKind,
+    /// Gains of the updater (31).
+    pub gains: UpdaterGains,
+    /// Inverse kinematics.
+    pub ik: IkSettings,
+    /// The estimator (its `alpha`, if unset, is chosen on the first frame
+    /// and kept).
+    pub estimator: EstimatorSettings,
+}
+
+impl Default for LoopSettings {
+    fn default() -> Self {
+        LoopSettings {
+            control_rate_hz: 30.0,
+            controller: ControllerKind::FfUpdater,
+            gains: UpdaterGains::default(),
+            ik: IkSettings::default(),
+            estimator: EstimatorSettings {
+                noise_sigma_m: 5e-5,
+                ..EstimatorSettings::default()
+            },
+        }
+    }
+}
+
+impl LoopSettings {
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the field
+    /// (`loop.control_rate_hz`, `updater.k_p_per_s`, …).
+    pub fn validate(&self) -> Result<()> {
+        let r = self.control_rate_hz;
+        if !(r.is_finite() && r > 0.0 && r <= MAX_RATE_HZ) {
+            return Err(Error::invalid(
+                "loop.control_rate_hz",
+                r,
+                format!("must be > 0 and at most {MAX_RATE_HZ} Hz"),
+            ));
+        }
+        self.gains.validate()?;
+        self.ik.validate()?;
+        self.estimator.validate()
+    }
+}
+
+/// What the estimator gave at one instant.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "estimate", rename_all = "snake_case")]
+pub enum EstimateFlag {
+    /// Not run (feedforward only).
+    NotRun,
+    /// A converged estimate was used.
+    Converged,
+    /// The estimator stopped short (its status) or failed: the last good
+    /// estimate was kept.
+    KeptLast {
+        /// The estimator's status, `None` if it returned an error.
+        status: Option<EstimateStatus>,
+    },
+}
+
+/// One instant of a run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LoopSample {
+    /// Time (s).
+    pub time_s: f64,
+    /// Desired end-effector position at this time (m).
+    pub desired_m: Vec<f64>,
+    /// The tip marker as measured (m).
+    pub measured_tip_m: Vec<f64>,
+    /// The true tip, if the caller's inspection supplied it (m).
+    pub true_tip_m: Option<Vec<f64>>,
+    /// The estimator's load `F̄` (the distributed field of (8), `n_q`
+    /// entries; zeros when not run), after subtracting the virtual payload
+    /// if one is set.
+    pub f_bar: Vec<f64>,
+    /// Resultant of `F̄` (N).
+    pub f_bar_resultant_n: Vec<f64>,
+    /// Resultant of the updater's load `F̂` used by the feedforward (N).
+    pub f_hat_resultant_n: Vec<f64>,
+    /// Pressures commanded for the next interval (Pa).
+    pub pressures_pa: Vec<f64>,
+    /// How the inverse kinematics ended.
+    pub ik: IkStatus,
+    /// What the estimator gave.
+    pub estimate: EstimateFlag,
+    /// Wall time of estimation + updater + inverse kinematics (s).
+    pub step_time_s: f64,
+}
+
+/// The samples of a run.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TimeSeries {
+    /// One per control instant.
+    pub samples: Vec<LoopSample>,
+}
+
+impl TimeSeries {
+    /// Tracking errors `|tip − x_d|` (m) from `from_s` on, of the true tip
+    /// where known, else of the measured one.
+    pub fn errors_after(&self, from_s: f64) -> Vec<f64> {
+        self.samples
+            .iter()
+            .filter(|s| s.time_s >= from_s)
+            .map(|s| {
+                let tip = s.true_tip_m.as_ref().unwrap_or(&s.measured_tip_m);
+                tip.iter()
+                    .zip(&s.desired_m)
+                    .map(|(a, b)| (a - b).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .collect()
+    }
+
+    /// Mean and maximum tracking error from `from_s` on (m); zeros if no sample.
+    pub fn mean_max_after(&self, from_s: f64) -> (f64, f64) {
+        let e = self.errors_after(from_s);
+        if e.is_empty() {
+            return (0.0, 0.0);
+        }
+        let mean = e.iter().sum::<f64>() / e.len() as f64;
+        (mean, e.iter().fold(0.0f64, |m, v| m.max(*v)))
+    }
+}
+
+/// A controller of one robot model (see the [module documentation](self)).
+///
+/// # Example
+/// See `tests/control.rs` and `examples/track_fig6.rs`.
+#[derive(Debug)]
+pub struct ClosedLoop<E: Element> {
+    model: Robot<E>,
+    known: Loads,
+    marker_s_m: Vec<f64>,
+    settings: LoopSettings,
+    ik: InverseKinematics<E>,
+    updater: ParameterUpdater,
+    last_good: Option<Vec<f64>>,
+    commanded_pa: Vec<f64>,
+    virtual_payload: Option<VirtualPayload>,
+}
+
+impl<E: Element + 'static> ClosedLoop<E> {
+    /// A controller for the model `model` under the known loads `known`
+    /// (its pressures are the command before the first step), observing
+    /// markers at the arc coordinates `marker_s_m` (m; the last one should
+    /// be the end effector's).
+    ///
+    /// # Errors
+    /// As [`LoopSettings::validate`], [`InverseKinematics::new`];
+    /// [`Error::InvalidParameter`] (field `markers`) for no markers.
+    pub fn new(
+        model: Robot<E>,
+        known: Loads,
+        marker_s_m: &[f64],
+        settings: LoopSettings,
+    ) -> Result<Self> {
+        settings.validate()?;
+        if marker_s_m.is_empty() {
+            return Err(Error::invalid("markers", "[]", "the loop needs markers"));
+        }
+        for (i, &s) in marker_s_m.iter().enumerate() {
+            model.locate(&format!("markers[{i}].s_m"), s)?;
+        }
+        let ik = InverseKinematics::new(model.clone(), known.clone(), settings.ik.clone())?;
+        let updater =
+            ParameterUpdater::new(model.n_q(), settings.gains, 1.0 / settings.control_rate_hz)?;
+        let commanded_pa = if known.pressures_pa.is_empty() {
+            vec![0.0; model.n_pressures()]
+        } else {
+            known.pressures_pa.clone()
+        };
+        Ok(ClosedLoop {
+            model,
+            known,
+            marker_s_m: marker_s_m.to_vec(),
+            settings,
+            ik,
+            updater,
+            last_good: None,
+            commanded_pa,
+            virtual_payload: None,
+        })
+    }
+
+    /// Subtracts `vp` (keyed by the desired end-effector position) from every
+    /// estimate before the updater: the loop then feeds forward the real
+    /// payload only.
+    pub fn with_virtual_payload(mut self, vp: VirtualPayload) -> Self {
+        self.virtual_payload = Some(vp);
+        self
+    }
+
+    /// The settings (the estimator's `alpha` is set once chosen).
+    pub fn settings(&self) -> &LoopSettings {
+        &self.settings
+    }
+
+    /// The control interval (s).
+    pub fn dt_s(&self) -> f64 {
+        1.0 / self.settings.control_rate_hz
+    }
+
+    /// The updater's current `F̂`.
+    pub fn f_hat(&self) -> &[f64] {
+        self.updater.estimate()
+    }
+
+    /// Resultant `∫ w dX` of a distributed load field `f` on the model (N).
+    pub fn resultant(&self, f: &[f64]) -> Vec<f64> {
+        let d = E::DIM;
+        let Ok(g) = self.model.apply_load_gram(f) else {
+            return vec![f64::NAN; d];
+        };
+        // the generalized force's position rows sum to ∫ w dX
+        let nd = E::NODE_DOFS;
+        (0..d).map(|k| g.iter().skip(k).step_by(nd).sum()).collect()
+    }
+
+    /// The estimator's `F̄` from the markers of `frame`; `(F̄, flag)` with
+    /// the last good one kept on a failure (zeros before any).
+    fn estimate(&mut self, frame: &crate::plant::MarkerFrame) -> (Vec<f64>, EstimateFlag) {
+        let keep = |s: &Self, status| {
+            let f = s
+                .last_good
+                .clone()
+                .unwrap_or_else(|| vec![0.0; s.model.n_q()]);
+            (f, EstimateFlag::KeptLast { status })
+        };
+        let obs = match frame.observation(&self.marker_s_m) {
+            Ok(o) => o,
+            Err(_) => return keep(self, None),
+        };
+        let est = adapter::estimator_at(
+            &self.model,
+            &self.known,
+            &self.commanded_pa,
+            &self.settings.estimator,
+        )
+        .and_then(|mut e| {
+            let r = e.step(&obs);
+            if self.settings.estimator.alpha.is_none() {
+                self.settings.estimator.alpha = e.alpha();
+            }
+            r
+        });
+        match est {
+            Ok(e) if e.report.status.is_converged() && e.f.iter().all(|v| v.is_finite()) => {
+                self.last_good = Some(e.f.clone());
+                (e.f, EstimateFlag::Converged)
+            }
+            Ok(e) => keep(self, Some(e.report.status)),
+            Err(_) => keep(self, None),
+        }
+    }
+
+    /// One control instant: the markers `frame` (taken at the time whose
+    /// desired position is `x_now`) in, the pressures for the interval
+    /// ending at `x_next` out (in the sample, and kept as the command the
+    /// next estimate assumes). The caller sends them to the plant.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for targets of the wrong dimension; the
+    /// inverse kinematics' errors (no equilibrium found). An estimator
+    /// failure is not an error: the sample's `estimate` says so.
+    pub fn control_step(
+        &mut self,
+        frame: &crate::plant::MarkerFrame,
+        x_now: &[f64],
+        x_next: &[f64],
+    ) -> Result<LoopSample> {
+        check_len("x_d", E::DIM, x_now.len())?;
+        let start = Instant::now();
+        let zeros = vec![0.0; self.model.n_q()];
+        let (f_bar, flag, f_hat) = match self.settings.controller {
+            ControllerKind::Ff => (zeros.clone(), EstimateFlag::NotRun, zeros),
+            ControllerKind::FfUpdater => {
+                let (mut f_bar, flag) = self.estimate(frame);
+                if let Some(vp) = &self.virtual_payload {
+                    if let Ok(f) = vp.subtract(x_now, &f_bar) {
+                        f_bar = f;
+                    }
+                }
+                let f_hat = self.updater.step(&f_bar)?.to_vec();
+                (f_bar, flag, f_hat)
+            }
+        };
+        let sol = self.ik.solve(x_next, &f_hat)?;
+        let step_time_s = start.elapsed().as_secs_f64();
+        self.commanded_pa.clone_from(&sol.pressures_pa);
+        Ok(LoopSample {
+            time_s: frame.time_s,
+            desired_m: x_now.to_vec(),
+            measured_tip_m: frame.positions_m.last().cloned().unwrap_or_default(),
+            true_tip_m: None,
+            f_bar_resultant_n: self.resultant(&f_bar),
+            f_bar,
+            f_hat_resultant_n: self.resultant(&f_hat),
+            pressures_pa: sol.pressures_pa,
+            ik: sol.status,
+            estimate: flag,
+            step_time_s,
+        })
+    }
+
+    /// The pressures last commanded (Pa).
+    pub fn commanded_pa(&self) -> &[f64] {
+        &self.commanded_pa
+    }
+
+    /// Runs the loop on `plant` along `trajectory`, from its start to its
+    /// end at the control rate; `inspect` is called on the plant after
+    /// every frame and may return the true tip for scoring (it must not
+    /// feed the controller).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for an invalid trajectory (naming its
+    /// field) or one of another dimension than the robot; the plant's
+    /// errors; the inverse kinematics' errors (no equilibrium found).
+    pub fn run<P: Plant>(
+        &mut self,
+        plant: &mut P,
+        trajectory: &Trajectory,
+        mut inspect: impl FnMut(&P) -> Option<Vec<f64>>,
+    ) -> Result<TimeSeries> {
+        trajectory.validate()?;
+        check_len("trajectory.points_m[0]", E::DIM, trajectory.dim())?;
+        check_len(
+            "plant pressures",
+            self.model.n_pressures(),
+            plant.n_pressures(),
+        )?;
+        let dt = self.dt_s();
+        let t0 = trajectory.times_s[0];
+        let n = ((trajectory.end_s() - t0) / dt).floor().min(1e7) as usize;
+        let zeros = vec![0.0; self.model.n_q()];
+        // the first command: the start point, nothing estimated yet
+        let first = self.ik.solve(&trajectory.at(t0), &zeros)?;
+        self.commanded_pa.clone_from(&first.pressures_pa);
+        plant.command(&self.commanded_pa)?;
+        let mut series = TimeSeries::default();
+        for k in 1..=n {
+            let frame = plant.advance(dt)?;
+            let t = t0 + k as f64 * dt;
+            let true_tip_m = inspect(plant);
+            let mut sample =
+                self.control_step(&frame, &trajectory.at(t), &trajectory.at(t + dt))?;
+            sample.time_s = t;
+            sample.true_tip_m = true_tip_m;
+            plant.command(&self.commanded_pa)?;
+            series.samples.push(sample);
+        }
+        Ok(series)
+    }
+}

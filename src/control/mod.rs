@@ -1,0 +1,31 @@
+//! Control of the planar robot (Sec. IV): feedforward inverse kinematics
+//! with the estimated load, the parameter updater (31), the virtual payload
+//! (Fig. 5) and the closed loop
+//!
+//! ```text
+//! plant markers → estimator (F̄) → updater (31) (F̂) → f_IK(x_d, F̂) → pressures → plant
+//! ```
+//!
+//! - [`InverseKinematics`]: `f_IK(x_d, F̂)`, equilibrium (17) plus "end
+//!   effector at `x_d`" by Newton in the pressure bounds, redundancy by
+//!   minimum `Σ P̂²`, unreachable targets reported.
+//! - [`ParameterUpdater`]: (31), exact at the control rate.
+//! - [`VirtualPayload`]: the load estimated on a payload-free run, as a
+//!   function of the configuration, to subtract.
+//! - [`ClosedLoop`]: one controller stepping against a [`crate::plant::Plant`].
+
+mod adapter;
+mod boxqp;
+mod closed_loop;
+mod ik;
+mod trajectory;
+mod updater;
+mod virtual_payload;
+
+pub use closed_loop::{
+    ClosedLoop, ControllerKind, EstimateFlag, LoopSample, LoopSettings, TimeSeries,
+};
+pub use ik::{IkSettings, IkSolution, IkStatus, InverseKinematics, PressureBound};
+pub use trajectory::Trajectory;
+pub use updater::{ParameterUpdater, UpdaterGains};
+pub use virtual_payload::VirtualPayload;
