@@ -31,10 +31,8 @@ pub(crate) fn dq_dp<E: Element>(
 /// The estimator of `settings.backend` for `robot` under the known loads
 /// `known` at the chamber pressures `pressures_pa`.
 ///
-/// The estimators take their known loads, pressures included, when they are
-/// built, and have no call to change them; a loop whose pressures change
-/// every step therefore builds one per step (and loses the warm start of
-/// `(F, q)`; `α` is kept by the caller through `settings.alpha`).
+/// The loop builds it once and replaces its known pressures each step with
+/// [`Estimator::set_known_loads`], keeping the warm start `(F, q)` and `α`.
 pub(crate) fn estimator_at<E: Element + 'static>(
     robot: &Robot<E>,
     known: &Loads,

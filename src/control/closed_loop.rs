@@ -197,6 +197,22 @@ pub struct ClosedLoop<E: Element> {
     last_good: Option<Vec<f64>>,
     commanded_pa: Vec<f64>,
     virtual_payload: Option<VirtualPayload>,
+    /// The estimator, built on the first frame and kept warm after (its
+    /// known pressures replaced each step).
+    estimator: EstimatorSlot,
+}
+
+/// The loop's estimator (`None` until the first frame).
+#[derive(Default)]
+struct EstimatorSlot(Option<Box<dyn crate::estimate::Estimator>>);
+
+impl std::fmt::Debug for EstimatorSlot {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.0 {
+            Some(e) => write!(f, "EstimatorSlot({:?}, alpha {:?})", e.backend(), e.alpha()),
+            None => f.write_str("EstimatorSlot(None)"),
+        }
+    }
 }
 
 impl<E: Element + 'static> ClosedLoop<E> {
@@ -239,6 +255,7 @@ impl<E: Element + 'static> ClosedLoop<E> {
             last_good: None,
             commanded_pa,
             virtual_payload: None,
+            estimator: EstimatorSlot::default(),
         })
     }
 
@@ -290,18 +307,30 @@ impl<E: Element + 'static> ClosedLoop<E> {
             Ok(o) => o,
             Err(_) => return keep(self, None),
         };
-        let est = adapter::estimator_at(
-            &self.model,
-            &self.known,
-            &self.commanded_pa,
-            &self.settings.estimator,
-        )
-        .and_then(|mut e| {
-            let r = e.step(&obs);
-            if self.settings.estimator.alpha.is_none() {
-                self.settings.estimator.alpha = e.alpha();
+        // built once, then warm: only the commanded pressures change
+        let ready = match self.estimator.0.as_mut() {
+            Some(e) => {
+                let mut known = self.known.clone();
+                known.pressures_pa.clone_from(&self.commanded_pa);
+                e.set_known_loads(known)
             }
-            r
+            None => adapter::estimator_at(
+                &self.model,
+                &self.known,
+                &self.commanded_pa,
+                &self.settings.estimator,
+            )
+            .map(|e| self.estimator.0 = Some(e)),
+        };
+        let est = ready.and_then(|()| match self.estimator.0.as_mut() {
+            Some(e) => {
+                let r = e.step(&obs);
+                if self.settings.estimator.alpha.is_none() {
+                    self.settings.estimator.alpha = e.alpha();
+                }
+                r
+            }
+            None => Err(Error::invalid("estimator", "none", "not built")),
         });
         match est {
             Ok(e) if e.report.status.is_converged() && e.f.iter().all(|v| v.is_finite()) => {

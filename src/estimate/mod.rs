@@ -560,4 +560,12 @@ pub trait Estimator {
     fn alpha(&self) -> Option<f64>;
     /// Forgets the warm start (and an automatically chosen `α`).
     fn reset(&mut self);
+    /// Replaces the known loads (a controller's commanded pressures, a
+    /// payload it was told about), keeping the warm start `(F, q)` and `α`:
+    /// the next step starts from the last estimate, re-solved under the new
+    /// loads, instead of from scratch.
+    ///
+    /// # Errors
+    /// As [`Robot::validate_loads`]; on an error the estimator is unchanged.
+    fn set_known_loads(&mut self, known: Loads) -> Result<()>;
 }

@@ -363,4 +363,10 @@ impl<E: Element + 'static> Estimator for NewtonEstimator<E> {
         self.stream.reset();
         self.derivs_cache = None;
     }
+
+    fn set_known_loads(&mut self, known: Loads) -> Result<()> {
+        self.stream.problem.tracker().set_known(known)?;
+        self.derivs_cache = None;
+        Ok(())
+    }
 }

@@ -287,6 +287,37 @@ impl<E: Element> EquilibriumTracker<E> {
         self.state = None;
     }
 
+    /// Replaces the known loads (for example the pressures a controller
+    /// commanded): the robot, the settings and the linear solver's analysis
+    /// stay; the kept factors and the last equilibrium, which were taken
+    /// under the old loads, are dropped.
+    ///
+    /// # Errors
+    /// As [`Robot::validate_loads`] and [`Robot::dead_force`]; on an error
+    /// the tracker is unchanged.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{scene::Scene, statics::{EquilibriumTracker, StaticSettings}};
+    /// let scene = Scene::two_section();
+    /// let mut tracker = EquilibriumTracker::new(scene.robot()?, scene.loads()?, StaticSettings::default())?;
+    /// let mut known = scene.loads()?;
+    /// known.pressures_pa[0] += 1e3;
+    /// tracker.set_known(known.clone())?;
+    /// assert_eq!(tracker.known(), &known);
+    /// known.pressures_pa[0] = f64::NAN;
+    /// assert!(tracker.set_known(known).is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn set_known(&mut self, known: Loads) -> Result<()> {
+        self.robot.validate_loads(&known)?;
+        let dead_known = self.robot.dead_force(&known)?;
+        self.known = known;
+        self.dead_known = dead_known;
+        self.forget();
+        Ok(())
+    }
+
     /// The equilibrium at `F` from `q0`: chord steps with the kept factors,
     /// then plain Newton steps, then the globalized [`StaticSolver`].
     ///

@@ -656,4 +656,8 @@ impl<E: Element + 'static> Estimator for SqpEstimator<E> {
     fn reset(&mut self) {
         self.stream.reset();
     }
+
+    fn set_known_loads(&mut self, known: Loads) -> Result<()> {
+        self.stream.problem.tracker().set_known(known)
+    }
 }
