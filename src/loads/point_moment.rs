@@ -15,7 +15,7 @@
 //! derivatives in `v`. At a node (`ξ` = 0 or 1) `A` picks that node and the
 //! load is exactly a moment at the node. The map needs a cable's node layout
 //! (`NODE_DOFS = 2 DIM`, `[r, r']`); other layouts are refused by
-//! [`crate::structure::Rod::validate_loads`].
+//! when the loads are validated.
 
 use crate::element::{ArcPoint, NodeKinematics};
 
