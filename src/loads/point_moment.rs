@@ -14,7 +14,7 @@
 //! with the node kernel [`NodeKinematics::add_moment_work`] supplying the
 //! derivatives in `v`. At a node (`ξ` = 0 or 1) `A` picks that node and the
 //! load is exactly a moment at the node. The map needs a cable's node layout
-//! (`NODE_DOFS = 2 DIM`, `[r, r']`); other layouts are refused by
+//! (`NODE_DOFS = 2 DIM`, `[r, r']`); other layouts are refused
 //! when the loads are validated.
 
 use crate::element::{ArcPoint, NodeKinematics};
