@@ -333,3 +333,34 @@ fn scene_moment_load_and_its_refusals() {
         assert_eq!(err.field(), Some(field), "{load}: {err}");
     }
 }
+
+/// A structure does not assemble moments at arc positions yet: it refuses
+/// them, naming the field, instead of ignoring them.
+#[test]
+fn a_structure_refuses_moments_at_arc_positions() {
+    use softrod::structure::{RodSpec, StructureLoads, StructureSpec};
+    let s = StructureSpec::new(
+        vec![RodSpec::clamped(
+            vec![Section::uniform(0.2, EA, EI, 4)],
+            vec![0.0, 0.0],
+            vec![1.0, 0.0],
+        )],
+        vec![],
+        vec![],
+    )
+    .build_planar()
+    .unwrap();
+    let loads = StructureLoads {
+        rods: vec![Loads {
+            point_moments: vec![PointMoment {
+                s_m: 0.1,
+                moment_nm: vec![0.01],
+            }],
+            ..Loads::default()
+        }],
+        ..StructureLoads::default()
+    };
+    let err = s.validate_loads(&loads).unwrap_err();
+    assert_eq!(err.field(), Some("loads.rods[0].point_moments"), "{err}");
+    assert!(s.dead_force(&loads).is_err());
+}
