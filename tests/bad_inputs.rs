@@ -350,6 +350,94 @@ fn cases() -> Vec<Case> {
             "loads[0].w_start_n_per_m[0]",
         ),
         case(
+            "infinite moment at an arc position",
+            move || {
+                scene_load(SceneLoad::Moment {
+                    s_m: 0.1,
+                    moment_nm: inf.into(),
+                })
+            },
+            Invalid,
+            "loads[0].moment_nm",
+        ),
+        case(
+            "moment at the clamped base",
+            move || {
+                scene_load(SceneLoad::Moment {
+                    s_m: 0.0,
+                    moment_nm: 0.01.into(),
+                })
+            },
+            Invalid,
+            "loads[0].s_m",
+        ),
+        case(
+            "moment off the robot",
+            move || {
+                scene_load(SceneLoad::Moment {
+                    s_m: 0.25,
+                    moment_nm: 0.01.into(),
+                })
+            },
+            Invalid,
+            "loads[0].s_m",
+        ),
+        case(
+            "table with arc positions out of order",
+            move || {
+                scene_load(SceneLoad::Distributed(LineLoad::Tabulated {
+                    s_m: vec![0.0, 0.2, 0.1],
+                    w_n_per_m: vec![vec![0.0, 1.0]; 3],
+                }))
+            },
+            Invalid,
+            "loads[0].s_m[2]",
+        ),
+        case(
+            "table reaching beyond the tip",
+            move || {
+                scene_load(SceneLoad::Distributed(LineLoad::Tabulated {
+                    s_m: vec![0.0, 0.1, 0.3],
+                    w_n_per_m: vec![vec![0.0, 1.0]; 3],
+                }))
+            },
+            Invalid,
+            "loads[0].s_m[2]",
+        ),
+        case(
+            "NaN table value",
+            move || {
+                scene_load(SceneLoad::Distributed(LineLoad::Tabulated {
+                    s_m: vec![0.0, 0.1],
+                    w_n_per_m: vec![vec![0.0, 1.0], vec![nan, 0.0]],
+                }))
+            },
+            Invalid,
+            "loads[0].w_n_per_m[1][0]",
+        ),
+        case(
+            "table of one entry",
+            move || {
+                scene_load(SceneLoad::Distributed(LineLoad::Tabulated {
+                    s_m: vec![0.1],
+                    w_n_per_m: vec![vec![0.0, 1.0]],
+                }))
+            },
+            Invalid,
+            "loads[0].s_m",
+        ),
+        case(
+            "table value of the wrong size",
+            move || {
+                scene_load(SceneLoad::Distributed(LineLoad::Tabulated {
+                    s_m: vec![0.0, 0.1],
+                    w_n_per_m: vec![vec![0.0, 1.0], vec![0.0, 1.0, 2.0]],
+                }))
+            },
+            Dim,
+            "loads[0].w_n_per_m[1]",
+        ),
+        case(
             "NaN extra-weight gravity",
             move || {
                 scene_load(SceneLoad::SelfWeight {

@@ -389,7 +389,7 @@ impl<E: Element> Robot<E> {
     /// base, and pressures outside their bounds; [`crate::Error::IndexOutOfRange`]
     /// for moments beyond the tip node.
     pub fn validate_loads(&self, loads: &Loads) -> Result<()> {
-        self.rod.validate_loads_with(loads, true)
+        self.rod.validate_robot_loads(loads)
     }
 
     /// The dead (configuration-independent) generalized forces over all
@@ -561,7 +561,19 @@ impl<E: Element> Robot<E> {
                 self.scatter_stiffness(node * nd, nd, mh, -1.0, &mut **k)?;
             }
             Ok(())
-        })
+        })?;
+        // moments at arc positions: on the two nodes of their element
+        let hessian = k.is_some();
+        self.rod
+            .for_each_point_moment(&self.base_node, q, loads, hessian, |e, g, h| {
+                if let Some((_, out)) = residual.as_mut() {
+                    self.scatter_force(e * nd, g, 1.0, out)?;
+                }
+                if let Some(k) = k.as_mut() {
+                    self.scatter_stiffness(e * nd, edof, h, -1.0, &mut **k)?;
+                }
+                Ok(())
+            })
     }
 
     /// Adds `sign · Tᵀ g` for a vector `g` over the coordinates
@@ -694,6 +706,9 @@ impl<E: Element> Robot<E> {
             d -= E::moment_work_between(&self.base_node, &from[r.clone()], &to[r], m);
             Ok(())
         })?;
+        d -= self
+            .rod
+            .point_moment_work_between(&self.base_node, from, to, loads)?;
         Ok(d)
     }
 
@@ -722,7 +737,11 @@ impl<E: Element> Robot<E> {
                 &mut mh,
             );
             self.scatter_force(node * nd, mg, 1.0, out)
-        })
+        })?;
+        self.rod
+            .for_each_point_moment(&self.base_node, q, loads, false, |e, g, _| {
+                self.scatter_force(e * nd, g, 1.0, out)
+            })
     }
 
     /// Node positions `r_i` (m), one `DIM` vector per node of `q` (a

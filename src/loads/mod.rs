@@ -9,6 +9,7 @@
 //! `q`.
 
 pub mod force_field;
+pub(crate) mod point_moment;
 
 use serde::{Deserialize, Serialize};
 
@@ -22,6 +23,10 @@ use crate::error::{check_all_finite, check_finite, check_positive, Error, Result
 /// use softrod::loads::LineLoad;
 /// let w = LineLoad::Linear { w_start_n_per_m: vec![0.0, 0.0], w_end_n_per_m: vec![0.0, -2.0] };
 /// assert_eq!(w.at(0.5, 1.0), vec![0.0, -1.0]);
+/// // a table: -2 N/m at 0.1 m falling linearly to 0 at 0.2 m, nothing elsewhere
+/// let t = LineLoad::Tabulated { s_m: vec![0.1, 0.2], w_n_per_m: vec![vec![0.0, -2.0], vec![0.0, 0.0]] };
+/// assert!((t.at(0.15, 0.24)[1] + 1.0).abs() < 1e-15);
+/// assert_eq!(t.at(0.05, 0.24), vec![0.0, 0.0]);
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "profile", rename_all = "snake_case", deny_unknown_fields)]
@@ -47,6 +52,18 @@ pub enum LineLoad {
         /// Width `σ` (m).
         width_m: f64,
     },
+    /// A table: load per length `w_n_per_m[k]` at arc coordinate `s_m[k]`,
+    /// linear in `X` between neighbouring entries and zero outside
+    /// `[s_m[0], s_m[last]]` (a table that covers the whole robot starts
+    /// at 0 and ends at its length). At least two entries, `s_m` strictly
+    /// increasing and on the robot. Its generalized forces are integrated
+    /// exactly (each element is split at the table's arc positions).
+    Tabulated {
+        /// Arc coordinates of the entries (m, strictly increasing).
+        s_m: Vec<f64>,
+        /// Load per length at each entry (N/m, one vector per entry).
+        w_n_per_m: Vec<Vec<f64>>,
+    },
 }
 
 impl LineLoad {
@@ -69,6 +86,33 @@ impl LineLoad {
                 let g = (-(x - center_m).powi(2) / (2.0 * width_m * width_m)).exp();
                 amplitude_n_per_m.iter().map(|a| a * g).collect()
             }
+            LineLoad::Tabulated { s_m, w_n_per_m } => {
+                let zero = || vec![0.0; w_n_per_m.first().map_or(0, Vec::len)];
+                // the entry at or before x; none before the first or after the last
+                let k = s_m.partition_point(|&s| s <= x);
+                let (Some(k), Some(&last)) = (k.checked_sub(1), s_m.last()) else {
+                    return zero();
+                };
+                let Some(a) = w_n_per_m.get(k).filter(|_| x <= last) else {
+                    return zero();
+                };
+                match (s_m.get(k + 1), w_n_per_m.get(k + 1)) {
+                    (Some(s1), Some(b)) => {
+                        let t = (x - s_m[k]) / (s1 - s_m[k]);
+                        a.iter().zip(b).map(|(a, b)| a + t * (b - a)).collect()
+                    }
+                    _ => a.clone(),
+                }
+            }
+        }
+    }
+
+    /// The arc coordinates where the load's profile has a kink or a jump
+    /// (m): a table's entries; none for the smooth profiles.
+    pub fn breakpoints(&self) -> &[f64] {
+        match self {
+            LineLoad::Tabulated { s_m, .. } => s_m,
+            _ => &[],
         }
     }
 
@@ -109,7 +153,61 @@ impl LineLoad {
                 check_finite(&path("center_m"), *center_m)?;
                 check_positive(&path("width_m"), *width_m)
             }
+            LineLoad::Tabulated { s_m, w_n_per_m } => {
+                if s_m.len() < 2 {
+                    return Err(Error::invalid(
+                        path("s_m"),
+                        format!("{s_m:?}"),
+                        "a table needs at least two entries",
+                    ));
+                }
+                crate::error::check_len(&path("w_n_per_m"), s_m.len(), w_n_per_m.len())?;
+                for (k, s) in s_m.iter().enumerate() {
+                    let n = path(&format!("s_m[{k}]"));
+                    check_finite(&n, *s)?;
+                    if k > 0 && *s <= s_m[k - 1] {
+                        return Err(Error::invalid(
+                            n,
+                            s,
+                            format!("must be greater than the entry before, {} m", s_m[k - 1]),
+                        ));
+                    }
+                }
+                for (k, w) in w_n_per_m.iter().enumerate() {
+                    vec(&format!("w_n_per_m[{k}]"), w)?;
+                }
+                Ok(())
+            }
         }
+    }
+
+    /// Checks that a table's arc positions lie on a robot of length
+    /// `total` (m); errors name `name.s_m[k]` (or `s_m[k]`). Other profiles
+    /// pass.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for an arc position off `[0, total]`
+    /// (beyond a relative `1e-12`).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::loads::LineLoad;
+    /// let t = LineLoad::Tabulated { s_m: vec![0.0, 0.3], w_n_per_m: vec![vec![0.0, 1.0]; 2] };
+    /// assert_eq!(t.check_on_robot("line_loads[0]", 0.24).unwrap_err().field(), Some("line_loads[0].s_m[1]"));
+    /// ```
+    pub fn check_on_robot(&self, name: &str, total: f64) -> Result<()> {
+        let tol = 1e-12 * total;
+        for (k, s) in self.breakpoints().iter().enumerate() {
+            if !(*s >= -tol && *s <= total + tol) {
+                let field = if name.is_empty() {
+                    format!("s_m[{k}]")
+                } else {
+                    format!("{name}.s_m[{k}]")
+                };
+                return Err(outside(&field, *s, total));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -144,6 +242,37 @@ pub struct NodeMoment {
     pub moment_nm: Vec<f64>,
 }
 
+/// A dead concentrated moment at an arc position of the backbone.
+///
+/// It does the work `W = M · θ(s)`, `θ(s)` the rotation of the backbone's
+/// tangent at `s` from the clamp's direction (in 2-D the angle of `r'(s)`,
+/// in 3-D the rotation vector of the smallest rotation; a cable has no
+/// torsion, so a component along the reference tangent does no work). At a
+/// node this is the same load as a [`NodeMoment`] there; between nodes the
+/// tangent `r'(s)` is interpolated by the cubic Hermite functions, so the
+/// moment acts on the element's two nodes. On a clamped robot it must lie
+/// beyond the base (`s_m > 0`). Accuracy: the bending moment jumps at `s`;
+/// with a node there the equilibrium converges as fast as for a moment at
+/// a node (fourth order in the element length), inside an element at first
+/// order (the cubic cannot follow the jump of curvature inside it).
+///
+/// # Example
+/// ```
+/// use softrod::loads::{Loads, PointMoment};
+/// let loads = Loads { point_moments: vec![PointMoment { s_m: 0.1, moment_nm: vec![0.01] }],
+///     ..Loads::default() };
+/// assert_eq!(loads.scaled(2.0).point_moments[0].moment_nm, vec![0.02]);
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointMoment {
+    /// Undeformed arc coordinate of the point (m, 0 at the base).
+    pub s_m: f64,
+    /// Moment (N·m; one component in 2-D, counter-clockwise positive; three
+    /// in world axes in 3-D).
+    pub moment_nm: Vec<f64>,
+}
+
 /// Everything that loads the robot in one static solve besides its weight.
 ///
 /// # Example
@@ -171,6 +300,9 @@ pub struct Loads {
     /// Known concentrated moments at nodes.
     #[serde(default)]
     pub node_moments: Vec<NodeMoment>,
+    /// Known concentrated moments at arc positions.
+    #[serde(default)]
+    pub point_moments: Vec<PointMoment>,
 }
 
 impl Loads {
@@ -203,6 +335,10 @@ impl Loads {
                         center_m: *center_m,
                         width_m: *width_m,
                     },
+                    LineLoad::Tabulated { s_m, w_n_per_m } => LineLoad::Tabulated {
+                        s_m: s_m.clone(),
+                        w_n_per_m: w_n_per_m.iter().map(|w| sc(w)).collect(),
+                    },
                 })
                 .collect(),
             point_forces: self
@@ -218,6 +354,14 @@ impl Loads {
                 .iter()
                 .map(|m| NodeMoment {
                     node: m.node,
+                    moment_nm: sc(&m.moment_nm),
+                })
+                .collect(),
+            point_moments: self
+                .point_moments
+                .iter()
+                .map(|m| PointMoment {
+                    s_m: m.s_m,
                     moment_nm: sc(&m.moment_nm),
                 })
                 .collect(),

@@ -23,7 +23,8 @@ use crate::loads::LineLoad;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum SceneLoad {
-    /// A distributed load with a profile (`uniform`, `linear`, `gaussian`).
+    /// A distributed load with a profile (`uniform`, `linear`, `gaussian`,
+    /// `tabulated`).
     Distributed(LineLoad),
     /// A force at the tip (N).
     TipForce {
@@ -47,6 +48,16 @@ pub enum SceneLoad {
     NodeMoment {
         /// Node index (1 ..= number of elements).
         node: usize,
+        /// Moment (N·m, as for `tip_moment`).
+        moment_nm: MomentNm,
+    },
+    /// A concentrated moment at arc coordinate `s_m` (N·m), anywhere on the
+    /// robot beyond the clamped base (between nodes it acts on the
+    /// element's two nodes through the interpolated tangent; see
+    /// [`crate::loads::PointMoment`]).
+    Moment {
+        /// Arc coordinate (m, > 0).
+        s_m: f64,
         /// Moment (N·m, as for `tip_moment`).
         moment_nm: MomentNm,
     },
@@ -182,6 +193,7 @@ pub(super) fn validate_scene_load<E: Element>(robot: &Robot<E>, load: &SceneLoad
     match load {
         SceneLoad::Distributed(l) => {
             l.validate("", d)?;
+            l.check_on_robot("", robot.length())?;
             match l {
                 // a bump centred off the robot acts only through its tail:
                 // almost surely a typo (a length in mm, the wrong section)
@@ -205,6 +217,18 @@ pub(super) fn validate_scene_load<E: Element>(robot: &Robot<E>, load: &SceneLoad
                     "node",
                     0,
                     "the clamped base takes no moment: must be a free node, >= 1",
+                ));
+            }
+            Ok(())
+        }
+        SceneLoad::Moment { s_m, moment_nm } => {
+            moment_nm.validate("moment_nm", E::MOMENT_DIM)?;
+            robot.locate("s_m", *s_m)?;
+            if *s_m <= 0.0 {
+                return Err(Error::invalid(
+                    "s_m",
+                    s_m,
+                    "the clamped base takes no moment: must be > 0",
                 ));
             }
             Ok(())

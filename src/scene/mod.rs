@@ -16,7 +16,7 @@ use crate::assembly::{Base, Chamber, Robot, RobotSpec, Section};
 use crate::element::{Element, NodeKinematics, PlanarCable, SpatialCable, DEFAULT_GAUSS_POINTS};
 use crate::error::{check_at_most, check_index, check_len, check_positive, Error, Result};
 use crate::estimate::{EstimatorSettings, LoadModel};
-use crate::loads::{LineLoad, Loads, NodeMoment, PointForce};
+use crate::loads::{LineLoad, Loads, NodeMoment, PointForce, PointMoment};
 use crate::params;
 
 pub use ladder::Ladder;
@@ -637,6 +637,10 @@ impl Scene {
                 }),
                 SceneLoad::NodeMoment { node, moment_nm } => loads.node_moments.push(NodeMoment {
                     node: *node,
+                    moment_nm: moment_nm.components(),
+                }),
+                SceneLoad::Moment { s_m, moment_nm } => loads.point_moments.push(PointMoment {
+                    s_m: *s_m,
                     moment_nm: moment_nm.components(),
                 }),
                 SceneLoad::SelfWeight {

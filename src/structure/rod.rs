@@ -22,6 +22,8 @@ use crate::quadrature::GaussRule;
 
 pub use super::section::{Chamber, Section};
 
+mod arc_loads;
+
 /// The largest number of elements a robot (or all rods of a structure) may
 /// have; larger requests are refused before anything is allocated.
 pub const MAX_ELEMENTS: usize = 200_000;
@@ -590,12 +592,33 @@ impl<E: Element> Rod<E> {
     /// for non-finite values, points off the rod and pressures outside their
     /// bounds; [`Error::IndexOutOfRange`] for moments beyond the last node.
     pub fn validate_loads(&self, loads: &Loads) -> Result<()> {
-        self.validate_loads_with(loads, false)
+        self.validate_all_loads(loads, false)
     }
 
-    /// [`Rod::validate_loads`], refusing moments at node 0 if
-    /// `clamped_start` (a clamp takes them: they are a user's mistake).
+    /// [`Rod::validate_loads`] for a rod of a [`super::Structure`],
+    /// refusing moments at node 0 if `clamped_start` (a clamp takes them:
+    /// they are a user's mistake). A structure does not assemble moments at
+    /// arc positions yet: `point_moments` are refused, not ignored.
     pub(crate) fn validate_loads_with(&self, loads: &Loads, clamped_start: bool) -> Result<()> {
+        self.validate_all_loads(loads, clamped_start)?;
+        if !loads.point_moments.is_empty() {
+            return Err(Error::invalid(
+                "point_moments",
+                format!("{} moments", loads.point_moments.len()),
+                "moments at arc positions are assembled on a robot only, not yet in a structure: \
+                 use node_moments",
+            ));
+        }
+        Ok(())
+    }
+
+    /// [`Rod::validate_loads`] for the rod of a clamped
+    /// [`crate::assembly::Robot`]: moments at the base refused.
+    pub(crate) fn validate_robot_loads(&self, loads: &Loads) -> Result<()> {
+        self.validate_all_loads(loads, true)
+    }
+
+    fn validate_all_loads(&self, loads: &Loads, clamped_start: bool) -> Result<()> {
         let d = E::DIM;
         self.check_load_structure(loads)?;
         check_all_finite("pressures_pa", &loads.pressures_pa)?;
@@ -614,6 +637,7 @@ impl<E: Element> Rod<E> {
         }
         for (i, l) in loads.line_loads.iter().enumerate() {
             l.validate(&format!("line_loads[{i}]"), d)?;
+            l.check_on_robot(&format!("line_loads[{i}]"), self.length())?;
         }
         for (i, p) in loads.point_forces.iter().enumerate() {
             check_len(&format!("point_forces[{i}].force_n"), d, p.force_n.len())?;
@@ -630,7 +654,7 @@ impl<E: Element> Rod<E> {
                 ));
             }
         }
-        Ok(())
+        self.validate_point_moments(loads, clamped_start)
     }
     /// The checks of [`Rod::validate_loads`] that indexing depends on (the
     /// pressure count, the nodes and sizes of the moments), without the
@@ -652,7 +676,7 @@ impl<E: Element> Rod<E> {
                 check_index(&format!("node_moments[{i}].node"), m.node, self.n_nodes())?;
             }
         }
-        Ok(())
+        self.check_point_moment_structure(loads)
     }
     /// The dead (configuration-independent) generalized forces over all
     /// coordinates: self-weight, line loads, point forces and `J_QF F` (N).
@@ -664,15 +688,8 @@ impl<E: Element> Rod<E> {
         self.validate_loads(loads)?;
         let nd = E::NODE_DOFS;
         let mut f = self.gravity_force.clone();
-        let total = self.length();
         for l in &loads.line_loads {
-            for (e, el) in self.elements.iter().enumerate() {
-                let le = el.length();
-                for (xi, wt) in self.line_rule.iter() {
-                    let w = l.at(self.node_s[e] + xi * le, total);
-                    add_shape_force(el, xi, &w, wt * le, &mut f[e * nd..(e + 2) * nd]);
-                }
-            }
+            self.add_line_load(l, &mut f);
         }
         for p in &loads.point_forces {
             let (e, xi) = self.locate("s_m", p.s_m)?;
