@@ -19,7 +19,10 @@ use softrod::element::{PlanarCable, SpatialCable};
 use softrod::estimate::{
     Backend, BoundFrame, EstimatorSettings, LoadBound, MarkerObservation, Observation,
 };
-use softrod::linsolve::BandedMatrix;
+use softrod::linsolve::{
+    AutoSolver, BandedMatrix, FactorOptions, Factorization, SymmetricMatrix, SymmetricPattern,
+    TangentSolver,
+};
 use softrod::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use softrod::quadrature::GaussRule;
 use softrod::scene::{Marker, RefinementTarget, Scene, SceneLoad};
@@ -905,11 +908,15 @@ fn cases() -> Vec<Case> {
         ),
         // --- low-level API with wrong sizes ---
         case(
-            "LU solve with a short right-hand side",
+            "sparse solve with a short right-hand side",
             || {
-                let mut a = BandedMatrix::zeros(3, 1, 1);
-                (0..3).for_each(|i| a.add(i, i, 1.0));
-                a.factor("t")?.solve_in_place(&mut [1.0, 2.0])
+                let p = std::sync::Arc::new(SymmetricPattern::from_elements(3, &[vec![0, 1, 2]])?);
+                let mut k = SymmetricMatrix::zeros(p.clone());
+                for i in 0..3 {
+                    k.add(i, i, 1.0)?;
+                }
+                let f = AutoSolver::analyze(&p)?.factor(&k, FactorOptions::default())?;
+                Ok(f.solve_in_place(&mut [1.0, 2.0])?)
             },
             Dim,
             "b",

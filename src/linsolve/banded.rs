@@ -1,28 +1,16 @@
-//! Banded matrices, their `L D Lᵀ` factorization (symmetric) and their LU
-//! factorization with partial pivoting.
+//! Banded matrices: the storage of the load Gram matrix `∫ Sᵀ S dX` and a
+//! tangent target for element-level tests.
 //!
-//! The tangent stiffness of a cable is block-tridiagonal in the nodes: with
-//! `b` coordinates per node it is banded with `kl = ku = 2b - 1`. It is
-//! symmetric, and positive definite near a stable equilibrium: there the
-//! Jacobi-scaled `L D Lᵀ` without pivoting ([`BandedMatrix::factor_scaled`],
-//! [`BandedMatrix::factor_scaled_symmetric`]) costs `O(n kl²/2)` and is
-//! stable. Partial pivoting (`O(n kl (kl + ku))`) keeps the factorization
-//! usable when the tangent is indefinite (compression, buckling, iterates
-//! far from equilibrium): a symmetric matrix whose `L D Lᵀ` meets a pivot
-//! that is not clearly positive is refactored that way. Both are linear in
-//! the number of elements; [`BandedLu::solve_many_in_place`] solves several
-//! right-hand sides in one sweep (the estimator's adjoint systems).
+//! A cable's matrices are block-tridiagonal in the nodes: with `b`
+//! coordinates per node they are banded with `kl = ku = 2b - 1`. Tangents
+//! are factored by [`crate::linsolve::TangentSolver`] (faer's sparse
+//! `L D Lᵀ`); the banded factorizations were removed after measurement (they
+//! were at most 1.25x faster end to end, see the README's Performance).
 
 use crate::error::{check_len, Error, Result};
 
-mod factors;
-mod ldlt;
 #[cfg(test)]
 mod tests;
-
-pub use factors::BandedLu;
-use factors::Kind;
-use ldlt::{Ldlt, LdltFailure};
 
 /// The most numbers [`BandedMatrix::try_zeros`] stores (2³⁰, 8 GiB).
 pub const MAX_ENTRIES: usize = 1 << 30;
@@ -38,10 +26,8 @@ pub const MAX_ENTRIES: usize = 1 << 30;
 /// let mut a = BandedMatrix::zeros(3, 1, 1);
 /// for i in 0..3 { a.add(i, i, 2.0); }
 /// a.add(0, 1, -1.0); a.add(1, 0, -1.0); a.add(1, 2, -1.0); a.add(2, 1, -1.0);
-/// let lu = a.clone().factor("example").unwrap();
-/// let mut x = vec![1.0, 0.0, 1.0];
-/// lu.solve_in_place(&mut x).unwrap();
-/// assert!((x[0] - 1.0).abs() < 1e-14 && (x[1] - 1.0).abs() < 1e-14);
+/// assert_eq!(a.mul_vec(&[1.0, 1.0, 1.0]).unwrap(), vec![1.0, 0.0, 1.0]);
+/// assert!(a.is_symmetric());
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct BandedMatrix {
@@ -244,146 +230,6 @@ impl BandedMatrix {
             .fold(0.0f64, |m, v| m.max(v.abs()))
     }
 
-    /// LU factorization with partial pivoting, in place.
-    ///
-    /// The singularity test is row-relative: a pivot is refused when it is
-    /// below `n ε` times the largest original entry of its row (stiffness
-    /// matrices of fine cables span many orders of magnitude between rows).
-    ///
-    /// # Errors
-    /// [`Error::Singular`] when a pivot is zero or below `n ε max|row|`;
-    /// [`Error::NonFinite`] when the matrix holds a NaN or infinity.
-    pub fn factor(mut self, context: &str) -> Result<BandedLu> {
-        let (n, kl, ku) = (self.n, self.kl, self.ku);
-        let scale = self.max_abs();
-        if !scale.is_finite() || self.data.iter().any(|v| !v.is_finite()) {
-            return Err(Error::NonFinite {
-                context: context.to_string(),
-            });
-        }
-        let rel = (n.max(1) as f64) * f64::EPSILON;
-        let mut rowmax: Vec<f64> = self
-            .data
-            .chunks(self.width)
-            .map(|r| r.iter().fold(0.0f64, |m, v| m.max(v.abs())))
-            .collect();
-        let mut piv = vec![0usize; n];
-        let mut min_pivot = f64::INFINITY;
-        let mut negative = 0usize;
-        for k in 0..n {
-            let last_row = (k + kl).min(n - 1);
-            let mut p = k;
-            let mut best = self.data[self.idx(k, k)].abs();
-            for i in k + 1..=last_row {
-                let v = self.data[self.idx(i, k)].abs();
-                if v > best {
-                    best = v;
-                    p = i;
-                }
-            }
-            if best <= rel * rowmax[p] || best == 0.0 {
-                return Err(Error::Singular {
-                    context: context.to_string(),
-                    index: k,
-                    pivot: best,
-                    scale: rowmax[p],
-                });
-            }
-            piv[k] = p;
-            rowmax.swap(k, p);
-            let last_col = (k + ku + kl).min(n - 1);
-            if p != k {
-                for j in k..=last_col {
-                    let a = self.idx(k, j);
-                    let b = self.idx(p, j);
-                    self.data.swap(a, b);
-                }
-            }
-            let pivot = self.data[self.idx(k, k)];
-            min_pivot = min_pivot.min(pivot.abs() / rowmax[k]);
-            if pivot < 0.0 {
-                negative += 1;
-            }
-            let width = self.width;
-            let len = last_col - k; // entries right of the pivot in row k
-            let row_k = self.idx(k, k);
-            for i in k + 1..=last_row {
-                let ik = self.idx(i, k);
-                let l = self.data[ik] / pivot;
-                self.data[ik] = l;
-                if l != 0.0 {
-                    // rows i > k lie after row k in storage: split to borrow both
-                    let (head, tail) = self.data.split_at_mut(ik + 1);
-                    let src = &head[row_k + 1..row_k + 1 + len];
-                    let dst = &mut tail[..len];
-                    for (d, s) in dst.iter_mut().zip(src) {
-                        *d -= l * s;
-                    }
-                }
-                debug_assert!(ik + 1 + len <= (i + 1) * width);
-            }
-        }
-        Ok(BandedLu {
-            kind: Kind::Lu { lu: self, piv },
-            min_pivot,
-            negative_pivots: negative,
-            scaling: None,
-            inertia: None,
-        })
-    }
-
-    /// Factorization of the Jacobi-scaled, shifted matrix
-    /// `D A D + shift·I`, `D = diag(|a_ii|^-1/2)`; the returned factors solve
-    /// `(A + shift·diag|a_ii|) x = b`. Scaling makes the factorization of
-    /// stiffness matrices whose rows span many orders of magnitude accurate.
-    ///
-    /// A symmetric matrix (every band entry equal to its mirror, as the
-    /// assembled tangent stiffness is) whose scaled, shifted form is
-    /// positive definite is factored as `L D Lᵀ` without pivoting
-    /// ([`BandedMatrix::factor_scaled_symmetric`], a third of the work);
-    /// anything else, and a symmetric matrix that turns out indefinite or
-    /// nearly singular, by the pivoted LU of [`BandedMatrix::factor`]. Both
-    /// solve the same system; the LU is the authority on singularity.
-    ///
-    /// # Errors
-    /// As [`BandedMatrix::factor`].
-    pub fn factor_scaled(self, shift: f64, context: &str) -> Result<BandedLu> {
-        if self.is_symmetric() {
-            return self.factor_scaled_symmetric(shift, context);
-        }
-        self.factor_scaled_lu(shift, context)
-    }
-
-    /// The pivoted-LU path of [`BandedMatrix::factor_scaled`], whatever the
-    /// symmetry.
-    fn factor_scaled_lu(mut self, shift: f64, context: &str) -> Result<BandedLu> {
-        let d = self.jacobi_scaling();
-        self.scale_symmetric(&d)?;
-        if shift != 0.0 {
-            for i in 0..self.n {
-                let k = self.idx(i, i);
-                self.data[k] += shift;
-            }
-        }
-        let mut lu = self.factor(context)?;
-        lu.scaling = Some(d);
-        Ok(lu)
-    }
-
-    /// `|a_ii|^-1/2` (1 for a zero or non-finite diagonal).
-    fn jacobi_scaling(&self) -> Vec<f64> {
-        (0..self.n)
-            .map(|i| {
-                let a = self.data[self.idx(i, i)].abs();
-                if a > 0.0 && a.is_finite() {
-                    1.0 / a.sqrt()
-                } else {
-                    1.0
-                }
-            })
-            .collect()
-    }
-
     /// Whether every entry of the band equals its mirror image (exactly;
     /// `kl` must equal `ku`).
     pub fn is_symmetric(&self) -> bool {
@@ -403,69 +249,6 @@ impl BandedMatrix {
         }
         true
     }
-
-    /// As [`BandedMatrix::factor_scaled`] for a matrix known to be symmetric
-    /// (only its lower band is read): the Jacobi-scaled, shifted matrix is
-    /// factored as `L D Lᵀ` without pivoting when it is positive definite
-    /// (every pivot above `n ε` times its row's largest entry); otherwise a
-    /// copy is factored by the pivoted LU. Does not consume the matrix.
-    ///
-    /// # Errors
-    /// As [`BandedMatrix::factor`] (raised by the LU fallback).
-    pub fn factor_scaled_symmetric(&self, shift: f64, context: &str) -> Result<BandedLu> {
-        let d = self.jacobi_scaling();
-        match Ldlt::new(self, Some(&d), shift, true) {
-            Ok(f) => Ok(f.into_factors(Some(d))),
-            // not positive definite, nearly singular or non-finite: the
-            // pivoted LU decides (and reports)
-            Err(_) => self.clone().factor_scaled_lu(shift, context),
-        }
-    }
-
-    /// `L D Lᵀ` factorization of a symmetric matrix (its lower band is
-    /// read, `kl` sub-diagonals), without pivoting and without scaling. It
-    /// exists for any matrix whose leading principal minors do not vanish,
-    /// definite or not, and then the number of negative pivots is the
-    /// number of negative eigenvalues (Sylvester's law of inertia). Without
-    /// pivoting it is stable for positive definite matrices; for indefinite
-    /// ones prefer [`BandedMatrix::factor`].
-    ///
-    /// # Errors
-    /// [`Error::Singular`] when a pivot is zero or below `n ε` times the
-    /// largest entry of its row; [`Error::NonFinite`] when the band holds a
-    /// NaN or infinity.
-    ///
-    /// # Example
-    /// ```
-    /// use softrod::linsolve::BandedMatrix;
-    /// let mut a = BandedMatrix::zeros(3, 1, 1);
-    /// for i in 0..3 { a.add(i, i, 2.0); }
-    /// for i in 0..2 { a.add(i, i + 1, -1.0); a.add(i + 1, i, -1.0); }
-    /// let f = a.factor_ldlt("example").unwrap();
-    /// assert_eq!(f.negative_pivots(), 0);
-    /// let mut x = vec![1.0, 0.0, 1.0];
-    /// f.solve_in_place(&mut x).unwrap();
-    /// assert!((x[1] - 1.0).abs() < 1e-14);
-    /// ```
-    pub fn factor_ldlt(&self, context: &str) -> Result<BandedLu> {
-        match Ldlt::new(self, None, 0.0, false) {
-            Ok(f) => Ok(f.into_factors(None)),
-            Err(LdltFailure::NonFinite) => Err(Error::NonFinite {
-                context: context.to_string(),
-            }),
-            Err(LdltFailure::Pivot {
-                index,
-                pivot,
-                scale,
-            }) => Err(Error::Singular {
-                context: context.to_string(),
-                index,
-                pivot,
-                scale,
-            }),
-        }
-    }
-
     /// `y = A x` into `y` (no allocation).
     ///
     /// # Errors
@@ -528,12 +311,4 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
         t += x * y;
     }
     t
-}
-
-/// `y -= c x` over the common length.
-#[inline]
-fn axpy_neg(c: f64, x: &[f64], y: &mut [f64]) {
-    for (yi, xi) in y.iter_mut().zip(x) {
-        *yi -= c * xi;
-    }
 }

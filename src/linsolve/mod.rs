@@ -31,9 +31,8 @@
 //!   against it end to end and removed, see the README's performance
 //!   section).
 //!
-//! [`BandedMatrix`] remains as plain band storage (the load Gram matrix)
-//! with its own small factorization ([`BandedLu`]); no tangent is factored
-//! by it.
+//! [`BandedMatrix`] remains as plain band storage (the load Gram matrix,
+//! a tangent target for element tests); nothing factors it.
 //!
 //! # Example
 //! ```
@@ -68,7 +67,7 @@ pub mod sparse;
 mod tests;
 
 pub use auto::{AutoFactors, AutoSolver, SolverKind};
-pub use banded::{BandedLu, BandedMatrix};
+pub use banded::BandedMatrix;
 pub use pattern::{SymmetricMatrix, SymmetricPattern, MAX_ELEMENT_DOFS};
 pub use sparse::{CholeskyKind, SparseFactors, SparseSettings, SparseSolver};
 
