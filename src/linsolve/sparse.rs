@@ -13,24 +13,26 @@ use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
 use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
 use faer::perm::PermRef;
-use faer::sparse::linalg::cholesky::simplicial::{SimplicialLdltRef, SimplicialLltRef};
 use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky,
-    SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering,
 };
 use faer::sparse::linalg::lu::simplicial::{
-    factorize_simplicial_numeric_lu, factorize_simplicial_numeric_lu_scratch,
-    solve_in_place_scratch as lu_solve_scratch, SimplicialLu,
+    factorize_simplicial_numeric_lu, factorize_simplicial_numeric_lu_scratch, SimplicialLu,
 };
 use faer::sparse::linalg::{amd, LuError};
 use faer::sparse::{FaerError, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Par, Side};
+use faer::{Par, Side};
 
 use super::{
-    check_factor_input, check_rhs, pivot_tolerance, FactorMethod, FactorOptions, Factorization,
-    Inertia, LinsolveError, SymmetricMatrix, SymmetricPattern, TangentSolver,
+    check_factor_input, pivot_tolerance, FactorOptions, Inertia, LinsolveError, SymmetricMatrix,
+    SymmetricPattern, TangentSolver,
 };
+
+mod factors;
+use factors::Numeric;
+pub use factors::SparseFactors;
 
 /// The symmetric factorization [`SparseSolver`] tries first.
 ///
@@ -626,182 +628,6 @@ impl TangentSolver for SparseSolver {
         };
         let (numeric, min_pivot) = self.lu(&rowmax)?;
         Ok(factors(numeric, inertia, min_pivot))
-    }
-}
-
-/// The numeric factors.
-#[derive(Debug, Clone)]
-enum Numeric {
-    Llt(Vec<f64>),
-    Ldlt(Vec<f64>),
-    Lu {
-        lu: SimplicialLu<usize, f64>,
-        row_fwd: Vec<usize>,
-        row_inv: Vec<usize>,
-    },
-}
-
-/// The factors [`SparseSolver`] returns (see [`Factorization`]).
-///
-/// # Example
-/// ```
-/// use std::sync::Arc;
-/// use softrod::linsolve::*;
-/// let p = Arc::new(SymmetricPattern::from_elements(2, [[0, 1]])?);
-/// let mut k = SymmetricMatrix::zeros(p.clone());
-/// k.add_element(0, &[1.0, 2.0, 2.0, 1.0])?; // eigenvalues 3 and −1
-/// let f: SparseFactors = SparseSolver::analyze(&p)?.factor(&k, FactorOptions::default())?;
-/// assert_eq!(f.method(), FactorMethod::Lu);
-/// assert_eq!(f.inertia(), Some(Inertia { positive: 1, negative: 1 }));
-/// # Ok::<(), Box<dyn std::error::Error>>(())
-/// ```
-#[derive(Debug, Clone)]
-pub struct SparseFactors {
-    n: usize,
-    symbolic: Arc<SymbolicCholesky<usize>>,
-    perm: Arc<Permuted>,
-    numeric: Numeric,
-    /// The Jacobi scaling in the permuted order.
-    scaling: Arc<Vec<f64>>,
-    inertia: Option<Inertia>,
-    min_pivot: f64,
-}
-
-impl SparseFactors {
-    /// The solve for `k >= 1` column-major right-hand sides (sizes checked):
-    /// permuted and scaled into a workspace (kept per thread, so repeated
-    /// solves do not allocate), solved there, back.
-    fn solve_cols(&self, b: &mut [f64], k: usize) -> Result<(), LinsolveError> {
-        thread_local! {
-            static SCRATCH: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
-        }
-        let kept = SCRATCH.try_with(|cell| match cell.try_borrow_mut() {
-            Ok(mut x) => Some(self.solve_cols_with(b, k, &mut x)),
-            Err(_) => None,
-        });
-        match kept {
-            Ok(Some(result)) => result,
-            _ => self.solve_cols_with(b, k, &mut Vec::new()),
-        }
-    }
-
-    /// [`SparseFactors::solve_cols`] with the workspace `x`.
-    fn solve_cols_with(
-        &self,
-        b: &mut [f64],
-        k: usize,
-        x: &mut Vec<f64>,
-    ) -> Result<(), LinsolveError> {
-        let n = self.n;
-        let fwd = &self.perm.fwd;
-        x.clear();
-        x.try_reserve(n * k)
-            .map_err(|_| LinsolveError::OutOfMemory)?;
-        for bc in b.chunks_exact(n) {
-            x.extend(fwd.iter().zip(self.scaling.iter()).map(|(&i, d)| bc[i] * d));
-        }
-        let rhs = MatMut::from_column_major_slice_mut(&mut x[..], n, k);
-        match (&self.numeric, self.symbolic.raw()) {
-            // the simplicial factors solve in place without a workspace
-            (Numeric::Llt(values), SymbolicCholeskyRaw::Simplicial(s)) => {
-                SimplicialLltRef::new(s, values).solve_in_place_with_conj(
-                    Conj::No,
-                    rhs,
-                    Par::Seq,
-                    MemStack::new(&mut []),
-                );
-            }
-            (Numeric::Ldlt(values), SymbolicCholeskyRaw::Simplicial(s)) => {
-                SimplicialLdltRef::new(s, values).solve_in_place_with_conj(
-                    Conj::No,
-                    rhs,
-                    Par::Seq,
-                    MemStack::new(&mut []),
-                );
-            }
-            (Numeric::Llt(values), _) => {
-                let req = self.symbolic.solve_in_place_scratch::<f64>(k, Par::Seq);
-                let mut mem = MemBuffer::try_new(req).map_err(|_| LinsolveError::OutOfMemory)?;
-                LltRef::new(&self.symbolic, values).solve_in_place_with_conj(
-                    Conj::No,
-                    rhs,
-                    Par::Seq,
-                    MemStack::new(&mut mem),
-                );
-            }
-            (Numeric::Ldlt(values), _) => {
-                let req = self.symbolic.solve_in_place_scratch::<f64>(k, Par::Seq);
-                let mut mem = MemBuffer::try_new(req).map_err(|_| LinsolveError::OutOfMemory)?;
-                LdltRef::new(&self.symbolic, values).solve_in_place_with_conj(
-                    Conj::No,
-                    rhs,
-                    Par::Seq,
-                    MemStack::new(&mut mem),
-                );
-            }
-            (
-                Numeric::Lu {
-                    lu,
-                    row_fwd,
-                    row_inv,
-                },
-                _,
-            ) => {
-                let req = lu_solve_scratch::<usize, f64>(n, k, Par::Seq);
-                let mut mem = MemBuffer::try_new(req).map_err(|_| LinsolveError::OutOfMemory)?;
-                let id = &self.perm.identity;
-                let row_perm = PermRef::new_checked(row_fwd, row_inv, n);
-                let col_perm = PermRef::new_checked(id, id, n);
-                lu.solve_in_place_with_conj(
-                    row_perm,
-                    col_perm,
-                    Conj::No,
-                    rhs,
-                    Par::Seq,
-                    MemStack::new(&mut mem),
-                );
-            }
-        }
-        for (xc, bc) in x.chunks_exact(n).zip(b.chunks_exact_mut(n)) {
-            for ((xi, &i), d) in xc.iter().zip(fwd).zip(self.scaling.iter()) {
-                bc[i] = xi * d;
-            }
-        }
-        Ok(())
-    }
-}
-
-impl Factorization for SparseFactors {
-    fn n(&self) -> usize {
-        self.n
-    }
-
-    fn method(&self) -> FactorMethod {
-        match self.numeric {
-            Numeric::Llt(_) => FactorMethod::Llt,
-            Numeric::Ldlt(_) => FactorMethod::Ldlt,
-            Numeric::Lu { .. } => FactorMethod::Lu,
-        }
-    }
-
-    fn inertia(&self) -> Option<Inertia> {
-        self.inertia
-    }
-
-    fn pivot_ratio(&self) -> f64 {
-        self.min_pivot
-    }
-
-    fn solve_in_place(&self, b: &mut [f64]) -> Result<(), LinsolveError> {
-        self.solve_columns_in_place(b, 1)
-    }
-
-    fn solve_columns_in_place(&self, b: &mut [f64], nrhs: usize) -> Result<(), LinsolveError> {
-        check_rhs("b", self.n.saturating_mul(nrhs), b.len())?;
-        if nrhs == 0 || self.n == 0 {
-            return Ok(());
-        }
-        self.solve_cols(b, nrhs)
     }
 }
 
