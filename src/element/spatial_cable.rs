@@ -396,8 +396,9 @@ impl Element for SpatialCable {
 /// `h(c) = arccos(c)/√(1 − c²) = θ/sin θ` and its first two derivatives with
 /// respect to `c`. Near `c = 1` the closed forms are 0/0: there the series
 /// `h = Σ a_n x^n`, `x = 1 − c`, `a_0 = 1`, `a_n = n a_{n−1}/(2n + 1)` (from
-/// `(1 − c²) h' = c h − 1`), which converges like `(x/2)^n`.
-fn rotation_factor(c: f64) -> (f64, f64, f64) {
+/// `(1 − c²) h' = c h − 1`), which converges like `(x/2)^n`. Shared with
+/// the full 3-D element's frame rotation.
+pub(crate) fn rotation_factor(c: f64) -> (f64, f64, f64) {
     let x = 1.0 - c;
     if x < 0.5 {
         // 48 terms: (1/4)^48 is far below round-off, also for h''

@@ -25,6 +25,7 @@
 //! rotation vector of the node's frame from a reference frame.
 
 use super::jet::{axpy, cross, dot, mul3, sub3, Scalar, Vec3};
+use crate::element::spatial_cable::rotation_factor;
 
 /// The stiffnesses a density is weighted with (weights of the Gauss point
 /// included by the caller).
@@ -132,37 +133,6 @@ pub(crate) fn node_frame<T: Scalar>(n: &[T; 9]) -> [Vec3<T>; 3] {
     let e2 = mul3(dot(&m, &m).sqrt().recip(), &m);
     let e3 = cross(&t, &e2);
     [t, e2, e3]
-}
-
-/// `h(c) = arccos(c)/√(1 − c²) = θ/sin θ` and its first two derivatives
-/// with respect to `c`. Near `c = 1` the closed forms are 0/0: there the
-/// series `h = Σ a_n x^n`, `x = 1 − c`, `a_0 = 1`, `a_n = n a_{n−1}/(2n + 1)`
-/// (from `(1 − c²) h' = c h − 1`), which converges like `(x/2)^n`.
-pub(crate) fn rotation_factor(c: f64) -> (f64, f64, f64) {
-    let x = 1.0 - c;
-    if x < 0.5 {
-        // 48 terms: (1/4)^48 is far below round-off, also for h''
-        let (mut a, mut h, mut hx, mut hxx) = (1.0, 1.0, 0.0, 0.0);
-        let (mut p0, mut p1) = (0.0, 1.0); // x^(n−2), x^(n−1)
-        for n in 1..=48 {
-            let nf = n as f64;
-            a *= nf / (2.0 * nf + 1.0);
-            let pn = p1 * x;
-            h += a * pn;
-            hx += nf * a * p1;
-            if n >= 2 {
-                hxx += nf * (nf - 1.0) * a * p0;
-            }
-            p0 = p1;
-            p1 = pn;
-        }
-        return (h, -hx, hxx);
-    }
-    let s2 = x * (2.0 - x); // 1 − c², without cancellation
-    let h = c.clamp(-1.0, 1.0).acos() / s2.sqrt();
-    let h1 = (c * h - 1.0) / s2;
-    let h2 = (h + 3.0 * c * h1) / s2;
-    (h, h1, h2)
 }
 
 /// The rotation vector `φ` of `Q = R R0ᵀ` (world axes), `R` the frame of
