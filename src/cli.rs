@@ -320,7 +320,7 @@ struct EstimateOut {
 
 const LOAD_GRID: usize = 49;
 
-fn estimate_out<E: Element>(scene: &Scene, robot: &Robot<E>, e: &Estimate, observation: String) -> EstimateOut {
+fn estimate_out<E: Element>(scene: &Scene, robot: &Robot<E>, pressures_pa: Vec<f64>, e: &Estimate, observation: String) -> EstimateOut {
     let nodes = node_outs(robot, &e.q);
     let d = e.resultant_force_n.len();
     let m = e.marker_residuals.len();
@@ -328,7 +328,7 @@ fn estimate_out<E: Element>(scene: &Scene, robot: &Robot<E>, e: &Estimate, obser
         scene: scene.name.clone(),
         backend: e.report.backend.name().to_string(),
         observation,
-        pressures_pa: Vec::new(),
+        pressures_pa,
         nodes,
         load: e.sample_load(LOAD_GRID).into_iter().map(|(s, w)| LoadSample { s, w }).collect(),
         load_grid_points: LOAD_GRID,
@@ -410,7 +410,7 @@ fn estimate_with<E: Element + 'static>(scene: &Scene, robot: Robot<E>, backend: 
     let pressures = known.pressures_pa.clone();
     let mut est = settings.backend.build(robot.clone(), known, settings)?;
     let e = est.step(&obs)?;
-    Ok(EstimateOut { pressures_pa: pressures, ..estimate_out(scene, &robot, &e, source) })
+    Ok(estimate_out(scene, &robot, pressures, &e, source))
 }
 
 /// Resolves "elements": "auto" sections by refinement (the observation for a
