@@ -22,6 +22,5 @@ fn main() {
     }
 }
 
-mod softrod_cli {
-    include!("cli.rs");
-}
+#[path = "cli/mod.rs"]
+mod softrod_cli;

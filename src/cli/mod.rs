@@ -1,4 +1,4 @@
-// The command line (included by main.rs).
+// The command line (the binary's `softrod_cli` module; subcommands of wave 2 live in their own files here).
 
 /// `println!` that ends the program quietly (exit 0) when standard output
 /// is closed, e.g. `softrod | head`, like a Unix tool on SIGPIPE.
@@ -103,10 +103,16 @@ struct PressuresArg(Vec<f64>);
 /// allowed (a chamber under vacuum).
 fn parse_pressures(text: &str) -> std::result::Result<PressuresArg, String> {
     let mut out = Vec::new();
-    for (i, item) in text.split(|c: char| c == ',' || c.is_whitespace()).filter(|t| !t.is_empty()).enumerate() {
+    for (i, item) in text
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|t| !t.is_empty())
+        .enumerate()
+    {
         // non-finite values parse and are refused by the scene's own check,
         // which names `pressures_pa[i]`
-        let p: f64 = item.parse().map_err(|_| format!("pressure {i} (`{item}`) is not a number in Pa"))?;
+        let p: f64 = item
+            .parse()
+            .map_err(|_| format!("pressure {i} (`{item}`) is not a number in Pa"))?;
         out.push(p);
     }
     if out.is_empty() {
@@ -152,7 +158,11 @@ struct NodeOut {
 }
 
 /// Fills in the planar robot's unwrapped node angles; returns the tip's.
-fn fill_angles(robot: &Robot<PlanarCable>, q: &[f64], nodes: &mut [NodeOut]) -> Result<Option<f64>> {
+fn fill_angles(
+    robot: &Robot<PlanarCable>,
+    q: &[f64],
+    nodes: &mut [NodeOut],
+) -> Result<Option<f64>> {
     let angles = robot.node_angles(q)?;
     for (n, a) in nodes.iter_mut().zip(&angles) {
         n.angle_rad = Some(*a);
@@ -194,11 +204,22 @@ fn node_outs<E: Element>(robot: &Robot<E>, q: &[f64]) -> Vec<NodeOut> {
         .node_arc()
         .iter()
         .enumerate()
-        .map(|(i, &s)| NodeOut { s_m: s, position_m: q[i * nd..i * nd + d].to_vec(), slope: q[i * nd + d..i * nd + 2 * d].to_vec(), angle_rad: None })
+        .map(|(i, &s)| NodeOut {
+            s_m: s,
+            position_m: q[i * nd..i * nd + d].to_vec(),
+            slope: q[i * nd + d..i * nd + 2 * d].to_vec(),
+            angle_rad: None,
+        })
         .collect()
 }
 
-fn solve_out<E: Element>(scene: &Scene, robot: &Robot<E>, pressures: Vec<f64>, q: &[f64], report: StaticReport) -> SolveOut {
+fn solve_out<E: Element>(
+    scene: &Scene,
+    robot: &Robot<E>,
+    pressures: Vec<f64>,
+    q: &[f64],
+    report: StaticReport,
+) -> SolveOut {
     let tip = &q[q.len() - E::NODE_DOFS..];
     SolveOut {
         scene: scene.name.clone(),
@@ -216,14 +237,24 @@ fn solve_out<E: Element>(scene: &Scene, robot: &Robot<E>, pressures: Vec<f64>, q
 }
 
 /// The static equilibrium of the scene's robot under its loads.
-fn solve_with<E: Element>(scene: &Scene, robot: &Robot<E>, pressures: Option<Vec<f64>>) -> Result<SolveOut> {
+fn solve_with<E: Element>(
+    scene: &Scene,
+    robot: &Robot<E>,
+    pressures: Option<Vec<f64>>,
+) -> Result<SolveOut> {
     let mut loads = scene.loads()?;
     if let Some(p) = pressures {
         loads.pressures_pa = p;
     }
     let solver = StaticSolver::new(scene.solver.statics.clone())?;
     let eq = solver.solve(robot, &loads, None)?;
-    Ok(solve_out(scene, robot, loads.pressures_pa.clone(), &eq.q, eq.report))
+    Ok(solve_out(
+        scene,
+        robot,
+        loads.pressures_pa.clone(),
+        &eq.q,
+        eq.report,
+    ))
 }
 
 fn solve(scene: &Scene, pressures: Option<Vec<f64>>) -> Result<SolveOut> {
@@ -253,11 +284,14 @@ fn solve(scene: &Scene, pressures: Option<Vec<f64>>) -> Result<SolveOut> {
 fn write_json<T: Serialize>(value: &T, out: Option<&PathBuf>) -> Result<()> {
     let text = serde_json::to_string_pretty(value)?;
     match out {
-        Some(path) => std::fs::write(path, text + "\n").with_context(|| format!("cannot write {}", path.display())),
+        Some(path) => std::fs::write(path, text + "\n")
+            .with_context(|| format!("cannot write {}", path.display())),
         None => {
             use std::io::Write;
             let mut stdout = std::io::stdout().lock();
-            writeln!(stdout, "{text}").and_then(|()| stdout.flush()).context("cannot write to standard output")
+            writeln!(stdout, "{text}")
+                .and_then(|()| stdout.flush())
+                .context("cannot write to standard output")
         }
     }
 }
@@ -320,7 +354,13 @@ struct EstimateOut {
 
 const LOAD_GRID: usize = 49;
 
-fn estimate_out<E: Element>(scene: &Scene, robot: &Robot<E>, pressures_pa: Vec<f64>, e: &Estimate, observation: String) -> EstimateOut {
+fn estimate_out<E: Element>(
+    scene: &Scene,
+    robot: &Robot<E>,
+    pressures_pa: Vec<f64>,
+    e: &Estimate,
+    observation: String,
+) -> EstimateOut {
     let nodes = node_outs(robot, &e.q);
     let d = e.resultant_force_n.len();
     let m = e.marker_residuals.len();
@@ -330,16 +370,24 @@ fn estimate_out<E: Element>(scene: &Scene, robot: &Robot<E>, pressures_pa: Vec<f
         observation,
         pressures_pa,
         nodes,
-        load: e.sample_load(LOAD_GRID).into_iter().map(|(s, w)| LoadSample { s, w }).collect(),
+        load: e
+            .sample_load(LOAD_GRID)
+            .into_iter()
+            .map(|(s, w)| LoadSample { s, w })
+            .collect(),
         load_grid_points: LOAD_GRID,
         load_parameters: e.f.clone(),
         resultant: ResultantOut {
             force_n: e.resultant_force_n.clone(),
-            force_std_n: (0..d).map(|a| e.resultant_force_cov[a * d + a].max(0.0).sqrt()).collect(),
+            force_std_n: (0..d)
+                .map(|a| e.resultant_force_cov[a * d + a].max(0.0).sqrt())
+                .collect(),
             moment_nm: e.resultant_moment_nm.clone(),
         },
         marker_residuals_m: e.marker_residuals.clone(),
-        marker_std_m: (0..m).map(|i| e.marker_cov[i * m + i].max(0.0).sqrt()).collect(),
+        marker_std_m: (0..m)
+            .map(|i| e.marker_cov[i * m + i].max(0.0).sqrt())
+            .collect(),
         max_load_parameter_std: e.std_f().into_iter().fold(0.0, f64::max),
         noise_sigma_m: e.noise_sigma_m,
         report: e.report.clone(),
@@ -351,7 +399,8 @@ fn estimate_out<E: Element>(scene: &Scene, robot: &Robot<E>, pressures_pa: Vec<f
 
 /// Reads a markers file.
 fn read_markers(path: &PathBuf) -> Result<Observation> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     serde_json::from_str(&text).with_context(|| format!("{}: not a markers file", path.display()))
 }
 
@@ -380,7 +429,11 @@ fn observe<E: Element>(scene: &Scene, robot: &Robot<E>, q: &[f64]) -> Result<Obs
     Ok(Observation { markers })
 }
 
-fn estimate(scene: &Scene, backend: Option<Backend>, markers: Option<&PathBuf>) -> Result<EstimateOut> {
+fn estimate(
+    scene: &Scene,
+    backend: Option<Backend>,
+    markers: Option<&PathBuf>,
+) -> Result<EstimateOut> {
     match scene.build()? {
         SceneRobot::Planar(robot) => {
             let mut out = estimate_with(scene, robot.clone(), backend, markers)?;
@@ -392,14 +445,22 @@ fn estimate(scene: &Scene, backend: Option<Backend>, markers: Option<&PathBuf>) 
 }
 
 /// [`estimate`] on the scene's robot of element `E`.
-fn estimate_with<E: Element + 'static>(scene: &Scene, robot: Robot<E>, backend: Option<Backend>, markers: Option<&PathBuf>) -> Result<EstimateOut> {
+fn estimate_with<E: Element + 'static>(
+    scene: &Scene,
+    robot: Robot<E>,
+    backend: Option<Backend>,
+    markers: Option<&PathBuf>,
+) -> Result<EstimateOut> {
     let known = scene.loads()?;
     let mut settings = scene.estimator_settings()?;
     if let Some(b) = backend {
         settings.backend = b;
     }
     let (obs, source) = match markers {
-        Some(path) => (read_markers(path)?, format!("markers file {}", path.display())),
+        Some(path) => (
+            read_markers(path)?,
+            format!("markers file {}", path.display()),
+        ),
         None => {
             let solver = StaticSolver::new(scene.solver.statics.clone())?;
             let eq = solver.solve(&robot, &known, None)?;
@@ -441,7 +502,10 @@ fn refine(scene: Scene, observation: Option<&Observation>) -> Result<(Scene, Opt
     Ok((r.scene.clone(), Some(r)))
 }
 
-fn median_warm_step(est: &mut dyn softrod::estimate::Estimator, observations: &[Observation]) -> Result<f64> {
+fn median_warm_step(
+    est: &mut dyn softrod::estimate::Estimator,
+    observations: &[Observation],
+) -> Result<f64> {
     let mut times = Vec::with_capacity(observations.len());
     for o in observations {
         let t = std::time::Instant::now();
@@ -467,31 +531,58 @@ fn estimation_demo() -> Result<()> {
     let tip_mass_kg = 0.02;
     let uniform = [0.0, -0.5];
     let mut truth = known.clone();
-    truth.point_forces.push(PointForce { s_m: robot.length(), force_n: vec![0.0, -9.81 * tip_mass_kg] });
-    truth.line_loads.push(LineLoad::Uniform { w_n_per_m: uniform.to_vec() });
+    truth.point_forces.push(PointForce {
+        s_m: robot.length(),
+        force_n: vec![0.0, -9.81 * tip_mass_kg],
+    });
+    truth.line_loads.push(LineLoad::Uniform {
+        w_n_per_m: uniform.to_vec(),
+    });
     let eq = StaticSolver::default().solve(&robot, &truth, None)?;
     let nodes: Vec<usize> = scene.markers.iter().filter_map(|m| m.node).collect();
     let sigma = 1e-5;
     let obs = Observation::at_nodes(&robot, &eq.q, &nodes).with_noise(sigma, 1);
-    let true_force = [uniform[0] * robot.length(), uniform[1] * robot.length() - 9.81 * tip_mass_kg];
+    let true_force = [
+        uniform[0] * robot.length(),
+        uniform[1] * robot.length() - 9.81 * tip_mass_kg,
+    ];
     let tip = |q: &[f64]| (q[q.len() - 4], q[q.len() - 3]);
     let (tx, ty) = tip(&eq.q);
     outln!("Estimation (Sec. III): unknown payload = {:.0} g tip mass + uniform {:.2} N/m, not known to the estimator", tip_mass_kg * 1e3, uniform[1]);
-    outln!("  {} markers at nodes {:?}, seeded noise {:.2} mm; alpha by the discrepancy principle", nodes.len(), nodes, sigma * 1e3);
-    outln!("  truth:    tip ({:+.5}, {:+.5}) m, resultant ({:+.4}, {:+.4}) N", tx, ty, true_force[0], true_force[1]);
+    outln!(
+        "  {} markers at nodes {:?}, seeded noise {:.2} mm; alpha by the discrepancy principle",
+        nodes.len(),
+        nodes,
+        sigma * 1e3
+    );
+    outln!(
+        "  truth:    tip ({:+.5}, {:+.5}) m, resultant ({:+.4}, {:+.4}) N",
+        tx,
+        ty,
+        true_force[0],
+        true_force[1]
+    );
     for backend in [Backend::Newton, Backend::Sqp] {
-        let mut est = backend.build(robot.clone(), known.clone(), scene.solver.estimator.clone())?;
+        let mut est =
+            backend.build(robot.clone(), known.clone(), scene.solver.estimator.clone())?;
         let e = est.step(&obs)?.converged()?;
         let (ex, ey) = tip(&e.q);
-        let sd: Vec<f64> = (0..2).map(|a| e.resultant_force_cov[a * 2 + a].max(0.0).sqrt()).collect();
+        let sd: Vec<f64> = (0..2)
+            .map(|a| e.resultant_force_cov[a * 2 + a].max(0.0).sqrt())
+            .collect();
         outln!(
             "  {:<6}    tip ({:+.5}, {:+.5}) m (error {:.3} mm), resultant ({:+.4} ± {:.4}, {:+.4} ± {:.4}) N, moment {:+.4} N·m; {} iterations, alpha {:.3e}, first step {:.1} ms",
             backend.name(), ex, ey, (ex - tx).hypot(ey - ty) * 1e3, e.resultant_force_n[0], sd[0], e.resultant_force_n[1], sd[1], e.resultant_moment_nm[0], e.report.iterations, e.report.alpha, e.report.wall_time_s * 1e3
         );
         // streaming: 50 new noisy frames of the same scene, warm-started
-        let frames: Vec<Observation> = (0..50).map(|k| Observation::at_nodes(&robot, &eq.q, &nodes).with_noise(sigma, 100 + k)).collect();
+        let frames: Vec<Observation> = (0..50)
+            .map(|k| Observation::at_nodes(&robot, &eq.q, &nodes).with_noise(sigma, 100 + k))
+            .collect();
         let t = median_warm_step(est.as_mut(), &frames)?;
-        outln!("            warm step (new noisy frame, median of 50): {:.1} µs", t * 1e6);
+        outln!(
+            "            warm step (new noisy frame, median of 50): {:.1} µs",
+            t * 1e6
+        );
     }
     outln!("Run `softrod estimate examples/two_section.json --backend newton --out estimate.json` for a full result.");
     Ok(())
@@ -502,24 +593,42 @@ fn solve_summary() -> Result<()> {
     let robot = scene.robot()?;
     let out = solve(&scene, None)?;
     let spec = robot.spec();
-    outln!("softrod {} — built-in scene `{}`", env!("CARGO_PKG_VERSION"), scene.name);
+    outln!(
+        "softrod {} — built-in scene `{}`",
+        env!("CARGO_PKG_VERSION"),
+        scene.name
+    );
     outln!("  {}", scene.description);
     outln!(
         "  {} sections, {} elements, {:.3} m, weight {:.3} N, pressures {:?} kPa",
         spec.sections.len(),
         robot.n_elements(),
         robot.length(),
-        spec.sections.iter().map(|s| s.mass_per_length_kg_per_m * s.length_m * 9.81).sum::<f64>(),
+        spec.sections
+            .iter()
+            .map(|s| s.mass_per_length_kg_per_m * s.length_m * 9.81)
+            .sum::<f64>(),
         out.pressures_pa.iter().map(|p| p / 1e3).collect::<Vec<_>>()
     );
     outln!("  equilibrium: {}", out.report);
     outln!("  solve time: {:.1} µs", out.report.wall_time_s * 1e6);
-    outln!("  tip position: ({:+.4}, {:+.4}) m, tip angle {:+.2}°", out.tip_position_m[0], out.tip_position_m[1], out.tip_angle_rad.unwrap_or(f64::NAN).to_degrees());
+    outln!(
+        "  tip position: ({:+.4}, {:+.4}) m, tip angle {:+.2}°",
+        out.tip_position_m[0],
+        out.tip_position_m[1],
+        out.tip_angle_rad.unwrap_or(f64::NAN).to_degrees()
+    );
     outln!("  markers:");
     for m in &scene.markers {
         if let Some(n) = m.node {
             let p = &out.nodes[n].position_m;
-            outln!("    node {:2} (s = {:.3} m): ({:+.4}, {:+.4}) m", n, out.nodes[n].s_m, p[0], p[1]);
+            outln!(
+                "    node {:2} (s = {:.3} m): ({:+.4}, {:+.4}) m",
+                n,
+                out.nodes[n].s_m,
+                p[0],
+                p[1]
+            );
         }
     }
     outln!("Run `softrod solve examples/two_section.json --out result.json` for the full result.");
@@ -538,7 +647,11 @@ pub fn run() -> Result<()> {
     let cli = parse_args()?;
     match cli.command {
         None => default_run(),
-        Some(Command::Solve { scene, pressures, out }) => {
+        Some(Command::Solve {
+            scene,
+            pressures,
+            out,
+        }) => {
             let pressures = pressures.map(|p| p.0);
             let mut scene = Scene::from_file(&scene)?;
             if let (true, Some(p)) = (scene.has_auto_elements(), &pressures) {
@@ -551,7 +664,13 @@ pub fn run() -> Result<()> {
             warn_all(&result.warnings);
             write_json(&result, out.as_ref())
         }
-        Some(Command::Estimate { scene, backend, markers, pressures, out }) => {
+        Some(Command::Estimate {
+            scene,
+            backend,
+            markers,
+            pressures,
+            out,
+        }) => {
             let mut scene = Scene::from_file(&scene)?;
             if let Some(p) = pressures {
                 // the known actuation the estimate is for; checked like the scene's own
@@ -578,11 +697,18 @@ pub fn run() -> Result<()> {
             // exit status says that it is not an estimate
             let status = result.report.status;
             if !status.is_converged() {
-                anyhow::bail!("estimation did not converge: {status}; the result written is the last iterate");
+                anyhow::bail!(
+                    "estimation did not converge: {status}; the result written is the last iterate"
+                );
             }
             Ok(())
         }
-        Some(Command::Report { out, quick, only, quiet }) => report(out, quick, only, quiet),
+        Some(Command::Report {
+            out,
+            quick,
+            only,
+            quiet,
+        }) => report(out, quick, only, quiet),
     }
 }
 
@@ -592,10 +718,20 @@ fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Resu
         PartArg::Pareto => Part::Pareto,
         PartArg::Stability => Part::Stability,
     });
-    let opts = ReportOptions { quick, only, quiet, ..ReportOptions::new(out) };
+    let opts = ReportOptions {
+        quick,
+        only,
+        quiet,
+        ..ReportOptions::new(out)
+    };
     let summary = report::run(&opts, &[])?;
     if let Some(p) = &summary.pareto {
-        outln!("Pareto: {} configurations ({} cases) in {:.1} s; backbone-RMS front (fastest first):", p.points.len(), p.cases.len(), p.wall_time_s);
+        outln!(
+            "Pareto: {} configurations ({} cases) in {:.1} s; backbone-RMS front (fastest first):",
+            p.points.len(),
+            p.cases.len(),
+            p.wall_time_s
+        );
         for q in p.front_backbone() {
             outln!(
                 "  {:<6} {:3} elements {:2} markers: {:8.3} ms, backbone {:.4} mm, load {:.1} %, force {:.1} %",
@@ -605,9 +741,19 @@ fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Resu
     }
     if let Some(s) = &summary.stability {
         let failed = s.cells.iter().filter(|c| !c.outcome.is_converged()).count();
-        outln!("Stability: {} cases in {:.1} s, {} failed, {} panics", s.cells.len(), s.wall_time_s, failed, s.panics);
+        outln!(
+            "Stability: {} cases in {:.1} s, {} failed, {} panics",
+            s.cells.len(),
+            s.wall_time_s,
+            failed,
+            s.panics
+        );
     }
-    outln!("wrote {} files in {:.1} s:", summary.files.len(), summary.wall_time_s);
+    outln!(
+        "wrote {} files in {:.1} s:",
+        summary.files.len(),
+        summary.wall_time_s
+    );
     for f in &summary.files {
         outln!("  {}", f.display());
     }
@@ -623,9 +769,18 @@ fn parse_args() -> Result<Cli> {
         Err(e) if !e.use_stderr() => e.exit(),
         Err(e) => {
             let text = e.to_string();
-            let head = text.split("\n\nUsage:").next().unwrap_or_default().split("\n\nFor more information").next().unwrap_or_default();
+            let head = text
+                .split("\n\nUsage:")
+                .next()
+                .unwrap_or_default()
+                .split("\n\nFor more information")
+                .next()
+                .unwrap_or_default();
             let line = head.split_whitespace().collect::<Vec<_>>().join(" ");
-            Err(anyhow::anyhow!("{} (see `softrod --help`)", line.trim_start_matches("error: ")))
+            Err(anyhow::anyhow!(
+                "{} (see `softrod --help`)",
+                line.trim_start_matches("error: ")
+            ))
         }
     }
 }
