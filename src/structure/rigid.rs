@@ -26,6 +26,16 @@
 //!
 //! A rod end fixed to a body that is itself fixed to the ground has a
 //! constant pose: its map is affine in `σ`, exactly a clamp.
+//!
+//! The 3-D counterpart (a pose `(x, ψ)` with a rotation vector, rod ends
+//! of the spatial cable and of the full 3-D element) is in
+//! [`SpatialAttachment`].
+
+mod spatial;
+
+pub use spatial::{
+    rotate_3d, rotate_back_3d, rotation_vector_of, SpatialAttachment, SPATIAL_END_COLUMNS,
+};
 
 /// `R(θ) v` for the planar rotation by `theta` (rad).
 ///
