@@ -33,6 +33,7 @@
 
 mod spatial;
 
+pub(crate) use spatial::resolve_spatial;
 pub use spatial::{
     rotate_3d, rotate_back_3d, rotation_vector_of, SpatialAttachment, SPATIAL_END_COLUMNS,
 };
@@ -135,6 +136,15 @@ impl PlanarAttachment {
         }
         w
     }
+}
+
+/// Where a rod end sits on a rigid body: planar or in 3-D.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Attachment {
+    /// A planar cable node on a planar body.
+    Planar(PlanarAttachment),
+    /// A spatial-cable or full 3-D node on a 3-D body.
+    Spatial(SpatialAttachment),
 }
 
 #[cfg(test)]

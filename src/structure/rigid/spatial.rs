@@ -304,6 +304,87 @@ impl SpatialAttachment {
     }
 }
 
+/// The attachment of a rod end to a body in the reference: the end of the
+/// rod's straight reference at `end_m` with the unit tangent `dir`, the
+/// body at `body_m` turned by `body_psi`; a given `point_m` or `direction`
+/// (body frame) must agree with the reference (to `tol` of `length_m`, and
+/// `tol`). The section axes are those a straight full 3-D rod carries
+/// along `dir` (the element's `straight_node`), in the body frame. Errors
+/// name `{path}point_m` / `{path}direction`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn resolve_spatial(
+    path: &str,
+    end_m: [f64; 3],
+    dir: [f64; 3],
+    body_m: [f64; 3],
+    body_psi: [f64; 3],
+    point_m: &Option<Vec<f64>>,
+    direction: &Option<Vec<f64>>,
+    length_m: f64,
+    tol: f64,
+    node_dofs: usize,
+) -> Result<SpatialAttachment> {
+    use crate::element::{Ancf3d, NodeKinematics};
+    let rel = [
+        end_m[0] - body_m[0],
+        end_m[1] - body_m[1],
+        end_m[2] - body_m[2],
+    ];
+    let reference_point = rotate_back_3d(body_psi, rel);
+    let node = Ancf3d::straight_node(&end_m, &dir);
+    let axis = |k: usize| -> [f64; 3] {
+        let v = [node[k], node[k + 1], node[k + 2]];
+        rotate_back_3d(body_psi, v)
+    };
+    let frame = [axis(3), axis(6), axis(9)];
+    let point = match point_m {
+        None => reference_point,
+        Some(v) => {
+            crate::error::check_len(&format!("{path}point_m"), 3, v.len())?;
+            crate::error::check_all_finite(&format!("{path}point_m"), v)?;
+            let gap = (0..3)
+                .map(|i| (v[i] - reference_point[i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            if gap.is_nan() || gap > tol * length_m {
+                return Err(Error::invalid(
+                    format!("{path}point_m"),
+                    format!("{v:?}"),
+                    format!(
+                        "puts the joint {gap:.3e} m from the rod's end in the reference \
+                         (its end is at {reference_point:?} in the body frame)"
+                    ),
+                ));
+            }
+            [v[0], v[1], v[2]]
+        }
+    };
+    if let Some(v) = direction {
+        crate::error::check_len(&format!("{path}direction"), 3, v.len())?;
+        crate::error::check_all_finite(&format!("{path}direction"), v)?;
+        let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let off = if n > 0.0 {
+            (0..3)
+                .map(|i| (v[i] / n - frame[0][i]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        } else {
+            f64::INFINITY
+        };
+        if off.is_nan() || off > tol {
+            return Err(Error::invalid(
+                format!("{path}direction"),
+                format!("{v:?}"),
+                format!(
+                    "differs from the rod's direction {:?} (body frame) in the reference",
+                    frame[0]
+                ),
+            ));
+        }
+    }
+    SpatialAttachment::new(point, frame, node_dofs).map_err(|e| e.with_prefix(path))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

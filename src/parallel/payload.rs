@@ -1,0 +1,1 @@
+//! Payload estimation (32)–(35).
