@@ -2,6 +2,7 @@
 //! of an axial load; the platform's twist under a torque about the
 //! vertical axis, with and without torsion) and the measurement that
 //! decides between spatial-cable and full 3-D legs.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use softrod::parallel::{ParallelRobot, ParallelSpec};
 
@@ -107,7 +108,8 @@ fn the_actuated_robot_needs_section_frames() {
         p[leg * 6] = 60e3; // section 1, chamber 0
         p[leg * 6 + 4] = 30e3; // section 2, chamber 1
     }
-    let cases: [(&str, &[f64], [f64; 3], [f64; 3]); 4] = [
+    type Case<'a> = (&'a str, &'a [f64], [f64; 3], [f64; 3]);
+    let cases: [Case; 4] = [
         (
             "payload 200 g, vented",
             &[],

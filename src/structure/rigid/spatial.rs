@@ -191,7 +191,7 @@ impl SpatialAttachment {
         }
         let c = cross(&f[0], &f[1]);
         off = off.max((0..3).map(|i| (c[i] - f[2][i]).abs()).fold(0.0, f64::max));
-        if !(off <= 1e-9) {
+        if off.is_nan() || off > 1e-9 {
             return Err(Error::invalid(
                 "frame",
                 format!("{f:?}"),
@@ -215,10 +215,8 @@ impl SpatialAttachment {
         if self.node_dofs == 12 {
             let a2 = rotate_generic(&psi, self.frame[1]);
             let a3 = rotate_generic(&psi, self.frame[2]);
-            for i in 0..3 {
-                out[6 + i] = a2[i];
-                out[9 + i] = a3[i];
-            }
+            out[6..9].copy_from_slice(&a2);
+            out[9..12].copy_from_slice(&a3);
         }
         out
     }
