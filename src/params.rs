@@ -65,6 +65,10 @@ pub mod parallel {
     /// vertical legs).
     pub const PLATFORM_RADIUS_M: f64 = 0.04;
 
+    /// Radius of the platform itself (m): a printed disc of 100 mm diameter;
+    /// the legs' joints must lie on it.
+    pub const PLATFORM_DISC_RADIUS_M: f64 = 0.05;
+
     /// Leg length (m): one of the paper's 120 mm sections long, made of two
     /// pneumatic sections of 60 mm.
     pub const LEG_LENGTH_M: f64 = 0.12;

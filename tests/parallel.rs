@@ -10,6 +10,7 @@ use softrod::parallel::{ParallelRobot, ParallelSpec};
 fn vertical() -> ParallelSpec {
     let mut spec = ParallelSpec::default();
     spec.platform_radius_m = spec.base_radius_m;
+    spec.platform_disc_radius_m = spec.base_radius_m;
     spec.gravity_m_per_s2 = vec![0.0; 3];
     spec.mass_per_length_kg_per_m = 0.0;
     spec.platform_mass_kg = 0.0;

@@ -67,8 +67,11 @@ pub struct ParallelSpec {
     pub legs: usize,
     /// Radius of the base circle (m).
     pub base_radius_m: f64,
-    /// Radius of the platform circle (m).
+    /// Radius of the circle the legs are joined to the platform on (m).
     pub platform_radius_m: f64,
+    /// Radius of the platform itself (m): the joints must lie on it.
+    #[serde(default = "default_disc")]
+    pub platform_disc_radius_m: f64,
     /// Leg length (m).
     pub leg_length_m: f64,
     /// Sections per leg (three chambers each).
@@ -96,6 +99,9 @@ pub struct ParallelSpec {
 fn default_legs() -> usize {
     p::LEGS
 }
+fn default_disc() -> f64 {
+    p::PLATFORM_DISC_RADIUS_M
+}
 fn default_gravity() -> Vec<f64> {
     vec![0.0, 0.0, -9.81]
 }
@@ -107,6 +113,7 @@ impl Default for ParallelSpec {
             legs: p::LEGS,
             base_radius_m: p::BASE_RADIUS_M,
             platform_radius_m: p::PLATFORM_RADIUS_M,
+            platform_disc_radius_m: p::PLATFORM_DISC_RADIUS_M,
             leg_length_m: p::LEG_LENGTH_M,
             sections_per_leg: p::SECTIONS_PER_LEG,
             elements_per_section: p::ELEMENTS_PER_SECTION,
@@ -130,7 +137,8 @@ impl ParallelSpec {
     /// # Errors
     /// [`Error::InvalidParameter`] for a non-positive or non-finite length,
     /// radius or stiffness, legs that cannot reach the platform
-    /// (`|ρ_b − ρ_p| >= L`), no legs and no platform mass, no sections or
+    /// (`|ρ_b − ρ_p| >= L`), legs joined off the platform (`ρ_p` beyond
+    /// `platform_disc_radius_m`), no legs, no sections or
     /// elements; [`Error::DimensionMismatch`] for a gravity not of 3.
     ///
     /// # Example
@@ -154,6 +162,7 @@ impl ParallelSpec {
         for (name, v) in [
             ("base_radius_m", self.base_radius_m),
             ("platform_radius_m", self.platform_radius_m),
+            ("platform_disc_radius_m", self.platform_disc_radius_m),
             ("mass_per_length_kg_per_m", self.mass_per_length_kg_per_m),
             ("platform_mass_kg", self.platform_mass_kg),
         ] {
@@ -183,6 +192,16 @@ impl ParallelSpec {
             if v == 0 {
                 return Err(Error::invalid(f(name), v, "must be >= 1"));
             }
+        }
+        if self.platform_radius_m > self.platform_disc_radius_m {
+            return Err(Error::invalid(
+                f("platform_radius_m"),
+                self.platform_radius_m,
+                format!(
+                    "joins the legs off the platform (its radius is {} m)",
+                    self.platform_disc_radius_m
+                ),
+            ));
         }
         let gap = (self.base_radius_m - self.platform_radius_m).abs();
         if gap >= self.leg_length_m {
