@@ -56,6 +56,7 @@ pub mod loads;
 pub(crate) mod numeric;
 pub mod observe;
 pub mod outcome;
+pub mod parallel;
 pub mod params;
 pub mod plant;
 pub mod quadrature;

@@ -45,3 +45,59 @@ pub const GRAVITY_M_PER_S2: [f64; 2] = [0.0, -9.81];
 /// chamber at 60 kPa lifts the robot against its weight, the second
 /// section's lower chamber at 30 kPa curls the tip back down.
 pub const DEFAULT_PRESSURES_PA: [f64; 4] = [60.0e3, 0.0, 0.0, 30.0e3];
+
+/// The soft parallel robot (Figs. 7–8 of the paper, its ref. [48]): three
+/// pneumatic legs from a base circle to a rigid platform. The paper gives
+/// none of its numbers; they are chosen here, with their reasons.
+pub mod parallel {
+    /// Number of legs (the paper's robot has three).
+    pub const LEGS: usize = 3;
+
+    /// Radius of the circle the legs are clamped on (m). The legs are
+    /// hung from a base plate above (the weights of Fig. 8 hang from the
+    /// platform below); 60 mm leaves room for three actuators of about
+    /// 20 mm diameter with their fittings.
+    pub const BASE_RADIUS_M: f64 = 0.06;
+
+    /// Radius of the circle the legs are joined to the platform on (m).
+    /// Smaller than the base's, so the legs lean inwards by
+    /// `asin(0.02 / 0.12) ≈ 9.6°` (the closed-form tests use equal radii,
+    /// vertical legs).
+    pub const PLATFORM_RADIUS_M: f64 = 0.04;
+
+    /// Radius of the platform itself (m): a printed disc of 100 mm diameter;
+    /// the legs' joints must lie on it.
+    pub const PLATFORM_DISC_RADIUS_M: f64 = 0.05;
+
+    /// Leg length (m): one of the paper's 120 mm sections long, made of two
+    /// pneumatic sections of 60 mm.
+    pub const LEG_LENGTH_M: f64 = 0.12;
+
+    /// Pneumatic sections per leg, each with three chambers at 120°.
+    pub const SECTIONS_PER_LEG: usize = 2;
+
+    /// Elements per section of the model.
+    pub const ELEMENTS_PER_SECTION: usize = 4;
+
+    /// Bending stiffness EI (N·m²): the paper's identified value for its
+    /// actuators (Sec. IV), both section axes.
+    pub const EI_NM2: f64 = 0.025;
+
+    /// Axial stiffness EA (N): the paper's simulated robot (Fig. 3).
+    pub const EA_N: f64 = 300.0;
+
+    /// Torsional stiffness GJ (N·m²): an isotropic, incompressible
+    /// elastomer section (ν = 0.5, `J = 2I` for a round section) has
+    /// `GJ = EI/(1 + ν) = EI/1.5`.
+    pub const GJ_NM2: f64 = EI_NM2 / 1.5;
+
+    /// Mass per length of a leg (kg/m), as the manipulator's sections.
+    pub const MASS_PER_LENGTH_KG_PER_M: f64 = 0.15;
+
+    /// Platform mass (kg): a printed disc of about 100 mm diameter, 5 mm thick.
+    pub const PLATFORM_MASS_KG: f64 = 0.05;
+
+    /// Torque per chamber pressure (N·m/Pa), as the manipulator's: 100 kPa
+    /// bends a free 60 mm section by about 40°.
+    pub const GAIN_NM_PER_PA: f64 = 3.0e-6;
+}

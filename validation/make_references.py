@@ -1,6 +1,6 @@
 """Regenerate (or check) every reference file under reference/.
 
-    python validation/make_references.py [--venv] [--only cheap|exudyn|family|spatial|beam3d|elastica|skfem|contact]
+    python validation/make_references.py [--venv] [--only cheap|exudyn|family|spatial|beam3d|parallel|elastica|skfem|contact]
                                          [--out-dir DIR] [--check]
 
 --venv     create validation/.venv if absent, pip-install validation/requirements.txt
@@ -121,6 +121,11 @@ def generate(only, out_dir):
         names = exudyn_beam3d.CHEAP if only == "cheap" else list(exudyn_beam3d.CASES)
         for name in names:
             rows += exudyn_beam3d.run_case(name, out_dir)
+    if only in (None, "exudyn", "parallel", "cheap"):
+        import exudyn_parallel
+
+        for name in exudyn_parallel.CHEAP if only == "cheap" else list(exudyn_parallel.CASES):
+            rows += exudyn_parallel.run_case(name, out_dir)
     if only in (None, "skfem", "cheap"):
         import skfem_strip
 
@@ -231,7 +236,7 @@ def main():
     ap = argparse.ArgumentParser(description="Regenerate or check the reference/*.json files.")
     ap.add_argument("--venv", action="store_true", help="run inside validation/.venv (created/updated as needed)")
     ap.add_argument(
-        "--only", choices=["cheap", "exudyn", "family", "spatial", "beam3d", "elastica", "skfem", "contact"], default=None
+        "--only", choices=["cheap", "exudyn", "family", "spatial", "beam3d", "parallel", "elastica", "skfem", "contact"], default=None
     )
     ap.add_argument("--out-dir", default=DEFAULT_OUT)
     ap.add_argument("--check", action="store_true")

@@ -13,6 +13,8 @@ macro_rules! outln {
 
 use std::path::PathBuf;
 
+mod parallel;
+
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use serde::Serialize;
@@ -653,6 +655,9 @@ pub fn run() -> Result<()> {
             out,
         }) => {
             let pressures = pressures.map(|p| p.0);
+            if let Some(ps) = parallel::read(&scene)? {
+                return parallel::solve(ps, pressures, out.as_ref());
+            }
             let mut scene = Scene::from_file(&scene)?;
             if let (true, Some(p)) = (scene.has_auto_elements(), &pressures) {
                 // the refinement solves with the pressures the result is for
@@ -671,6 +676,14 @@ pub fn run() -> Result<()> {
             pressures,
             out,
         }) => {
+            if let Some(ps) = parallel::read(&scene)? {
+                return parallel::estimate(
+                    ps,
+                    markers.as_ref(),
+                    pressures.map(|p| p.0),
+                    out.as_ref(),
+                );
+            }
             let mut scene = Scene::from_file(&scene)?;
             if let Some(p) = pressures {
                 // the known actuation the estimate is for; checked like the scene's own

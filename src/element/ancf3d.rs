@@ -83,7 +83,7 @@
 //! straight rod, a rod rolled in a plane), and `M · (rotation)` for small
 //! rotations. Unlike the cable, a moment along the tangent does work.
 
-mod jet;
+pub(crate) mod jet;
 mod kinematics;
 
 use jet::{Dual, Jet, Scalar};

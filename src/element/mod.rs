@@ -29,6 +29,8 @@ use crate::error::{check_len, check_positive, Error, Result};
 use crate::quadrature::GaussRule;
 
 mod ancf3d;
+/// Forward-mode jets (value, gradient, Hessian), shared with the rigid ends.
+pub(crate) use ancf3d::jet;
 mod planar_cable;
 mod spatial_cable;
 

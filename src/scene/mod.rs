@@ -7,6 +7,7 @@
 
 mod ladder;
 mod load;
+pub mod parallel;
 mod robot;
 mod settings;
 

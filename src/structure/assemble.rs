@@ -12,6 +12,7 @@
 //! second term of the tangent comes from the blocks of the map that are
 //! nonlinear (rod ends on rigid bodies), once `g` is complete.
 
+use super::rigid::Attachment;
 use super::{BlockRule, Structure, StructureLoads, Triplets};
 use crate::element::Element;
 use crate::error::{check_all_finite, check_index, check_len, Error, Result};
@@ -127,10 +128,10 @@ impl<E: Element> Structure<E> {
                     b.force_n.len(),
                 )?;
             }
-            if !b.moment_nm.is_empty() && b.moment_nm.len() != 1 {
+            if !b.moment_nm.is_empty() && b.moment_nm.len() != E::MOMENT_DIM {
                 check_len(
                     &format!("loads.bodies[{k}].moment_nm"),
-                    1,
+                    E::MOMENT_DIM,
                     b.moment_nm.len(),
                 )?;
             }
@@ -627,24 +628,37 @@ impl<E: Element> Structure<E> {
         let mut out = Vec::with_capacity(self.joints.len());
         for (j, node) in &self.joints {
             let b = self.body_coordinates(j.body)?;
-            let pose = [q[b.start], q[b.start + 1], q[b.start + 2]];
             let block = *node;
             let stretch = match (self.dofs.rule(block), self.dofs.free(block)) {
-                (Some(BlockRule::PlanarRigidEnd { .. } | BlockRule::Affine { .. }), Some(r))
-                    if !r.is_empty() =>
-                {
-                    u[r.start]
-                }
+                (
+                    Some(
+                        BlockRule::PlanarRigidEnd { .. }
+                        | BlockRule::SpatialRigidEnd { .. }
+                        | BlockRule::Affine { .. },
+                    ),
+                    Some(r),
+                ) if !r.is_empty() => u[r.start],
                 _ => 0.0,
             };
             let s = node * nd;
-            let f = [-g[s], -g[s + 1], -g[s + 2], -g[s + 3]];
-            let w = j.attachment.wrench(pose, stretch, f);
+            let f: Vec<f64> = g[s..s + nd].iter().map(|v| -v).collect();
+            let (force_n, moment_nm) = match &j.attachment {
+                Attachment::Planar(a) => {
+                    let pose = [q[b.start], q[b.start + 1], q[b.start + 2]];
+                    let w = a.wrench(pose, stretch, [f[0], f[1], f[2], f[3]]);
+                    (vec![w[0], w[1]], vec![w[2]])
+                }
+                Attachment::Spatial(a) => {
+                    let pose: [f64; 6] = std::array::from_fn(|k| q[b.start + k]);
+                    let w = a.wrench(pose, stretch, &f);
+                    (w[..3].to_vec(), w[3..].to_vec())
+                }
+            };
             out.push(JointReaction {
                 joint: j.joint,
                 body: j.body,
-                force_n: vec![w[0], w[1]],
-                moment_nm: vec![w[2]],
+                force_n,
+                moment_nm,
             });
         }
         Ok(out)

@@ -47,6 +47,7 @@ pub use triplets::Triplets;
 use crate::element::Element;
 use crate::error::{check_index, Result};
 use crate::loads::force_field::ForceField;
+use rigid::Attachment;
 use spec::ResolvedJoint;
 
 /// One element of a structure: its two nodes (global node numbers) and where
@@ -177,18 +178,27 @@ impl<E: Element> Structure<E> {
                 } else if let Some(j) = joint_at(i, end) {
                     joints.push((j, node));
                     let b = &spec.rigid_bodies[j.body];
-                    if checked.grounded[j.body] {
+                    let mut pose = b.position_m.clone();
+                    pose.extend_from_slice(&b.orientation_rad);
+                    let body_block = n_nodes + j.body;
+                    match (j.attachment, checked.grounded[j.body]) {
                         // a joint to a fixed body is a clamp where the body holds the end
-                        let pose = [b.position_m[0], b.position_m[1], b.orientation_rad[0]];
-                        clamp_rule::<E>(
-                            j.attachment.node(pose, 0.0).to_vec(),
+                        (Attachment::Planar(a), true) => clamp_rule::<E>(
+                            a.node([pose[0], pose[1], pose[2]], 0.0).to_vec(),
                             Clamp::PositionAndDirection,
-                        )
-                    } else {
-                        BlockRule::PlanarRigidEnd {
-                            body_block: n_nodes + j.body,
-                            attachment: j.attachment,
+                        ),
+                        (Attachment::Spatial(a), true) => {
+                            let node = a.node(std::array::from_fn(|k| pose[k]), 0.0);
+                            clamp_rule::<E>(node[..nd].to_vec(), Clamp::PositionAndDirection)
                         }
+                        (Attachment::Planar(attachment), false) => BlockRule::PlanarRigidEnd {
+                            body_block,
+                            attachment,
+                        },
+                        (Attachment::Spatial(attachment), false) => BlockRule::SpatialRigidEnd {
+                            body_block,
+                            attachment,
+                        },
                     }
                 } else {
                     BlockRule::Free { len: nd }

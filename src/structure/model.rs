@@ -517,11 +517,15 @@ impl<E: Element> Assembled for Structure<E> {
             .chunks(nd)
             .flat_map(|node| node.get(d..2 * d).unwrap_or(&[]))
             .fold(0.0f64, |m, v| m.max(v.abs()));
-        // the bodies' angles: a planar pose is (x, y, θ)
+        // the bodies' angles: a planar pose is (x, y, θ), a 3-D one (x, ψ)
         let angles = (0..self.spec().rigid_bodies.len())
             .filter_map(|b| self.body_coordinates(b).ok())
-            .filter(|r| r.len() == 3)
-            .filter_map(|r| dq.get(r.start + 2))
+            .filter_map(|r| match r.len() {
+                3 => dq.get(r.start + 2..r.start + 3),
+                6 => dq.get(r.start + 3..r.start + 6),
+                _ => None,
+            })
+            .flatten()
             .fold(0.0f64, |m, v| m.max(v.abs()));
         slopes.max(angles)
     }

@@ -26,6 +26,17 @@
 //!
 //! A rod end fixed to a body that is itself fixed to the ground has a
 //! constant pose: its map is affine in `σ`, exactly a clamp.
+//!
+//! The 3-D counterpart (a pose `(x, ψ)` with a rotation vector, rod ends
+//! of the spatial cable and of the full 3-D element) is in
+//! [`SpatialAttachment`].
+
+mod spatial;
+
+pub(crate) use spatial::resolve_spatial;
+pub use spatial::{
+    rotate_3d, rotate_back_3d, rotation_vector_of, SpatialAttachment, SPATIAL_END_COLUMNS,
+};
 
 /// `R(θ) v` for the planar rotation by `theta` (rad).
 ///
@@ -125,6 +136,15 @@ impl PlanarAttachment {
         }
         w
     }
+}
+
+/// Where a rod end sits on a rigid body: planar or in 3-D.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Attachment {
+    /// A planar cable node on a planar body.
+    Planar(PlanarAttachment),
+    /// A spatial-cable or full 3-D node on a 3-D body.
+    Spatial(SpatialAttachment),
 }
 
 #[cfg(test)]

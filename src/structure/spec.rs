@@ -6,7 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::rigid::{rotate, rotate_back, PlanarAttachment};
+use super::rigid::{resolve_spatial, rotate, rotate_back, Attachment, PlanarAttachment};
 use super::rod::{Rod, MAX_ELEMENTS};
 use super::section::Section;
 use crate::element::{Element, DEFAULT_GAUSS_POINTS};
@@ -278,7 +278,7 @@ pub(crate) struct ResolvedJoint {
     pub(crate) rod: usize,
     pub(crate) end: RodEnd,
     pub(crate) body: usize,
-    pub(crate) attachment: PlanarAttachment,
+    pub(crate) attachment: Attachment,
 }
 
 /// The outcome of [`StructureSpec::check`]: what the builder needs.
@@ -385,13 +385,16 @@ impl StructureSpec {
             directions.push(unit(&format!("{path}.direction"), &r.direction, d)?);
         }
         let planar_cable = d == 2 && E::NODE_DOFS == 4;
-        if !self.rigid_bodies.is_empty() && !planar_cable {
+        let spatial = d == 3 && (E::NODE_DOFS == 6 || E::NODE_DOFS == 12);
+        if !self.rigid_bodies.is_empty() && !planar_cable && !spatial {
             return Err(Error::invalid(
                 "structure.rigid_bodies",
                 format!("{} bodies", self.rigid_bodies.len()),
-                "rigid bodies are implemented for the planar cable (DIM = 2, 4 coordinates per node)",
+                "rigid bodies are implemented for the planar cable, the spatial cable and the full 3-D element",
             ));
         }
+        // the pose's rotation: an angle in 2-D, a rotation vector in 3-D
+        let n_rot = if d == 2 { 1 } else { 3 };
         for (b, body) in self.rigid_bodies.iter().enumerate() {
             let p = |f: &str| format!("structure.rigid_bodies[{b}].{f}");
             if !(body.mass_kg.is_finite() && body.mass_kg >= 0.0) {
@@ -403,10 +406,10 @@ impl StructureSpec {
             }
             check_len(&p("position_m"), d, body.position_m.len())?;
             check_all_finite(&p("position_m"), &body.position_m)?;
-            check_len(&p("orientation_rad"), 1, body.orientation_rad.len())?;
+            check_len(&p("orientation_rad"), n_rot, body.orientation_rad.len())?;
             check_all_finite(&p("orientation_rad"), &body.orientation_rad)?;
         }
-        let (joints, grounded, joined_bodies) = self.check_joints(&directions)?;
+        let (joints, grounded, joined_bodies) = self.check_joints(&directions, E::NODE_DOFS)?;
         for (b, body) in self.rigid_bodies.iter().enumerate() {
             if body.mass_kg == 0.0 && !joined_bodies[b] {
                 return Err(Error::invalid(
@@ -431,6 +434,7 @@ impl StructureSpec {
     fn check_joints(
         &self,
         directions: &[Vec<f64>],
+        node_dofs: usize,
     ) -> Result<(Vec<ResolvedJoint>, Vec<bool>, Vec<bool>)> {
         let (n_rods, n_bodies) = (self.rods.len(), self.rigid_bodies.len());
         // which joint holds each rod end (2 per rod), which fixes each body
@@ -484,15 +488,42 @@ impl StructureSpec {
                     }
                     end_joint[slot] = Some(j);
                     joined[*body] = true;
-                    let attachment = self.attachment(
-                        j,
-                        *rod,
-                        *end,
-                        *body,
-                        &directions[*rod],
-                        point_m,
-                        direction,
-                    )?;
+                    let attachment = if node_dofs == 4 {
+                        Attachment::Planar(self.attachment(
+                            j,
+                            *rod,
+                            *end,
+                            *body,
+                            &directions[*rod],
+                            point_m,
+                            direction,
+                        )?)
+                    } else {
+                        let (r, b, dir) = (
+                            &self.rods[*rod],
+                            &self.rigid_bodies[*body],
+                            &directions[*rod],
+                        );
+                        let s = if *end == RodEnd::Start {
+                            0.0
+                        } else {
+                            r.length()
+                        };
+                        let v3 = |v: &[f64]| [v[0], v[1], v[2]];
+                        let end_m: [f64; 3] = std::array::from_fn(|i| r.start_m[i] + s * dir[i]);
+                        Attachment::Spatial(resolve_spatial(
+                            &p(""),
+                            end_m,
+                            v3(dir),
+                            v3(&b.position_m),
+                            v3(&b.orientation_rad),
+                            point_m,
+                            direction,
+                            r.length(),
+                            JOINT_TOLERANCE,
+                            node_dofs,
+                        )?)
+                    };
                     resolved.push(ResolvedJoint {
                         joint: j,
                         rod: *rod,

@@ -54,8 +54,72 @@ fn numbering_follows_the_blocks() {
 /// difference of `T(u)ᵀ g` (step 1e-6; bounds 1e-9).
 #[test]
 fn jacobian_and_second_derivative_match_finite_differences() {
-    let m = map();
+    check_derivatives(&map());
+}
+
+/// A spatial map: a full 3-D node and a spatial-cable node joined to one
+/// free body pose `(x, ψ)`, a clamp, a free node.
+fn spatial_map() -> DofMap {
+    let d = [0.36, 0.48, 0.8];
+    let a2 = [0.8, -0.6, 0.0];
+    let a3 = [0.48, 0.64, -0.6]; // d × a2
+    let at = |nd| SpatialAttachment::new([0.05, -0.02, 0.01], [d, a2, a3], nd).unwrap();
+    DofMap::new(vec![
+        BlockRule::Affine {
+            offset: vec![0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            directions: vec![vec![0.0, 0.0, 0.0, 0.0, 0.0, 1.0]],
+        },
+        BlockRule::Free { len: 6 },
+        BlockRule::SpatialRigidEnd {
+            body_block: 4,
+            attachment: at(12),
+        },
+        BlockRule::SpatialRigidEnd {
+            body_block: 4,
+            attachment: at(6),
+        },
+        BlockRule::Free { len: 6 },
+    ])
+    .unwrap()
+}
+
+/// The same checks for the spatial rigid ends: `∂φ/∂u` and `∂²φ/∂u²`
+/// of both node kinds by central differences.
+#[test]
+fn spatial_rigid_ends_match_finite_differences() {
+    let m = spatial_map();
+    assert_eq!((m.n_q(), m.n_u()), (6 + 6 + 12 + 6 + 6, 1 + 6 + 1 + 1 + 6));
+    assert_eq!(m.free(4), Some(9..15));
+    check_derivatives(&m);
+    // q back to u
     let u = u_at(&m);
+    let q = m.configuration(&u).unwrap();
+    let back = m.free_coordinates_of(&q).unwrap();
+    let worst = u
+        .iter()
+        .zip(&back)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-14, "free_coordinates_of: {worst:e}");
+    // a body block of the wrong size is refused, naming the field
+    let e = DofMap::new(vec![
+        BlockRule::Free { len: 3 },
+        BlockRule::SpatialRigidEnd {
+            body_block: 0,
+            attachment: SpatialAttachment::new(
+                [0.0; 3],
+                [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                6,
+            )
+            .unwrap(),
+        },
+    ])
+    .unwrap_err();
+    assert_eq!(e.field(), Some("dof_map.blocks[1].body_block"));
+}
+
+fn check_derivatives(m: &DofMap) {
+    let u = u_at(m);
     let (nu, nq) = (m.n_u(), m.n_q());
     let h = 1e-6;
     let mut t_fd = nalgebra::DMatrix::zeros(nq, nu);
@@ -96,12 +160,20 @@ fn jacobian_and_second_derivative_match_finite_differences() {
         assert!((r1[j] - tg[j]).abs() < 1e-9, "restrict {j}");
         assert!((r2[j] - tg[j]).abs() < 1e-9, "add_force {j}");
     }
-    // Tᵀ H T by add_stiffness on a random symmetric H
-    let hm = nalgebra::DMatrix::from_fn(nq, nq, |i, j| ((i * 7 + j * 7 + i * j) as f64).sin());
+    // Tᵀ H T by add_stiffness on a random symmetric H over at most
+    // MAX_DOFS coordinates (ending 6 before the last: the rigid ends)
+    let sel: Vec<usize> = if nq <= MAX_DOFS {
+        all.clone()
+    } else {
+        (nq - 6 - MAX_DOFS..nq - 6).collect()
+    };
+    let ns = sel.len();
+    let hm = nalgebra::DMatrix::from_fn(ns, ns, |i, j| ((i * 7 + j * 7 + i * j) as f64).sin());
     let mut k = nalgebra::DMatrix::zeros(nu, nu);
-    let hv: Vec<f64> = (0..nq * nq).map(|x| hm[(x / nq, x % nq)]).collect();
-    m.add_stiffness(&u, &all[..nq], &hv, 1.0, &mut k).unwrap();
-    let expect = t_fd.transpose() * &hm * &t_fd;
+    let hv: Vec<f64> = (0..ns * ns).map(|x| hm[(x / ns, x % ns)]).collect();
+    m.add_stiffness(&u, &sel, &hv, 1.0, &mut k).unwrap();
+    let t_sel = nalgebra::DMatrix::from_fn(ns, nu, |i, j| t_fd[(sel[i], j)]);
+    let expect = t_sel.transpose() * &hm * &t_sel;
     assert!((k - expect).amax() < 1e-8);
     // geometric term: d(Tᵀ g)/du at fixed g
     let mut kg = nalgebra::DMatrix::zeros(nu, nu);

@@ -1,0 +1,128 @@
+//! `softrod solve` and `softrod estimate` on a soft-parallel-robot scene
+//! (a scene file whose top-level object has a `parallel` key).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use serde::{Deserialize, Serialize};
+use softrod::parallel::payload::PayloadEstimate;
+use softrod::scene::parallel::{ParallelScene, ParallelSolution};
+
+/// The scene at `path` if it is a parallel-robot scene.
+pub(super) fn read(path: &Path) -> Result<Option<ParallelScene>> {
+    // a file too large (or unreadable) is the ordinary scene reader's to refuse
+    match std::fs::metadata(path) {
+        Ok(m) if m.len() <= softrod::scene::MAX_SCENE_BYTES as u64 => {}
+        _ => return Ok(None),
+    }
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    if !ParallelScene::is_parallel(&text) {
+        return Ok(None);
+    }
+    Ok(Some(ParallelScene::from_json(&text)?))
+}
+
+#[derive(Serialize)]
+struct SolveOut {
+    scene: String,
+    element: softrod::parallel::LegElement,
+    #[serde(flatten)]
+    solution: ParallelSolution,
+}
+
+/// `softrod solve` on a parallel scene (`pressures` override the scene's).
+pub(super) fn solve(
+    mut scene: ParallelScene,
+    pressures: Option<Vec<f64>>,
+    out: Option<&PathBuf>,
+) -> Result<()> {
+    if let Some(p) = pressures {
+        scene.pressures_pa = p;
+        scene.validate()?;
+    }
+    let solution = scene.solve()?;
+    super::write_json(
+        &SolveOut {
+            scene: scene.name.clone(),
+            element: scene.element,
+            solution,
+        },
+        out,
+    )
+}
+
+/// The markers file of a parallel estimate: the platform marker unloaded
+/// and loaded (m, world axes).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlatformMarkers {
+    unloaded_m: [f64; 3],
+    loaded_m: [f64; 3],
+}
+
+#[derive(Serialize)]
+struct EstimateOut {
+    scene: String,
+    observation: String,
+    force_n: [f64; 3],
+    mass_kg: f64,
+    iterations: usize,
+    residual_m: f64,
+}
+
+/// `softrod estimate` on a parallel scene: the payload at the platform
+/// from the platform marker (a markers file `{"unloaded_m": [..],
+/// "loaded_m": [..]}`; without one, the scene solved without and with a
+/// 100 g payload, exact).
+pub(super) fn estimate(
+    mut scene: ParallelScene,
+    markers: Option<&PathBuf>,
+    pressures: Option<Vec<f64>>,
+    out: Option<&PathBuf>,
+) -> Result<()> {
+    if let Some(p) = pressures {
+        scene.pressures_pa = p;
+        scene.validate()?;
+    }
+    let (m, source) = match markers {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            let m: PlatformMarkers = serde_json::from_str(&text)
+                .with_context(|| format!("{}: not a platform markers file", path.display()))?;
+            (m, format!("markers file {}", path.display()))
+        }
+        None => {
+            let free = scene.solve()?;
+            let mut loaded = scene.clone();
+            let g = &scene.parallel.gravity_m_per_s2;
+            loaded.platform_force_n = g.iter().map(|v| 0.1 * v).collect();
+            let with = loaded.solve()?;
+            let p =
+                |s: &ParallelSolution| [s.platform_pose[0], s.platform_pose[1], s.platform_pose[2]];
+            (
+                PlatformMarkers {
+                    unloaded_m: p(&free),
+                    loaded_m: p(&with),
+                },
+                "synthesized: the scene solved without and with a 100 g payload (exact); the estimate should be 0.1 kg".to_string(),
+            )
+        }
+    };
+    if markers.is_none() {
+        eprintln!("softrod: no markers file: {source}");
+    }
+    let e: PayloadEstimate = scene.estimate(m.unloaded_m, m.loaded_m)?;
+    super::write_json(
+        &EstimateOut {
+            scene: scene.name.clone(),
+            observation: source,
+            force_n: e.force_n,
+            mass_kg: e.mass_kg,
+            iterations: e.iterations,
+            residual_m: e.residual_m,
+        },
+        out,
+    )
+}

@@ -1,0 +1,251 @@
+//! A soft parallel robot as a scene file: the robot's numbers (the
+//! `parallel` object, [`ParallelSpec`]), the legs' element, the chamber
+//! pressures and the loads on the platform.
+//!
+//! ```json
+//! { "name": "parallel", "element": "ancf3d",
+//!   "parallel": { "base_radius_m": 0.06, "platform_radius_m": 0.04, "leg_length_m": 0.12,
+//!                 "sections_per_leg": 2, "elements_per_section": 4, "ea_n": 300, "ei_nm2": 0.025,
+//!                 "gj_nm2": 0.0167, "mass_per_length_kg_per_m": 0.15, "platform_mass_kg": 0.05,
+//!                 "gain_nm_per_pa": 3e-6 },
+//!   "pressures_pa": [], "platform_force_n": [0, 0, -0.98], "platform_moment_nm": [0, 0, 0] }
+//! ```
+//!
+//! A file is a parallel-robot scene when its top-level object has a
+//! `parallel` key ([`ParallelScene::is_parallel`]); `softrod solve` and
+//! `softrod estimate` then take this path.
+
+use serde::{Deserialize, Serialize};
+
+use crate::element::Element;
+use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::parallel::payload::PayloadEstimate;
+use crate::parallel::{LegElement, ParallelRobot, ParallelSpec};
+use crate::statics::Equilibrium;
+
+fn ancf3d() -> LegElement {
+    LegElement::Ancf3d
+}
+
+/// A parallel-robot scene.
+///
+/// # Example
+/// ```
+/// use softrod::scene::parallel::ParallelScene;
+/// let s = ParallelScene::from_json(r#"{"parallel": {"base_radius_m": 0.06, "platform_radius_m": 0.04,
+///   "leg_length_m": 0.12, "sections_per_leg": 2, "elements_per_section": 2, "ea_n": 300,
+///   "ei_nm2": 0.025, "gj_nm2": 0.0167, "platform_mass_kg": 0.05, "gain_nm_per_pa": 3e-6}}"#)?;
+/// let out = s.solve()?;
+/// assert!(out.platform_pose[2] < -0.11);
+/// # Ok::<(), softrod::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParallelScene {
+    /// Name.
+    #[serde(default)]
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// The legs' element (default `ancf3d`: the parallel robot needs the
+    /// section frames, see `tests/parallel.rs`).
+    #[serde(default = "ancf3d")]
+    pub element: LegElement,
+    /// The robot's numbers.
+    pub parallel: ParallelSpec,
+    /// Chamber pressures (Pa): none, or legs × sections × 3.
+    #[serde(default)]
+    pub pressures_pa: Vec<f64>,
+    /// A known force on the platform's centre (N, world axes; empty for none).
+    #[serde(default)]
+    pub platform_force_n: Vec<f64>,
+    /// A known moment on the platform (N·m, world axes; empty for none).
+    #[serde(default)]
+    pub platform_moment_nm: Vec<f64>,
+}
+
+/// What a solve of a parallel scene gives.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ParallelSolution {
+    /// The platform's pose: position of its centre (m), rotation vector (rad).
+    pub platform_pose: [f64; 6],
+    /// Every leg's node positions (m), base to platform.
+    pub legs_m: Vec<Vec<[f64; 3]>>,
+    /// Newton iterations.
+    pub iterations: usize,
+}
+
+impl ParallelScene {
+    /// Whether a scene text is a parallel-robot scene (its top-level object
+    /// has a `parallel` key); malformed JSON is not.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::scene::parallel::ParallelScene;
+    /// assert!(ParallelScene::is_parallel(r#"{"parallel": {}}"#));
+    /// assert!(!ParallelScene::is_parallel(r#"{"robot": {}}"#));
+    /// ```
+    pub fn is_parallel(text: &str) -> bool {
+        serde_json::from_str::<serde_json::Value>(text)
+            .ok()
+            .and_then(|v| v.as_object().map(|o| o.contains_key("parallel")))
+            .unwrap_or(false)
+    }
+
+    /// Parses and validates a parallel scene.
+    ///
+    /// # Errors
+    /// [`Error::Scene`] for malformed JSON, unknown or missing fields (the
+    /// message starts with the field's path); the errors of
+    /// [`ParallelScene::validate`].
+    pub fn from_json(text: &str) -> Result<Self> {
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let s: ParallelScene = serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let inner = e.into_inner();
+            Error::Scene {
+                message: if path.is_empty() || path == "." {
+                    inner.to_string()
+                } else {
+                    format!("{path}: {inner}")
+                },
+            }
+        })?;
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// Checks the scene: [`ParallelSpec::validate`] (fields `parallel.…`),
+    /// the pressure count and the platform's loads.
+    ///
+    /// # Errors
+    /// A typed error naming the field.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::scene::parallel::ParallelScene;
+    /// let e = ParallelScene::from_json(r#"{"parallel": {"base_radius_m": 0.06, "platform_radius_m": 0.04,
+    ///   "leg_length_m": 0.12, "sections_per_leg": 2, "elements_per_section": 2, "ea_n": 300,
+    ///   "ei_nm2": 0.025, "gj_nm2": 0.0167, "platform_mass_kg": 0.05, "gain_nm_per_pa": 3e-6},
+    ///   "platform_force_n": [0, 1]}"#).unwrap_err();
+    /// assert_eq!(e.field(), Some("platform_force_n"));
+    /// ```
+    pub fn validate(&self) -> Result<()> {
+        self.parallel.validate()?;
+        if !self.pressures_pa.is_empty() {
+            check_len(
+                "pressures_pa",
+                self.parallel.n_pressures(),
+                self.pressures_pa.len(),
+            )?;
+        }
+        check_all_finite("pressures_pa", &self.pressures_pa)?;
+        for (name, v) in [
+            ("platform_force_n", &self.platform_force_n),
+            ("platform_moment_nm", &self.platform_moment_nm),
+        ] {
+            if !v.is_empty() {
+                check_len(name, 3, v.len())?;
+            }
+            check_all_finite(name, v)?;
+        }
+        Ok(())
+    }
+
+    fn vec3(v: &[f64]) -> [f64; 3] {
+        match v {
+            [a, b, c] => [*a, *b, *c],
+            _ => [0.0; 3],
+        }
+    }
+
+    /// The static equilibrium of the scene.
+    ///
+    /// # Errors
+    /// As [`ParallelScene::validate`] and [`ParallelRobot::solve`].
+    pub fn solve(&self) -> Result<ParallelSolution> {
+        self.validate()?;
+        match self.element {
+            LegElement::Ancf3d => self.solve_with(&self.parallel.build_full()?),
+            LegElement::SpatialCable => self.solve_with(&self.parallel.build_cable()?),
+        }
+    }
+
+    fn loads_of<E: Element>(
+        &self,
+        robot: &ParallelRobot<E>,
+        extra_n: [f64; 3],
+    ) -> Result<crate::structure::StructureLoads> {
+        let f = Self::vec3(&self.platform_force_n);
+        robot.loads(
+            &self.pressures_pa,
+            [0, 1, 2].map(|i| f[i] + extra_n[i]),
+            Self::vec3(&self.platform_moment_nm),
+        )
+    }
+
+    fn solve_with<E: Element>(&self, robot: &ParallelRobot<E>) -> Result<ParallelSolution> {
+        let eq = robot.solve(&self.loads_of(robot, [0.0; 3])?, None)?;
+        solution(robot, &eq)
+    }
+
+    /// The payload force at the platform (32)–(35) from two measured
+    /// platform positions (m): unloaded and loaded, under the scene's
+    /// pressures and known loads (the relative displacement is applied to
+    /// the model's unloaded platform).
+    ///
+    /// # Errors
+    /// As [`ParallelScene::solve`] and
+    /// [`ParallelRobot::estimate_payload`].
+    pub fn estimate(&self, unloaded_m: [f64; 3], loaded_m: [f64; 3]) -> Result<PayloadEstimate> {
+        self.validate()?;
+        check_all_finite("unloaded_m", &unloaded_m)?;
+        check_all_finite("loaded_m", &loaded_m)?;
+        match self.element {
+            LegElement::Ancf3d => {
+                self.estimate_with(&self.parallel.build_full()?, unloaded_m, loaded_m)
+            }
+            LegElement::SpatialCable => {
+                self.estimate_with(&self.parallel.build_cable()?, unloaded_m, loaded_m)
+            }
+        }
+    }
+
+    fn estimate_with<E: Element>(
+        &self,
+        robot: &ParallelRobot<E>,
+        unloaded_m: [f64; 3],
+        loaded_m: [f64; 3],
+    ) -> Result<PayloadEstimate> {
+        if !self.platform_force_n.is_empty() {
+            return Err(Error::invalid(
+                "platform_force_n",
+                format!("{:?}", self.platform_force_n),
+                "the estimated payload is the platform's force: leave it out of the scene",
+            ));
+        }
+        let free = robot.solve(&self.loads_of(robot, [0.0; 3])?, None)?;
+        let x = robot.platform_pose(&free.q)?;
+        let target = [0, 1, 2].map(|i| x[i] + loaded_m[i] - unloaded_m[i]);
+        robot.estimate_payload(&self.pressures_pa, target, &free)
+    }
+}
+
+fn solution<E: Element>(robot: &ParallelRobot<E>, eq: &Equilibrium) -> Result<ParallelSolution> {
+    let s = robot.structure();
+    let mut legs = Vec::with_capacity(s.rods().len());
+    for (i, rod) in s.rods().iter().enumerate() {
+        let mut nodes = Vec::with_capacity(rod.n_nodes());
+        for k in 0..rod.n_nodes() {
+            let r = s.node_coordinates(i, k)?;
+            nodes.push([eq.q[r.start], eq.q[r.start + 1], eq.q[r.start + 2]]);
+        }
+        legs.push(nodes);
+    }
+    Ok(ParallelSolution {
+        platform_pose: robot.platform_pose(&eq.q)?,
+        legs_m: legs,
+        iterations: eq.report.iterations,
+    })
+}
