@@ -34,7 +34,7 @@ mod tangent;
 mod validity;
 
 pub use crate::structure::rod::MAX_ELEMENTS;
-pub use crate::structure::section::{Chamber, Section};
+pub use crate::structure::section::{Chamber, RestCurvatureProfile, Section};
 pub use crate::structure::Clamp;
 use spec::base_direction;
 pub use spec::{Base, RobotSpec};
@@ -311,9 +311,10 @@ impl<E: Element> Robot<E> {
             if i > 0 {
                 let sec = self.section_of_element(i - 1);
                 let spec = &self.rod.sections()[sec];
-                let k = torques[sec].first().copied().unwrap_or(0.0) / spec.ei_nm2
-                    + spec.rest_curvature_per_m;
                 let ds = s - s_prev;
+                let start = self.rod.node_arc()[self.section_nodes()[sec].0];
+                let k = torques[sec].first().copied().unwrap_or(0.0) / spec.ei_nm2
+                    + spec.rest_curvature_at(s_prev + 0.5 * ds - start);
                 let dth = k * ds;
                 if dth.abs() < 1e-9 {
                     x += ds * (th + 0.5 * dth).cos();

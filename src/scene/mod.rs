@@ -704,6 +704,7 @@ impl Scene {
             elements: params::ELEMENTS_PER_SECTION,
             auto_elements: false,
             rest_curvature_per_m: 0.0,
+            rest_curvature_profile: None,
             chambers: vec![chamber(1.0), chamber(-1.0)],
         };
         Scene {
