@@ -95,6 +95,10 @@ def generate(only, out_dir):
 
     rows = []
     if only in (None, "elastica"):
+        import elastica_follower
+
+        for name in elastica_follower.CASES:
+            rows += elastica_follower.run_case(name, out_dir)
         import elastica
 
         for name in C.CASES:

@@ -28,6 +28,7 @@ use crate::structure::rod::MAX_EDOF;
 use crate::structure::{BlockRule, DofMap, Rod};
 
 mod angles;
+mod follower;
 mod model;
 mod spec;
 mod tangent;
@@ -439,7 +440,8 @@ impl<E: Element> Robot<E> {
         self.assemble::<SymmetricMatrix>(q, Some((dead, out)), None, loads)
     }
 
-    /// Tangent stiffness `K = −∂Q/∂q` over the free coordinates, written
+    /// Tangent stiffness `K = −∂Q/∂q` over the free coordinates (with
+    /// follower loads its symmetric part: see [`Robot::follower_stiffness`]), written
     /// into `k`: a [`crate::linsolve::SymmetricMatrix`] on
     /// [`Robot::tangent_pattern`] (put on it if it is on another), or a band
     /// matrix with `kl = ku = 2 NODE_DOFS − 1` (resized if needed).
@@ -574,7 +576,24 @@ impl<E: Element> Robot<E> {
                     self.scatter_stiffness(e * nd, edof, h, -1.0, &mut **k)?;
                 }
                 Ok(())
-            })
+            })?;
+        // follower loads: Q_e = m q_e; the symmetric part of −m to the
+        // tangent (see follower::follower_stiffness for the rest)
+        self.rod.for_each_follower_element(loads, |e, m| {
+            if let Some((_, out)) = residual.as_mut() {
+                let qe = &q[e * nd..(e + 2) * nd];
+                let g: Vec<f64> = m
+                    .chunks_exact(qe.len())
+                    .map(|row| row.iter().zip(qe).map(|(a, b)| a * b).sum())
+                    .collect();
+                self.scatter_force(e * nd, &g, 1.0, out)?;
+            }
+            if let Some(k) = k.as_mut() {
+                let sym = follower::symmetric_part(m);
+                self.scatter_stiffness(e * nd, edof, &sym, -1.0, &mut **k)?;
+            }
+            Ok(())
+        })
     }
 
     /// Adds `sign · Tᵀ g` for a vector `g` over the coordinates
@@ -710,6 +729,7 @@ impl<E: Element> Robot<E> {
         d -= self
             .rod
             .point_moment_work_between(&self.base_node, from, to, loads)?;
+        d -= self.rod.follower_work_between(from, to, loads)?;
         Ok(d)
     }
 

@@ -7,7 +7,7 @@ use crate::element::Element;
 use crate::error::{
     check_all_finite, check_finite, check_index, check_len, check_positive, Error, Result,
 };
-use crate::loads::LineLoad;
+use crate::loads::{FollowerLoad, LineLoad};
 
 /// A known load of a scene (dead, world axes, SI). Vectors have as many
 /// components as the scene's element has dimensions (2 for `planar_cable`,
@@ -68,6 +68,10 @@ pub enum SceneLoad {
         /// Gravity (m/s²).
         gravity_m_per_s2: Vec<f64>,
     },
+    /// A pressure normal to the deformed backbone (N/m, planar scenes):
+    /// `pressure_n_per_m`, optionally on `[s_start_m, s_end_m]` only; see
+    /// [`crate::loads::FollowerLoad`].
+    Follower(FollowerLoad),
     /// A mass hanging at the tip (kg), under the scene's gravity.
     TipMass {
         /// Mass (kg).
@@ -247,5 +251,15 @@ pub(super) fn validate_scene_load<E: Element>(robot: &Robot<E>, load: &SceneLoad
             vector("gravity_m_per_s2", g)
         }
         SceneLoad::TipMass { mass_kg } => check_positive("mass_kg", *mass_kg),
+        SceneLoad::Follower(f) => {
+            if d != 2 {
+                return Err(Error::invalid(
+                    "type",
+                    "\"follower\"",
+                    "a pressure normal to the backbone needs a planar scene (planar_cable)",
+                ));
+            }
+            f.validate("", robot.length())
+        }
     }
 }

@@ -624,6 +624,7 @@ impl Scene {
         for (i, l) in self.loads.iter().enumerate() {
             match l {
                 SceneLoad::Distributed(p) => loads.line_loads.push(p.clone()),
+                SceneLoad::Follower(f) => loads.follower_loads.push(f.clone()),
                 SceneLoad::TipForce { force_n } => loads.point_forces.push(PointForce {
                     s_m: total,
                     force_n: force_n.clone(),
