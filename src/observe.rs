@@ -20,6 +20,12 @@ use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::{check_all_finite, check_index, check_len, check_positive, Error, Result};
 
+/// How far beyond the robot's scale a marker may be: positions beyond
+/// `MAX_MARKER_SCALE` robot lengths, weights beyond `MAX_MARKER_SCALE`
+/// times their default and tangents longer than it are refused (they can
+/// only overflow the estimate).
+pub const MAX_MARKER_SCALE: f64 = 1e12;
+
 /// One marker measurement.
 ///
 /// # Example
@@ -334,13 +340,33 @@ impl ObservationOperator {
             };
             check_len(&name("position_m"), d, m.position_m.len())?;
             check_all_finite(&name("position_m"), &m.position_m)?;
+            // magnitudes that can only overflow: 1e12 robot lengths away
+            let far = MAX_MARKER_SCALE * robot.length();
+            if let Some(k) = m.position_m.iter().position(|v| v.abs() > far) {
+                return Err(Error::invalid(
+                    format!("{}[{k}]", name("position_m")),
+                    m.position_m[k],
+                    format!("is more than {MAX_MARKER_SCALE:e} robot lengths from the origin (m)"),
+                ));
+            }
             let weights = |w: &Option<Vec<f64>>, field: &str, default: f64| -> Result<Vec<f64>> {
                 match w {
                     None => Ok(vec![default; d]),
                     Some(w) => {
                         check_len(&name(field), d, w.len())?;
                         for (k, v) in w.iter().enumerate() {
-                            check_positive(&format!("{}[{k}]", name(field)), *v)?;
+                            let n = format!("{}[{k}]", name(field));
+                            check_positive(&n, *v)?;
+                            if *v > MAX_MARKER_SCALE * default {
+                                return Err(Error::invalid(
+                                    n,
+                                    v,
+                                    format!(
+                                        "is more than {MAX_MARKER_SCALE:e} times the default \
+                                         weight {default:e} (1/sigma²): it can only overflow"
+                                    ),
+                                ));
+                            }
                         }
                         Ok(w.clone())
                     }
@@ -355,6 +381,15 @@ impl ObservationOperator {
             if let Some(t) = &m.tangent {
                 check_len(&name("tangent"), d, t.len())?;
                 check_all_finite(&name("tangent"), t)?;
+                let norm = t.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if !(norm > 0.0 && norm <= MAX_MARKER_SCALE) {
+                    return Err(Error::invalid(
+                        name("tangent"),
+                        format!("{t:?}"),
+                        "must be a direction r' of length about 1 (a stretch), not zero \
+                         and not beyond 1e12",
+                    ));
+                }
                 let wtan = weights(&m.tangent_weight, "tangent_weight", tw)?;
                 for (c, (y, w)) in t.iter().zip(&wtan).enumerate() {
                     op.rows.push(row(&dsh, c));

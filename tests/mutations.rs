@@ -140,3 +140,125 @@ fn every_refused_mutation_names_its_field() {
         wrong.join("\n")
     );
 }
+
+/// The markers files of the examples (`{"markers": [...]}`), swept like the
+/// scenes against the robot of `examples/two_section.json` (the same
+/// 0.24 m length): every number × every value, each refusal naming
+/// `observation.<path>` (the file's path under `observation.`).
+#[test]
+fn every_refused_marker_mutation_names_its_field() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
+    let scene =
+        Scene::from_json(&std::fs::read_to_string(format!("{dir}/two_section.json")).unwrap())
+            .unwrap();
+    let robot = scene.robot().unwrap();
+    let (mut total, mut refused, mut wrong) = (0, 0, Vec::new());
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|f| f.to_string_lossy().ends_with("markers.json"))
+        .collect();
+    files.sort();
+    for file in &files {
+        let base: Value = serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+        if base.get("markers").is_none() {
+            continue; // a parallel robot's measurement, not planar markers
+        }
+        let mut paths = Vec::new();
+        numbers(&base, String::new(), &mut paths, Vec::new());
+        for (path, steps) in &paths {
+            for x in VALUES {
+                total += 1;
+                let mut v = base.clone();
+                set(&mut v, steps, x);
+                let obs: softrod::estimate::Observation = serde_json::from_value(v).unwrap();
+                if let Err(e) = softrod::observe::ObservationOperator::new(&robot, &obs, 1e-5, 1e-3)
+                {
+                    refused += 1;
+                    let m = e.to_string();
+                    if !names(&m, &format!("observation.{path}")) {
+                        wrong.push(format!("{}: {path} = {x:e}: {m}", file.display()));
+                    }
+                }
+            }
+        }
+    }
+    println!(
+        "{total} marker mutations: {refused} refused, {} wrong",
+        wrong.len()
+    );
+    assert!(total >= 50, "only {total}");
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+#[test]
+fn magnitudes_that_can_only_overflow_are_refused_with_their_path() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
+    let base: Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{dir}/two_section.json")).unwrap())
+            .unwrap();
+    // α, a tip force, a line load, a moment 1e13 times the robot's scale
+    for (patch, field) in [
+        (
+            serde_json::json!({"solver": {"estimator": {"alpha": 1e300}}}),
+            "solver.estimator.alpha",
+        ),
+        (
+            serde_json::json!({"loads": [{"type": "tip_force", "force_n": [0.0, -1e13]}]}),
+            "loads[0].force_n[1]",
+        ),
+        (
+            serde_json::json!({"loads": [{"type": "distributed", "profile": "uniform", "w_n_per_m": [1e14, 0.0]}]}),
+            "loads[0].w_n_per_m[0]",
+        ),
+        (
+            serde_json::json!({"loads": [{"type": "tip_moment", "moment_nm": 1e12}]}),
+            "loads[0].moment_nm",
+        ),
+        (
+            serde_json::json!({"loads": [{"type": "tip_mass", "mass_kg": 1e12}]}),
+            "loads[0].mass_kg",
+        ),
+        (
+            serde_json::json!({"loads": [{"type": "follower", "pressure_n_per_m": -1e14}]}),
+            "loads[0].pressure_n_per_m",
+        ),
+    ] {
+        let mut v = base.clone();
+        for (k, x) in patch.as_object().unwrap() {
+            if k == "solver" {
+                v["solver"]["estimator"]["alpha"] = x["estimator"]["alpha"].clone();
+            } else {
+                v[k] = x.clone();
+            }
+        }
+        let err = Scene::from_json(&v.to_string()).unwrap_err();
+        assert_eq!(err.field(), Some(field), "{err}");
+    }
+    // the same loads at 1e9 times less are accepted
+    let mut v = base.clone();
+    v["loads"] = serde_json::json!([{"type": "tip_force", "force_n": [0.0, -1e4]}]);
+    assert!(Scene::from_json(&v.to_string()).is_ok());
+    // a marker's tangent of zero length, a weight and a position beyond scale
+    let scene = Scene::from_json(&base.to_string()).unwrap();
+    let robot = scene.robot().unwrap();
+    for (marker, field) in [
+        (
+            r#"{"s_m": 0.24, "position_m": [0.2, 0.0], "tangent": [0, 0]}"#,
+            "observation.markers[0].tangent",
+        ),
+        (
+            r#"{"s_m": 0.24, "position_m": [0.2, 0.0], "position_weight": [1e300, 1]}"#,
+            "observation.markers[0].position_weight[0]",
+        ),
+        (
+            r#"{"s_m": 0.24, "position_m": [1e300, 0.0]}"#,
+            "observation.markers[0].position_m[0]",
+        ),
+    ] {
+        let obs: softrod::estimate::Observation =
+            serde_json::from_str(&format!(r#"{{"markers": [{marker}]}}"#)).unwrap();
+        let err = softrod::observe::ObservationOperator::new(&robot, &obs, 1e-5, 1e-3).unwrap_err();
+        assert_eq!(err.field(), Some(field), "{err}");
+    }
+}

@@ -95,6 +95,10 @@ def generate(only, out_dir):
 
     rows = []
     if only in (None, "elastica"):
+        import elastica_follower
+
+        for name in elastica_follower.CASES:
+            rows += elastica_follower.run_case(name, out_dir)
         import elastica
 
         for name in C.CASES:
@@ -109,6 +113,11 @@ def generate(only, out_dir):
         import exudyn_load_family
 
         rows += exudyn_load_family.run_all(out_dir)
+    if only in (None, "exudyn"):
+        import exudyn_rest_curvature
+
+        for name in exudyn_rest_curvature.CASES:
+            rows += exudyn_rest_curvature.run_case(name, out_dir)
     if only in (None, "exudyn", "spatial", "cheap"):
         import exudyn_spatial_cable
 

@@ -28,13 +28,14 @@ use crate::structure::rod::MAX_EDOF;
 use crate::structure::{BlockRule, DofMap, Rod};
 
 mod angles;
+mod follower;
 mod model;
 mod spec;
 mod tangent;
 mod validity;
 
 pub use crate::structure::rod::MAX_ELEMENTS;
-pub use crate::structure::section::{Chamber, Section};
+pub use crate::structure::section::{Chamber, RestCurvatureProfile, Section};
 pub use crate::structure::Clamp;
 use spec::base_direction;
 pub use spec::{Base, RobotSpec};
@@ -311,9 +312,10 @@ impl<E: Element> Robot<E> {
             if i > 0 {
                 let sec = self.section_of_element(i - 1);
                 let spec = &self.rod.sections()[sec];
-                let k = torques[sec].first().copied().unwrap_or(0.0) / spec.ei_nm2
-                    + spec.rest_curvature_per_m;
                 let ds = s - s_prev;
+                let start = self.rod.node_arc()[self.section_nodes()[sec].0];
+                let k = torques[sec].first().copied().unwrap_or(0.0) / spec.ei_nm2
+                    + spec.rest_curvature_at(s_prev + 0.5 * ds - start);
                 let dth = k * ds;
                 if dth.abs() < 1e-9 {
                     x += ds * (th + 0.5 * dth).cos();
@@ -438,7 +440,8 @@ impl<E: Element> Robot<E> {
         self.assemble::<SymmetricMatrix>(q, Some((dead, out)), None, loads)
     }
 
-    /// Tangent stiffness `K = −∂Q/∂q` over the free coordinates, written
+    /// Tangent stiffness `K = −∂Q/∂q` over the free coordinates (with
+    /// follower loads its symmetric part: see [`Robot::follower_stiffness`]), written
     /// into `k`: a [`crate::linsolve::SymmetricMatrix`] on
     /// [`Robot::tangent_pattern`] (put on it if it is on another), or a band
     /// matrix with `kl = ku = 2 NODE_DOFS − 1` (resized if needed).
@@ -573,7 +576,24 @@ impl<E: Element> Robot<E> {
                     self.scatter_stiffness(e * nd, edof, h, -1.0, &mut **k)?;
                 }
                 Ok(())
-            })
+            })?;
+        // follower loads: Q_e = m q_e; the symmetric part of −m to the
+        // tangent (see follower::follower_stiffness for the rest)
+        self.rod.for_each_follower_element(loads, |e, m| {
+            if let Some((_, out)) = residual.as_mut() {
+                let qe = &q[e * nd..(e + 2) * nd];
+                let g: Vec<f64> = m
+                    .chunks_exact(qe.len())
+                    .map(|row| row.iter().zip(qe).map(|(a, b)| a * b).sum())
+                    .collect();
+                self.scatter_force(e * nd, &g, 1.0, out)?;
+            }
+            if let Some(k) = k.as_mut() {
+                let sym = follower::symmetric_part(m);
+                self.scatter_stiffness(e * nd, edof, &sym, -1.0, &mut **k)?;
+            }
+            Ok(())
+        })
     }
 
     /// Adds `sign · Tᵀ g` for a vector `g` over the coordinates
@@ -709,6 +729,7 @@ impl<E: Element> Robot<E> {
         d -= self
             .rod
             .point_moment_work_between(&self.base_node, from, to, loads)?;
+        d -= self.rod.follower_work_between(from, to, loads)?;
         Ok(d)
     }
 

@@ -96,9 +96,7 @@ impl RobotSpec {
     /// # Errors
     /// See [`Robot::new`].
     pub fn build_planar(&self) -> Result<Robot<PlanarCable>> {
-        Robot::new(self.clone(), |s, le, ax, be| {
-            PlanarCable::with_rules(le, s.ea_n, s.ei_nm2, s.rest_curvature_per_m, ax, be)
-        })
+        Robot::new(self.clone(), crate::structure::section::planar_element)
     }
 
     /// A spatial spec: base at the origin pointing along +x, gravity
@@ -134,6 +132,13 @@ impl RobotSpec {
     /// (the spatial cable has none: it has no section frame to bend in).
     pub fn build_spatial(&self) -> Result<Robot<SpatialCable>> {
         Robot::new(self.clone(), |s, le, ax, be| {
+            if s.rest_curvature_profile.is_some() {
+                return Err(Error::invalid(
+                    "rest_curvature_profile",
+                    "a profile",
+                    "the spatial cable has no rest curvature: leave it out",
+                ));
+            }
             if s.rest_curvature_per_m != 0.0 {
                 return Err(Error::invalid(
                     "rest_curvature_per_m",

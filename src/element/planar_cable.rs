@@ -1,7 +1,8 @@
 //! The planar ANCF cable (2-D, 4 coordinates per node, `q_i = [r_i, r_i']`):
 //! energy (19) with the scalar bending strain `κ = (r' × r'')_z / (r'·r')`, the
 //! rate of the tangent angle per undeformed length, and an optional rest
-//! curvature `κ0`.
+//! curvature `κ0(X)`: constant, or any function of the arc coordinate
+//! sampled at the bending Gauss points ([`PlanarCable::with_rest_curvature`]).
 
 use super::DEFAULT_GAUSS_POINTS;
 use super::{check_cable, gauss_points, hermite, Element, GaussPoint, NodeKinematics};
@@ -22,7 +23,8 @@ pub struct PlanarCable {
     le: f64,
     ea: f64,
     ei: f64,
-    kappa0: f64,
+    /// Rest curvature `κ0` (1/m) at each of `points` (0 at axial-only points).
+    kappa0: Vec<f64>,
     /// The Gauss points of both integrals: one list when the two rules
     /// coincide (the default), else the axial points followed by the
     /// bending points. The kernels evaluate `r'`, `r''` once per point.
@@ -61,14 +63,65 @@ impl PlanarCable {
         axial_points: usize,
         bending_points: usize,
     ) -> Result<Self> {
-        check_cable(le, ea, ei)?;
         check_finite("rest_curvature_per_m", kappa0)?;
+        Self::with_rest_curvature(le, ea, ei, |_| kappa0, axial_points, bending_points)
+    }
+
+    /// As [`PlanarCable::with_rules`], with a rest curvature that varies
+    /// along the element: `kappa0(x)` (1/m) at the local arc coordinate `x`
+    /// (m, `0 ..= le` from the element's first node), evaluated at the
+    /// bending Gauss points. The energy is then
+    /// `½ ∫ EI (κ − κ0(X))² dX` by the bending rule: exact for the
+    /// integrand's polynomial part, so a `κ0` with a kink inside an element
+    /// is integrated only approximately (put a node at the kink).
+    ///
+    /// # Errors
+    /// As [`PlanarCable::with_rules`]; [`crate::Error::InvalidParameter`]
+    /// naming `rest_curvature_per_m` if `kappa0` gives a non-finite value.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::element::{Element, PlanarCable};
+    /// // κ0 rising linearly from 1 to 2 1/m over a 0.1 m element
+    /// let e = PlanarCable::with_rest_curvature(0.1, 300.0, 0.025, |x| 1.0 + 10.0 * x, 5, 5).unwrap();
+    /// // the straight element stores the energy of bending it back: ½ EI ∫ κ0² dX
+    /// let qe = [0.0, 0.0, 1.0, 0.0, 0.1, 0.0, 1.0, 0.0];
+    /// let exact = 0.5 * 0.025 * (2.0f64.powi(3) - 1.0) / 3.0 * 0.1;
+    /// assert!((e.energy(&qe) - exact).abs() < 1e-15);
+    /// ```
+    pub fn with_rest_curvature(
+        le: f64,
+        ea: f64,
+        ei: f64,
+        kappa0: impl Fn(f64) -> f64,
+        axial_points: usize,
+        bending_points: usize,
+    ) -> Result<Self> {
+        check_cable(le, ea, ei)?;
         let points = gauss_points(le, ea, ei, axial_points, bending_points)?;
+        // the points' ξ, in the order `gauss_points` lists them
+        let rule = |n| crate::quadrature::GaussRule::new(n);
+        let (axial, bending) = (rule(axial_points)?, rule(bending_points)?);
+        let xis: Vec<f64> = if axial == bending {
+            axial.iter().map(|(xi, _)| xi).collect()
+        } else {
+            axial
+                .iter()
+                .chain(bending.iter())
+                .map(|(xi, _)| xi)
+                .collect()
+        };
+        let mut k0 = Vec::with_capacity(points.len());
+        for (gp, xi) in points.iter().zip(xis) {
+            let k = if gp.cb != 0.0 { kappa0(xi * le) } else { 0.0 };
+            check_finite("rest_curvature_per_m", k)?;
+            k0.push(k);
+        }
         Ok(PlanarCable {
             le,
             ea,
             ei,
-            kappa0,
+            kappa0: k0,
             points,
         })
     }
@@ -204,7 +257,7 @@ impl PlanarCable {
     /// Gradient of the energy density at a Gauss point with respect to
     /// `z = (a, b) = (r', r'')`, weights included.
     #[inline]
-    fn point_gradient(&self, gp: &GaussPoint, a: [f64; 2], b: [f64; 2]) -> [f64; 4] {
+    fn point_gradient(&self, gp: &GaussPoint, k0: f64, a: [f64; 2], b: [f64; 2]) -> [f64; 4] {
         let mut gz = [0.0; 4];
         if gp.ca != 0.0 {
             // dU/da = EA ε a/|a|
@@ -217,7 +270,7 @@ impl PlanarCable {
         }
         if gp.cb != 0.0 {
             let (kappa, g) = curvature_gradient(a, b);
-            let m = gp.cb * (kappa - self.kappa0);
+            let m = gp.cb * (kappa - k0);
             for (gi, v) in gz.iter_mut().zip(g) {
                 *gi += m * v;
             }
@@ -232,6 +285,7 @@ impl PlanarCable {
     fn point_derivatives(
         &self,
         gp: &GaussPoint,
+        k0: f64,
         a: [f64; 2],
         b: [f64; 2],
     ) -> ([f64; 4], [[f64; 4]; 4]) {
@@ -255,7 +309,7 @@ impl PlanarCable {
         }
         if gp.cb != 0.0 {
             let (kappa, g, hk) = curvature(a, b);
-            let dk = kappa - self.kappa0;
+            let dk = kappa - k0;
             let c = gp.cb;
             let m = c * dk;
             for i in 0..4 {
@@ -346,7 +400,7 @@ impl Element for PlanarCable {
             return f64::NAN;
         };
         let mut u = 0.0;
-        for gp in &self.points {
+        for (gp, k0) in self.points.iter().zip(&self.kappa0) {
             let (a, b) = derivs(qe, &gp.d1, &gp.d2);
             let aa = a[0] * a[0] + a[1] * a[1];
             if gp.ca != 0.0 {
@@ -354,7 +408,7 @@ impl Element for PlanarCable {
                 u += 0.5 * gp.ca * eps * eps;
             }
             if gp.cb != 0.0 {
-                let k = (a[0] * b[1] - a[1] * b[0]) / aa - self.kappa0;
+                let k = (a[0] * b[1] - a[1] * b[0]) / aa - k0;
                 u += 0.5 * gp.cb * k * k;
             }
         }
@@ -366,9 +420,9 @@ impl Element for PlanarCable {
         else {
             return;
         };
-        for gp in &self.points {
+        for (gp, &k0) in self.points.iter().zip(&self.kappa0) {
             let (a, b) = derivs(qe, &gp.d1, &gp.d2);
-            let gz = self.point_gradient(gp, a, b);
+            let gz = self.point_gradient(gp, k0, a, b);
             scatter_gradient(gp, &gz, grad);
         }
     }
@@ -379,9 +433,9 @@ impl Element for PlanarCable {
             return;
         };
         let mut h = [0.0; 64];
-        for gp in &self.points {
+        for (gp, &k0) in self.points.iter().zip(&self.kappa0) {
             let (a, b) = derivs(qe, &gp.d1, &gp.d2);
-            let (_, hz) = self.point_derivatives(gp, a, b);
+            let (_, hz) = self.point_derivatives(gp, k0, a, b);
             accumulate_hessian(gp, &hz, &mut h);
         }
         mirror_into(&h, hess);
@@ -396,9 +450,9 @@ impl Element for PlanarCable {
             return;
         };
         let mut h = [0.0; 64];
-        for gp in &self.points {
+        for (gp, &k0) in self.points.iter().zip(&self.kappa0) {
             let (a, b) = derivs(qe, &gp.d1, &gp.d2);
-            let (gz, hz) = self.point_derivatives(gp, a, b);
+            let (gz, hz) = self.point_derivatives(gp, k0, a, b);
             scatter_gradient(gp, &gz, grad);
             accumulate_hessian(gp, &hz, &mut h);
         }

@@ -123,6 +123,16 @@ impl<E: Element> Problem<E> {
                 ));
             }
         }
+        if !known.follower_loads.is_empty() {
+            // the sensitivities solve with the symmetric tangent: a follower
+            // load's stiffness is not symmetric (assembly::Robot::follower_stiffness)
+            return Err(Error::invalid(
+                "follower_loads",
+                format!("{} loads", known.follower_loads.len()),
+                "the estimator does not take follower loads among its known loads yet \
+                 (its sensitivities assume a symmetric tangent); solve with them instead",
+            ));
+        }
         let n_f = settings.load_model.n_params(&robot);
         for (i, b) in settings.bounds.iter().enumerate() {
             check_len(

@@ -2,16 +2,20 @@
 //! moments, the pressures of the actuation, and the unknown distributed load
 //! field `w(X) = S(X) F` (8), (16).
 //!
-//! Every load here is dead (fixed in world axes). Self-weight comes from
+//! Every load here is dead (fixed in world axes) except the
+//! [`FollowerLoad`], a pressure normal to the deformed backbone. Self-weight comes from
 //! the sections' mass per length and the scene's gravity, not from here.
 //! Forces that depend on the configuration (a spring holding a point, later
 //! contact) are [`force_field::ForceField`]s: energy, force and stiffness at
 //! `q`.
 
+pub mod follower;
 pub mod force_field;
 pub(crate) mod point_moment;
 
 use serde::{Deserialize, Serialize};
+
+pub use follower::FollowerLoad;
 
 use crate::error::{check_all_finite, check_finite, check_positive, Error, Result};
 
@@ -303,6 +307,10 @@ pub struct Loads {
     /// Known concentrated moments at arc positions.
     #[serde(default)]
     pub point_moments: Vec<PointMoment>,
+    /// Pressures normal to the deformed backbone (planar robots; not dead:
+    /// they turn with the rod).
+    #[serde(default)]
+    pub follower_loads: Vec<FollowerLoad>,
 }
 
 impl Loads {
@@ -363,6 +371,14 @@ impl Loads {
                 .map(|m| PointMoment {
                     s_m: m.s_m,
                     moment_nm: sc(&m.moment_nm),
+                })
+                .collect(),
+            follower_loads: self
+                .follower_loads
+                .iter()
+                .map(|f| FollowerLoad {
+                    pressure_n_per_m: f.pressure_n_per_m * factor,
+                    ..f.clone()
                 })
                 .collect(),
         }

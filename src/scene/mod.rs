@@ -339,7 +339,7 @@ impl Scene {
                      to the refinement: use a tip_moment, or fixed element counts",
                 ));
             }
-            load::validate_scene_load(&robot, load)
+            load::validate_scene_load(&robot, load, &self.gravity_m_per_s2)
                 .map_err(|e| e.with_prefix(&format!("loads[{i}].")))?;
         }
         self.check_pressure_bounds()?;
@@ -353,6 +353,7 @@ impl Scene {
             .validate()
             // (the estimator names its fields `estimator.…`)
             .map_err(|e| e.with_prefix("solver."))?;
+        self.check_alpha_scale(&robot)?;
         let total = robot.length();
         let mut seen: Vec<f64> = Vec::new();
         for (i, m) in self.markers.iter().enumerate() {
@@ -395,6 +396,39 @@ impl Scene {
         } else {
             self.check_unknown_load(&robot, false)
         }
+    }
+
+    /// Refuses an `alpha` so large that it can only overflow: beyond
+    /// `MAX_LOAD_SCALE` times the ratio of the markers' misfit at the
+    /// robot's length, `L² / σ²`, to the penalty of a load at the robot's
+    /// scale, `(EI / L³)² L` (at that ratio the markers no longer count).
+    fn check_alpha_scale<E: Element>(&self, robot: &Robot<E>) -> Result<()> {
+        let Some(alpha) = self.solver.estimator.alpha else {
+            return Ok(());
+        };
+        let l = robot.length();
+        let ei = robot
+            .rod()
+            .sections()
+            .iter()
+            .fold(0.0f64, |m, s| m.max(s.ei_nm2));
+        let sigma = self.solver.estimator.noise_sigma_m;
+        let w = ei / (l * l * l);
+        let max = load::MAX_LOAD_SCALE * (l * l / (sigma * sigma)) / (w * w * l);
+        // (a stiffness or length that itself overflows the scale is not
+        // alpha's fault: no bound then)
+        if max > 0.0 && max.is_finite() && alpha > max {
+            return Err(Error::invalid(
+                "solver.estimator.alpha",
+                alpha,
+                format!(
+                    "must be at most {max:.3e}: beyond that the penalty outweighs the markers \
+                     by more than {:e} and the estimate can only overflow",
+                    load::MAX_LOAD_SCALE
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// Each given pressure within its chamber's bounds; the error names the
@@ -624,6 +658,7 @@ impl Scene {
         for (i, l) in self.loads.iter().enumerate() {
             match l {
                 SceneLoad::Distributed(p) => loads.line_loads.push(p.clone()),
+                SceneLoad::Follower(f) => loads.follower_loads.push(f.clone()),
                 SceneLoad::TipForce { force_n } => loads.point_forces.push(PointForce {
                     s_m: total,
                     force_n: force_n.clone(),
@@ -704,6 +739,7 @@ impl Scene {
             elements: params::ELEMENTS_PER_SECTION,
             auto_elements: false,
             rest_curvature_per_m: 0.0,
+            rest_curvature_profile: None,
             chambers: vec![chamber(1.0), chamber(-1.0)],
         };
         Scene {

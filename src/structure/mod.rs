@@ -37,7 +37,7 @@ pub use assemble::JointReaction;
 pub use dofmap::{BlockRule, DofMap};
 pub use model::Assembled;
 pub use rod::Rod;
-pub use section::{Chamber, Section};
+pub use section::{Chamber, RestCurvatureProfile, Section};
 pub use spec::{
     BodyLoad, Clamp, EndSupport, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads,
     StructureSpec,

@@ -3,6 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::element::PlanarCable;
+
 /// One pneumatic chamber: its torque per pressure and its pressure bounds.
 ///
 /// # Example
@@ -60,8 +62,12 @@ pub struct Section {
     /// robot from such a section ([`crate::scene::Scene::robot`]); a
     /// [`crate::assembly::RobotSpec`] ignores the flag and builds with `elements`.
     pub auto_elements: bool,
-    /// Rest curvature `κ0` (1/m).
+    /// Rest curvature `κ0` (1/m), constant over the section.
     pub rest_curvature_per_m: f64,
+    /// Rest curvature as a function of the arc coordinate within the
+    /// section (planar robots), instead of the constant
+    /// `rest_curvature_per_m` (which must then be 0).
+    pub rest_curvature_profile: Option<RestCurvatureProfile>,
     /// Pneumatic chambers acting on this section.
     pub chambers: Vec<Chamber>,
 }
@@ -127,6 +133,8 @@ struct SectionJson {
     elements: ElementCount,
     #[serde(default)]
     rest_curvature_per_m: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    rest_curvature_profile: Option<RestCurvatureProfile>,
     #[serde(default)]
     chambers: Vec<Chamber>,
 }
@@ -145,6 +153,7 @@ impl From<SectionJson> for Section {
             elements,
             auto_elements,
             rest_curvature_per_m: j.rest_curvature_per_m,
+            rest_curvature_profile: j.rest_curvature_profile,
             chambers: j.chambers,
         }
     }
@@ -163,6 +172,7 @@ impl From<Section> for SectionJson {
                 ElementCount::Fixed(s.elements)
             },
             rest_curvature_per_m: s.rest_curvature_per_m,
+            rest_curvature_profile: s.rest_curvature_profile,
             chambers: s.chambers,
         }
     }
@@ -179,7 +189,103 @@ impl Section {
             elements,
             auto_elements: false,
             rest_curvature_per_m: 0.0,
+            rest_curvature_profile: None,
             chambers: Vec::new(),
+        }
+    }
+
+    /// The rest curvature `κ0` (1/m) at arc coordinate `x` (m) from the
+    /// section's start: the profile's value if it has one, else the
+    /// constant `rest_curvature_per_m`.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RestCurvatureProfile, Section};
+    /// let mut s = Section::uniform(0.2, 300.0, 0.025, 4);
+    /// s.rest_curvature_profile = Some(RestCurvatureProfile {
+    ///     s_m: vec![0.0, 0.2], kappa_per_m: vec![0.0, 10.0] });
+    /// assert!((s.rest_curvature_at(0.05) - 2.5).abs() < 1e-15);
+    /// ```
+    pub fn rest_curvature_at(&self, x: f64) -> f64 {
+        match &self.rest_curvature_profile {
+            Some(p) => p.at(x),
+            None => self.rest_curvature_per_m,
+        }
+    }
+}
+
+/// The planar cable element of length `le` (m) of section `s` (or of a
+/// piece of it, whose profile starts at the element's first node), with
+/// `ax` axial and `be` bending Gauss points: its constant rest curvature,
+/// or its profile sampled at the bending points.
+///
+/// # Errors
+/// As [`PlanarCable::with_rest_curvature`].
+pub(crate) fn planar_element(
+    s: &Section,
+    le: f64,
+    ax: usize,
+    be: usize,
+) -> crate::error::Result<PlanarCable> {
+    match &s.rest_curvature_profile {
+        Some(p) => PlanarCable::with_rest_curvature(le, s.ea_n, s.ei_nm2, |x| p.at(x), ax, be),
+        None => PlanarCable::with_rules(le, s.ea_n, s.ei_nm2, s.rest_curvature_per_m, ax, be),
+    }
+}
+
+/// A rest curvature `κ0(X)` given by a table: `kappa_per_m[k]` (1/m) at the
+/// arc coordinate `s_m[k]` (m, from the section's start), linear in `X`
+/// between neighbouring entries. The table covers its section: `s_m`
+/// starts at 0, ends at the section's `length_m` and never decreases; an
+/// arc position written twice is a jump (the second value holds from there
+/// on). Each element samples `κ0` at its bending Gauss points, so a kink or
+/// a jump is resolved exactly when a node sits on it.
+///
+/// A planar rod whose rest curvature is `κ0(X)` is, unloaded, the curve
+/// whose tangent angle is `θ(X) = θ(0) + ∫₀^X κ0`; a moment `M` at its tip
+/// adds `M / EI` to the curvature everywhere.
+///
+/// # Example
+/// ```
+/// use softrod::assembly::RestCurvatureProfile;
+/// let p: RestCurvatureProfile = serde_json::from_str(
+///     r#"{"s_m": [0, 0.05, 0.05, 0.1], "kappa_per_m": [0, 0, 5, 5]}"#).unwrap();
+/// assert_eq!((p.at(0.04), p.at(0.05), p.at(0.07)), (0.0, 5.0, 5.0));
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RestCurvatureProfile {
+    /// Arc coordinates of the entries (m from the section's start, non-decreasing).
+    pub s_m: Vec<f64>,
+    /// Rest curvature at each entry (1/m, counter-clockwise positive).
+    pub kappa_per_m: Vec<f64>,
+}
+
+impl RestCurvatureProfile {
+    /// `κ0` (1/m) at `x` (m); the first or last value beyond the table's ends.
+    pub fn at(&self, x: f64) -> f64 {
+        let k = self.s_m.partition_point(|&s| s <= x);
+        let Some(k) = k.checked_sub(1) else {
+            return self.kappa_per_m.first().copied().unwrap_or(0.0);
+        };
+        match (
+            self.s_m.get(k),
+            self.s_m.get(k + 1),
+            self.kappa_per_m.get(k),
+            self.kappa_per_m.get(k + 1),
+        ) {
+            (Some(s0), Some(s1), Some(a), Some(b)) if s1 > s0 => a + (x - s0) / (s1 - s0) * (b - a),
+            (_, _, Some(a), _) => *a,
+            _ => 0.0,
+        }
+    }
+
+    /// The same profile seen from `offset` (m) further along: entry `k` at
+    /// `s_m[k] − offset` (the profile of an element starting at `offset`).
+    pub(crate) fn shifted(&self, offset: f64) -> Self {
+        RestCurvatureProfile {
+            s_m: self.s_m.iter().map(|s| s - offset).collect(),
+            kappa_per_m: self.kappa_per_m.clone(),
         }
     }
 }

@@ -318,16 +318,7 @@ impl StructureSpec {
     /// # Errors
     /// See [`super::Structure::new`].
     pub fn build_planar(&self) -> Result<super::Structure<crate::element::PlanarCable>> {
-        super::Structure::new(self.clone(), |s, le, ax, be| {
-            crate::element::PlanarCable::with_rules(
-                le,
-                s.ea_n,
-                s.ei_nm2,
-                s.rest_curvature_per_m,
-                ax,
-                be,
-            )
-        })
+        super::Structure::new(self.clone(), super::section::planar_element)
     }
 
     /// Every check of a structure for elements of type `E`, in this order:

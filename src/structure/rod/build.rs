@@ -10,6 +10,84 @@ use crate::error::{
 use crate::linsolve::BandedMatrix;
 use crate::quadrature::GaussRule;
 
+/// Largest rest curvature times section length a profile may hold: `|κ0| L`
+/// is the angle the section turns through unloaded (rad); beyond 1e6 turns
+/// it is a unit mistake or a value that can only overflow.
+const MAX_REST_TURN_RAD: f64 = 1e6 * std::f64::consts::TAU;
+
+/// Checks a rest-curvature profile of `section` (fields `path.s_m[k]`,
+/// `path.kappa_per_m[k]`): at least two entries, as many values as arc
+/// positions, finite, non-decreasing from 0 to the section's length, and
+/// the constant `rest_curvature_per_m` left at 0.
+fn check_rest_curvature_profile(
+    path: &str,
+    p: &super::super::section::RestCurvatureProfile,
+    section: &Section,
+) -> Result<()> {
+    if section.rest_curvature_per_m != 0.0 {
+        return Err(Error::invalid(
+            path.replace("rest_curvature_profile", "rest_curvature_per_m"),
+            section.rest_curvature_per_m,
+            "must be 0 when the section has a rest_curvature_profile (give one or the other)",
+        ));
+    }
+    if p.s_m.len() < 2 {
+        return Err(Error::invalid(
+            format!("{path}.s_m"),
+            format!("{:?}", p.s_m),
+            "a profile needs at least two entries",
+        ));
+    }
+    check_len(
+        &format!("{path}.kappa_per_m"),
+        p.s_m.len(),
+        p.kappa_per_m.len(),
+    )?;
+    let l = section.length_m;
+    let tol = 1e-12 * l;
+    let last = p.s_m.len() - 1;
+    for (k, s) in p.s_m.iter().enumerate() {
+        let name = format!("{path}.s_m[{k}]");
+        check_finite(&name, *s)?;
+        if k == 0 && s.abs() > tol {
+            return Err(Error::invalid(
+                name,
+                s,
+                "the profile starts at the section's start: must be 0",
+            ));
+        }
+        if k > 0 && *s < p.s_m[k - 1] {
+            return Err(Error::invalid(
+                name,
+                s,
+                format!("must not be less than the entry before, {} m", p.s_m[k - 1]),
+            ));
+        }
+        if k == last && (s - l).abs() > tol {
+            return Err(Error::invalid(
+                name,
+                s,
+                format!("the profile ends at the section's end: must be its length_m, {l} m"),
+            ));
+        }
+    }
+    for (k, v) in p.kappa_per_m.iter().enumerate() {
+        let name = format!("{path}.kappa_per_m[{k}]");
+        check_finite(&name, *v)?;
+        if v.abs() * l > MAX_REST_TURN_RAD {
+            return Err(Error::invalid(
+                name,
+                v,
+                format!(
+                    "times the section's length {l} m turns by more than {MAX_REST_TURN_RAD:e} rad \
+                     (curvatures are in 1/m)"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Refuses a section longer than [`MAX_SECTION_LENGTH_M`] and sections whose
 /// lengths differ by more than [`MAX_SECTION_LENGTH_RATIO`], naming the
 /// longest (lengths already checked finite and positive).
@@ -132,6 +210,9 @@ impl<E: Element> Rod<E> {
                 ));
             }
             check_finite(&p("rest_curvature_per_m"), s.rest_curvature_per_m)?;
+            if let Some(profile) = &s.rest_curvature_profile {
+                check_rest_curvature_profile(&p("rest_curvature_profile"), profile, s)?;
+            }
             for (c, ch) in s.chambers.iter().enumerate() {
                 let pc = |f: &str| format!("{path}.sections[{i}].chambers[{c}].{f}");
                 check_len(
@@ -211,10 +292,23 @@ impl<E: Element> Rod<E> {
         for (i, sec) in sections.iter().enumerate() {
             let le = sec.length_m / sec.elements as f64;
             let start = node_s.len() - 1;
-            let proto = make(sec, le, axial_gauss_points, bending_gauss_points)
-                .map_err(|e| e.with_prefix(&format!("{path}.sections[{i}].")))?;
+            let prefix = |e: Error| e.with_prefix(&format!("{path}.sections[{i}]."));
+            let proto = make(sec, le, axial_gauss_points, bending_gauss_points).map_err(prefix)?;
             for k in 0..sec.elements {
-                elements.push(proto.clone());
+                match &sec.rest_curvature_profile {
+                    // κ0(X) differs from element to element: each its own piece
+                    Some(p) => {
+                        let piece = Section {
+                            rest_curvature_profile: Some(p.shifted(k as f64 * le)),
+                            ..sec.clone()
+                        };
+                        elements.push(
+                            make(&piece, le, axial_gauss_points, bending_gauss_points)
+                                .map_err(prefix)?,
+                        );
+                    }
+                    None => elements.push(proto.clone()),
+                }
                 node_s.push(if k + 1 == sec.elements {
                     s0 + sec.length_m
                 } else {

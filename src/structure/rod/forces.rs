@@ -86,6 +86,13 @@ impl<E: Element> Rod<E> {
     /// arc positions yet: `point_moments` are refused, not ignored.
     pub(crate) fn validate_loads_with(&self, loads: &Loads, clamped_start: bool) -> Result<()> {
         self.validate_all_loads(loads, clamped_start)?;
+        if !loads.follower_loads.is_empty() {
+            return Err(Error::invalid(
+                "follower_loads",
+                format!("{} loads", loads.follower_loads.len()),
+                "follower loads are assembled on a robot only, not yet in a structure",
+            ));
+        }
         if !loads.point_moments.is_empty() {
             return Err(Error::invalid(
                 "point_moments",
@@ -139,7 +146,8 @@ impl<E: Element> Rod<E> {
                 ));
             }
         }
-        self.validate_point_moments(loads, clamped_start)
+        self.validate_point_moments(loads, clamped_start)?;
+        self.validate_followers(loads)
     }
     /// The checks of [`Rod::validate_loads`] that indexing depends on (the
     /// pressure count, the nodes and sizes of the moments), without the
@@ -161,7 +169,8 @@ impl<E: Element> Rod<E> {
                 check_index(&format!("node_moments[{i}].node"), m.node, self.n_nodes())?;
             }
         }
-        self.check_point_moment_structure(loads)
+        self.check_point_moment_structure(loads)?;
+        self.check_follower_structure(loads)
     }
     /// The dead (configuration-independent) generalized forces over all
     /// coordinates: self-weight, line loads, point forces and `J_QF F` (N).

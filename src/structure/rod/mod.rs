@@ -20,6 +20,7 @@ pub use super::section::{Chamber, Section};
 
 mod arc_loads;
 mod build;
+mod follower;
 mod forces;
 mod geometry;
 
