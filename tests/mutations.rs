@@ -74,6 +74,7 @@ fn solve_finite(scene: &Scene) -> Result<bool, softrod::Error> {
     let q = match scene.build()? {
         SceneRobot::Planar(r) => solver.solve(&r, &loads, None)?.q,
         SceneRobot::Spatial(r) => solver.solve(&r, &loads, None)?.q,
+        SceneRobot::Full(r) => solver.solve(&r, &loads, None)?.q,
     };
     Ok(q.iter().all(|x| x.is_finite()))
 }

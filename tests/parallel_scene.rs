@@ -79,3 +79,37 @@ fn bad_input_is_refused_with_the_field() {
     let e = with(|v| v["parallel"]["leg_lenght_m"] = 0.1.into());
     assert!(e.to_string().contains("leg_lenght_m"), "{e}");
 }
+
+/// `"element": "ancf3d"` in a scene: one leg twisted by a tip moment about
+/// its axis turns by `T L / GJ` (GJ = EI/1.5), within 1e-6 relative; a
+/// singular section frame in the rest configuration (a zero direction) is
+/// refused naming `base.direction`.
+#[test]
+fn ancf3d_scene_twists_by_tl_over_gj_and_refuses_a_singular_frame() {
+    use softrod::element::{Ancf3d, NodeKinematics};
+    use softrod::scene::{Scene, SceneRobot};
+    use softrod::statics::StaticSolver;
+    let scene = Scene::from_json(&example("parallel_leg_ancf3d.json")).unwrap();
+    let SceneRobot::Full(robot) = scene.build().unwrap() else {
+        panic!("an ancf3d scene builds full 3-D elements");
+    };
+    let eq = StaticSolver::default()
+        .solve(&robot, &scene.loads().unwrap(), None)
+        .unwrap();
+    let tip = &eq.q[eq.q.len() - 12..];
+    let phi = Ancf3d::node_rotation(robot.base_node(), tip);
+    let closed = 1e-3 * 0.12 / (0.025 / 1.5);
+    let rel = (phi[2].abs() / closed - 1.0).abs();
+    println!(
+        "ancf3d scene twist {:.9e} rad, T L/GJ {closed:.9e}, rel {rel:.1e}",
+        phi[2]
+    );
+    assert!(rel < 1e-6);
+    let mut v: serde_json::Value =
+        serde_json::from_str(&example("parallel_leg_ancf3d.json")).unwrap();
+    v["base"]["direction"] = serde_json::json!([0.0, 0.0, 0.0]);
+    let e = Scene::from_json(&v.to_string())
+        .and_then(|s| s.build().map(|_| ()))
+        .unwrap_err();
+    assert_eq!(e.field(), Some("base.direction"), "{e}");
+}

@@ -266,6 +266,14 @@ fn solve(scene: &Scene, pressures: Option<Vec<f64>>) -> Result<SolveOut> {
             out.tip_angle_rad = fill_angles(&robot, &out.q, &mut out.nodes)?;
             Ok(out)
         }
+        SceneRobot::Full(robot) => {
+            let mut out = solve_with(scene, &robot, pressures)?;
+            out.tip_direction = out.nodes.last().map(|n| {
+                let l = n.slope.iter().map(|x| x * x).sum::<f64>().sqrt();
+                n.slope.iter().map(|x| x / l).collect()
+            });
+            Ok(out)
+        }
         SceneRobot::Spatial(robot) => {
             let mut out = solve_with(scene, &robot, pressures)?;
             let unit = |v: &[f64]| {
@@ -443,6 +451,15 @@ fn estimate(
             Ok(out)
         }
         SceneRobot::Spatial(robot) => estimate_with(scene, robot, backend, markers),
+        SceneRobot::Full(_) => Err(softrod::Error::InvalidParameter {
+            name: "robot.element".into(),
+            value: "ancf3d".into(),
+            reason: "the estimator observes cable nodes [r, r']: estimation on a chain of full 3-D \
+                     elements is not implemented (the parallel robot's payload estimation is: a scene \
+                     with a `parallel` object)"
+                .into(),
+        }
+        .into()),
     }
 }
 

@@ -39,6 +39,12 @@ pub enum ElementKind {
     /// scene's vectors (base position and direction, gravity, forces,
     /// moments, chamber gains) have three components.
     SpatialCable,
+    /// Full 3-D ANCF element (12 coordinates per node: `[r, r_X, r_Y,
+    /// r_Z]`, a section frame and torsion); 3-D vectors as the spatial
+    /// cable's. Its torsional stiffness is `GJ = EI/1.5` (an isotropic,
+    /// incompressible elastomer section, ν = 0.5, `J = 2I`), its bending
+    /// stiffness `EI` about both section axes.
+    Ancf3d,
 }
 
 impl ElementKind {
@@ -53,6 +59,7 @@ impl ElementKind {
         match self {
             ElementKind::PlanarCable => PlanarCable::DIM,
             ElementKind::SpatialCable => SpatialCable::DIM,
+            ElementKind::Ancf3d => crate::element::Ancf3d::DIM,
         }
     }
 
@@ -61,6 +68,7 @@ impl ElementKind {
         match self {
             ElementKind::PlanarCable => "planar_cable",
             ElementKind::SpatialCable => "spatial_cable",
+            ElementKind::Ancf3d => "ancf3d",
         }
     }
 
@@ -69,7 +77,7 @@ impl ElementKind {
     pub fn default_base(self) -> Base {
         match self {
             ElementKind::PlanarCable => Base::default(),
-            ElementKind::SpatialCable => RobotSpec::spatial(Vec::new()).base,
+            ElementKind::SpatialCable | ElementKind::Ancf3d => RobotSpec::spatial(Vec::new()).base,
         }
     }
 
@@ -78,7 +86,9 @@ impl ElementKind {
     pub fn default_gravity(self) -> Vec<f64> {
         match self {
             ElementKind::PlanarCable => gravity(),
-            ElementKind::SpatialCable => vec![0.0, 0.0, params::GRAVITY_M_PER_S2[1]],
+            ElementKind::SpatialCable | ElementKind::Ancf3d => {
+                vec![0.0, 0.0, params::GRAVITY_M_PER_S2[1]]
+            }
         }
     }
 }
@@ -298,7 +308,7 @@ impl Scene {
     pub fn validate(&self) -> Result<()> {
         match self.robot.element {
             ElementKind::PlanarCable => self.validate_as::<PlanarCable>(),
-            ElementKind::SpatialCable => {
+            ElementKind::SpatialCable | ElementKind::Ancf3d => {
                 if let Some(i) = self.robot.sections.iter().position(|s| s.auto_elements) {
                     return Err(Error::invalid(
                         format!("robot.sections[{i}].elements"),
@@ -306,7 +316,11 @@ impl Scene {
                         "the refinement of element counts is planar only: give a count",
                     ));
                 }
-                self.validate_as::<SpatialCable>()
+                if self.robot.element == ElementKind::Ancf3d {
+                    self.validate_as::<crate::element::Ancf3d>()
+                } else {
+                    self.validate_as::<SpatialCable>()
+                }
             }
         }
     }
@@ -514,6 +528,7 @@ impl Scene {
                 let node = match self.build()? {
                     SceneRobot::Planar(r) => node_at(&r, "unknown_load.s_m", s_m)?,
                     SceneRobot::Spatial(r) => node_at(&r, "unknown_load.s_m", s_m)?,
+                    SceneRobot::Full(r) => node_at(&r, "unknown_load.s_m", s_m)?,
                 };
                 settings.load_model = LoadModel::Concentrated { node };
             }

@@ -3,7 +3,7 @@
 
 use super::{ElementKind, Scene};
 use crate::assembly::{Robot, RobotSpec};
-use crate::element::{Element, PlanarCable, SpatialCable};
+use crate::element::{Ancf3d, Ancf3dStiffness, Element, PlanarCable, SpatialCable};
 use crate::error::{Error, Result};
 
 /// An element a scene can build its robot of.
@@ -39,6 +39,25 @@ impl SceneElement for SpatialCable {
     }
 }
 
+impl SceneElement for Ancf3d {
+    const KIND: ElementKind = ElementKind::Ancf3d;
+    /// `GJ = EI/1.5` and `EI` about both axes (see [`ElementKind::Ancf3d`]);
+    /// no rest curvature.
+    fn build_robot(spec: &RobotSpec) -> Result<Robot<Self>> {
+        Robot::new(spec.clone(), |s, le, ax, be| {
+            if s.rest_curvature_per_m != 0.0 {
+                return Err(Error::invalid(
+                    "rest_curvature_per_m",
+                    s.rest_curvature_per_m,
+                    "the ancf3d scene element has no rest curvature: must be 0",
+                ));
+            }
+            let k = Ancf3dStiffness::isotropic(s.ea_n, s.ei_nm2, s.ei_nm2 / 1.5);
+            Ancf3d::with_stiffness(le, k, ax.max(be))
+        })
+    }
+}
+
 /// The robot of a scene, of the element family the scene names.
 ///
 /// # Example
@@ -58,6 +77,8 @@ pub enum SceneRobot {
     Planar(Robot<PlanarCable>),
     /// A robot of spatial cables.
     Spatial(Robot<SpatialCable>),
+    /// A robot of full 3-D elements.
+    Full(Robot<Ancf3d>),
 }
 
 impl Scene {
@@ -98,6 +119,7 @@ impl Scene {
         Ok(match self.robot.element {
             ElementKind::PlanarCable => SceneRobot::Planar(self.robot_as()?),
             ElementKind::SpatialCable => SceneRobot::Spatial(self.robot_as()?),
+            ElementKind::Ancf3d => SceneRobot::Full(self.robot_as()?),
         })
     }
 }

@@ -1,0 +1,59 @@
+//! The soft parallel robot (params::parallel, full 3-D legs, 4 elements per
+//! section: 3 × 9 nodes of 12 coordinates and the platform, 331 free
+//! coordinates):
+//! - `parallel/static_solve/actuated`: a static solve from the straight
+//!   reference with chamber 0 of every leg's first section at 40 kPa and a
+//!   100 g payload;
+//! - `parallel/payload_step/actuated`: one payload estimation (32)–(35)
+//!   from the unloaded equilibrium to a platform displaced by a 100 g
+//!   payload (Newton on the payload force with warm static solves);
+//! - the same static solve with spatial-cable legs (the cheaper model the
+//!   torsion test rules out) for the price of the section frames.
+//!
+//! Measured (2026-11-30, shared 2-core machine): static solve 129 ms with
+//! full 3-D legs, 4.8 ms with spatial-cable legs; a payload step 205 ms.
+//!
+//! Run: `cargo bench --bench parallel`.
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use softrod::parallel::payload::fig8_configurations;
+use softrod::parallel::ParallelSpec;
+
+fn bench(c: &mut Criterion) {
+    let spec = ParallelSpec::default();
+    let full = spec.build_full().unwrap();
+    let cable = spec.build_cable().unwrap();
+    let p = fig8_configurations(&spec)[1].clone();
+    let payload = [0.0, 0.0, -0.981];
+    let loads = full.loads(&p, payload, [0.0; 3]).unwrap();
+    let cable_loads = cable.loads(&p, payload, [0.0; 3]).unwrap();
+    let free = full
+        .solve(&full.loads(&p, [0.0; 3], [0.0; 3]).unwrap(), None)
+        .unwrap();
+    let loaded = full.solve(&loads, Some(&free.q)).unwrap();
+    let x = full.platform_pose(&loaded.q).unwrap();
+    let mut g = c.benchmark_group("parallel");
+    g.sample_size(10).measurement_time(Duration::from_secs(5));
+    g.bench_function("static_solve/actuated", |b| {
+        b.iter(|| black_box(full.solve(&loads, None).unwrap()))
+    });
+    g.bench_function("static_solve_cable/actuated", |b| {
+        b.iter(|| black_box(cable.solve(&cable_loads, None).unwrap()))
+    });
+    g.bench_function("payload_step/actuated", |b| {
+        b.iter(|| {
+            black_box(
+                full.estimate_payload(&p, [x[0], x[1], x[2]], &free)
+                    .unwrap(),
+            )
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
