@@ -399,6 +399,29 @@ impl<E: Element> InverseKinematics<E> {
         Ok(best)
     }
 
+    /// As [`InverseKinematics::solve`], but starting from the pressures
+    /// `p0_pa` (Pa, within their bounds) instead of the last solution: the
+    /// solution nearest a known command where the workspace folds.
+    ///
+    /// # Errors
+    /// As [`InverseKinematics::solve`]; [`Error::InvalidParameter`] (field
+    /// `pressures_pa[i]`) for a start outside the bounds.
+    pub fn solve_starting_at(
+        &mut self,
+        x_d: &[f64],
+        f_hat: &[f64],
+        p0_pa: &[f64],
+    ) -> Result<IkSolution> {
+        let mut loads = self.known.clone();
+        loads.pressures_pa = p0_pa.to_vec();
+        self.robot.validate_loads(&loads)?;
+        check_len("f_hat", self.robot.n_q(), f_hat.len())?;
+        check_all_finite("f_hat", f_hat)?;
+        let (q0, _) = self.forward(p0_pa, f_hat, None)?;
+        self.warm = Some((p0_pa.to_vec(), q0));
+        self.solve(x_d, f_hat)
+    }
+
     /// Newton from the pressures `p0` (and the shape `q0`, or cold).
     #[allow(non_snake_case)]
     fn solve_from(
