@@ -21,6 +21,7 @@ mod boxqp;
 mod closed_loop;
 mod ik;
 mod mass;
+mod track;
 mod trajectory;
 mod updater;
 mod virtual_payload;
@@ -31,6 +32,10 @@ pub use closed_loop::{
 };
 pub use ik::{IkSettings, IkSolution, IkStatus, InverseKinematics, PressureBound};
 pub use mass::{MassEstimate, MassEstimator, MassForce, MassReference, MassSettings};
+pub use track::{
+    build_trajectory, payloads_from_json, run_track, CircleSpec, FigureEightSpec, LineSpec,
+    PressuresSpec, SamplesSpec, TrackFile, TrackRun, TrackSample, TrackSummary, TrajectorySpec,
+};
 pub use trajectory::Trajectory;
 pub use updater::{ParameterUpdater, UpdaterGains};
 pub use virtual_payload::VirtualPayload;
