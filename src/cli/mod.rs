@@ -11,6 +11,8 @@ macro_rules! outln {
     }};
 }
 
+mod track;
+
 use std::path::PathBuf;
 
 mod parallel;
@@ -73,6 +75,30 @@ enum Command {
         /// and/or spaces (overrides the scene's; as in `solve`).
         #[arg(long, value_parser = parse_pressures, allow_hyphen_values = true)]
         pressures: Option<PressuresArg>,
+        /// Output file (default: standard output).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Track a trajectory in closed loop against a simulated plant that is
+    /// not the scene's model (finer mesh, parameter errors, noise, lag,
+    /// payloads the controller is not told about) and write the time series
+    /// and a summary as JSON. The trajectory file (JSON) gives the path
+    /// (circle, figure_eight, line, samples, pressures), the loop's and the
+    /// plant's settings; the payload file a schedule {"payloads": [...]}.
+    /// Without a trajectory file: a 5 mm circle about the end effector at
+    /// the scene's pressures.
+    Track {
+        /// Scene file (JSON): the controller's model and the markers.
+        scene: PathBuf,
+        /// Trajectory file (JSON).
+        #[arg(long)]
+        trajectory: Option<PathBuf>,
+        /// Payload schedule (JSON), replacing the trajectory file's plant payloads.
+        #[arg(long)]
+        payload: Option<PathBuf>,
+        /// Controller (default: the trajectory file's, else ff+updater).
+        #[arg(long, value_enum)]
+        controller: Option<track::ControllerArg>,
         /// Output file (default: standard output).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -733,6 +759,13 @@ pub fn run() -> Result<()> {
             }
             Ok(())
         }
+        Some(Command::Track {
+            scene,
+            trajectory,
+            payload,
+            controller,
+            out,
+        }) => track::run(scene, trajectory, payload, controller, out),
         Some(Command::Report {
             out,
             quick,

@@ -7,7 +7,7 @@ use nalgebra::DMatrix;
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::Result;
-use crate::estimate::{Estimator, EstimatorSettings};
+use crate::estimate::{Backend, Estimator, EstimatorSettings, NewtonEstimator, SqpEstimator};
 use crate::linsolve::{AutoSolver, FactorOptions, SolverKind, SymmetricMatrix, TangentSolver};
 use crate::loads::Loads;
 use crate::sensitivity::Sensitivity;
@@ -28,6 +28,27 @@ pub(crate) fn dq_dp<E: Element>(
     Sensitivity::new(robot, &factors)?.dq_dp(q)
 }
 
+/// The loop's estimator: a concrete backend (not a `Box<dyn Estimator>`)
+/// so that a loop, warm start included, can be cloned: a benchmark restores
+/// the same state for every measured step, a sweep branches one settled loop.
+#[derive(Debug, Clone)]
+pub(crate) enum LoopEstimator<E: Element> {
+    /// The reduced Gauss–Newton backend.
+    Newton(NewtonEstimator<E>),
+    /// The SQP backend.
+    Sqp(SqpEstimator<E>),
+}
+
+impl<E: Element + 'static> LoopEstimator<E> {
+    /// The estimator as the trait object.
+    pub(crate) fn as_dyn(&mut self) -> &mut dyn Estimator {
+        match self {
+            LoopEstimator::Newton(e) => e,
+            LoopEstimator::Sqp(e) => e,
+        }
+    }
+}
+
 /// The estimator of `settings.backend` for `robot` under the known loads
 /// `known` at the chamber pressures `pressures_pa`.
 ///
@@ -38,10 +59,12 @@ pub(crate) fn estimator_at<E: Element + 'static>(
     known: &Loads,
     pressures_pa: &[f64],
     settings: &EstimatorSettings,
-) -> Result<Box<dyn Estimator>> {
+) -> Result<LoopEstimator<E>> {
     let mut loads = known.clone();
     loads.pressures_pa = pressures_pa.to_vec();
-    settings
-        .backend
-        .build(robot.clone(), loads, settings.clone())
+    let (robot, settings) = (robot.clone(), settings.clone());
+    Ok(match settings.backend {
+        Backend::Newton => LoopEstimator::Newton(NewtonEstimator::new(robot, loads, settings)?),
+        Backend::Sqp => LoopEstimator::Sqp(SqpEstimator::new(robot, loads, settings)?),
+    })
 }

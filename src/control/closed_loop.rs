@@ -186,7 +186,11 @@ impl TimeSeries {
 ///
 /// # Example
 /// See `tests/control.rs` and `examples/track_fig6.rs`.
-#[derive(Debug)]
+///
+/// A clone carries the whole state (updater, warm estimator, warm inverse
+/// kinematics, last good estimate, last command): two clones fed the same
+/// frames give the same commands.
+#[derive(Debug, Clone)]
 pub struct ClosedLoop<E: Element> {
     model: Robot<E>,
     known: Loads,
@@ -199,20 +203,7 @@ pub struct ClosedLoop<E: Element> {
     virtual_payload: Option<VirtualPayload>,
     /// The estimator, built on the first frame and kept warm after (its
     /// known pressures replaced each step).
-    estimator: EstimatorSlot,
-}
-
-/// The loop's estimator (`None` until the first frame).
-#[derive(Default)]
-struct EstimatorSlot(Option<Box<dyn crate::estimate::Estimator>>);
-
-impl std::fmt::Debug for EstimatorSlot {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match &self.0 {
-            Some(e) => write!(f, "EstimatorSlot({:?}, alpha {:?})", e.backend(), e.alpha()),
-            None => f.write_str("EstimatorSlot(None)"),
-        }
-    }
+    estimator: Option<adapter::LoopEstimator<E>>,
 }
 
 impl<E: Element + 'static> ClosedLoop<E> {
@@ -255,7 +246,7 @@ impl<E: Element + 'static> ClosedLoop<E> {
             last_good: None,
             commanded_pa,
             virtual_payload: None,
-            estimator: EstimatorSlot::default(),
+            estimator: None,
         })
     }
 
@@ -308,11 +299,11 @@ impl<E: Element + 'static> ClosedLoop<E> {
             Err(_) => return keep(self, None),
         };
         // built once, then warm: only the commanded pressures change
-        let ready = match self.estimator.0.as_mut() {
+        let ready = match self.estimator.as_mut() {
             Some(e) => {
                 let mut known = self.known.clone();
                 known.pressures_pa.clone_from(&self.commanded_pa);
-                e.set_known_loads(known)
+                e.as_dyn().set_known_loads(known)
             }
             None => adapter::estimator_at(
                 &self.model,
@@ -320,10 +311,11 @@ impl<E: Element + 'static> ClosedLoop<E> {
                 &self.commanded_pa,
                 &self.settings.estimator,
             )
-            .map(|e| self.estimator.0 = Some(e)),
+            .map(|e| self.estimator = Some(e)),
         };
-        let est = ready.and_then(|()| match self.estimator.0.as_mut() {
+        let est = ready.and_then(|()| match self.estimator.as_mut() {
             Some(e) => {
+                let e = e.as_dyn();
                 let r = e.step(&obs);
                 if self.settings.estimator.alpha.is_none() {
                     self.settings.estimator.alpha = e.alpha();

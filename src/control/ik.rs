@@ -360,16 +360,21 @@ impl<E: Element> InverseKinematics<E> {
                 (p, None)
             }
         };
-        let mut best = self.solve_from(x_d, f_hat, p0, q0)?;
-        if best.status.is_reached() {
-            self.warm = Some((best.pressures_pa.clone(), best.q.clone()));
-            return Ok(best);
-        }
+        // the warm start; a static solve that fails from it is not the end:
+        // the starts below are cold
+        let (mut best, first_err) = match self.solve_from(x_d, f_hat, p0, q0) {
+            Ok(s) if s.status.is_reached() => {
+                self.warm = Some((s.pressures_pa.clone(), s.q.clone()));
+                return Ok(s);
+            }
+            Ok(s) => (Some(s), None),
+            Err(e) => (None, Some(e)),
+        };
         // not reached from the warm start: a local minimum of the distance
         // is possible (the workspace folds), so try every chamber at its
         // minimum or mid-range (2^n starts, n ≤ 6) and keep the closest
         let n_starts = if np <= 6 { 1usize << np } else { 2 };
-        let mut iterations = best.iterations;
+        let mut iterations = best.as_ref().map_or(0, |b| b.iterations);
         for code in 0..n_starts {
             let p: Vec<f64> = bounds
                 .iter()
@@ -386,17 +391,52 @@ impl<E: Element> InverseKinematics<E> {
                 continue;
             };
             iterations += s.iterations;
-            if s.status.error_m() < best.status.error_m() {
+            if best
+                .as_ref()
+                .is_none_or(|b| s.status.error_m() < b.status.error_m())
+            {
                 let reached = s.status.is_reached();
-                best = s;
+                best = Some(s);
                 if reached {
                     break;
                 }
             }
         }
+        let Some(mut best) = best else {
+            return Err(first_err.unwrap_or_else(|| {
+                Error::invalid(
+                    "x_d",
+                    format!("{x_d:?}"),
+                    "no start of the inverse kinematics found an equilibrium",
+                )
+            }));
+        };
         best.iterations = iterations;
         self.warm = Some((best.pressures_pa.clone(), best.q.clone()));
         Ok(best)
+    }
+
+    /// As [`InverseKinematics::solve`], but starting from the pressures
+    /// `p0_pa` (Pa, within their bounds) instead of the last solution: the
+    /// solution nearest a known command where the workspace folds.
+    ///
+    /// # Errors
+    /// As [`InverseKinematics::solve`]; [`Error::InvalidParameter`] (field
+    /// `pressures_pa[i]`) for a start outside the bounds.
+    pub fn solve_starting_at(
+        &mut self,
+        x_d: &[f64],
+        f_hat: &[f64],
+        p0_pa: &[f64],
+    ) -> Result<IkSolution> {
+        let mut loads = self.known.clone();
+        loads.pressures_pa = p0_pa.to_vec();
+        self.robot.validate_loads(&loads)?;
+        check_len("f_hat", self.robot.n_q(), f_hat.len())?;
+        check_all_finite("f_hat", f_hat)?;
+        let (q0, _) = self.forward(p0_pa, f_hat, None)?;
+        self.warm = Some((p0_pa.to_vec(), q0));
+        self.solve(x_d, f_hat)
     }
 
     /// Newton from the pressures `p0` (and the shape `q0`, or cold).

@@ -10,6 +10,8 @@
 //!   effector at `x_d`" by Newton in the pressure bounds, redundancy by
 //!   minimum `Σ P̂²`, unreachable targets reported.
 //! - [`ParameterUpdater`]: (31), exact at the control rate.
+//! - [`MassEstimator`]: the mass hanging at a point from the end effector's
+//!   displacement, with the concentrated-load model (32)–(35).
 //! - [`VirtualPayload`]: the load estimated on a payload-free run, as a
 //!   function of the configuration, to subtract.
 //! - [`ClosedLoop`]: one controller stepping against a [`crate::plant::Plant`].
@@ -18,14 +20,23 @@ mod adapter;
 mod boxqp;
 mod closed_loop;
 mod ik;
+mod mass;
+mod track;
 mod trajectory;
 mod updater;
 mod virtual_payload;
+mod weighing;
 
 pub use closed_loop::{
     ClosedLoop, ControllerKind, EstimateFlag, LoopSample, LoopSettings, TimeSeries,
 };
 pub use ik::{IkSettings, IkSolution, IkStatus, InverseKinematics, PressureBound};
+pub use mass::{MassEstimate, MassEstimator, MassForce, MassReference, MassSettings};
+pub use track::{
+    build_trajectory, payloads_from_json, run_track, CircleSpec, FigureEightSpec, LineSpec,
+    PressuresSpec, SamplesSpec, TrackFile, TrackRun, TrackSample, TrackSummary, TrajectorySpec,
+};
 pub use trajectory::Trajectory;
 pub use updater::{ParameterUpdater, UpdaterGains};
 pub use virtual_payload::VirtualPayload;
+pub use weighing::{MassConfiguration, MassRow, MassTable, WeighingExperiment};

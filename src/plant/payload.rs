@@ -51,9 +51,13 @@ pub enum PayloadKind {
 /// use softrod::plant::{Payload, PayloadKind};
 /// let p = Payload { kind: PayloadKind::PointMass { mass_kg: 0.02, s_m: 0.24 }, start_s: 2.0, end_s: None };
 /// assert!(!p.acts_at(1.0) && p.acts_at(2.5));
+/// // as written in a file: the kind's fields and the times side by side
+/// let q: Payload = serde_json::from_str(r#"{"kind": "point_mass", "mass_kg": 0.02, "s_m": 0.24, "start_s": 2.0}"#).unwrap();
+/// assert_eq!(q, p);
+/// assert!(serde_json::from_str::<Payload>(r#"{"kind": "point_mass", "mass_kg": 0.02, "s_m": 0.24, "colour": 1}"#).is_err());
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(from = "PayloadRepr")]
 pub struct Payload {
     /// The payload.
     #[serde(flatten)]
@@ -64,6 +68,83 @@ pub struct Payload {
     /// Time it is taken off (s, > `start_s`), or never (default).
     #[serde(default)]
     pub end_s: Option<f64>,
+}
+
+/// A payload as written: the kind's fields and the times side by side
+/// (serde's `flatten` cannot refuse unknown fields, this can).
+#[derive(Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+enum PayloadRepr {
+    PointMass {
+        mass_kg: f64,
+        s_m: f64,
+        #[serde(default)]
+        start_s: f64,
+        #[serde(default)]
+        end_s: Option<f64>,
+    },
+    Distributed {
+        mass_per_length_kg_per_m: f64,
+        #[serde(default)]
+        start_s: f64,
+        #[serde(default)]
+        end_s: Option<f64>,
+    },
+    Sliding {
+        mass_kg: f64,
+        from_s_m: f64,
+        to_s_m: f64,
+        speed_m_per_s: f64,
+        #[serde(default)]
+        start_s: f64,
+        #[serde(default)]
+        end_s: Option<f64>,
+    },
+}
+
+impl From<PayloadRepr> for Payload {
+    fn from(r: PayloadRepr) -> Self {
+        match r {
+            PayloadRepr::PointMass {
+                mass_kg,
+                s_m,
+                start_s,
+                end_s,
+            } => Payload {
+                kind: PayloadKind::PointMass { mass_kg, s_m },
+                start_s,
+                end_s,
+            },
+            PayloadRepr::Distributed {
+                mass_per_length_kg_per_m,
+                start_s,
+                end_s,
+            } => Payload {
+                kind: PayloadKind::Distributed {
+                    mass_per_length_kg_per_m,
+                },
+                start_s,
+                end_s,
+            },
+            PayloadRepr::Sliding {
+                mass_kg,
+                from_s_m,
+                to_s_m,
+                speed_m_per_s,
+                start_s,
+                end_s,
+            } => Payload {
+                kind: PayloadKind::Sliding {
+                    mass_kg,
+                    from_s_m,
+                    to_s_m,
+                    speed_m_per_s,
+                },
+                start_s,
+                end_s,
+            },
+        }
+    }
 }
 
 impl Payload {

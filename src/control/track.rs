@@ -1,0 +1,681 @@
+//! A tracking run as the command line describes it (`softrod track`): a
+//! scene (the controller's model), a trajectory file (the path, the loop's
+//! and the plant's settings) and a payload schedule, run against a
+//! [`SimulatedPlant`] built from the scene with the plant's differences.
+//!
+//! The trajectory file (JSON; every field but `trajectory` optional):
+//!
+//! ```json
+//! {
+//!   "trajectory": {"kind": "circle", "center_m": [0.1911, 0.1203], "radius_m": 0.005,
+//!                  "period_s": 15.0, "duration_s": 15.0, "hold_s": 3.0},
+//!   "loop": {"control_rate_hz": 30.0, "controller": "ff_updater",
+//!            "gains": {"k_p_per_s": 4.0, "k_i_per_s2": 4.0}},
+//!   "plant": {"ei_factor": 1.15, "gain_factor": 0.9, "noise_sigma_m": 5e-5},
+//!   "score_from_s": 3.0
+//! }
+//! ```
+//!
+//! Trajectory kinds: `circle`, `figure_eight` (`size_m`), `line`
+//! (`from_m`, `to_m`), `samples` (`times_s`, `points_m`) and `pressures`
+//! (`times_s`, `pressures_pa`: the path is the model's unloaded end
+//! effector under that pressure schedule). A `circle` or `figure_eight`
+//! without `center_m` is centred on the model's end effector at the
+//! scene's pressures. The payload file is a [`PayloadSchedule`]
+//! (`{"payloads": [...]}`), replacing the plant's.
+//!
+//! Every check names the field as written in its file
+//! (`trajectory.radius_m`, `loop.gains.k_p_per_s`, `payloads[1].end_s`,
+//! `trajectory.pressures_pa[3][1]`, …).
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::plant::{PayloadSchedule, PlantSettings, SimulatedPlant};
+use crate::scene::Scene;
+
+use super::{ClosedLoop, ControllerKind, EstimateFlag, IkStatus, LoopSettings, Trajectory};
+use super::{IkSettings, InverseKinematics};
+
+/// A desired path as written in a trajectory file (`"kind"` names the
+/// variant; its fields sit beside it).
+///
+/// # Example
+/// ```
+/// let f = softrod::control::TrackFile::from_json(
+///     r#"{"trajectory": {"kind": "line", "from_m": [0.18, 0.11], "to_m": [0.19, 0.12], "period_s": 10, "duration_s": 10}}"#)?;
+/// assert!(matches!(f.trajectory, softrod::control::TrajectorySpec::Line(_)));
+/// # Ok::<(), softrod::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum TrajectorySpec {
+    /// [`Trajectory::circle`].
+    Circle(CircleSpec),
+    /// [`Trajectory::figure_eight`].
+    FigureEight(FigureEightSpec),
+    /// [`Trajectory::line`].
+    Line(LineSpec),
+    /// Positions at times, linear in between.
+    Samples(SamplesSpec),
+    /// A pressure schedule: the path is the model's unloaded end effector
+    /// under it.
+    Pressures(PressuresSpec),
+}
+
+/// `"kind": "circle"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CircleSpec {
+    /// Centre (m; default the model's end effector at the scene's pressures).
+    #[serde(default)]
+    pub center_m: Option<Vec<f64>>,
+    /// Radius (m, > 0).
+    pub radius_m: f64,
+    /// One turn (s).
+    pub period_s: f64,
+    /// Duration of the motion (s).
+    pub duration_s: f64,
+    /// Hold at the start point first (s, default 3).
+    #[serde(default = "default_hold")]
+    pub hold_s: f64,
+}
+
+/// `"kind": "figure_eight"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FigureEightSpec {
+    /// Centre (m; default as for a circle).
+    #[serde(default)]
+    pub center_m: Option<Vec<f64>>,
+    /// Half-width (m, > 0).
+    pub size_m: f64,
+    /// One figure (s).
+    pub period_s: f64,
+    /// Duration of the motion (s).
+    pub duration_s: f64,
+    /// Hold at the start point first (s, default 3).
+    #[serde(default = "default_hold")]
+    pub hold_s: f64,
+}
+
+/// `"kind": "line"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LineSpec {
+    /// One end (m).
+    pub from_m: Vec<f64>,
+    /// The other end (m).
+    pub to_m: Vec<f64>,
+    /// One return trip (s).
+    pub period_s: f64,
+    /// Duration of the motion (s).
+    pub duration_s: f64,
+    /// Hold at the start point first (s, default 3).
+    #[serde(default = "default_hold")]
+    pub hold_s: f64,
+}
+
+/// `"kind": "samples"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SamplesSpec {
+    /// Times (s), increasing.
+    pub times_s: Vec<f64>,
+    /// Positions (m).
+    pub points_m: Vec<Vec<f64>>,
+}
+
+/// `"kind": "pressures"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PressuresSpec {
+    /// Times (s), increasing.
+    pub times_s: Vec<f64>,
+    /// Chamber pressures per time (Pa), within the chambers' bounds.
+    pub pressures_pa: Vec<Vec<f64>>,
+}
+
+impl TrajectorySpec {
+    /// The hold at the start (s; 0 for samples and pressure schedules).
+    pub fn hold_s(&self) -> f64 {
+        match self {
+            TrajectorySpec::Circle(c) => c.hold_s,
+            TrajectorySpec::FigureEight(c) => c.hold_s,
+            TrajectorySpec::Line(c) => c.hold_s,
+            _ => 0.0,
+        }
+    }
+
+    /// Parses `{"kind": ..., fields}` with the path of a bad field (an
+    /// internally tagged enum hides it from the parser's path).
+    fn from_value(v: serde_json::Value) -> Result<Self> {
+        let kind = v
+            .get("kind")
+            .and_then(|k| k.as_str())
+            .ok_or_else(|| {
+                Error::invalid(
+                    "trajectory.kind",
+                    "missing",
+                    "one of circle, figure_eight, line, samples, pressures",
+                )
+            })?
+            .to_string();
+        let mut v = v;
+        if let Some(o) = v.as_object_mut() {
+            o.remove("kind");
+        }
+        let text = v.to_string();
+        let p = |e: Error| e.with_prefix("trajectory.");
+        Ok(match kind.as_str() {
+            "circle" => TrajectorySpec::Circle(parse_json(&text).map_err(p)?),
+            "figure_eight" => TrajectorySpec::FigureEight(parse_json(&text).map_err(p)?),
+            "line" => TrajectorySpec::Line(parse_json(&text).map_err(p)?),
+            "samples" => TrajectorySpec::Samples(parse_json(&text).map_err(p)?),
+            "pressures" => TrajectorySpec::Pressures(parse_json(&text).map_err(p)?),
+            other => {
+                return Err(Error::invalid(
+                    "trajectory.kind",
+                    other,
+                    "one of circle, figure_eight, line, samples, pressures",
+                ))
+            }
+        })
+    }
+}
+
+fn default_hold() -> f64 {
+    3.0
+}
+
+/// A trajectory file (see the [module documentation](self)); read it with
+/// [`TrackFile::from_json`], which names the path of a bad field.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrackFile {
+    /// The desired path.
+    pub trajectory: TrajectorySpec,
+    /// The loop (default [`LoopSettings::default`]).
+    #[serde(rename = "loop", default)]
+    pub loop_settings: LoopSettings,
+    /// The plant's differences from the scene (default
+    /// [`PlantSettings::default`]).
+    #[serde(default)]
+    pub plant: PlantSettings,
+    /// Errors are scored from this time on (s; default the trajectory's
+    /// hold, else 2.7 s, the updater's 2 % settling time).
+    #[serde(default)]
+    pub score_from_s: Option<f64>,
+}
+
+/// A trajectory file with the trajectory not yet parsed.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TrackFileRaw {
+    trajectory: serde_json::Value,
+    #[serde(rename = "loop", default)]
+    loop_settings: LoopSettings,
+    #[serde(default)]
+    plant: PlantSettings,
+    #[serde(default)]
+    score_from_s: Option<f64>,
+}
+
+impl TrackFile {
+    /// Parses a trajectory file.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for malformed JSON, unknown fields or
+    /// wrong types, naming the field's path (`(file)` when the JSON itself
+    /// is broken).
+    ///
+    /// # Example
+    /// ```
+    /// let f = softrod::control::TrackFile::from_json(r#"{"trajectory": {"kind": "circle", "radius_m": 0.005, "period_s": 15, "duration_s": 15}}"#)?;
+    /// assert_eq!(f.loop_settings.control_rate_hz, 30.0);
+    /// let e = softrod::control::TrackFile::from_json(r#"{"trajectory": {"kind": "circle", "radius_m": "big"}}"#).unwrap_err();
+    /// assert_eq!(e.field(), Some("trajectory.radius_m"), "{e}");
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn from_json(text: &str) -> Result<Self> {
+        let raw: TrackFileRaw = parse_json(text)?;
+        Ok(TrackFile {
+            trajectory: TrajectorySpec::from_value(raw.trajectory)?,
+            loop_settings: raw.loop_settings,
+            plant: raw.plant,
+            score_from_s: raw.score_from_s,
+        })
+    }
+}
+
+/// Parses JSON with the path of a bad field in the message.
+pub(crate) fn parse_json<T: serde::de::DeserializeOwned>(text: &str) -> Result<T> {
+    let de = &mut serde_json::Deserializer::from_str(text);
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let path = path
+            .trim_end_matches(".?")
+            .trim_end_matches('?')
+            .to_string();
+        let inner = e.into_inner();
+        let name = if path.is_empty() || path == "." {
+            "(file)".to_string()
+        } else {
+            path
+        };
+        Error::invalid(name, "as written", inner.to_string())
+    })
+}
+
+/// Parses a payload file (`{"payloads": [...]}`).
+///
+/// # Errors
+/// As [`TrackFile::from_json`].
+///
+/// # Example
+/// ```
+/// let p = softrod::control::payloads_from_json(r#"{"payloads": [{"kind": "point_mass", "mass_kg": 0.02, "s_m": 0.24}]}"#)?;
+/// assert_eq!(p.payloads.len(), 1);
+/// # Ok::<(), softrod::Error>(())
+/// ```
+pub fn payloads_from_json(text: &str) -> Result<PayloadSchedule> {
+    parse_json(text)
+}
+
+/// One sample of a tracking run, as written.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrackSample {
+    /// Time (s).
+    pub time_s: f64,
+    /// Desired end effector (m).
+    pub desired_m: Vec<f64>,
+    /// The plant's true end effector (m).
+    pub actual_m: Vec<f64>,
+    /// The end-effector marker as measured (m).
+    pub measured_m: Vec<f64>,
+    /// `|actual − desired|` (m).
+    pub error_m: f64,
+    /// The payload mass acting on the plant (kg; the controller is not told).
+    pub payload_kg: f64,
+    /// Resultant of the load the feedforward uses, `F̂` (N; payload plus
+    /// the virtual payload of the model's errors).
+    pub estimated_load_n: Vec<f64>,
+    /// Resultant of the estimator's `F̄` this frame (N).
+    pub estimator_load_n: Vec<f64>,
+    /// Pressures commanded for the next interval (Pa).
+    pub pressures_pa: Vec<f64>,
+    /// Wall time of estimation + updater + inverse kinematics (s).
+    pub step_time_s: f64,
+    /// How the inverse kinematics ended.
+    pub ik: IkStatus,
+    /// The estimator this frame (`kept_last`: it failed, the last good
+    /// estimate was used).
+    pub estimate: EstimateFlag,
+}
+
+/// The summary of a tracking run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrackSummary {
+    /// The controller.
+    pub controller: ControllerKind,
+    /// Control rate (Hz).
+    pub control_rate_hz: f64,
+    /// Samples.
+    pub samples: usize,
+    /// Scoring starts here (s).
+    pub score_from_s: f64,
+    /// Mean tracking error from `score_from_s` on (m).
+    pub mean_error_m: f64,
+    /// Maximum tracking error from `score_from_s` on (m).
+    pub max_error_m: f64,
+    /// Median step time (s).
+    pub median_step_time_s: f64,
+    /// Samples whose inverse kinematics did not reach its target.
+    pub ik_not_reached: usize,
+    /// Samples whose pressures sat on a bound.
+    pub pressure_saturated: usize,
+    /// Frames whose estimator failed (last good estimate kept).
+    pub estimator_kept_last: usize,
+    /// The plant (its differences from the model, payloads included).
+    pub plant: PlantSettings,
+}
+
+/// A finished tracking run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrackRun {
+    /// The summary.
+    pub summary: TrackSummary,
+    /// One sample per control instant.
+    pub samples: Vec<TrackSample>,
+}
+
+/// Checks a point: `DIM` finite coordinates within the robot's reach.
+fn check_point(field: &str, p: &[f64], base: &[f64], length: f64) -> Result<()> {
+    check_len(field, base.len(), p.len())?;
+    check_all_finite(field, p)?;
+    let d = p
+        .iter()
+        .zip(base)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    if d > length {
+        return Err(Error::invalid(
+            field,
+            format!("{p:?}"),
+            format!("out of reach: {d:.4} m from the base, the robot is {length:.4} m long"),
+        ));
+    }
+    Ok(())
+}
+
+fn check_positive(field: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, v, "must be finite and > 0"))
+    }
+}
+
+/// Builds the desired trajectory of `spec` for the model of `scene`.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] naming the field (`trajectory.radius_m`,
+/// `trajectory.points_m[4]`, `trajectory.pressures_pa[2][0]`, …): not
+/// finite, of the wrong size, out of reach (farther from the base than the
+/// robot is long, or, checked by the inverse kinematics on 8 points of the
+/// path, more than 0.5 mm from any pose within the pressure bounds), an
+/// empty trajectory, times going backwards, pressures outside the bounds.
+pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajectory> {
+    let robot = scene.robot()?;
+    let loads = scene.loads()?;
+    let base = robot.position_at(&robot.reference_configuration(), 0.0)?;
+    let length = robot.length();
+    let mut ik = InverseKinematics::new(robot.clone(), loads.clone(), IkSettings::default())?;
+    let zeros = vec![0.0; robot.n_q()];
+    let center = |c: &Option<Vec<f64>>, ik: &mut InverseKinematics<_>| -> Result<Vec<f64>> {
+        match c {
+            Some(c) => {
+                check_point("trajectory.center_m", c, &base, length)?;
+                Ok(c.clone())
+            }
+            None => Ok(ik.forward(&loads.pressures_pa, &zeros, None)?.1),
+        }
+    };
+    let arr = |v: &[f64]| [v[0], v.get(1).copied().unwrap_or(0.0)];
+    // (the trajectory, the field a point out of reach is blamed on)
+    let (traj, blame) = match spec {
+        TrajectorySpec::Circle(CircleSpec {
+            center_m,
+            radius_m,
+            period_s,
+            duration_s,
+            hold_s,
+        }) => {
+            check_positive("trajectory.radius_m", *radius_m)?;
+            let c = center(center_m, &mut ik)?;
+            (
+                Trajectory::circle(arr(&c), *radius_m, *period_s, *duration_s, *hold_s)?,
+                "trajectory.radius_m".to_string(),
+            )
+        }
+        TrajectorySpec::FigureEight(FigureEightSpec {
+            center_m,
+            size_m,
+            period_s,
+            duration_s,
+            hold_s,
+        }) => {
+            check_positive("trajectory.size_m", *size_m)?;
+            let c = center(center_m, &mut ik)?;
+            (
+                Trajectory::figure_eight(arr(&c), *size_m, *period_s, *duration_s, *hold_s)?,
+                "trajectory.size_m".to_string(),
+            )
+        }
+        TrajectorySpec::Line(LineSpec {
+            from_m,
+            to_m,
+            period_s,
+            duration_s,
+            hold_s,
+        }) => {
+            check_point("trajectory.from_m", from_m, &base, length)?;
+            check_point("trajectory.to_m", to_m, &base, length)?;
+            (
+                Trajectory::line(arr(from_m), arr(to_m), *period_s, *duration_s, *hold_s)?,
+                "trajectory.to_m".to_string(),
+            )
+        }
+        TrajectorySpec::Samples(SamplesSpec { times_s, points_m }) => {
+            let t = Trajectory::new(times_s.clone(), points_m.clone())?;
+            for (i, p) in points_m.iter().enumerate() {
+                check_point(&format!("trajectory.points_m[{i}]"), p, &base, length)?;
+            }
+            (t, "trajectory.points_m".to_string())
+        }
+        TrajectorySpec::Pressures(PressuresSpec {
+            times_s,
+            pressures_pa,
+        }) => {
+            if pressures_pa.len() != times_s.len() || times_s.is_empty() {
+                return Err(Error::invalid(
+                    "trajectory.pressures_pa",
+                    pressures_pa.len(),
+                    format!(
+                        "must have one pressure set per time ({}), at least one",
+                        times_s.len()
+                    ),
+                ));
+            }
+            let bounds = robot.pressure_bounds();
+            let mut points = Vec::with_capacity(times_s.len());
+            for (i, p) in pressures_pa.iter().enumerate() {
+                let field = format!("trajectory.pressures_pa[{i}]");
+                check_len(&field, bounds.len(), p.len())?;
+                for (j, (v, (lo, hi))) in p.iter().zip(&bounds).enumerate() {
+                    if !(v.is_finite() && *v >= *lo && *v <= *hi) {
+                        return Err(Error::invalid(
+                            format!("{field}[{j}]"),
+                            v,
+                            format!("must lie within the chamber's bounds [{lo}, {hi}] Pa"),
+                        ));
+                    }
+                }
+                points.push(ik.forward(p, &zeros, None)?.1);
+            }
+            (
+                Trajectory::new(times_s.clone(), points)?,
+                "trajectory.pressures_pa".to_string(),
+            )
+        }
+    };
+    // reach: the distance from the base at every sample, the inverse
+    // kinematics at 8 points
+    for (i, p) in traj.points_m.iter().enumerate() {
+        check_point(&blame, p, &base, length).map_err(|e| match e {
+            Error::InvalidParameter {
+                name,
+                value,
+                reason,
+            } => Error::InvalidParameter {
+                name,
+                value,
+                reason: format!("{reason} (the path's point {i}, at {} s)", traj.times_s[i]),
+            },
+            other => other,
+        })?;
+    }
+    let n = traj.points_m.len();
+    let m = 8.min(n);
+    for k in 0..m {
+        let i = if m > 1 { k * (n - 1) / (m - 1) } else { 0 };
+        let sol = ik.solve(&traj.points_m[i], &zeros).map_err(|e| {
+            Error::invalid(
+                blame.clone(),
+                format!("{:?}", traj.points_m[i]),
+                format!(
+                    "out of reach at {} s: the inverse kinematics found no pose ({e})",
+                    traj.times_s[i]
+                ),
+            )
+        })?;
+        if !sol.status.is_reached() && sol.status.error_m() > 5e-4 {
+            return Err(Error::invalid(
+                blame,
+                format!("{:?}", traj.points_m[i]),
+                format!(
+                    "out of reach at {} s: the closest pose within the pressure bounds is {:.2} mm away",
+                    traj.times_s[i],
+                    sol.status.error_m() * 1e3
+                ),
+            ));
+        }
+    }
+    Ok(traj)
+}
+
+/// Checks the file's settings with the paths of the file.
+fn validate_file(file: &TrackFile, payloads: &PayloadSchedule, length_m: f64) -> Result<()> {
+    let s = &file.loop_settings;
+    let r = s.control_rate_hz;
+    if !(r.is_finite() && r > 0.0 && r <= 10_000.0) {
+        return Err(Error::invalid(
+            "loop.control_rate_hz",
+            r,
+            "must be > 0 and at most 10000 Hz",
+        ));
+    }
+    check_positive("loop.gains.k_p_per_s", s.gains.k_p_per_s)?;
+    check_positive("loop.gains.k_i_per_s2", s.gains.k_i_per_s2)?;
+    s.ik.validate().map_err(|e| e.with_prefix("loop."))?;
+    s.estimator.validate().map_err(|e| e.with_prefix("loop."))?;
+    file.plant.validate()?;
+    if let Some(t) = file.score_from_s {
+        if !(t.is_finite() && t >= 0.0) {
+            return Err(Error::invalid("score_from_s", t, "must be finite and >= 0"));
+        }
+    }
+    payloads.validate(length_m)
+}
+
+/// Runs `file` on `scene` with `payloads` (replacing the plant's, if
+/// given) and the controller `controller` (replacing the file's, if given).
+///
+/// # Errors
+/// The checks of [`build_trajectory`] and of the settings, naming the
+/// field as written (`loop.control_rate_hz`, `loop.gains.k_p_per_s`,
+/// `plant.ei_factor`, `payloads[0].mass_kg`, …); [`Error::InvalidParameter`]
+/// (field `markers`) for a scene without markers; the plant's and the
+/// inverse kinematics' errors (no equilibrium found). An estimator failure
+/// is not an error: the sample says so.
+pub fn run_track(
+    scene: &Scene,
+    file: &TrackFile,
+    payloads: Option<&PayloadSchedule>,
+    controller: Option<ControllerKind>,
+) -> Result<TrackRun> {
+    let robot = scene.robot()?;
+    let length = robot.length();
+    let payloads = payloads.unwrap_or(&file.plant.payloads).clone();
+    validate_file(file, &payloads, length)?;
+    let trajectory = build_trajectory(scene, &file.trajectory)?;
+    let arcs: Vec<f64> = scene
+        .markers
+        .iter()
+        .enumerate()
+        .map(|(i, m)| match (m.node, m.s_m) {
+            (Some(n), _) => robot
+                .node_arc()
+                .get(n)
+                .copied()
+                .ok_or_else(|| Error::invalid(format!("markers[{i}].node"), n, "no such node")),
+            (None, Some(s)) => Ok(s),
+            (None, None) => Err(Error::invalid(
+                format!("markers[{i}]"),
+                "{}",
+                "give a node or s_m",
+            )),
+        })
+        .collect::<Result<_>>()?;
+    if arcs.is_empty() {
+        return Err(Error::invalid(
+            "markers",
+            "[]",
+            "the estimator of the loop needs the scene's markers",
+        ));
+    }
+    let mut settings = file.loop_settings.clone();
+    if let Some(c) = controller {
+        settings.controller = c;
+    }
+    let plant_settings = PlantSettings {
+        payloads: payloads.clone(),
+        ..file.plant.clone()
+    };
+    let mut plant = SimulatedPlant::new(scene, &arcs, plant_settings.clone())?;
+    let mut lp = ClosedLoop::new(robot, scene.loads()?, &arcs, settings.clone())?;
+    let series = lp.run(&mut plant, &trajectory, |p| p.true_tip_m().ok())?;
+    let score_from_s = file.score_from_s.unwrap_or(match &file.trajectory {
+        TrajectorySpec::Samples(_) | TrajectorySpec::Pressures(_) => 2.7,
+        t => t.hold_s().max(0.0),
+    });
+    let (mean_error_m, max_error_m) = series.mean_max_after(score_from_s);
+    let mut steps: Vec<f64> = series.samples.iter().map(|s| s.step_time_s).collect();
+    steps.sort_by(f64::total_cmp);
+    let bounds = scene.robot()?.pressure_bounds();
+    let samples: Vec<TrackSample> = series
+        .samples
+        .iter()
+        .map(|s| {
+            let actual = s
+                .true_tip_m
+                .clone()
+                .unwrap_or_else(|| s.measured_tip_m.clone());
+            let error_m = actual
+                .iter()
+                .zip(&s.desired_m)
+                .map(|(a, b)| (a - b).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            TrackSample {
+                time_s: s.time_s,
+                desired_m: s.desired_m.clone(),
+                actual_m: actual,
+                measured_m: s.measured_tip_m.clone(),
+                error_m,
+                payload_kg: payloads.mass_at(s.time_s, length),
+                estimated_load_n: s.f_hat_resultant_n.clone(),
+                estimator_load_n: s.f_bar_resultant_n.clone(),
+                pressures_pa: s.pressures_pa.clone(),
+                step_time_s: s.step_time_s,
+                ik: s.ik,
+                estimate: s.estimate,
+            }
+        })
+        .collect();
+    let summary = TrackSummary {
+        controller: settings.controller,
+        control_rate_hz: settings.control_rate_hz,
+        samples: samples.len(),
+        score_from_s,
+        mean_error_m,
+        max_error_m,
+        median_step_time_s: steps.get(steps.len() / 2).copied().unwrap_or(0.0),
+        ik_not_reached: samples.iter().filter(|s| !s.ik.is_reached()).count(),
+        pressure_saturated: samples
+            .iter()
+            .filter(|s| {
+                s.pressures_pa
+                    .iter()
+                    .zip(&bounds)
+                    .any(|(p, (lo, hi))| (p - hi).abs() < 1e-9 * (hi - lo) && hi > lo && *p > *lo)
+            })
+            .count(),
+        estimator_kept_last: samples
+            .iter()
+            .filter(|s| matches!(s.estimate, EstimateFlag::KeptLast { .. }))
+            .count(),
+        plant: plant_settings,
+    };
+    Ok(TrackRun { summary, samples })
+}
