@@ -14,7 +14,11 @@ use crate::contact::{ContactForce, ContactSettings, ContactSolver, Obstacles};
 use crate::element::PlanarCable;
 use crate::error::{Error, Result};
 use crate::loads::Loads;
-use crate::outcome::ContactReport;
+use crate::outcome::{ContactReport, ContactStatus};
+use crate::statics::StaticSolver;
+
+/// Clearance beyond which a step is solved without the contact solver (m).
+const FREE_MARGIN_M: f64 = 1e-3;
 
 use super::SimulatedPlant;
 
@@ -87,6 +91,37 @@ impl PlantContact {
         loads: &Loads,
         q: &[f64],
     ) -> Result<Vec<f64>> {
+        // Far from every obstacle the contact equilibrium is the free one:
+        // taken when no gap is closer than twice the largest node motion
+        // of the step plus 1 mm (nothing can have been passed through).
+        if let Ok(eq) = StaticSolver::default().solve(robot, loads, Some(q)) {
+            let moved =
+                eq.q.chunks(4)
+                    .zip(q.chunks(4))
+                    .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+                    .fold(0.0, f64::max);
+            let min_gap = self
+                .obstacles
+                .gaps(robot, &eq.q)?
+                .iter()
+                .map(|g| g.gap_m)
+                .fold(f64::INFINITY, f64::min);
+            if min_gap > 2.0 * moved + FREE_MARGIN_M {
+                self.report = Some(ContactReport {
+                    status: ContactStatus::Converged,
+                    min_gap_m: if min_gap.is_finite() {
+                        min_gap
+                    } else {
+                        f64::MAX
+                    },
+                    residual_norm_n: eq.report.residual_norm_n,
+                    residual_tolerance_n: eq.report.residual_tolerance_n,
+                    ..ContactReport::default()
+                });
+                self.contacts.clear();
+                return Ok(eq.q);
+            }
+        }
         let sol = self.solver.solve(robot, loads, &self.obstacles, Some(q))?;
         let converged = sol.is_converged();
         self.report = Some(sol.report.clone());

@@ -8,14 +8,21 @@
 //!   position, found by a 1-D search through the markers' response
 //!   ([`MarkerResponse`]).
 
+mod avoid;
 mod calibrate;
+mod field;
 mod peak;
 mod point_search;
 mod response;
 mod robot;
 mod sweep;
 
+pub use avoid::{
+    calibrate_on_free_plant, check_obstacles, run_avoidance, AvoidRun, AvoidSample, AvoidSettings,
+    AvoidStatus, TouchedPoint,
+};
 pub use calibrate::{calibrate, Calibration, FreeFrame};
+pub use field::{field_gradient, repulsive, FieldParams};
 pub use peak::{peak_contact, PeakContact};
 pub use point_search::{locate_point_force, marker_offset, PointContact, PointSearchSettings};
 pub use response::MarkerResponse;

@@ -42,6 +42,29 @@ pub(crate) fn marker_rows(
     Ok(rows)
 }
 
+/// The factors of the tangent of `robot` under `loads` at `q`.
+fn tangent_factors(
+    robot: &Robot<PlanarCable>,
+    loads: &Loads,
+    q: &[f64],
+) -> Result<<AutoSolver as TangentSolver>::Factors> {
+    let pattern = robot.tangent_pattern();
+    let mut k = SymmetricMatrix::zeros(pattern.clone());
+    robot.tangent_into(q, loads, &mut k)?;
+    let mut solver = AutoSolver::with_kind(pattern, SolverKind::Auto)?;
+    Ok(solver.factor(&k, FactorOptions::default())?)
+}
+
+/// (43) `∂q/∂P = −(∂Q/∂q)⁻¹ ∂Q/∂P` (`n_q × n_pressures`, m/Pa) at the
+/// equilibrium `q` of `robot` under `loads`.
+///
+/// # Errors
+/// [`Error::Singular`] if the tangent is singular there.
+pub(crate) fn dq_dp(robot: &Robot<PlanarCable>, loads: &Loads, q: &[f64]) -> Result<DMatrix<f64>> {
+    let factors = tangent_factors(robot, loads, q)?;
+    Sensitivity::new(robot, &factors)?.dq_dp(q)
+}
+
 /// `∂y/∂f` of the markers for a point force at any arc coordinate, at one
 /// equilibrium (see the [module documentation](self)).
 ///
@@ -79,11 +102,7 @@ impl MarkerResponse {
         marker_s_m: &[f64],
     ) -> Result<Self> {
         let rows = marker_rows(robot, marker_s_m)?;
-        let pattern = robot.tangent_pattern();
-        let mut k = SymmetricMatrix::zeros(pattern.clone());
-        robot.tangent_into(q, loads, &mut k)?;
-        let mut solver = AutoSolver::with_kind(pattern, SolverKind::Auto)?;
-        let factors = solver.factor(&k, FactorOptions::default())?;
+        let factors = tangent_factors(robot, loads, q)?;
         let adj = Sensitivity::new(robot, &factors)?.adjoints(rows.iter().map(|r| &r[..]))?;
         Ok(MarkerResponse {
             node_arc: robot.node_arc().to_vec(),

@@ -68,5 +68,13 @@ pub fn marker_arcs(count: usize) -> Vec<f64> {
     let n = count.max(2);
     // summed as the robot sums its sections, so the last one is its tip
     let length: f64 = (0..SECTIONS).map(|_| SECTION_LENGTH_M).sum();
-    (0..n).map(|i| length * i as f64 / (n - 1) as f64).collect()
+    (0..n)
+        .map(|i| {
+            if i + 1 == n {
+                length
+            } else {
+                length * i as f64 / (n - 1) as f64
+            }
+        })
+        .collect()
 }
