@@ -16,7 +16,7 @@
 //! [`crate::outcome`], which depends on no solver: this module imports no
 //! solver module, so no module cycle runs through the error type.
 
-use crate::outcome::{EstimateStatus, RefinementFailure, StaticReport};
+use crate::outcome::{ContactReport, EstimateStatus, RefinementFailure, StaticReport};
 
 /// Errors returned by `softrod`.
 ///
@@ -89,6 +89,13 @@ pub enum Error {
     NotConverged {
         /// What the solver reached before it stopped.
         report: Box<StaticReport>,
+    },
+    /// A contact solve (rod against obstacles) did not reach a
+    /// non-penetrating equilibrium: its report says why.
+    #[error("contact solve did not converge: {report}")]
+    ContactNotConverged {
+        /// What the contact solver reached before it stopped.
+        report: Box<ContactReport>,
     },
     /// A matrix that must be positive definite (a Gauss–Newton system) is not.
     #[error("{context} is not positive definite")]

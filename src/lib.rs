@@ -67,5 +67,6 @@ pub mod scene;
 pub mod sensitivity;
 pub mod statics;
 pub mod structure;
+pub mod touch;
 
 pub use error::{Error, Result};

@@ -17,14 +17,18 @@
 //!   order of the step response of a proportional pneumatic regulator),
 //!   integrated exactly over each interval for a command held constant;
 //! - quasi-static equilibrium (17) at the end of every interval, solved by
-//!   [`StaticSolver`] warm-started from the previous shape.
+//!   [`StaticSolver`] warm-started from the previous shape, or, with
+//!   obstacles in the plant's world ([`SimulatedPlant::with_obstacles`]),
+//!   by the exact contact solver ([`crate::contact`]).
 //!
 //! The truth (the shape without noise) is available on [`SimulatedPlant`]
 //! itself for scoring a run; a controller only ever holds a `&mut dyn Plant`
 //! or a generic `P: Plant`.
 
+mod obstacles;
 mod payload;
 
+pub use obstacles::PlantContact;
 pub use payload::{Payload, PayloadKind, PayloadSchedule};
 
 use serde::{Deserialize, Serialize};
@@ -209,6 +213,8 @@ pub struct SimulatedPlant {
     actual_pa: Vec<f64>,
     q: Vec<f64>,
     noise_draws: u64,
+    /// Obstacles in the plant's world (see [`SimulatedPlant::with_obstacles`]).
+    contact: Option<PlantContact>,
 }
 
 impl SimulatedPlant {
@@ -271,6 +277,7 @@ impl SimulatedPlant {
             actual_pa: pressures,
             q,
             noise_draws: 0,
+            contact: None,
         })
     }
 
@@ -358,10 +365,14 @@ impl Plant for SimulatedPlant {
             self.settings
                 .payloads
                 .loads_at(self.time_s, &self.scene.gravity_m_per_s2, &base);
-        let eq = self
-            .solver
-            .solve_with(&self.robot, &loads, Some(&self.q), &mut self.linear)?;
-        self.q = eq.q;
+        self.q = match self.contact.as_mut() {
+            Some(c) => c.solve(&self.robot, &loads, &self.q)?,
+            None => {
+                self.solver
+                    .solve_with(&self.robot, &loads, Some(&self.q), &mut self.linear)?
+                    .q
+            }
+        };
         let truth = self.true_markers_m()?;
         let obs = Observation {
             markers: truth
