@@ -153,6 +153,7 @@ fn parse_pressures(text: &str) -> std::result::Result<PressuresArg, String> {
 enum PartArg {
     Pareto,
     Stability,
+    Spatial,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -780,6 +781,7 @@ fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Resu
     let only = only.map(|p| match p {
         PartArg::Pareto => Part::Pareto,
         PartArg::Stability => Part::Stability,
+        PartArg::Spatial => Part::Spatial,
     });
     let opts = ReportOptions {
         quick,

@@ -112,7 +112,8 @@ impl<E: Element> ParallelRobot<E> {
     /// let x = robot.platform_pose(&loaded.q)?;
     /// let start = robot.solve(&robot.loads(&[], [0.0; 3], [0.0; 3])?, None)?;
     /// let e = robot.estimate_payload(&[], [x[0], x[1], x[2]], &start)?;
-    /// assert!((e.mass_kg - 0.01).abs() < 1e-9);
+    /// // to the position tolerance (1.2e-10 m) over the compliance (1.4e-4 m/N): 1e-7 kg
+    /// assert!((e.mass_kg - 0.01).abs() < 1e-6);
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn estimate_payload(

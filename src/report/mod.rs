@@ -33,6 +33,8 @@ pub mod plot;
 #[doc(hidden)]
 pub mod reference;
 #[doc(hidden)]
+pub mod spatial;
+#[doc(hidden)]
 pub mod stability;
 #[doc(hidden)]
 pub mod sweep;
@@ -56,6 +58,8 @@ pub enum Part {
     Pareto,
     /// The stability map only.
     Stability,
+    /// The soft parallel robot only (payload estimation, two projections).
+    Spatial,
 }
 
 /// Options of a report run.
@@ -195,7 +199,7 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
     let start = Instant::now();
     std::fs::create_dir_all(&opts.out_dir).map_err(|e| io_error(&opts.out_dir, e))?;
     let mut files = Vec::new();
-    let pareto = if opts.only != Some(Part::Stability) {
+    let pareto = if matches!(opts.only, None | Some(Part::Pareto)) {
         let mut r = pareto::run(opts)?;
         let pb = progress(1, opts.quiet, "auto");
         pb.set_message("elements: \"auto\" on the Pareto references");
@@ -209,7 +213,10 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
     } else {
         None
     };
-    let stability = if opts.only != Some(Part::Pareto) {
+    if matches!(opts.only, None | Some(Part::Spatial)) {
+        files.extend(spatial::run(opts)?.1);
+    }
+    let stability = if matches!(opts.only, None | Some(Part::Stability)) {
         let r = stability::run(opts)?;
         files.extend(r.write(&opts.out_dir)?);
         Some(r)
