@@ -153,6 +153,7 @@ fn parse_pressures(text: &str) -> std::result::Result<PressuresArg, String> {
 enum PartArg {
     Pareto,
     Stability,
+    Tracking,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -780,6 +781,7 @@ fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Resu
     let only = only.map(|p| match p {
         PartArg::Pareto => Part::Pareto,
         PartArg::Stability => Part::Stability,
+        PartArg::Tracking => Part::Tracking,
     });
     let opts = ReportOptions {
         quick,
@@ -810,6 +812,15 @@ fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Resu
             s.wall_time_s,
             failed,
             s.panics
+        );
+    }
+    if let Some(t) = &summary.tracking {
+        let failed = t.rows.iter().filter(|r| r.failure.is_some()).count();
+        outln!(
+            "Tracking: {} runs in {:.1} s, {} failed",
+            t.rows.len(),
+            t.wall_time_s,
+            failed
         );
     }
     outln!(

@@ -5,6 +5,8 @@
 //!   128-element solutions ([`reference`](mod@reference)); error (backbone RMS, load error)
 //!   against the median time per warm estimate; the Pareto front marked.
 //! - [`auto_point`]: where `"elements": "auto"` lands on the Pareto chart.
+//! - [`tracking`]: the closed loop against the simulated plant (tracking
+//!   and payload-mass figures, `tracking*.{png,svg,json}`).
 //! - [`stability`]: marker noise, load magnitude, marker count, the jump
 //!   between successive observations and `α`, per backend: converged or
 //!   not, the failure cause ([`sweep::FailureCause`]), iterations, errors;
@@ -36,6 +38,8 @@ pub mod reference;
 pub mod stability;
 #[doc(hidden)]
 pub mod sweep;
+#[doc(hidden)]
+pub mod tracking;
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -56,6 +60,8 @@ pub enum Part {
     Pareto,
     /// The stability map only.
     Stability,
+    /// The closed loop's tracking and mass-estimation figures only.
+    Tracking,
 }
 
 /// Options of a report run.
@@ -93,6 +99,8 @@ pub struct ReportSummary {
     pub pareto: Option<ParetoReport>,
     /// The stability sweep, if it ran.
     pub stability: Option<StabilityReport>,
+    /// The closed loop's figures, if they ran.
+    pub tracking: Option<tracking::TrackingReport>,
     /// The files written.
     pub files: Vec<PathBuf>,
     /// Wall time of the whole run (s).
@@ -195,7 +203,7 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
     let start = Instant::now();
     std::fs::create_dir_all(&opts.out_dir).map_err(|e| io_error(&opts.out_dir, e))?;
     let mut files = Vec::new();
-    let pareto = if opts.only != Some(Part::Stability) {
+    let pareto = if opts.only.is_none() || opts.only == Some(Part::Pareto) {
         let mut r = pareto::run(opts)?;
         let pb = progress(1, opts.quiet, "auto");
         pb.set_message("elements: \"auto\" on the Pareto references");
@@ -209,8 +217,15 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
     } else {
         None
     };
-    let stability = if opts.only != Some(Part::Pareto) {
+    let stability = if opts.only.is_none() || opts.only == Some(Part::Stability) {
         let r = stability::run(opts)?;
+        files.extend(r.write(&opts.out_dir)?);
+        Some(r)
+    } else {
+        None
+    };
+    let tracking = if opts.only.is_none() || opts.only == Some(Part::Tracking) {
+        let r = tracking::run(opts)?;
         files.extend(r.write(&opts.out_dir)?);
         Some(r)
     } else {
@@ -219,6 +234,7 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
     Ok(ReportSummary {
         pareto,
         stability,
+        tracking,
         files,
         wall_time_s: start.elapsed().as_secs_f64(),
     })
