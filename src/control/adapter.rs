@@ -34,17 +34,17 @@ pub(crate) fn dq_dp<E: Element>(
 #[derive(Debug, Clone)]
 pub(crate) enum LoopEstimator<E: Element> {
     /// The reduced Gauss–Newton backend.
-    Newton(NewtonEstimator<E>),
+    Newton(Box<NewtonEstimator<E>>),
     /// The SQP backend.
-    Sqp(SqpEstimator<E>),
+    Sqp(Box<SqpEstimator<E>>),
 }
 
 impl<E: Element + 'static> LoopEstimator<E> {
     /// The estimator as the trait object.
     pub(crate) fn as_dyn(&mut self) -> &mut dyn Estimator {
         match self {
-            LoopEstimator::Newton(e) => e,
-            LoopEstimator::Sqp(e) => e,
+            LoopEstimator::Newton(e) => e.as_mut(),
+            LoopEstimator::Sqp(e) => e.as_mut(),
         }
     }
 }
@@ -64,7 +64,9 @@ pub(crate) fn estimator_at<E: Element + 'static>(
     loads.pressures_pa = pressures_pa.to_vec();
     let (robot, settings) = (robot.clone(), settings.clone());
     Ok(match settings.backend {
-        Backend::Newton => LoopEstimator::Newton(NewtonEstimator::new(robot, loads, settings)?),
-        Backend::Sqp => LoopEstimator::Sqp(SqpEstimator::new(robot, loads, settings)?),
+        Backend::Newton => {
+            LoopEstimator::Newton(Box::new(NewtonEstimator::new(robot, loads, settings)?))
+        }
+        Backend::Sqp => LoopEstimator::Sqp(Box::new(SqpEstimator::new(robot, loads, settings)?)),
     })
 }

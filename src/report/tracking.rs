@@ -186,7 +186,7 @@ pub fn run(opts: &ReportOptions) -> Result<TrackingReport> {
     let trajs = trajectories(opts.quick);
     let pays = payloads(opts.quick);
     let n = trajs.len() * pays.len() * 2;
-    let pb = super::progress(n as usize + 1, opts.quiet, "tracking");
+    let pb = super::progress(n + 1, opts.quiet, "tracking");
     let mut rows = Vec::new();
     let mut runs = Vec::new();
     for (tname, spec) in &trajs {
