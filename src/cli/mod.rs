@@ -154,6 +154,7 @@ enum PartArg {
     Pareto,
     Stability,
     Spatial,
+    Tracking,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -782,6 +783,7 @@ fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Resu
         PartArg::Pareto => Part::Pareto,
         PartArg::Stability => Part::Stability,
         PartArg::Spatial => Part::Spatial,
+        PartArg::Tracking => Part::Tracking,
     });
     let opts = ReportOptions {
         quick,
@@ -812,6 +814,15 @@ fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Resu
             s.wall_time_s,
             failed,
             s.panics
+        );
+    }
+    if let Some(t) = &summary.tracking {
+        let failed = t.rows.iter().filter(|r| r.failure.is_some()).count();
+        outln!(
+            "Tracking: {} runs in {:.1} s, {} failed",
+            t.rows.len(),
+            t.wall_time_s,
+            failed
         );
     }
     outln!(

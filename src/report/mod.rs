@@ -1,10 +1,14 @@
 //! `softrod report`: the speed–accuracy (Pareto) chart and the stability map
-//! of the estimators.
+//! of the estimators, the closed loop's figures and the parallel robot's.
 //!
 //! - [`pareto`]: backend × element count × marker count against exudyn's
 //!   128-element solutions ([`reference`](mod@reference)); error (backbone RMS, load error)
 //!   against the median time per warm estimate; the Pareto front marked.
 //! - [`auto_point`]: where `"elements": "auto"` lands on the Pareto chart.
+//! - [`tracking`]: the closed loop against the simulated plant (tracking
+//!   and payload-mass figures, `tracking*.{png,svg,json}`).
+//! - [`spatial`]: the soft parallel robot's payload estimation and two
+//!   projections of its shape (`spatial.{png,svg,json}`).
 //! - [`stability`]: marker noise, load magnitude, marker count, the jump
 //!   between successive observations and `α`, per backend: converged or
 //!   not, the failure cause ([`sweep::FailureCause`]), iterations, errors;
@@ -38,6 +42,8 @@ pub mod spatial;
 pub mod stability;
 #[doc(hidden)]
 pub mod sweep;
+#[doc(hidden)]
+pub mod tracking;
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -60,6 +66,8 @@ pub enum Part {
     Stability,
     /// The soft parallel robot only (payload estimation, two projections).
     Spatial,
+    /// The closed loop's tracking and mass-estimation figures only.
+    Tracking,
 }
 
 /// Options of a report run.
@@ -97,6 +105,8 @@ pub struct ReportSummary {
     pub pareto: Option<ParetoReport>,
     /// The stability sweep, if it ran.
     pub stability: Option<StabilityReport>,
+    /// The closed loop's figures, if they ran.
+    pub tracking: Option<tracking::TrackingReport>,
     /// The files written.
     pub files: Vec<PathBuf>,
     /// Wall time of the whole run (s).
@@ -223,9 +233,17 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
     } else {
         None
     };
+    let tracking = if matches!(opts.only, None | Some(Part::Tracking)) {
+        let r = tracking::run(opts)?;
+        files.extend(r.write(&opts.out_dir)?);
+        Some(r)
+    } else {
+        None
+    };
     Ok(ReportSummary {
         pareto,
         stability,
+        tracking,
         files,
         wall_time_s: start.elapsed().as_secs_f64(),
     })
