@@ -426,7 +426,7 @@ pub fn run_avoidance(
     run.status = match run
         .samples
         .iter()
-        .rposition(|s| !(err(s) <= settings.goal_tolerance_m))
+        .rposition(|s| err(s).is_nan() || err(s) > settings.goal_tolerance_m)
     {
         None => AvoidStatus::Reached { time_s: 0.0 },
         Some(i) if i + 1 < run.samples.len() => AvoidStatus::Reached {

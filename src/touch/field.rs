@@ -86,7 +86,7 @@ impl FieldParams {
 pub fn repulsive(p: &FieldParams, x: [f64; 2], x_obs: [f64; 2]) -> (f64, [f64; 2]) {
     let r = [x[0] - x_obs[0], x[1] - x_obs[1]];
     let d = r[0].hypot(r[1]);
-    if !(d < p.q0_m) || d <= 0.0 {
+    if d.is_nan() || d >= p.q0_m || d <= 0.0 {
         return (0.0, [0.0; 2]);
     }
     let a = 1.0 / d - 1.0 / p.q0_m;
