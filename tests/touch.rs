@@ -94,14 +94,25 @@ fn plant_contact_that_does_not_converge_is_an_error_not_a_shape() {
         max_newton_iterations: 1,
         ..ContactSettings::default()
     };
-    // one SQP iteration cannot bend the robot onto the disk: refused with
-    // the solver's status, no shape taken
-    let err = SimulatedPlant::new(&scene, &arcs, PlantSettings::default())
+    // hanging straight, far from the disk: solved without the contact solver
+    let mut plant = SimulatedPlant::new(&scene, &arcs, PlantSettings::default())
         .unwrap()
         .with_contact(PlantContact::new(disk(), starved).unwrap())
-        .unwrap_err();
-    let Error::ContactNotConverged { report } = err else {
-        panic!("{err}")
+        .unwrap();
+    // bending onto the disk, one SQP iteration cannot reach the contact
+    // equilibrium: an error with the solver's status, and no shape taken
+    plant.command(&bent()).unwrap();
+    let mut err = None;
+    for _ in 0..10 {
+        let before = plant.true_q().to_vec();
+        if let Err(e) = plant.advance(0.05) {
+            assert_eq!(plant.true_q(), &before[..]);
+            err = Some(e);
+            break;
+        }
+    }
+    let Some(Error::ContactNotConverged { report }) = err else {
+        panic!("{err:?}")
     };
     assert!(!report.status.is_converged(), "{report}");
 }
@@ -334,8 +345,8 @@ fn avoidance_by_touch_reaches_the_goal_the_baseline_pushes_into_the_obstacle() {
         "{run:?}"
     );
     assert!(run.final_force_n <= 1e-9);
-    // the baseline meets the disk at about 13 s and pushes on
-    let base = avoid(disk, goal, false, 25.0).unwrap();
+    // the baseline meets the disk at about 13 s and pushes on (0.46 N by 70 s)
+    let base = avoid(disk, goal, false, 70.0).unwrap();
     println!(
         "baseline: {:?}, final {:.2} mm, force max {:.4} N",
         base.status,
