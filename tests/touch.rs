@@ -94,14 +94,25 @@ fn plant_contact_that_does_not_converge_is_an_error_not_a_shape() {
         max_newton_iterations: 1,
         ..ContactSettings::default()
     };
-    // one SQP iteration cannot bend the robot onto the disk: refused with
-    // the solver's status, no shape taken
-    let err = SimulatedPlant::new(&scene, &arcs, PlantSettings::default())
+    // hanging straight, far from the disk: solved without the contact solver
+    let mut plant = SimulatedPlant::new(&scene, &arcs, PlantSettings::default())
         .unwrap()
         .with_contact(PlantContact::new(disk(), starved).unwrap())
-        .unwrap_err();
-    let Error::ContactNotConverged { report } = err else {
-        panic!("{err}")
+        .unwrap();
+    // bending onto the disk, one SQP iteration cannot reach the contact
+    // equilibrium: an error with the solver's status, and no shape taken
+    plant.command(&bent()).unwrap();
+    let mut err = None;
+    for _ in 0..10 {
+        let before = plant.true_q().to_vec();
+        if let Err(e) = plant.advance(0.05) {
+            assert_eq!(plant.true_q(), &before[..]);
+            err = Some(e);
+            break;
+        }
+    }
+    let Some(Error::ContactNotConverged { report }) = err else {
+        panic!("{err:?}")
     };
     assert!(!report.status.is_converged(), "{report}");
 }
@@ -220,4 +231,188 @@ fn point_search_locates_contacts_within_5_mm_with_six_markers() {
         assert!(point <= 5e-3, "{r:?}");
         assert!(force <= 0.05 * f, "{r:?}");
     }
+}
+
+#[test]
+fn repulsive_gradient_is_the_exact_gradient_of_38_not_the_printed_39() {
+    use softrod::touch::{repulsive, FieldParams};
+    let p = FieldParams::default();
+    let obs = [0.01, -0.02];
+    let h = 1e-7;
+    for x in [[0.05, 0.0], [0.02, -0.05], [-0.03, 0.01], [0.011, -0.019]] {
+        let (_, g) = repulsive(&p, x, obs);
+        let d = (x[0] - obs[0]).hypot(x[1] - obs[1]);
+        for k in 0..2 {
+            let (mut a, mut b) = (x, x);
+            a[k] += h;
+            b[k] -= h;
+            let fd = (repulsive(&p, a, obs).0 - repulsive(&p, b, obs).0) / (2.0 * h);
+            assert!(
+                (fd - g[k]).abs() <= 1e-6 * g[k].abs().max(1e-3),
+                "x {x:?} k {k}: {fd} vs {}",
+                g[k]
+            );
+            // the paper's (39): α (1/Q0 − 1/d) (x − x_obs) / d^{3/2}
+            let printed = p.alpha_r * (1.0 / p.q0_m - 1.0 / d) * (x[k] - obs[k]) / d.powf(1.5);
+            assert!(
+                (printed - g[k]).abs() > 0.1 * g[k].abs(),
+                "x {x:?}: (39) agrees?"
+            );
+        }
+    }
+}
+
+#[test]
+fn field_gradient_in_the_shape_matches_finite_differences() {
+    use softrod::touch::{field_gradient, FieldParams};
+    let scene = five_section_scene(4);
+    let (robot, mut loads) = (scene.robot().unwrap(), scene.loads().unwrap());
+    loads.pressures_pa = bent();
+    let q = StaticSolver::default()
+        .solve(&robot, &loads, None)
+        .unwrap()
+        .q;
+    let p = FieldParams::default();
+    let goal = [0.15, -0.40];
+    // two obstacle points within Q0 of several elements
+    let obs = [[0.09, -0.33], [0.02, -0.2]];
+    let (_, g) = field_gradient(&robot, &q, &p, goal, &obs).unwrap();
+    let h = 1e-7;
+    let scale = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(scale > 1.0);
+    // every free coordinate (the base node is clamped)
+    for i in 4..q.len() {
+        let (mut a, mut b) = (q.clone(), q.clone());
+        a[i] += h;
+        b[i] -= h;
+        let fd = (field_gradient(&robot, &a, &p, goal, &obs).unwrap().0
+            - field_gradient(&robot, &b, &p, goal, &obs).unwrap().0)
+            / (2.0 * h);
+        assert!((fd - g[i]).abs() < 1e-5 * scale, "q[{i}]: {fd} vs {}", g[i]);
+    }
+}
+
+/// The calibration, the plant among one disk, the avoidance run.
+fn avoid(
+    center: [f64; 2],
+    goal: [f64; 2],
+    feedback: bool,
+    duration_s: f64,
+) -> softrod::Result<softrod::touch::AvoidRun> {
+    use softrod::touch::{calibrate_on_free_plant, run_avoidance, AvoidSettings};
+    let scene = five_section_scene(4);
+    let arcs = marker_arcs(6);
+    let cal = calibrate_on_free_plant(&scene, &arcs, &PlantSettings::default())?;
+    let obstacles = Obstacles::new(
+        vec![Obstacle::Circle {
+            center_m: center,
+            radius_m: 0.01,
+        }],
+        ROD_RADIUS_M,
+    )?;
+    let mut plant =
+        SimulatedPlant::new(&scene, &arcs, PlantSettings::default())?.with_obstacles(obstacles)?;
+    let settings = AvoidSettings {
+        duration_s,
+        touch_feedback: feedback,
+        ..AvoidSettings::default()
+    };
+    run_avoidance(&scene, &cal, &arcs, &mut plant, goal, &settings)
+}
+
+#[test]
+fn avoidance_by_touch_reaches_the_goal_the_baseline_pushes_into_the_obstacle() {
+    let (disk, goal) = ([0.08, -0.465], [0.15, -0.40]);
+    let run = avoid(disk, goal, true, 70.0).unwrap();
+    println!(
+        "touch: {:?}, final {:.2} mm, force before {:.4} N, after {:.4} N, touched {:?}",
+        run.status,
+        run.final_error_m * 1e3,
+        run.max_force_before_n,
+        run.max_force_after_n,
+        run.touched
+    );
+    assert!(run.status.is_reached(), "{:?}", run.status);
+    assert!(run.final_error_m <= 2e-3);
+    // localized near the disk's surface (radius 10 mm)
+    let t = &run.touched[0];
+    let d = (t.point_m[0] - disk[0]).hypot(t.point_m[1] - disk[1]);
+    assert!((d - 0.01).abs() < 5e-3, "{t:?}");
+    // the contact force never grows after localization
+    assert!(run.max_force_before_n > 0.0);
+    assert!(
+        run.max_force_after_n <= run.max_force_before_n * 1.05,
+        "{run:?}"
+    );
+    assert!(run.final_force_n <= 1e-9);
+    // the baseline meets the disk at about 13 s and pushes on (0.46 N by 70 s)
+    let base = avoid(disk, goal, false, 70.0).unwrap();
+    println!(
+        "baseline: {:?}, final {:.2} mm, force max {:.4} N",
+        base.status,
+        base.final_error_m * 1e3,
+        base.max_force_before_n
+    );
+    assert!(!base.status.is_reached());
+    assert!(base.max_force_before_n > 20.0 * run.max_force_before_n);
+}
+
+#[test]
+fn avoidance_bad_input_is_typed_and_an_unreachable_goal_says_so() {
+    use softrod::touch::AvoidStatus;
+    // a goal no pressure reaches: a status, not a run
+    let run = avoid([0.08, -0.465], [0.0, 0.5], true, 1.0).unwrap();
+    assert!(
+        matches!(run.status, AvoidStatus::GoalUnreachable { distance_m } if distance_m > 0.5),
+        "{:?}",
+        run.status
+    );
+    assert!(run.samples.is_empty());
+    let err = avoid([0.08, -0.465], [f64::NAN, 0.0], true, 1.0).unwrap_err();
+    assert_eq!(err.field(), Some("goal_m"));
+    // obstacles: radius <= 0, NaN, non-convex polygon, overlapping the base
+    let bad = [
+        (
+            Obstacle::Circle {
+                center_m: [0.1, 0.0],
+                radius_m: 0.0,
+            },
+            "obstacles[0].radius_m",
+        ),
+        (
+            Obstacle::Capsule {
+                start_m: [0.1, f64::NAN],
+                end_m: [0.2, 0.0],
+                radius_m: 0.01,
+            },
+            "obstacles[0].start_m",
+        ),
+        (
+            Obstacle::Polygon {
+                vertices_m: vec![[0.1, 0.0], [0.2, 0.0], [0.12, 0.02], [0.2, 0.1], [0.1, 0.1]],
+            },
+            "obstacles[0].vertices_m",
+        ),
+    ];
+    for (o, field) in bad {
+        let err = Obstacles::new(vec![o], ROD_RADIUS_M).unwrap_err();
+        assert_eq!(err.field(), Some(field), "{err}");
+    }
+    let base = Obstacles::new(
+        vec![Obstacle::Circle {
+            center_m: [0.0, 0.005],
+            radius_m: 0.01,
+        }],
+        ROD_RADIUS_M,
+    )
+    .unwrap();
+    let plant = SimulatedPlant::new(
+        &five_section_scene(4),
+        &marker_arcs(6),
+        PlantSettings::default(),
+    )
+    .unwrap();
+    let err = plant.with_obstacles(base).unwrap_err();
+    assert_eq!(err.field(), Some("obstacles[0]"));
+    assert!(err.to_string().contains("base"), "{err}");
 }

@@ -11,6 +11,7 @@ macro_rules! outln {
     }};
 }
 
+mod avoid;
 mod track;
 
 use std::path::PathBuf;
@@ -41,6 +42,20 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Obstacle avoidance by touch (Fig. 9): the five-section robot moves to
+    /// the scene's goal among obstacles it is not told about, localizes each
+    /// contact from its markers and steers around it. Writes the run as
+    /// JSON; fails if the goal is not reached or is outside the workspace.
+    Avoid {
+        /// Avoidance scene (JSON: obstacles, goal_m, optional plant/avoid settings).
+        scene: PathBuf,
+        /// Output file (default: standard output).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Run the baseline: the same controller without touch feedback.
+        #[arg(long)]
+        baseline: bool,
+    },
     /// Solve the static equilibrium of a scene and write the result as JSON.
     Solve {
         /// Scene file (JSON).
@@ -694,6 +709,11 @@ pub fn run() -> Result<()> {
     let cli = parse_args()?;
     match cli.command {
         None => default_run(),
+        Some(Command::Avoid {
+            scene,
+            out,
+            baseline,
+        }) => avoid::avoid(scene, out, baseline),
         Some(Command::Solve {
             scene,
             pressures,

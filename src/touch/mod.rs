@@ -15,6 +15,7 @@ mod peak;
 mod point_search;
 mod response;
 mod robot;
+mod scene;
 mod sweep;
 
 pub use avoid::{
@@ -27,4 +28,5 @@ pub use peak::{peak_contact, PeakContact};
 pub use point_search::{locate_point_force, marker_offset, PointContact, PointSearchSettings};
 pub use response::MarkerResponse;
 pub use robot::{five_section_scene, marker_arcs, ROD_RADIUS_M, SECTIONS, SECTION_LENGTH_M};
+pub use scene::AvoidScene;
 pub use sweep::{run_localization, LocalizationCase, LocalizationResult, PROBE_RADIUS_M};
