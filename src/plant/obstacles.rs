@@ -28,9 +28,10 @@ use super::SimulatedPlant;
 /// ```
 /// use softrod::contact::{Obstacle, Obstacles};
 /// use softrod::plant::{Plant, PlantSettings, SimulatedPlant};
-/// let scene = softrod::scene::Scene::two_section();
-/// let walls = Obstacles::new(vec![Obstacle::Circle { center_m: [0.2, 0.2], radius_m: 0.02 }], 0.005)?;
-/// let mut plant = SimulatedPlant::new(&scene, &[0.12, 0.24], PlantSettings::default())?
+/// // the five-section robot hangs from its base along −y; a disk beside it
+/// let scene = softrod::touch::five_section_scene(4);
+/// let walls = Obstacles::new(vec![Obstacle::Circle { center_m: [0.1, -0.3], radius_m: 0.02 }], 0.01)?;
+/// let mut plant = SimulatedPlant::new(&scene, &[0.186, 0.372], PlantSettings::default())?
 ///     .with_obstacles(walls)?;
 /// plant.advance(0.05)?;
 /// let c = plant.contact().unwrap();

@@ -67,7 +67,7 @@ impl SceneElement for Ancf3d {
 ///     "sections": [{"length_m": 0.24, "ea_n": 300, "ei_nm2": 0.025, "elements": 8}]}}"#)?;
 /// match scene.build()? {
 ///     SceneRobot::Spatial(robot) => assert_eq!(robot.n_q(), 9 * 6),
-///     SceneRobot::Planar(_) => unreachable!(),
+///     SceneRobot::Planar(_) | SceneRobot::Full(_) => unreachable!(),
 /// }
 /// # Ok::<(), softrod::Error>(())
 /// ```
