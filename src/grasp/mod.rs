@@ -4,3 +4,4 @@
 //! - [`friction`]: whether contact forces inside the Coulomb cones balance an
 //!   object's weight (a second-order cone program, clarabel).
 pub mod friction;
+pub mod gripper;
