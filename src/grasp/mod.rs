@@ -5,3 +5,4 @@
 //!   object's weight (a second-order cone program, clarabel).
 pub mod friction;
 pub mod gripper;
+pub mod object;
