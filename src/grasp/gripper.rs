@@ -116,7 +116,11 @@ impl GripperSpec {
             ("pressure_max_pa", self.pressure_max_pa),
         ] {
             if !(v.is_finite() && v > 0.0) {
-                return Err(Error::invalid(format!("gripper.{name}"), v, "must be finite and > 0"));
+                return Err(Error::invalid(
+                    format!("gripper.{name}"),
+                    v,
+                    "must be finite and > 0",
+                ));
             }
         }
         if !(self.mass_per_length_kg_per_m.is_finite() && self.mass_per_length_kg_per_m >= 0.0) {
@@ -127,7 +131,11 @@ impl GripperSpec {
             ));
         }
         if self.elements_per_segment == 0 {
-            return Err(Error::invalid("gripper.elements_per_segment", 0, "must be >= 1"));
+            return Err(Error::invalid(
+                "gripper.elements_per_segment",
+                0,
+                "must be >= 1",
+            ));
         }
         if self.opening_m() <= 0.0 {
             return Err(Error::invalid(
@@ -194,7 +202,8 @@ impl GripperSpec {
         gain_factor: f64,
         mesh_factor: usize,
     ) -> RobotSpec {
-        let mut spec = RobotSpec::new(self.finger_sections(side, ei_factor, gain_factor, mesh_factor));
+        let mut spec =
+            RobotSpec::new(self.finger_sections(side, ei_factor, gain_factor, mesh_factor));
         spec.base = Base {
             position_m: self.base_m(side).to_vec(),
             angle_rad: -std::f64::consts::FRAC_PI_2,
@@ -314,11 +323,17 @@ mod tests {
             base_spacing_m: 0.01,
             ..GripperSpec::default()
         };
-        assert_eq!(g.validate().unwrap_err().field(), Some("gripper.base_spacing_m"));
+        assert_eq!(
+            g.validate().unwrap_err().field(),
+            Some("gripper.base_spacing_m")
+        );
         let g = GripperSpec {
             ei_nm2: -1.0,
             ..GripperSpec::default()
         };
-        assert_eq!(g.finger(Side::Left).unwrap_err().field(), Some("gripper.ei_nm2"));
+        assert_eq!(
+            g.finger(Side::Left).unwrap_err().field(),
+            Some("gripper.ei_nm2")
+        );
     }
 }

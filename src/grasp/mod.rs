@@ -6,3 +6,5 @@
 pub mod friction;
 pub mod gripper;
 pub mod object;
+pub mod plant;
+pub mod strategy;

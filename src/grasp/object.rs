@@ -107,7 +107,11 @@ impl GraspObject {
     pub fn validate(&self, path: &str) -> Result<()> {
         positive(&format!("{path}.mass_kg"), self.mass_kg)?;
         if !(self.mu.is_finite() && self.mu >= 0.0) {
-            return Err(Error::invalid(format!("{path}.mu"), self.mu, "must be finite and >= 0"));
+            return Err(Error::invalid(
+                format!("{path}.mu"),
+                self.mu,
+                "must be finite and >= 0",
+            ));
         }
         let sp = format!("{path}.shape");
         match &self.shape {
@@ -131,10 +135,18 @@ impl GraspObject {
                 positive(&format!("{sp}.corner_radius_m"), *corner_radius_m)?;
                 let n = vertices_m.len();
                 if n < 3 {
-                    return Err(Error::invalid(format!("{sp}.vertices_m"), n, "needs at least 3 vertices"));
+                    return Err(Error::invalid(
+                        format!("{sp}.vertices_m"),
+                        n,
+                        "needs at least 3 vertices",
+                    ));
                 }
                 for i in 0..n {
-                    let (a, b, c) = (vertices_m[i], vertices_m[(i + 1) % n], vertices_m[(i + 2) % n]);
+                    let (a, b, c) = (
+                        vertices_m[i],
+                        vertices_m[(i + 1) % n],
+                        vertices_m[(i + 2) % n],
+                    );
                     let cr = (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]);
                     if !(cr.is_finite() && cr > 0.0) {
                         return Err(Error::invalid(
@@ -155,7 +167,9 @@ impl GraspObject {
     fn local_vertices(&self) -> Vec<[f64; 2]> {
         match &self.shape {
             Shape::Circle { .. } => Vec::new(),
-            Shape::Ellipse { semi_axes_m: [a, b] } => (0..ELLIPSE_VERTICES)
+            Shape::Ellipse {
+                semi_axes_m: [a, b],
+            } => (0..ELLIPSE_VERTICES)
                 .map(|k| {
                     let t = std::f64::consts::TAU * k as f64 / ELLIPSE_VERTICES as f64;
                     [a * t.cos(), b * t.sin()]
@@ -174,7 +188,8 @@ impl GraspObject {
                     let (a, b) = (vertices_m[i], vertices_m[(i + 1) % n]);
                     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
                     let l = dx.hypot(dy);
-                    (-dx / l).atan2(dy / l) // outward normal (dy, −dx)/l of the edge i → i+1, as an angle
+                    (-dx / l)
+                        .atan2(dy / l) // outward normal (dy, −dx)/l of the edge i → i+1, as an angle
                         .rem_euclid(std::f64::consts::TAU)
                 };
                 let mut out = Vec::with_capacity(n * CORNER_VERTICES);
@@ -216,23 +231,45 @@ impl GraspObject {
         let mut vertices: Vec<[f64; 2]> = self
             .local_vertices()
             .into_iter()
-            .map(|[x, y]| [pose.position_m[0] + c * x - s * y, pose.position_m[1] + s * x + c * y])
+            .map(|[x, y]| {
+                [
+                    pose.position_m[0] + c * x - s * y,
+                    pose.position_m[1] + s * x + c * y,
+                ]
+            })
             .collect();
         // rounding arcs of adjacent corners may share a point: drop repeats
         vertices.dedup_by(|a, b| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-12);
-        Obstacle::Polygon { vertices_m: vertices }
+        Obstacle::Polygon {
+            vertices_m: vertices,
+        }
     }
 
     /// The object's extent at `pose` (m): `[min x, max x, min y, max y]`.
     pub fn bounds(&self, pose: &Pose) -> [f64; 4] {
         if let Shape::Circle { radius_m } = self.shape {
             let p = pose.position_m;
-            return [p[0] - radius_m, p[0] + radius_m, p[1] - radius_m, p[1] + radius_m];
+            return [
+                p[0] - radius_m,
+                p[0] + radius_m,
+                p[1] - radius_m,
+                p[1] + radius_m,
+            ];
         }
-        let mut b = [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY];
+        let mut b = [
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
         if let Obstacle::Polygon { vertices_m } = self.obstacle(pose) {
             for v in vertices_m {
-                b = [b[0].min(v[0]), b[1].max(v[0]), b[2].min(v[1]), b[3].max(v[1])];
+                b = [
+                    b[0].min(v[0]),
+                    b[1].max(v[0]),
+                    b[2].min(v[1]),
+                    b[3].max(v[1]),
+                ];
             }
         }
         b
@@ -305,12 +342,18 @@ mod tests {
             mass_kg: 0.0,
             mu: 0.5,
         };
-        assert_eq!(o.validate("object").unwrap_err().field(), Some("object.mass_kg"));
+        assert_eq!(
+            o.validate("object").unwrap_err().field(),
+            Some("object.mass_kg")
+        );
         o.mass_kg = 0.1;
         o.shape = Shape::Rectangle {
             size_m: [0.01, -1.0],
         };
-        assert_eq!(o.validate("object").unwrap_err().field(), Some("object.shape.size_m[1]"));
+        assert_eq!(
+            o.validate("object").unwrap_err().field(),
+            Some("object.shape.size_m[1]")
+        );
         o.shape = Shape::RoundedPolygon {
             vertices_m: vec![[0.0, 0.0], [0.0, 0.01], [0.01, 0.0]],
             corner_radius_m: 0.001,
