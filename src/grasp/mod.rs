@@ -8,3 +8,5 @@ pub mod gripper;
 pub mod object;
 pub mod plant;
 pub mod strategy;
+pub mod table;
+pub mod trial;

@@ -92,9 +92,9 @@ impl GripperPlantSettings {
 pub struct FingerState {
     /// The plant's coordinates.
     pub q: Vec<f64>,
-    /// Contacts with the object (obstacle 0).
+    /// Contacts with the object.
     pub object_contacts: Vec<ContactForce>,
-    /// Contacts with the table (obstacle 1), if it is there.
+    /// Contacts with the table, if it is there.
     pub table_contacts: Vec<ContactForce>,
     /// The noisy marker observation.
     pub markers: Observation,
@@ -120,7 +120,7 @@ pub enum PlantStep {
 #[derive(Debug, Clone)]
 pub struct GripperPlant {
     fingers: [Robot<PlanarCable>; 2],
-    object: Obstacle,
+    object: Vec<Obstacle>,
     table: Option<Obstacle>,
     radius_m: f64,
     markers_s_m: Vec<f64>,
@@ -132,8 +132,10 @@ pub struct GripperPlant {
 }
 
 impl GripperPlant {
-    /// The plant of `gripper` (perturbed by `settings`) around `object`,
-    /// with a table (an obstacle, or `None`); markers at the arc
+    /// The plant of `gripper` (perturbed by `settings`) around `object`
+    /// (its circle cover, [`crate::grasp::object::GraspObject::contact_cover`];
+    /// empty: the payload-free run of the virtual payload), with a table
+    /// (an obstacle, or `None`); markers at the arc
     /// coordinates `markers_s_m` of each finger, noise seeded by `seed`.
     ///
     /// # Errors
@@ -143,7 +145,7 @@ impl GripperPlant {
     pub fn new(
         gripper: &GripperSpec,
         settings: &GripperPlantSettings,
-        object: Obstacle,
+        object: Vec<Obstacle>,
         table: Option<Obstacle>,
         markers_s_m: &[f64],
         seed: u64,
@@ -184,7 +186,7 @@ impl GripperPlant {
     }
 
     fn obstacles(&self) -> Result<Obstacles> {
-        let mut v = vec![self.object.clone()];
+        let mut v: Vec<Obstacle> = self.object.clone();
         v.extend(self.table.clone());
         Obstacles::new(v, self.radius_m)
     }
@@ -228,9 +230,31 @@ impl GripperPlant {
                 pressures_pa: pressures_pa[k].to_vec(),
                 ..Loads::default()
             };
-            let sol = self
-                .solver
-                .solve(robot, &loads, &obstacles, self.warm[k].as_deref())?;
+            // the solve without the object first: if the object's gaps at
+            // that equilibrium are all open it is the contact solution too
+            // (no constraint of the object active), and the contact solver
+            // never sees a polygon the finger does not touch
+            let free_obstacles =
+                Obstacles::new(self.table.iter().cloned().collect(), self.radius_m)?;
+            let mut sol =
+                self.solver
+                    .solve(robot, &loads, &free_obstacles, self.warm[k].as_deref())?;
+            let n_obj = self.object.len();
+            let open = sol.is_converged()
+                && (n_obj == 0
+                    || Obstacles::new(self.object.clone(), self.radius_m)?
+                        .gaps(robot, &sol.q)?
+                        .iter()
+                        .all(|g| g.gap_m > 0.0));
+            if open {
+                // the table's contacts were numbered without the object
+                let shift = n_obj;
+                sol.contacts.iter_mut().for_each(|c| c.obstacle += shift);
+            } else {
+                sol = self
+                    .solver
+                    .solve(robot, &loads, &obstacles, self.warm[k].as_deref())?;
+            }
             if !sol.is_converged() {
                 self.warm[k] = None;
                 return Ok(PlantStep::Failed {
@@ -252,8 +276,11 @@ impl GripperPlant {
                 .iter()
                 .map(|p| [p[0], p[1]])
                 .collect();
-            let (object_contacts, table_contacts) =
-                sol.contacts.iter().cloned().partition(|c| c.obstacle == 0);
+            let (object_contacts, table_contacts) = sol
+                .contacts
+                .iter()
+                .cloned()
+                .partition(|c| c.obstacle < n_obj);
             self.warm[k] = Some(sol.q.clone());
             out.push(FingerState {
                 q: sol.q,
