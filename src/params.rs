@@ -100,6 +100,7 @@ pub mod parallel {
     /// Torque per chamber pressure (N·m/Pa), as the manipulator's: 100 kPa
     /// bends a free 60 mm section by about 40°.
     pub const GAIN_NM_PER_PA: f64 = 3.0e-6;
+}
 
 /// The two-finger gripper of Sec. VI (Fig. 10(a)). The paper's text gives
 /// no dimensions (only the drawing); these are chosen, with their reasons:
