@@ -145,7 +145,8 @@ pub fn hold_check(
         check_all_finite(&format!("contacts[{i}].point_m"), &c.point_m)?;
         let n = c.normal;
         let len = (n[0] * n[0] + n[1] * n[1]).sqrt();
-        if !((len - 1.0).abs() < 1e-9) {
+        let unit = (len - 1.0).abs() < 1e-9;
+        if !unit {
             return Err(Error::invalid(
                 format!("contacts[{i}].normal"),
                 format!("{n:?}"),

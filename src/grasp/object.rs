@@ -149,12 +149,8 @@ impl GraspObject {
                         "needs at least 3 vertices",
                     ));
                 }
-                for i in 0..n {
-                    let (a, b, c) = (
-                        vertices_m[i],
-                        vertices_m[(i + 1) % n],
-                        vertices_m[(i + 2) % n],
-                    );
+                for (i, &a) in vertices_m.iter().enumerate() {
+                    let (b, c) = (vertices_m[(i + 1) % n], vertices_m[(i + 2) % n]);
                     let cr = (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]);
                     if !(cr.is_finite() && cr > 0.0) {
                         return Err(Error::invalid(
@@ -201,13 +197,12 @@ impl GraspObject {
                         .rem_euclid(std::f64::consts::TAU)
                 };
                 let mut out = Vec::with_capacity(n * CORNER_VERTICES);
-                for i in 0..n {
+                for (i, &v) in vertices_m.iter().enumerate() {
                     let a0 = normal((i + n - 1) % n);
                     let mut a1 = normal(i);
                     if a1 < a0 {
                         a1 += std::f64::consts::TAU;
                     }
-                    let v = vertices_m[i];
                     for k in 0..CORNER_VERTICES {
                         let t = a0 + (a1 - a0) * k as f64 / (CORNER_VERTICES - 1) as f64;
                         out.push([v[0] + r * t.cos(), v[1] + r * t.sin()]);
@@ -230,14 +225,11 @@ impl GraspObject {
     /// ```
     pub fn obstacle(&self, pose: &Pose) -> Obstacle {
         let (s, c) = pose.angle_rad.sin_cos();
-        match self.shape {
-            Shape::Circle { radius_m } => {
-                return Obstacle::Circle {
-                    center_m: pose.position_m,
-                    radius_m,
-                }
-            }
-            _ => {}
+        if let Shape::Circle { radius_m } = self.shape {
+            return Obstacle::Circle {
+                center_m: pose.position_m,
+                radius_m,
+            };
         }
         let mut vertices: Vec<[f64; 2]> = self
             .local_vertices()

@@ -106,7 +106,7 @@ pub struct FingerState {
 #[derive(Debug, Clone, PartialEq)]
 pub enum PlantStep {
     /// Both contact solves converged.
-    Solved([FingerState; 2]),
+    Solved(Box<[FingerState; 2]>),
     /// A contact solve did not converge: which finger and the solver's status.
     Failed {
         /// The finger.
@@ -292,7 +292,7 @@ impl GripperPlant {
         }
         self.step += 1;
         match <[FingerState; 2]>::try_from(out) {
-            Ok(f) => Ok(PlantStep::Solved(f)),
+            Ok(f) => Ok(PlantStep::Solved(Box::new(f))),
             Err(_) => Err(Error::invalid("plant", "fingers", "expected two")),
         }
     }

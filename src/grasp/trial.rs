@@ -581,7 +581,7 @@ fn calibrate(
     let n = (settings.max_time_s * settings.control_rate_hz).ceil() as usize;
     for _ in 0..n {
         let state = match plant.solve([&p[0], &p[1]])? {
-            PlantStep::Solved(s) => s,
+            PlantStep::Solved(s) => *s,
             PlantStep::Failed { side, status } => {
                 return Ok(Err(Failure::PlantSolve { side, status }))
             }
@@ -751,7 +751,7 @@ pub fn run_trial(
     };
     let zero = vec![0.0; FINGER_PRESSURES];
     let mut state = match plant.solve([&zero, &zero])? {
-        PlantStep::Solved(s) => s,
+        PlantStep::Solved(s) => *s,
         PlantStep::Failed { side, status } => {
             fail_plant(&mut out, side, status);
             return Ok(out);
@@ -772,7 +772,7 @@ pub fn run_trial(
                 let cmd = vec![p, 0.0, 0.0, 0.0];
                 pressures = [cmd.clone(), cmd];
                 state = match plant.solve([&pressures[0], &pressures[1]])? {
-                    PlantStep::Solved(s) => s,
+                    PlantStep::Solved(s) => *s,
                     PlantStep::Failed { side, status } => {
                         fail_plant(&mut out, side, status);
                         return Ok(out);
@@ -835,7 +835,7 @@ pub fn run_trial(
                 }
                 pressures = [ctrl[0].pressures.clone(), ctrl[1].pressures.clone()];
                 state = match plant.solve([&pressures[0], &pressures[1]])? {
-                    PlantStep::Solved(s) => s,
+                    PlantStep::Solved(s) => *s,
                     PlantStep::Failed { side, status } => {
                         fail_plant(&mut out, side, status);
                         return Ok(out);
@@ -868,7 +868,7 @@ pub fn run_trial(
     // the lift: the table no longer carries the object
     plant.remove_table();
     let lifted = match plant.solve([&pressures[0], &pressures[1]])? {
-        PlantStep::Solved(s) => s,
+        PlantStep::Solved(s) => *s,
         PlantStep::Failed { side, status } => {
             fail_plant(&mut out, side, status);
             return Ok(out);
