@@ -24,6 +24,7 @@
 //! - [`linsolve`]: linear solvers for the tangent (banded, faer sparse); [`quadrature`]: Gauss rules.
 //! - [`control`]: inverse kinematics, the parameter updater (31), the closed loop.
 //! - [`plant`]: the robot a controller acts on; a simulated plant that is not the model.
+//! - [`grasp`]: the two-finger gripper, objects with friction, the adaptive grasp (45)–(52).
 //! - `report` (feature `report`): `softrod report`, the speed–accuracy chart and the stability map.
 //!
 //! Features: the library needs only its numerical dependencies (nalgebra,
@@ -51,6 +52,7 @@ pub mod control;
 pub mod element;
 pub mod error;
 pub mod estimate;
+pub mod grasp;
 pub mod linsolve;
 pub mod loads;
 pub(crate) mod numeric;

@@ -101,3 +101,44 @@ pub mod parallel {
     /// bends a free 60 mm section by about 40°.
     pub const GAIN_NM_PER_PA: f64 = 3.0e-6;
 }
+
+/// The two-finger gripper of Sec. VI (Fig. 10(a)). The paper's text gives
+/// no dimensions (only the drawing); these are chosen, with their reasons:
+///
+/// - Each finger: two equal pneumatic segments of 50 mm (the drawing shows
+///   two segments of about equal length; a 100 mm finger reaches objects
+///   from a walnut, about 30 mm, to a bottle, about 65 mm, as in Fig. 10(c)).
+/// - Finger bases 110 mm apart, fingers 16 mm thick (rod radius 8 mm): the
+///   straight fingers leave a 94 mm opening, wider than the largest object
+///   of Table I (an apple of about 75 mm) with room for its placement error.
+/// - Each segment has two chambers (one on each side of the strain-limiting
+///   layer), so it bends either way: four pressures per finger, which makes
+///   the Jacobian (50) 3 × 4.
+pub mod gripper {
+    /// Length of each of a finger's two segments (m).
+    pub const SEGMENT_LENGTH_M: f64 = 0.05;
+    /// Distance between the two finger bases (m), symmetric about x = 0.
+    pub const BASE_SPACING_M: f64 = 0.11;
+    /// Half the finger's thickness (m): contact is measured from the
+    /// centreline offset by it.
+    pub const FINGER_RADIUS_M: f64 = 0.008;
+    /// Bending stiffness of a finger (N·m²). A silicone finger with a
+    /// strain-limiting layer is much softer than the PVC robot of Sec. IV:
+    /// chosen so that a free segment bends by about 95° at the upper
+    /// pressure (`θ = M L / EI = 0.2 × 0.05 / 0.006 ≈ 1.67 rad`).
+    pub const EI_NM2: f64 = 0.006;
+    /// Axial stiffness (N): the strain-limiting layer prevents elongation;
+    /// as the robot's.
+    pub const EA_N: f64 = 300.0;
+    /// Mass per length (kg/m): a 16 × 20 mm silicone section, about half of
+    /// it chambers (1.1 g/cm³): about 0.18 kg/m.
+    pub const MASS_PER_LENGTH_KG_PER_M: f64 = 0.18;
+    /// Torque per chamber pressure (N·m/Pa): a chamber face of about
+    /// 15 × 20 mm at about 7 mm from the strain-limiting layer
+    /// (`3e-4 m² × 0.007 m ≈ 2e-6`), 0.2 N·m at the upper bound.
+    pub const ACTUATION_GAIN_NM_PER_PA: f64 = 2.0e-6;
+    /// Upper chamber pressure (Pa), as the robot's.
+    pub const PRESSURE_MAX_PA: f64 = 100.0e3;
+    /// Elements per segment of the controller's model (the plant uses more).
+    pub const ELEMENTS_PER_SEGMENT: usize = 4;
+}

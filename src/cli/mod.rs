@@ -136,7 +136,24 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// One simulated grasp (two-finger gripper, an object on a table) and
+    /// its outcome as JSON. The scene file is JSON: {"object": {"name": ...,
+    /// "shape": {"shape": "circle", "radius_m": 0.03}, "mass_kg": 0.1, "mu": 0.5},
+    /// "placement": {"offset_m": 0.0, "angle_rad": 0.0}} (optional: "gripper",
+    /// "settings", "seed", "strategy").
+    Grasp {
+        /// Grasp scene file (JSON, see above).
+        scene: PathBuf,
+        /// Strategy (default: the scene's, else adaptive).
+        #[arg(long, value_enum)]
+        strategy: Option<grasp::StrategyArg>,
+        /// Output file (default: standard output).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
 }
+
+mod grasp;
 
 /// Chamber pressures from the command line, in Pa.
 #[derive(Clone, Debug)]
@@ -794,6 +811,11 @@ pub fn run() -> Result<()> {
             only,
             quiet,
         }) => report(out, quick, only, quiet),
+        Some(Command::Grasp {
+            scene,
+            strategy,
+            out,
+        }) => grasp::run(scene, strategy, out),
     }
 }
 

@@ -1,0 +1,23 @@
+//! The adaptive pinch grasp (Sec. VI, (45)–(52)): a two-finger gripper,
+//! rigid objects that can slip, and two grasp strategies.
+//!
+//! - [`friction`]: whether contact forces inside the Coulomb cones balance an
+//!   object's weight (a second-order cone program, clarabel).
+//! - [`gripper`]: the two mirrored two-segment fingers (dimensions in
+//!   [`crate::params::gripper`]), per finger and as one structure.
+//! - [`object`]: the objects (circle, ellipse, rectangle, rounded polygon)
+//!   with mass and friction, their outlines and their circle covers.
+//! - [`plant`]: the gripper as the "real robot" (not the model), with exact
+//!   contact against the object and the table.
+//! - [`strategy`]: the contact pose (46)–(49) with a signed angle, the
+//!   Jacobian (50), the bounded least-squares step of (51)/(52).
+//! - [`trial`]: one quasi-static grasp trial and its success criterion.
+//! - [`table`]: Table I's nine objects and the seeded runner.
+
+pub mod friction;
+pub mod gripper;
+pub mod object;
+pub mod plant;
+pub mod strategy;
+pub mod table;
+pub mod trial;

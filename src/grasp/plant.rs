@@ -1,0 +1,299 @@
+//! The gripper as the "real robot": not the controller's model.
+//!
+//! Each finger is a finer mesh with a stiffer bending stiffness and a
+//! weaker actuation than the model (defaults: twice the elements, EI +15 %,
+//! gain −10 %), solved with exact frictionless contact
+//! ([`crate::contact::ContactSolver`]) against the object and the table;
+//! its markers carry Gaussian noise (default 0.05 mm). The object is held
+//! in place by the contact solve (a fixed obstacle): while the fingers
+//! close it rests on the table; whether it can be lifted is decided from
+//! the contact forces by the friction check
+//! ([`crate::grasp::friction::hold_check`]).
+
+use serde::{Deserialize, Serialize};
+
+use crate::assembly::Robot;
+use crate::contact::{ContactForce, ContactSolver, Obstacle, Obstacles};
+use crate::element::PlanarCable;
+use crate::error::{Error, Result};
+use crate::grasp::gripper::{GripperSpec, Side};
+use crate::loads::Loads;
+use crate::observe::{MarkerObservation, Observation};
+
+/// How the plant differs from the model; every field has a documented default.
+///
+/// # Example
+/// ```
+/// let s = softrod::grasp::plant::GripperPlantSettings::default();
+/// assert_eq!((s.mesh_factor, s.ei_factor, s.gain_factor), (2, 1.15, 0.9));
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GripperPlantSettings {
+    /// Elements per model element (default 2).
+    pub mesh_factor: usize,
+    /// Bending stiffness factor (default 1.15).
+    pub ei_factor: f64,
+    /// Actuation gain factor (default 0.9).
+    pub gain_factor: f64,
+    /// Marker noise, standard deviation per component (m; default 5e-5).
+    pub marker_noise_m: f64,
+}
+
+impl Default for GripperPlantSettings {
+    fn default() -> Self {
+        GripperPlantSettings {
+            mesh_factor: 2,
+            ei_factor: 1.15,
+            gain_factor: 0.9,
+            marker_noise_m: 5e-5,
+        }
+    }
+}
+
+impl GripperPlantSettings {
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the field (`plant.<field>`).
+    pub fn validate(&self) -> Result<()> {
+        if self.mesh_factor == 0 || self.mesh_factor > 16 {
+            return Err(Error::invalid(
+                "plant.mesh_factor",
+                self.mesh_factor,
+                "must be in 1..=16",
+            ));
+        }
+        for (n, v) in [
+            ("ei_factor", self.ei_factor),
+            ("gain_factor", self.gain_factor),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::invalid(
+                    format!("plant.{n}"),
+                    v,
+                    "must be finite and > 0",
+                ));
+            }
+        }
+        if !(self.marker_noise_m.is_finite() && self.marker_noise_m >= 0.0) {
+            return Err(Error::invalid(
+                "plant.marker_noise_m",
+                self.marker_noise_m,
+                "must be finite and >= 0",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// One finger's state after a plant solve.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FingerState {
+    /// The plant's coordinates.
+    pub q: Vec<f64>,
+    /// Contacts with the object.
+    pub object_contacts: Vec<ContactForce>,
+    /// Contacts with the table, if it is there.
+    pub table_contacts: Vec<ContactForce>,
+    /// The noisy marker observation.
+    pub markers: Observation,
+    /// Centreline points at the plant's nodes (m), for drawings.
+    pub centreline_m: Vec<[f64; 2]>,
+}
+
+/// The result of one plant solve: both fingers, or why it failed.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PlantStep {
+    /// Both contact solves converged.
+    Solved(Box<[FingerState; 2]>),
+    /// A contact solve did not converge: which finger and the solver's status.
+    Failed {
+        /// The finger.
+        side: Side,
+        /// The contact solver's status, as text.
+        status: String,
+    },
+}
+
+/// The simulated gripper with an object (and a table) in its workspace.
+#[derive(Debug, Clone)]
+pub struct GripperPlant {
+    fingers: [Robot<PlanarCable>; 2],
+    object: Vec<Obstacle>,
+    table: Option<Obstacle>,
+    radius_m: f64,
+    markers_s_m: Vec<f64>,
+    noise_m: f64,
+    seed: u64,
+    step: u64,
+    warm: [Option<Vec<f64>>; 2],
+    solver: ContactSolver,
+}
+
+impl GripperPlant {
+    /// The plant of `gripper` (perturbed by `settings`) around `object`
+    /// (its circle cover, [`crate::grasp::object::GraspObject::contact_cover`];
+    /// empty: the payload-free run of the virtual payload), with a table
+    /// (an obstacle, or `None`); markers at the arc
+    /// coordinates `markers_s_m` of each finger, noise seeded by `seed`.
+    ///
+    /// # Errors
+    /// [`GripperPlantSettings::validate`], [`GripperSpec::validate`]; an
+    /// obstacle overlapping a straight finger ([`Obstacles::check_robot`],
+    /// field `obstacles[i]`).
+    pub fn new(
+        gripper: &GripperSpec,
+        settings: &GripperPlantSettings,
+        object: Vec<Obstacle>,
+        table: Option<Obstacle>,
+        markers_s_m: &[f64],
+        seed: u64,
+    ) -> Result<Self> {
+        settings.validate()?;
+        gripper.validate()?;
+        let build = |side| {
+            gripper
+                .finger_spec(
+                    side,
+                    settings.ei_factor,
+                    settings.gain_factor,
+                    settings.mesh_factor,
+                )
+                .build_planar()
+        };
+        let fingers = [build(Side::Left)?, build(Side::Right)?];
+        let plant = GripperPlant {
+            fingers,
+            object,
+            table,
+            radius_m: gripper.finger_radius_m,
+            markers_s_m: markers_s_m.to_vec(),
+            noise_m: settings.marker_noise_m,
+            seed,
+            step: 0,
+            warm: [None, None],
+            solver: ContactSolver::default(),
+        };
+        let obs = plant.obstacles()?;
+        for f in &plant.fingers {
+            obs.check_robot(f)?;
+            for (i, &s) in markers_s_m.iter().enumerate() {
+                f.locate(&format!("markers_s_m[{i}]"), s)?;
+            }
+        }
+        Ok(plant)
+    }
+
+    fn obstacles(&self) -> Result<Obstacles> {
+        let mut v: Vec<Obstacle> = self.object.clone();
+        v.extend(self.table.clone());
+        Obstacles::new(v, self.radius_m)
+    }
+
+    /// Removes the table (the gripper has lifted the object off it).
+    pub fn remove_table(&mut self) {
+        self.table = None;
+    }
+
+    /// The plant's finger robots (left, right).
+    pub fn fingers(&self) -> &[Robot<PlanarCable>; 2] {
+        &self.fingers
+    }
+
+    /// Solves both fingers at their pressures (Pa, four each), warm from
+    /// the last solve.
+    ///
+    /// # Errors
+    /// Bad input only (pressures of the wrong count or outside the
+    /// chambers' bounds). A contact solve that does not converge is
+    /// [`PlantStep::Failed`].
+    pub fn solve(&mut self, pressures_pa: [&[f64]; 2]) -> Result<PlantStep> {
+        let obstacles = self.obstacles()?;
+        let mut out = Vec::with_capacity(2);
+        for (k, side) in [Side::Left, Side::Right].into_iter().enumerate() {
+            let robot = &self.fingers[k];
+            for (j, (p, (lo, hi))) in pressures_pa[k]
+                .iter()
+                .zip(robot.pressure_bounds())
+                .enumerate()
+            {
+                if !(p.is_finite() && *p >= lo - 1e-9 && *p <= hi + 1e-9) {
+                    return Err(Error::invalid(
+                        format!("pressures_pa[{j}]"),
+                        p,
+                        "outside the chamber's bounds",
+                    ));
+                }
+            }
+            let loads = Loads {
+                pressures_pa: pressures_pa[k].to_vec(),
+                ..Loads::default()
+            };
+            // the solve without the object first: if the object's gaps at
+            // that equilibrium are all open it is the contact solution too
+            // (no constraint of the object active), and the contact solver
+            // never sees a polygon the finger does not touch
+            let free_obstacles =
+                Obstacles::new(self.table.iter().cloned().collect(), self.radius_m)?;
+            let mut sol =
+                self.solver
+                    .solve(robot, &loads, &free_obstacles, self.warm[k].as_deref())?;
+            let n_obj = self.object.len();
+            let open = sol.is_converged()
+                && (n_obj == 0
+                    || Obstacles::new(self.object.clone(), self.radius_m)?
+                        .gaps(robot, &sol.q)?
+                        .iter()
+                        .all(|g| g.gap_m > 0.0));
+            if open {
+                // the table's contacts were numbered without the object
+                let shift = n_obj;
+                sol.contacts.iter_mut().for_each(|c| c.obstacle += shift);
+            } else {
+                sol = self
+                    .solver
+                    .solve(robot, &loads, &obstacles, self.warm[k].as_deref())?;
+            }
+            if !sol.is_converged() {
+                self.warm[k] = None;
+                return Ok(PlantStep::Failed {
+                    side,
+                    status: format!("{:?}", sol.report.status),
+                });
+            }
+            let mut markers = Vec::with_capacity(self.markers_s_m.len());
+            for &s in &self.markers_s_m {
+                markers.push(MarkerObservation::at_arc(s, robot.position_at(&sol.q, s)?));
+            }
+            let seed = self
+                .seed
+                .wrapping_mul(1_000_003)
+                .wrapping_add(2 * self.step + k as u64);
+            let markers = Observation { markers }.with_noise(self.noise_m, seed);
+            let centreline_m = robot
+                .node_positions(&sol.q)
+                .iter()
+                .map(|p| [p[0], p[1]])
+                .collect();
+            let (object_contacts, table_contacts) = sol
+                .contacts
+                .iter()
+                .cloned()
+                .partition(|c| c.obstacle < n_obj);
+            self.warm[k] = Some(sol.q.clone());
+            out.push(FingerState {
+                q: sol.q,
+                object_contacts,
+                table_contacts,
+                markers,
+                centreline_m,
+            });
+        }
+        self.step += 1;
+        match <[FingerState; 2]>::try_from(out) {
+            Ok(f) => Ok(PlantStep::Solved(Box::new(f))),
+            Err(_) => Err(Error::invalid("plant", "fingers", "expected two")),
+        }
+    }
+}

@@ -1,0 +1,907 @@
+//! One grasp trial, quasi-static: the gripper closes on an object resting
+//! on a table, lifts it, and the friction check decides whether it holds.
+//!
+//! # The scene
+//! The palm at `y = 0`, fingers hanging down; the table top
+//! `table_clearance_m` below the straight fingertips' surface; the object
+//! rests on it (its lowest point on the table), shifted sideways by the
+//! placement's offset and turned by its angle (both randomized in Table I).
+//!
+//! # The strategies
+//! - **Open loop** (the baseline of the paper's ref. [53]): the proximal
+//!   segments' inward chambers ramp linearly to a predetermined pressure
+//!   (default: the pressure at which the free model's fingertips meet at
+//!   the centreline) over `open_loop_ramp_s`, then stay; no feedback.
+//! - **Adaptive** (45)–(52), per finger, at `control_rate_hz`: the estimator
+//!   ([`crate::estimate`], on the controller's model, from the plant's
+//!   noisy markers) gives the load field `F̄`; the virtual payload (the
+//!   estimates recorded while nothing touches, keyed by the pressures)
+//!   is subtracted; contact is detected when the remainder's resultant
+//!   exceeds `contact_threshold_n`, and the contact point is the node of
+//!   its largest magnitude. Before contact the pose (49) is taken at the
+//!   fingertip and (51) moves it inward at `u1` while keeping it vertical
+//!   (the paper ramps the proximal segment instead: in this geometry that
+//!   lifts the fingertips by about 12 mm and misses low objects, measured
+//!   by the open-loop trials); after contact (51) pushes the contact point
+//!   inward at `u1` and turns the finger to `θ = 0` at `u2`; when a pressure
+//!   comes within `bound_margin` of its upper bound, (52) turns only, and
+//!   once `|θ| < theta_tolerance_rad` the pressures are held.
+//!
+//! # Success
+//! After closing, the gripper lifts by `lift_height_m`: the table no longer
+//! supports the object, the plant is solved again at the held pressures, and
+//! the friction check ([`crate::grasp::friction::hold_check`]) is run on
+//! the fingers' contact forces (normal forces as the bound of each contact's
+//! push). The trial succeeds iff the weight is balanced inside the friction
+//! cones (weight factor `>= 1`). In this quasi-static model, with the
+//! pressures held and no creep, a balanced object stays through the hold
+//! time `hold_time_s` with zero slip (the contacts stick); an unbalanced one
+//! is recorded as a failure "slips" with its weight factor, not simulated
+//! further: the contact solver treats the object as a fixed obstacle, so the
+//! sliding object's pose (and the slip distance, to compare with
+//! `max_slip_m`) is not computed. A plant contact solve that does not
+//! converge ends the trial as a failure with the solver's status.
+
+use serde::{Deserialize, Serialize};
+
+use crate::assembly::Robot;
+use crate::contact::{Obstacle, Obstacles};
+use crate::control::VirtualPayload;
+use crate::element::PlanarCable;
+use crate::error::{Error, Result};
+use crate::estimate::{Backend, Estimator, EstimatorSettings};
+use crate::grasp::friction::{hold_check, FrictionContact, HoldCheck};
+use crate::grasp::gripper::{GripperSpec, Side, FINGER_PRESSURES};
+use crate::grasp::object::{GraspObject, Pose};
+use crate::grasp::plant::{FingerState, GripperPlant, GripperPlantSettings, PlantStep};
+use crate::grasp::strategy::{bounded_step, contact_jacobian, contact_pose};
+use crate::loads::Loads;
+use crate::statics::StaticSolver;
+
+/// Which grasp strategy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Strategy {
+    /// (45)–(52) with the estimator.
+    Adaptive,
+    /// Proximal segments to a predetermined pressure, no feedback.
+    OpenLoop,
+}
+
+impl Strategy {
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::Adaptive => "adaptive",
+            Strategy::OpenLoop => "open-loop",
+        }
+    }
+}
+
+/// Settings of a trial; every field has a documented default.
+///
+/// # Example
+/// ```
+/// let s = softrod::grasp::trial::GraspSettings::default();
+/// assert_eq!((s.control_rate_hz, s.u1_m_per_s), (20.0, 0.03));
+/// s.validate()?;
+/// # Ok::<(), softrod::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GraspSettings {
+    /// Control rate `f_c` (Hz; paper: 20).
+    pub control_rate_hz: f64,
+    /// Speed of the contact point toward the centreline `u1` (m/s; paper: 30 mm/s).
+    pub u1_m_per_s: f64,
+    /// Turning rate `u2` (rad/s; paper: π/24).
+    pub u2_rad_per_s: f64,
+    /// Contact is detected when the estimated load minus the virtual
+    /// payload (averaged over the last three estimates) has a resultant
+    /// above this (N; default 0.25, above the noise of the estimate).
+    pub contact_threshold_n: f64,
+    /// (52) takes over when a pressure is within this fraction of its
+    /// upper bound (default 0.05).
+    pub bound_margin: f64,
+    /// The pressures are held once `|θ|` is below this (rad; default 0.03).
+    pub theta_tolerance_rad: f64,
+    /// After contact, (52) replaces (51) while `|θ|` exceeds this (rad;
+    /// default 0.1): a contact blocks the contact point, so the pressures
+    /// (51) adds to move it turn the finger instead (measured: without the
+    /// band `θ` drifted to −0.3 rad within 1 s on a 60 mm disc).
+    pub theta_band_rad: f64,
+    /// Longest closing phase (s; default 6).
+    pub max_time_s: f64,
+    /// Table top below the straight fingertips' surface (m; default 0.004).
+    pub table_clearance_m: f64,
+    /// Lift height (m; default 0.05): quasi-static, it only removes the table.
+    pub lift_height_m: f64,
+    /// Hold time (s; default 3): quasi-static, see the module docs.
+    pub hold_time_s: f64,
+    /// Largest slip of a success (m; default 0.005): a held object does not slip here.
+    pub max_slip_m: f64,
+    /// Ramp time of the open-loop strategy (s; default 2).
+    pub open_loop_ramp_s: f64,
+    /// Open-loop proximal pressure (Pa); `None` (default): where the free
+    /// model's fingertips meet at the centreline.
+    pub open_loop_pressure_pa: Option<f64>,
+    /// The estimator's regularization weight `α` (m/N², whitened weights;
+    /// default 1). The discrepancy principle picks `α` on the first frame,
+    /// where nothing touches and the markers fit to the noise: it then
+    /// shrank the contact load so much (a 0.9 N contact estimated below
+    /// 0.1 N, measured) that contact went undetected.
+    pub estimator_alpha: f64,
+    /// Marker arc coordinates on each finger (m; default four, every 25 mm).
+    pub markers_s_m: Vec<f64>,
+    /// How the plant differs from the model.
+    pub plant: GripperPlantSettings,
+}
+
+impl Default for GraspSettings {
+    fn default() -> Self {
+        GraspSettings {
+            control_rate_hz: 20.0,
+            u1_m_per_s: 0.03,
+            u2_rad_per_s: std::f64::consts::PI / 24.0,
+            contact_threshold_n: 0.25,
+            bound_margin: 0.05,
+            theta_tolerance_rad: 0.03,
+            theta_band_rad: 0.1,
+            max_time_s: 6.0,
+            table_clearance_m: 0.004,
+            lift_height_m: 0.05,
+            hold_time_s: 3.0,
+            max_slip_m: 0.005,
+            open_loop_ramp_s: 2.0,
+            open_loop_pressure_pa: None,
+            estimator_alpha: 1.0,
+            markers_s_m: vec![0.025, 0.05, 0.075, 0.1],
+            plant: GripperPlantSettings::default(),
+        }
+    }
+}
+
+impl GraspSettings {
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the field (`settings.<field>`).
+    pub fn validate(&self) -> Result<()> {
+        for (n, v) in [
+            ("control_rate_hz", self.control_rate_hz),
+            ("u1_m_per_s", self.u1_m_per_s),
+            ("u2_rad_per_s", self.u2_rad_per_s),
+            ("contact_threshold_n", self.contact_threshold_n),
+            ("bound_margin", self.bound_margin),
+            ("theta_tolerance_rad", self.theta_tolerance_rad),
+            ("theta_band_rad", self.theta_band_rad),
+            ("max_time_s", self.max_time_s),
+            ("table_clearance_m", self.table_clearance_m),
+            ("lift_height_m", self.lift_height_m),
+            ("hold_time_s", self.hold_time_s),
+            ("max_slip_m", self.max_slip_m),
+            ("open_loop_ramp_s", self.open_loop_ramp_s),
+            ("estimator_alpha", self.estimator_alpha),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::invalid(
+                    format!("settings.{n}"),
+                    v,
+                    "must be finite and > 0",
+                ));
+            }
+        }
+        if self.max_time_s * self.control_rate_hz > 10_000.0 {
+            return Err(Error::invalid(
+                "settings.max_time_s",
+                self.max_time_s,
+                "at most 10000 control steps",
+            ));
+        }
+        if let Some(p) = self.open_loop_pressure_pa {
+            if !(p.is_finite() && p >= 0.0) {
+                return Err(Error::invalid(
+                    "settings.open_loop_pressure_pa",
+                    p,
+                    "must be finite and >= 0",
+                ));
+            }
+        }
+        if self.markers_s_m.is_empty() {
+            return Err(Error::invalid(
+                "settings.markers_s_m",
+                "[]",
+                "needs at least one marker",
+            ));
+        }
+        self.plant.validate()
+    }
+}
+
+/// Where the object is put: sideways offset of its centre from the
+/// gripper's centreline and its rotation.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Placement {
+    /// Offset of the object's bounding box centre from `x = 0` (m).
+    pub offset_m: f64,
+    /// Rotation of the object (rad).
+    pub angle_rad: f64,
+}
+
+/// A finger controller's phase.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Phase {
+    /// No contact yet.
+    Approach,
+    /// (51): push the contact point inward, square the finger.
+    Squeeze,
+    /// (52): a pressure is near its bound; square the finger only.
+    Align,
+    /// Pressures held.
+    Hold,
+    /// The open-loop ramp.
+    Ramp,
+}
+
+/// One contact force on the object, for reports.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ContactRecord {
+    /// The finger.
+    pub side: Side,
+    /// Point on the object's surface (m).
+    pub point_m: [f64; 2],
+    /// Unit normal into the object (the finger's push).
+    pub normal: [f64; 2],
+    /// Normal force (N).
+    pub force_n: f64,
+}
+
+/// The state after one control interval.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Frame {
+    /// Time (s).
+    pub time_s: f64,
+    /// Each finger's phase.
+    pub phases: [Phase; 2],
+    /// Each finger's pressures (Pa).
+    pub pressures_pa: [Vec<f64>; 2],
+    /// Each finger's centreline (the plant's nodes, m).
+    pub centreline_m: [Vec<[f64; 2]>; 2],
+    /// Contacts on the object.
+    pub contacts: Vec<ContactRecord>,
+    /// The adaptive controller's contact pose `[p_x, p_y, θ]` per finger.
+    pub contact_pose: [Option<[f64; 3]>; 2],
+}
+
+/// Why a trial failed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "cause", rename_all = "snake_case")]
+pub enum Failure {
+    /// The object cannot be held after the lift: the contacts balance only
+    /// this fraction of its weight.
+    Slips {
+        /// The largest weight factor the contacts balance.
+        weight_factor: f64,
+    },
+    /// A finger reached the centreline or its pressure bound without
+    /// detecting contact.
+    Missed {
+        /// The finger.
+        side: Side,
+    },
+    /// The plant's contact solve did not converge.
+    PlantSolve {
+        /// The finger.
+        side: Side,
+        /// The solver's status.
+        status: String,
+    },
+    /// The controller could not compute a step (estimator or Jacobian).
+    Controller {
+        /// The error.
+        message: String,
+    },
+}
+
+/// The result of a trial.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrialOutcome {
+    /// The object's name.
+    pub object: String,
+    /// The strategy.
+    pub strategy: Strategy,
+    /// The placement.
+    pub placement: Placement,
+    /// The object's pose on the table.
+    pub pose: Pose,
+    /// The object as an obstacle (for drawings).
+    pub outline: Obstacle,
+    /// Whether the grasp held.
+    pub success: bool,
+    /// Why not.
+    pub failure: Option<Failure>,
+    /// The friction check after the lift (when the trial got there).
+    pub hold: Option<HoldCheck>,
+    /// The heaviest object of this geometry the final grasp holds (kg).
+    pub holding_mass_kg: f64,
+    /// The largest distance between a finger's estimated contact point and
+    /// its true one at the end (m; adaptive only, fingers in contact).
+    pub contact_estimate_error_m: Option<f64>,
+    /// Every control interval, the last one after the lift.
+    pub frames: Vec<Frame>,
+}
+
+/// The object's pose on the table for `placement`.
+fn resting_pose(object: &GraspObject, placement: &Placement, table_y: f64) -> Pose {
+    let probe = Pose {
+        position_m: [0.0, 0.0],
+        angle_rad: placement.angle_rad,
+    };
+    let b = object.bounds(&probe);
+    Pose {
+        position_m: [placement.offset_m - 0.5 * (b[0] + b[1]), table_y - b[2]],
+        angle_rad: placement.angle_rad,
+    }
+}
+
+/// The pressure at which the free model's fingertips meet at the centreline
+/// (proximal inward chambers only), by bisection; the upper bound if they
+/// never do.
+///
+/// # Errors
+/// Static solve failures.
+pub fn meeting_pressure_pa(gripper: &GripperSpec) -> Result<f64> {
+    let f = gripper.finger(Side::Left)?;
+    let solver = StaticSolver::default();
+    let gap = |p: f64, q0: Option<&[f64]>| -> Result<(f64, Vec<f64>)> {
+        let loads = Loads {
+            pressures_pa: vec![p, 0.0, 0.0, 0.0],
+            ..Loads::default()
+        };
+        let q = solver.solve(&f, &loads, q0)?.q;
+        let tip = f.position_at(&q, gripper.finger_length_m())?;
+        Ok((-(tip[0] + gripper.finger_radius_m), q))
+    };
+    let (mut lo, mut hi) = (0.0, gripper.pressure_max_pa);
+    let (g_hi, _) = gap(hi, None)?;
+    if g_hi > 0.0 {
+        return Ok(hi);
+    }
+    let mut q = None;
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        let (g, qm) = gap(mid, q.as_deref())?;
+        q = Some(qm);
+        if g > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Ok(0.5 * (lo + hi))
+}
+
+/// Estimates averaged for contact detection and localization.
+const AVERAGED_ESTIMATES: usize = 3;
+
+/// The adaptive controller of one finger.
+struct FingerController {
+    side: Side,
+    model: Robot<PlanarCable>,
+    estimator: Box<dyn Estimator>,
+    vp: VirtualPayload,
+    phase: Phase,
+    pressures: Vec<f64>,
+    pose: Option<[f64; 3]>,
+    length: f64,
+    radius: f64,
+    max_pa: f64,
+    /// The payload-free run: record the virtual payload, never detect.
+    calibrating: bool,
+    /// The last estimates minus the virtual payload (averaged for detection
+    /// and localization: one estimate carries the marker noise).
+    recent: Vec<Vec<f64>>,
+}
+
+impl FingerController {
+    fn new(
+        gripper: &GripperSpec,
+        side: Side,
+        noise_m: f64,
+        alpha: f64,
+        vp: Option<VirtualPayload>,
+    ) -> Result<Self> {
+        let model = gripper.finger(side)?;
+        let settings = EstimatorSettings {
+            noise_sigma_m: noise_m.max(1e-6),
+            alpha: Some(alpha),
+            ..EstimatorSettings::default()
+        };
+        let known = Loads {
+            pressures_pa: vec![0.0; FINGER_PRESSURES],
+            ..Loads::default()
+        };
+        let estimator = Backend::Newton.build(model.clone(), known, settings)?;
+        Ok(FingerController {
+            side,
+            model,
+            estimator,
+            calibrating: vp.is_none(),
+            recent: Vec::new(),
+            vp: vp.unwrap_or_else(|| VirtualPayload::new(3)),
+            phase: Phase::Approach,
+            pressures: vec![0.0; FINGER_PRESSURES],
+            pose: None,
+            length: gripper.finger_length_m(),
+            radius: gripper.finger_radius_m,
+            max_pa: gripper.pressure_max_pa,
+        })
+    }
+
+    /// Resultant (N) of a load field and where it peaks: the
+    /// magnitude-weighted mean arc coordinate of the nodes at more than half
+    /// the largest nodal magnitude (the largest node alone jumps by a node
+    /// spacing between steps).
+    fn resultant_and_peak(&self, r: &[f64]) -> Result<(f64, f64)> {
+        let g = self.model.apply_load_gram(r)?;
+        let fx: f64 = g.iter().step_by(4).sum();
+        let fy: f64 = g.iter().skip(1).step_by(4).sum();
+        let arcs = self.model.node_arc();
+        let mags: Vec<f64> = (0..arcs.len())
+            .map(|i| r[4 * i].hypot(r[4 * i + 1]))
+            .collect();
+        let top = mags.iter().skip(1).copied().fold(0.0, f64::max);
+        let (mut ws, mut w) = (0.0, 0.0);
+        for (m, s) in mags.iter().zip(arcs).skip(1) {
+            if *m >= 0.5 * top && top > 0.0 {
+                ws += m * s;
+                w += m;
+            }
+        }
+        let peak = if w > 0.0 { ws / w } else { self.length };
+        Ok((fx.hypot(fy), peak))
+    }
+
+    /// One control instant: the markers in, the new pressures (or a failure).
+    fn step(&mut self, state: &FingerState, s: &GraspSettings) -> Result<Option<Failure>> {
+        if self.phase == Phase::Hold {
+            return Ok(None);
+        }
+        let dt = 1.0 / s.control_rate_hz;
+        self.estimator.set_known_loads(Loads {
+            pressures_pa: self.pressures.clone(),
+            ..Loads::default()
+        })?;
+        let est = self.estimator.step(&state.markers)?;
+        if !est.f.iter().chain(&est.q).all(|v| v.is_finite()) {
+            return Ok(Some(Failure::Controller {
+                message: "the estimate is not finite".into(),
+            }));
+        }
+        let r: Vec<f64> = if self.vp.is_empty() {
+            vec![0.0; est.f.len()]
+        } else {
+            self.vp.subtract(&self.pressures, &est.f)?
+        };
+        self.recent.push(r);
+        if self.recent.len() > AVERAGED_ESTIMATES {
+            self.recent.remove(0);
+        }
+        let mut r = vec![0.0; est.f.len()];
+        for x in &self.recent {
+            r.iter_mut()
+                .zip(x)
+                .for_each(|(a, b)| *a += b / self.recent.len() as f64);
+        }
+        let (res, peak) = self.resultant_and_peak(&r)?;
+        let s_c = match self.phase {
+            Phase::Approach if self.calibrating => {
+                self.vp.record(&self.pressures, &est.f)?;
+                self.length
+            }
+            Phase::Approach if res > s.contact_threshold_n => {
+                self.phase = Phase::Squeeze;
+                peak
+            }
+            Phase::Approach => self.length,
+            _ => peak,
+        };
+        let loads = Loads {
+            pressures_pa: self.pressures.clone(),
+            distributed_f: est.f.clone(),
+            ..Loads::default()
+        };
+        let pose = contact_pose(&self.model, &est.q, s_c)?;
+        self.pose = Some(pose);
+        let inward = self.side.inward();
+        let near_bound = self
+            .pressures
+            .iter()
+            .any(|p| *p >= (1.0 - s.bound_margin) * self.max_pa);
+        if self.phase == Phase::Approach && (inward * pose[0] + self.radius >= 0.0 || near_bound) {
+            return Ok(Some(Failure::Missed { side: self.side }));
+        }
+        if self.phase == Phase::Squeeze && near_bound {
+            self.phase = Phase::Align;
+        }
+        if self.phase == Phase::Align && pose[2].abs() < s.theta_tolerance_rad {
+            self.phase = Phase::Hold;
+            return Ok(None);
+        }
+        let turn = -s.u2_rad_per_s * pose[2].signum() * f64::from(u8::from(pose[2] != 0.0));
+        // (52) also while the finger is turned by more than the band: the
+        // contact blocks the motion (51) asks for, and its push turns the finger
+        let squaring = self.phase == Phase::Squeeze && pose[2].abs() > s.theta_band_rad;
+        let xdot = if self.phase == Phase::Align || squaring {
+            [0.0, 0.0, turn]
+        } else {
+            [inward * s.u1_m_per_s, 0.0, turn]
+        };
+        let j = contact_jacobian(&self.model, &est.q, &loads, s_c)?;
+        let dp = bounded_step(
+            &j,
+            &xdot,
+            dt,
+            &self.pressures,
+            &self.model.pressure_bounds(),
+            self.length,
+        )?;
+        self.pressures
+            .iter_mut()
+            .zip(&dp)
+            .for_each(|(p, d)| *p += d);
+        Ok(None)
+    }
+}
+
+/// The virtual payload of each finger: the approach law run on the plant
+/// with nothing in the way (no object, no table), the estimates recorded
+/// against the pressures until the fingertips reach the centreline.
+fn calibrate(
+    gripper: &GripperSpec,
+    settings: &GraspSettings,
+    seed: u64,
+) -> Result<std::result::Result<[VirtualPayload; 2], Failure>> {
+    let mut plant = GripperPlant::new(
+        gripper,
+        &settings.plant,
+        Vec::new(),
+        None,
+        &settings.markers_s_m,
+        seed.wrapping_add(0x5EED),
+    )?;
+    let noise = settings.plant.marker_noise_m;
+    let mut ctrl = [
+        FingerController::new(gripper, Side::Left, noise, settings.estimator_alpha, None)?,
+        FingerController::new(gripper, Side::Right, noise, settings.estimator_alpha, None)?,
+    ];
+    let zero = vec![0.0; FINGER_PRESSURES];
+    let mut p = [zero.clone(), zero];
+    let n = (settings.max_time_s * settings.control_rate_hz).ceil() as usize;
+    for _ in 0..n {
+        let state = match plant.solve([&p[0], &p[1]])? {
+            PlantStep::Solved(s) => *s,
+            PlantStep::Failed { side, status } => {
+                return Ok(Err(Failure::PlantSolve { side, status }))
+            }
+        };
+        let mut done = false;
+        for (c, st) in ctrl.iter_mut().zip(&state) {
+            match c.step(st, settings) {
+                Ok(None) => {}
+                Ok(Some(_)) => done = true,
+                Err(e) => {
+                    return Ok(Err(Failure::Controller {
+                        message: format!("virtual payload run: {e}"),
+                    }))
+                }
+            }
+        }
+        if done {
+            break;
+        }
+        p = [ctrl[0].pressures.clone(), ctrl[1].pressures.clone()];
+    }
+    let [a, b] = ctrl;
+    Ok(Ok([a.vp, b.vp]))
+}
+
+fn contact_records(fingers: &[FingerState; 2], radius: f64) -> Vec<ContactRecord> {
+    let mut out = Vec::new();
+    for (f, side) in fingers.iter().zip([Side::Left, Side::Right]) {
+        for c in &f.object_contacts {
+            let d = radius + c.gap_m;
+            out.push(ContactRecord {
+                side,
+                point_m: [
+                    c.point_m[0] - d * c.normal[0],
+                    c.point_m[1] - d * c.normal[1],
+                ],
+                normal: [-c.normal[0], -c.normal[1]],
+                force_n: c.force_n,
+            });
+        }
+    }
+    out
+}
+
+fn frame(
+    time_s: f64,
+    phases: [Phase; 2],
+    pressures: [&[f64]; 2],
+    fingers: &[FingerState; 2],
+    radius: f64,
+    poses: [Option<[f64; 3]>; 2],
+) -> Frame {
+    Frame {
+        time_s,
+        phases,
+        pressures_pa: [pressures[0].to_vec(), pressures[1].to_vec()],
+        centreline_m: [
+            fingers[0].centreline_m.clone(),
+            fingers[1].centreline_m.clone(),
+        ],
+        contacts: contact_records(fingers, radius),
+        contact_pose: poses,
+    }
+}
+
+/// Runs one trial of `strategy` on `object` at `placement` (see the module
+/// docs); `seed` seeds the marker noise.
+///
+/// # Errors
+/// Bad input, each naming its field: the object ([`GraspObject::validate`],
+/// path `object`), an object wider than the gripper's opening
+/// (`object.shape`), an object overlapping a finger at the start
+/// (`placement.offset_m`), the settings, the gripper. A failed plant solve
+/// or controller step is not an error: the outcome says so.
+///
+/// # Example
+/// ```no_run
+/// use softrod::grasp::{gripper::GripperSpec, object::{GraspObject, Shape}};
+/// use softrod::grasp::trial::{run_trial, GraspSettings, Placement, Strategy};
+/// let apple = GraspObject { name: "apple".into(), shape: Shape::Circle { radius_m: 0.035 }, mass_kg: 0.15, mu: 0.6 };
+/// let out = run_trial(&GripperSpec::default(), &apple, Placement::default(), Strategy::Adaptive, &GraspSettings::default(), 1)?;
+/// println!("{} {:?}", out.success, out.failure);
+/// # Ok::<(), softrod::Error>(())
+/// ```
+pub fn run_trial(
+    gripper: &GripperSpec,
+    object: &GraspObject,
+    placement: Placement,
+    strategy: Strategy,
+    settings: &GraspSettings,
+    seed: u64,
+) -> Result<TrialOutcome> {
+    gripper.validate()?;
+    object.validate("object")?;
+    settings.validate()?;
+    for (n, v) in [
+        ("placement.offset_m", placement.offset_m),
+        ("placement.angle_rad", placement.angle_rad),
+    ] {
+        if !v.is_finite() {
+            return Err(Error::invalid(n, v, "must be finite"));
+        }
+    }
+    let r = gripper.finger_radius_m;
+    let table_y = -(gripper.finger_length_m() + r + settings.table_clearance_m);
+    let pose = resting_pose(object, &placement, table_y);
+    let b = object.bounds(&pose);
+    if b[1] - b[0] >= gripper.opening_m() {
+        return Err(Error::invalid(
+            "object.shape",
+            format!("{:.4} m wide", b[1] - b[0]),
+            format!(
+                "wider than the gripper's opening ({:.4} m)",
+                gripper.opening_m()
+            ),
+        ));
+    }
+    let outline = object.obstacle(&pose);
+    let cover = object.contact_cover(&pose)?;
+    let obstacles = Obstacles::new(cover.clone(), r)?;
+    for side in [Side::Left, Side::Right] {
+        let f = gripper.finger(side)?;
+        let overlap = obstacles
+            .gaps(&f, &f.reference_configuration())?
+            .iter()
+            .any(|g| g.gap_m < 0.0);
+        if overlap {
+            return Err(Error::invalid(
+                "placement.offset_m",
+                placement.offset_m,
+                format!("the object overlaps the {side:?} finger at the start"),
+            ));
+        }
+    }
+    let table = Obstacle::Polygon {
+        vertices_m: vec![
+            [-0.5, table_y - 0.05],
+            [0.5, table_y - 0.05],
+            [0.5, table_y],
+            [-0.5, table_y],
+        ],
+    };
+    let mut plant = GripperPlant::new(
+        gripper,
+        &settings.plant,
+        cover,
+        Some(table),
+        &settings.markers_s_m,
+        seed,
+    )?;
+    let dt = 1.0 / settings.control_rate_hz;
+    let mut out = TrialOutcome {
+        object: object.name.clone(),
+        strategy,
+        placement,
+        pose,
+        outline,
+        success: false,
+        failure: None,
+        hold: None,
+        holding_mass_kg: 0.0,
+        contact_estimate_error_m: None,
+        frames: Vec::new(),
+    };
+    let fail_plant = |out: &mut TrialOutcome, side, status| {
+        out.failure = Some(Failure::PlantSolve { side, status });
+    };
+    let zero = vec![0.0; FINGER_PRESSURES];
+    let mut state = match plant.solve([&zero, &zero])? {
+        PlantStep::Solved(s) => *s,
+        PlantStep::Failed { side, status } => {
+            fail_plant(&mut out, side, status);
+            return Ok(out);
+        }
+    };
+    let mut pressures = [zero.clone(), zero.clone()];
+    let mut phases = [Phase::Ramp; 2];
+    let mut poses = [None; 2];
+    match strategy {
+        Strategy::OpenLoop => {
+            let p_ol = match settings.open_loop_pressure_pa {
+                Some(p) => p.min(gripper.pressure_max_pa),
+                None => meeting_pressure_pa(gripper)?,
+            };
+            let n = (settings.open_loop_ramp_s / dt).ceil() as usize + 10;
+            for k in 1..=n {
+                let p = (k as f64 * dt / settings.open_loop_ramp_s).min(1.0) * p_ol;
+                let cmd = vec![p, 0.0, 0.0, 0.0];
+                pressures = [cmd.clone(), cmd];
+                state = match plant.solve([&pressures[0], &pressures[1]])? {
+                    PlantStep::Solved(s) => *s,
+                    PlantStep::Failed { side, status } => {
+                        fail_plant(&mut out, side, status);
+                        return Ok(out);
+                    }
+                };
+                out.frames.push(frame(
+                    k as f64 * dt,
+                    phases,
+                    [&pressures[0], &pressures[1]],
+                    &state,
+                    r,
+                    poses,
+                ));
+            }
+        }
+        Strategy::Adaptive => {
+            let noise = settings.plant.marker_noise_m;
+            let vp = match calibrate(gripper, settings, seed)? {
+                Ok(vp) => vp,
+                Err(f) => {
+                    out.failure = Some(f);
+                    return Ok(out);
+                }
+            };
+            let mut ctrl = [
+                FingerController::new(
+                    gripper,
+                    Side::Left,
+                    noise,
+                    settings.estimator_alpha,
+                    Some(vp[0].clone()),
+                )?,
+                FingerController::new(
+                    gripper,
+                    Side::Right,
+                    noise,
+                    settings.estimator_alpha,
+                    Some(vp[1].clone()),
+                )?,
+            ];
+            let n = (settings.max_time_s / dt).ceil() as usize;
+            for k in 1..=n {
+                for (c, st) in ctrl.iter_mut().zip(&state) {
+                    let res = c.step(st, settings);
+                    let failure = match res {
+                        Ok(f) => f,
+                        Err(e) => Some(Failure::Controller {
+                            message: e.to_string(),
+                        }),
+                    };
+                    if failure.is_some() {
+                        out.failure = failure;
+                        return Ok(out);
+                    }
+                }
+                phases = [ctrl[0].phase, ctrl[1].phase];
+                poses = [ctrl[0].pose, ctrl[1].pose];
+                if phases.iter().all(|p| *p == Phase::Hold) {
+                    break;
+                }
+                pressures = [ctrl[0].pressures.clone(), ctrl[1].pressures.clone()];
+                state = match plant.solve([&pressures[0], &pressures[1]])? {
+                    PlantStep::Solved(s) => *s,
+                    PlantStep::Failed { side, status } => {
+                        fail_plant(&mut out, side, status);
+                        return Ok(out);
+                    }
+                };
+                out.frames.push(frame(
+                    k as f64 * dt,
+                    phases,
+                    [&pressures[0], &pressures[1]],
+                    &state,
+                    r,
+                    poses,
+                ));
+            }
+            // how far the estimated contact point is from the true one
+            let mut worst: Option<f64> = None;
+            for (c, st) in ctrl.iter().zip(&state) {
+                if let (Some(p), false) = (c.pose, st.object_contacts.is_empty()) {
+                    let e = st
+                        .object_contacts
+                        .iter()
+                        .map(|t| (t.point_m[0] - p[0]).hypot(t.point_m[1] - p[1]))
+                        .fold(f64::INFINITY, f64::min);
+                    worst = Some(worst.map_or(e, |w: f64| w.max(e)));
+                }
+            }
+            out.contact_estimate_error_m = worst;
+        }
+    }
+    // the lift: the table no longer carries the object
+    plant.remove_table();
+    let lifted = match plant.solve([&pressures[0], &pressures[1]])? {
+        PlantStep::Solved(s) => *s,
+        PlantStep::Failed { side, status } => {
+            fail_plant(&mut out, side, status);
+            return Ok(out);
+        }
+    };
+    let t_end = out.frames.last().map_or(0.0, |f| f.time_s) + dt;
+    let last = frame(
+        t_end,
+        phases,
+        [&pressures[0], &pressures[1]],
+        &lifted,
+        r,
+        poses,
+    );
+    let contacts: Vec<FrictionContact> = last
+        .contacts
+        .iter()
+        .map(|c| FrictionContact {
+            point_m: c.point_m,
+            normal: c.normal,
+            max_normal_force_n: c.force_n,
+        })
+        .collect();
+    out.frames.push(last);
+    let g = gripper.gravity_m_per_s2;
+    let hold = hold_check(&contacts, object.mass_kg, pose.position_m, object.mu, g)?;
+    out.success = hold.holds;
+    out.holding_mass_kg = hold.holding_mass_kg(object.mass_kg);
+    if !hold.holds {
+        out.failure = Some(Failure::Slips {
+            weight_factor: hold.weight_factor,
+        });
+    }
+    out.hold = Some(hold);
+    Ok(out)
+}

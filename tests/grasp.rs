@@ -1,0 +1,123 @@
+//! The grasp: a small seeded version of Table I's trials and the bad inputs.
+//! (The friction check's closed forms, the Jacobian's finite differences and
+//! the gripper's structure are unit tests in `src/grasp/`.)
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use softrod::grasp::friction::hold_check;
+use softrod::grasp::gripper::GripperSpec;
+use softrod::grasp::object::{GraspObject, Shape};
+use softrod::grasp::table::{placement, table_objects};
+use softrod::grasp::trial::{run_trial, Failure, GraspSettings, Placement, Strategy};
+
+fn disc(radius_m: f64, mass_kg: f64, mu: f64) -> GraspObject {
+    GraspObject {
+        name: "disc".into(),
+        shape: Shape::Circle { radius_m },
+        mass_kg,
+        mu,
+    }
+}
+
+#[test]
+fn adaptive_holds_a_disc_the_open_loop_strategy_drops() {
+    let g = GripperSpec::default();
+    let s = GraspSettings::default();
+    let o = disc(0.03, 0.1, 0.5);
+    let p = Placement::default();
+    let open = run_trial(&g, &o, p, Strategy::OpenLoop, &s, 1).unwrap();
+    let adaptive = run_trial(&g, &o, p, Strategy::Adaptive, &s, 1).unwrap();
+    assert!(!open.success, "{:?}", open.failure);
+    assert!(matches!(open.failure, Some(Failure::Slips { weight_factor }) if weight_factor < 1.0));
+    assert!(adaptive.success, "{:?}", adaptive.failure);
+    // the adaptive grasp squeezes harder: it holds more than the baseline's
+    assert!(adaptive.holding_mass_kg > 1.5 * open.holding_mass_kg);
+    // the estimated contact point is within 2 cm of the true one (paper: about 1.5 cm)
+    let e = adaptive.contact_estimate_error_m.unwrap();
+    assert!(e < 0.02, "{e}");
+    // the outcome's verdict is the friction check on its last frame's contacts
+    let last = adaptive.frames.last().unwrap();
+    assert!(last.contacts.iter().any(|c| c.point_m[0] < 0.0));
+    assert!(last.contacts.iter().any(|c| c.point_m[0] > 0.0));
+    let contacts: Vec<_> = last
+        .contacts
+        .iter()
+        .map(|c| softrod::grasp::friction::FrictionContact {
+            point_m: c.point_m,
+            normal: c.normal,
+            max_normal_force_n: c.force_n,
+        })
+        .collect();
+    let h = hold_check(
+        &contacts,
+        o.mass_kg,
+        adaptive.pose.position_m,
+        o.mu,
+        g.gravity_m_per_s2,
+    )
+    .unwrap();
+    assert!(h.holds && (h.weight_factor - adaptive.hold.unwrap().weight_factor).abs() < 1e-9);
+}
+
+#[test]
+fn a_table_object_that_is_not_a_disc() {
+    // the mouse (a rounded rectangle, its circle cover in the plant)
+    let o = &table_objects()[6];
+    let p = placement(1, 6, 0);
+    assert!(p.offset_m.abs() <= 0.006 && p.angle_rad.abs() <= 0.15 && p != Placement::default());
+    let out = run_trial(
+        &GripperSpec::default(),
+        o,
+        Placement::default(),
+        Strategy::Adaptive,
+        &GraspSettings::default(),
+        1,
+    )
+    .unwrap();
+    assert!(out.success, "{:?}", out.failure);
+    assert!(out.holding_mass_kg > o.mass_kg);
+}
+
+#[test]
+fn bad_input_names_the_field() {
+    let g = GripperSpec::default();
+    let s = GraspSettings::default();
+    let p = Placement::default();
+    let field = |o: &GraspObject, p: Placement| {
+        run_trial(&g, o, p, Strategy::OpenLoop, &s, 1)
+            .unwrap_err()
+            .field()
+            .map(str::to_string)
+    };
+    assert_eq!(
+        field(&disc(0.03, 0.1, -0.2), p).as_deref(),
+        Some("object.mu")
+    );
+    assert_eq!(
+        field(&disc(0.03, 0.0, 0.5), p).as_deref(),
+        Some("object.mass_kg")
+    );
+    assert_eq!(
+        field(&disc(0.03, -1.0, 0.5), p).as_deref(),
+        Some("object.mass_kg")
+    );
+    // wider than the 94 mm opening
+    assert_eq!(
+        field(&disc(0.05, 0.1, 0.5), p).as_deref(),
+        Some("object.shape")
+    );
+    // overlapping the left finger at the start
+    let off = Placement {
+        offset_m: -0.02,
+        angle_rad: 0.0,
+    };
+    assert_eq!(
+        field(&disc(0.035, 0.1, 0.5), off).as_deref(),
+        Some("placement.offset_m")
+    );
+    let bad = GraspSettings {
+        u1_m_per_s: -1.0,
+        ..GraspSettings::default()
+    };
+    let e = run_trial(&g, &disc(0.03, 0.1, 0.5), p, Strategy::Adaptive, &bad, 1).unwrap_err();
+    assert_eq!(e.field(), Some("settings.u1_m_per_s"));
+}
