@@ -168,15 +168,15 @@ impl Observation {
 }
 
 /// A small deterministic normal generator (SplitMix64 + Box–Muller), for
-/// synthetic observations.
+/// synthetic observations (and the simulated experiments' noise).
 #[derive(Debug, Clone)]
-struct Gaussian {
+pub(crate) struct Gaussian {
     state: u64,
     spare: Option<f64>,
 }
 
 impl Gaussian {
-    fn new(seed: u64) -> Self {
+    pub(crate) fn new(seed: u64) -> Self {
         Gaussian {
             state: seed ^ 0x9E37_79B9_7F4A_7C15,
             spare: None,
@@ -193,7 +193,7 @@ impl Gaussian {
     }
 
     /// One standard normal sample.
-    fn sample(&mut self) -> f64 {
+    pub(crate) fn sample(&mut self) -> f64 {
         if let Some(s) = self.spare.take() {
             return s;
         }

@@ -23,6 +23,7 @@ use nalgebra::{DMatrix, DVector};
 use super::ParallelRobot;
 use crate::element::Element;
 use crate::error::{check_all_finite, Error, Result};
+use crate::observe::Gaussian;
 use crate::statics::Equilibrium;
 
 /// Newton iterations of [`ParallelRobot::estimate_payload`] at most.
@@ -283,42 +284,6 @@ pub fn mass_experiment<E: Element, P: Element>(
         }
     }
     Ok(trials)
-}
-
-/// A small deterministic normal generator (SplitMix64 + Box–Muller).
-#[derive(Debug, Clone)]
-struct Gaussian {
-    state: u64,
-    spare: Option<f64>,
-}
-
-impl Gaussian {
-    fn new(seed: u64) -> Self {
-        Gaussian {
-            state: seed ^ 0x9E37_79B9_7F4A_7C15,
-            spare: None,
-        }
-    }
-
-    fn uniform(&mut self) -> f64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        ((z >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-
-    fn sample(&mut self) -> f64 {
-        if let Some(s) = self.spare.take() {
-            return s;
-        }
-        let (u, v) = (self.uniform(), self.uniform());
-        let r = (-2.0 * u.ln()).sqrt();
-        let t = std::f64::consts::TAU * v;
-        self.spare = Some(r * t.sin());
-        r * t.cos()
-    }
 }
 
 /// The three configurations of the simulated Fig. 8 experiment (chamber
