@@ -46,7 +46,7 @@ pub const GRAVITY_M_PER_S2: [f64; 2] = [0.0, -9.81];
 /// section's lower chamber at 30 kPa curls the tip back down.
 pub const DEFAULT_PRESSURES_PA: [f64; 4] = [60.0e3, 0.0, 0.0, 30.0e3];
 
-/// The soft parallel robot (Figs. 7–8 of the paper, its ref. [48]): three
+/// The soft parallel robot (Figs. 7–8 of the paper, its ref. \[48\]): three
 /// pneumatic legs from a base circle to a rigid platform. The paper gives
 /// none of its numbers; they are chosen here, with their reasons.
 pub mod parallel {

@@ -28,7 +28,7 @@
 //! `c_i = max(1, round(L_i / L_shortest))`, and the candidate of scale
 //! `t = 1, 2, 3, …` has `t c_i` elements in auto section `i` ([`Ladder`]).
 //! When the scene states that the unknown load acts at a point
-//! ([`UnknownLoad::Point`]) inside an auto section, that section's base count
+//! (`UnknownLoad::Point`) inside an auto section, that section's base count
 //! is rounded up to a multiple of the smallest `k` for which a uniform
 //! `k`-element mesh of the section has a node there, so every candidate keeps
 //! a node at the point, where the estimator puts the concentrated force.

@@ -10,7 +10,7 @@
 //! penalty would bias the force by `O(1/k)` and a barrier acts before
 //! touching; here nothing acts until the gap closes and nothing penetrates.
 //!
-//! Gaps ([`gap`]): one per local minimum, along the rod, of the distance to
+//! Gaps (`gap`): one per local minimum, along the rod, of the distance to
 //! each obstacle, found exactly (the closest point of a cubic Hermite
 //! element to a point is the root of a quintic; every real root in the
 //! element is isolated), so there is no sampling density to choose: the

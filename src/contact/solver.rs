@@ -244,7 +244,7 @@ impl ContactSolver {
     /// A solver with the given settings.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] if the settings are invalid.
+    /// [`Error::InvalidParameter`](crate::Error::InvalidParameter) if the settings are invalid.
     ///
     /// # Example
     /// ```

@@ -182,7 +182,7 @@ impl TimeSeries {
     }
 }
 
-/// A controller of one robot model (see the [module documentation](self)).
+/// A controller of one robot model (see the [module documentation](crate::control)).
 ///
 /// # Example
 /// See `tests/control.rs` and `examples/track_fig6.rs`.

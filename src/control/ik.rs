@@ -175,7 +175,7 @@ pub struct IkSolution {
 }
 
 /// Feedforward inverse kinematics of one robot (see the [module
-/// documentation](self)). It keeps the last solution as the warm start of
+/// documentation](crate::control)). It keeps the last solution as the warm start of
 /// the next.
 ///
 /// # Example

@@ -34,7 +34,7 @@ use crate::statics::{EquilibriumTracker, StaticSettings};
 
 use super::{IkSettings, InverseKinematics};
 
-/// What the target of the solve is (see the [module documentation](self)).
+/// What the target of the solve is (see the [module documentation](crate::control)).
 ///
 /// # Example
 /// ```
@@ -173,7 +173,7 @@ pub struct MassEstimate {
 }
 
 /// The concentrated-load mass estimator of one robot model (see the
-/// [module documentation](self)).
+/// [module documentation](crate::control)).
 ///
 /// # Example
 /// A 50 g mass at the tip of the model itself, recovered from the tip
@@ -449,7 +449,7 @@ impl<E: Element> MassEstimator<E> {
     /// The mass hanging at the load node from the end effector measured
     /// before (`unloaded_m`) and after (`loaded_m`) it was hung, at the
     /// chamber pressures `pressures_pa` (see the [module
-    /// documentation](self) for the two references).
+    /// documentation](crate::control) for the two references).
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] naming `unloaded_m` / `loaded_m` for

@@ -188,7 +188,7 @@ fn default_hold() -> f64 {
     3.0
 }
 
-/// A trajectory file (see the [module documentation](self)); read it with
+/// A trajectory file (see the [module documentation](crate::control)); read it with
 /// [`TrackFile::from_json`], which names the path of a bad field.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TrackFile {

@@ -65,7 +65,7 @@ impl UpdaterGains {
 }
 
 /// The updater's state for a load vector of fixed length (see the [module
-/// documentation](self)).
+/// documentation](crate::control)).
 ///
 /// # Example
 /// A step of `F̄` from 0 to 1, sampled at 30 Hz: after 1 s the estimate has

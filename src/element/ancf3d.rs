@@ -592,7 +592,7 @@ impl NodeKinematics for Ancf3d {
     const MOMENT_DIM: usize = 3;
 
     /// `[position, direction, e2, e3]`: `r_X` is `direction` as given, the
-    /// section gradients the unit axes [`straight_frame`] carries along the
+    /// section gradients the unit axes `straight_frame` carries along the
     /// unit direction (NaN for a zero or non-finite direction).
     fn straight_node(position: &[f64], direction: &[f64]) -> Vec<f64> {
         let ([x, y, z], [dx, dy, dz]) = (position, direction) else {

@@ -8,7 +8,7 @@
 //! placement's offset and turned by its angle (both randomized in Table I).
 //!
 //! # The strategies
-//! - **Open loop** (the baseline of the paper's ref. [53]): the proximal
+//! - **Open loop** (the baseline of the paper's ref. \[53\]): the proximal
 //!   segments' inward chambers ramp linearly to a predetermined pressure
 //!   (default: the pressure at which the free model's fingertips meet at
 //!   the centreline) over `open_loop_ramp_s`, then stay; no feedback.

@@ -251,7 +251,7 @@ pub fn calibrate_on_free_plant(
 /// controller) from its present state, towards `goal_m`, the controller's
 /// model the nominal scene `nominal` with `settings.model_elements` per
 /// section, calibrated by `calibration`, observing markers at
-/// `marker_s_m` (see the [module documentation](self)).
+/// `marker_s_m` (see the [module documentation](crate::touch)).
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] for invalid settings or a non-finite goal

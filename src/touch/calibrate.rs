@@ -95,7 +95,7 @@ fn rms(r: &[f64]) -> f64 {
 }
 
 /// Calibrates `EI` and the actuation gain of `scene` (factors, starting at 1)
-/// on `frames` (see the [module documentation](self)).
+/// on `frames` (see the [module documentation](crate::touch)).
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] (`frames`) for no frames or a calibration

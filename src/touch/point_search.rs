@@ -68,7 +68,7 @@ pub struct PointContact {
 /// The point force on `robot` (under the known loads `known`, the virtual
 /// payload in `known.distributed_f`) that best explains the marker
 /// positions `markers_m` at the arc coordinates `marker_s_m` (see the
-/// [module documentation](self)). `offset_m` (empty, or one position per
+/// [module documentation](crate::touch)). `offset_m` (empty, or one position per
 /// marker, m) is what the model with the virtual payload still misses of
 /// the contact-free markers, recorded with it ([`marker_offset`]); it is
 /// subtracted from the markers.

@@ -66,7 +66,7 @@ pub(crate) fn dq_dp(robot: &Robot<PlanarCable>, loads: &Loads, q: &[f64]) -> Res
 }
 
 /// `∂y/∂f` of the markers for a point force at any arc coordinate, at one
-/// equilibrium (see the [module documentation](self)).
+/// equilibrium (see the [module documentation](crate::touch)).
 ///
 /// # Example
 /// A force at the tip moves the tip marker most:

@@ -25,7 +25,7 @@ use super::{
     AvoidSettings, ROD_RADIUS_M,
 };
 
-/// An avoidance scene (see the [module documentation](self)).
+/// An avoidance scene (see the [module documentation](crate::touch)).
 ///
 /// # Example
 /// ```

@@ -27,7 +27,7 @@ pub(super) enum Numeric {
     },
 }
 
-/// The factors [`SparseSolver`] returns (see [`Factorization`]).
+/// The factors `SparseSolver` returns (see [`Factorization`]).
 ///
 /// # Example
 /// ```

@@ -40,7 +40,7 @@ impl<E: Element> Rod<E> {
     /// Element holding arc coordinate `s` and the local coordinate `ξ` in it.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] if `s` is not on the robot.
+    /// [`Error::InvalidParameter`](crate::Error::InvalidParameter) if `s` is not on the robot.
     pub fn locate(&self, name: &str, s: f64) -> Result<(usize, f64)> {
         let total = self.length();
         let tol = 1e-12 * total;
@@ -60,8 +60,8 @@ impl<E: Element> Rod<E> {
     /// Position `r(s)` of the backbone at arc coordinate `s` (m).
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] if `s` is off the robot,
-    /// [`Error::DimensionMismatch`] if `q` does not have `n_q` entries.
+    /// [`Error::InvalidParameter`](crate::Error::InvalidParameter) if `s` is off the robot,
+    /// [`Error::DimensionMismatch`](crate::Error::DimensionMismatch) if `q` does not have `n_q` entries.
     pub fn position_at(&self, q: &[f64], s: f64) -> Result<Vec<f64>> {
         check_len("q", self.n_q(), q.len())?;
         let p = self.arc_point("s_m", s)?;
@@ -81,7 +81,7 @@ impl<E: Element> Rod<E> {
     /// [`ArcPoint::value_into`] and [`ArcPoint::slope_into`].
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] named `name` if `s` is not on the rod.
+    /// [`Error::InvalidParameter`](crate::Error::InvalidParameter) named `name` if `s` is not on the rod.
     ///
     /// # Example
     /// ```

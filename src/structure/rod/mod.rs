@@ -153,7 +153,7 @@ impl<E: Element> Rod<E> {
     /// Elastic energy `U_E(q)` (J).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] if `q` has the wrong size.
+    /// [`Error::DimensionMismatch`](crate::Error::DimensionMismatch) if `q` has the wrong size.
     pub fn elastic_energy(&self, q: &[f64]) -> Result<f64> {
         let nd = E::NODE_DOFS;
         check_len("q", self.n_q(), q.len())?;
@@ -168,7 +168,7 @@ impl<E: Element> Rod<E> {
     /// per element), for [`crate::assembly::Robot::potential_change_from`].
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] if `q` or `out` has the wrong size.
+    /// [`Error::DimensionMismatch`](crate::Error::DimensionMismatch) if `q` or `out` has the wrong size.
     pub fn element_energies_into(&self, q: &[f64], out: &mut [f64]) -> Result<()> {
         let nd = E::NODE_DOFS;
         check_len("q", self.n_q(), q.len())?;
