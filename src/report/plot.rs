@@ -40,12 +40,12 @@ pub fn register_font() -> Result<()> {
     }
 }
 
-fn ms<E: std::fmt::Debug>(e: E) -> String {
+pub(super) fn ms<E: std::fmt::Debug>(e: E) -> String {
     format!("{e:?}")
 }
 
 /// Draws with `draw` into `<dir>/<stem>.png` and `<dir>/<stem>.svg`.
-fn both(
+pub(super) fn both(
     dir: &Path,
     stem: &str,
     size: (u32, u32),

@@ -27,6 +27,7 @@ use crate::error::Result;
 use crate::plant::{Payload, PayloadKind, PayloadSchedule};
 use crate::scene::Scene;
 
+use super::plot::{both, ms};
 use super::ReportOptions;
 
 const FONT: &str = "sans-serif";
@@ -285,34 +286,6 @@ fn failed(t: &str, p: &str, controller: ControllerKind, failure: String) -> Trac
         estimator_kept_last: 0,
         failure: Some(failure),
     }
-}
-
-fn ms<E: std::fmt::Debug>(e: E) -> String {
-    format!("{e:?}")
-}
-
-/// Draws into `<dir>/<stem>.png` and `.svg`.
-fn both(
-    dir: &Path,
-    stem: &str,
-    size: (u32, u32),
-    draw_png: impl Fn(&DrawingArea<BitMapBackend, Shift>) -> std::result::Result<(), String>,
-    draw_svg: impl Fn(&DrawingArea<SVGBackend, Shift>) -> std::result::Result<(), String>,
-) -> Result<Vec<PathBuf>> {
-    super::plot::register_font()?;
-    let png = dir.join(format!("{stem}.png"));
-    let svg = dir.join(format!("{stem}.svg"));
-    {
-        let root = BitMapBackend::new(&png, size).into_drawing_area();
-        draw_png(&root).map_err(|m| super::io_error(&png, m))?;
-        root.present().map_err(|e| super::io_error(&png, ms(e)))?;
-    }
-    {
-        let root = SVGBackend::new(&svg, size).into_drawing_area();
-        draw_svg(&root).map_err(|m| super::io_error(&svg, m))?;
-        root.present().map_err(|e| super::io_error(&svg, ms(e)))?;
-    }
-    Ok(vec![png, svg])
 }
 
 const COLOURS: [RGBColor; 5] = [
