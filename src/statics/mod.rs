@@ -32,6 +32,7 @@ use crate::linsolve::{AutoSolver, SolverKind, TangentSolver};
 pub use crate::outcome::{NonFiniteAt, StaticCriterion, StaticReport, StaticStatus};
 use crate::structure::Assembled;
 
+mod continuation;
 mod newton;
 pub mod tracker;
 
@@ -245,7 +246,7 @@ impl StaticSolver {
         let pattern = model.tangent_pattern()?;
         let mut solver = AutoSolver::with_kind(&pattern, self.settings.linear_solver)?;
         let u = self.start(model, loads, q0)?;
-        self.run(model, loads, u, &mut solver)
+        self.run(model, loads, u, q0.is_none(), &mut solver)
     }
 
     /// [`StaticSolver::solve`] with a linear solver analyzed before on the
@@ -287,7 +288,7 @@ impl StaticSolver {
             ));
         }
         let u = self.start(model, loads, q0)?;
-        self.run(model, loads, u, solver)
+        self.run(model, loads, u, q0.is_none(), solver)
     }
 
     /// The start point in free coordinates: `q0` taken to the map, or the

@@ -20,26 +20,38 @@ use crate::numeric::norm2;
 use crate::outcome::{NonFiniteAt, StaticCriterion, StaticReport, StaticStatus};
 use crate::structure::Assembled;
 
+/// Iterations of the first, plain Newton attempt from the start point.
+const QUICK_ITERATIONS: usize = 8;
+
+/// Full Newton steps taken at most on the round-off floor.
+const FLOOR_STEPS: usize = 3;
+
 /// The buffers and counters of one solve.
-struct Work<'a> {
-    k: SymmetricMatrix,
+pub(super) struct Work<'a> {
+    pub k: SymmetricMatrix,
     /// Analyzed on the model's tangent pattern.
-    solver: &'a mut AutoSolver,
+    pub solver: &'a mut AutoSolver,
     /// The residual at the current iterate (offset subtracted).
-    r: Vec<f64>,
+    pub r: Vec<f64>,
     /// `φ(u)` at the current iterate.
-    q: Vec<f64>,
-    iterations: usize,
-    floor: f64,
-    last_step: f64,
+    pub q: Vec<f64>,
+    pub iterations: usize,
+    pub floor: f64,
+    pub last_step: f64,
+    /// Whether the last tangent [`StaticSolver::newton`] factored was
+    /// positive definite.
+    pub definite: bool,
 }
 
 /// The loads of one Newton run: the dead forces, the model's loads and
 /// the homotopy's offset.
-struct Target<'a, M: Assembled> {
-    dead: &'a [f64],
-    loads: &'a M::Loads,
-    offset: &'a [f64],
+pub(super) struct Target<'a, M: Assembled> {
+    pub dead: &'a [f64],
+    pub loads: &'a M::Loads,
+    pub offset: &'a [f64],
+    /// Only full Newton steps (the line search's first trial): a quick
+    /// first attempt that gives up at the first step it would shorten.
+    pub strict: bool,
 }
 
 impl StaticSolver {
@@ -51,6 +63,7 @@ impl StaticSolver {
         model: &M,
         loads: &M::Loads,
         mut u: Vec<f64>,
+        cold: bool,
         solver: &mut AutoSolver,
     ) -> Result<Equilibrium> {
         let start = Instant::now();
@@ -64,6 +77,7 @@ impl StaticSolver {
             iterations: 0,
             floor: 0.0,
             last_step: 0.0,
+            definite: false,
         };
         model.configuration_into(&u, &mut w.q)?;
         let scale = {
@@ -76,23 +90,79 @@ impl StaticSolver {
         let mut load_steps = 0;
         // loads so large that their norm overflows (or a start point where the
         // forces do): no tolerance can be stated, so no solve is attempted
-        let mut status = if scale.is_finite() {
+        let quick = if scale.is_finite() {
+            // first plain Newton from the start point (a warm start, a
+            // robot's arcs of its actuation), given up at the first step it
+            // would have to shorten
             let full = Target::<M> {
                 dead: &dead,
                 loads,
                 offset: &zero,
+                strict: true,
             };
-            self.newton(model, &full, &mut u, &mut w, scale)?
+            let quick = StaticSolver {
+                settings: super::StaticSettings {
+                    max_iterations: self.settings.max_iterations.min(QUICK_ITERATIONS),
+                    ..self.settings.clone()
+                },
+            };
+            quick.newton(model, &full, &mut u, &mut w, scale)?
+        } else {
+            StaticStatus::LineSearchFailed
+        };
+        // kept only at a stable equilibrium (plain Newton also finds the
+        // unstable ones, e.g. a column standing straight above its buckling load)
+        let status = if quick.is_converged() && (w.iterations == 0 || w.definite) {
+            quick
+        } else if scale.is_finite() {
+            u.copy_from_slice(&u_start);
+            w.q.copy_from_slice(&q_start);
+            // cold: the path starts from the unloaded reference, an exact
+            // equilibrium of no loads (an offset from another start point
+            // acts as a dead force on the node slopes, which stretches them
+            // on fine meshes)
+            if cold {
+                u = model.reference_free_coordinates();
+                model.configuration_into(&u, &mut w.q)?;
+            }
+            let end = self.continuation(model, &dead, loads, &mut u, &mut w)?;
+            load_steps = end.load_steps;
+            match end.status {
+                // near the full load's equilibrium: Newton to the tolerance
+                None => {
+                    let full = Target::<M> {
+                        dead: &dead,
+                        loads,
+                        offset: &zero,
+                        strict: false,
+                    };
+                    self.newton(model, &full, &mut u, &mut w, scale)?
+                }
+                Some(status) => status,
+            }
         } else {
             StaticStatus::NonFinite {
                 at: NonFiniteAt::Loads,
             }
         };
+        let mut status = status;
         if !status.is_converged() && scale.is_finite() {
-            // Homotopy from the start point: R_λ(u) = R(u; λ loads) − (1 − λ) R(u_start; no loads).
-            // At λ = 0 the start point is exact; the load-dependent part of the
-            // tangent (the torques' Hessian) grows with λ, so iterates stay
-            // near equilibria, where the tangent is positive definite.
+            // The continuation failed: natural continuation from the start
+            // point, each load step globalized by the line search,
+            // R_λ(u) = R(u; λ loads) − (1 − λ) R(u_start; no loads) (slower on
+            // fine meshes, but it reaches some equilibria the plain
+            // corrector cannot: see the module documentation).
+            u.copy_from_slice(&u_start);
+            w.q.copy_from_slice(&q_start);
+            let full = Target::<M> {
+                dead: &dead,
+                loads,
+                offset: &zero,
+                strict: false,
+            };
+            status = self.newton(model, &full, &mut u, &mut w, scale)?;
+        }
+        if !status.is_converged() && scale.is_finite() {
             u.copy_from_slice(&u_start);
             w.q.copy_from_slice(&q_start);
             let unloaded = model.scaled_loads(loads, 0.0);
@@ -113,6 +183,7 @@ impl StaticSolver {
                     dead: &dead_t,
                     loads: &loads_t,
                     offset: &off,
+                    strict: false,
                 };
                 let step_status = self.newton(model, &t, &mut u, &mut w, scale)?;
                 if step_status.is_converged() {
@@ -180,7 +251,7 @@ impl StaticSolver {
 
     /// Newton iterations on `R(u) − offset = 0` from `u` (updated in place,
     /// `w.q = φ(u)` kept with it).
-    fn newton<M: Assembled>(
+    pub(super) fn newton<M: Assembled>(
         &self,
         model: &M,
         t: &Target<'_, M>,
@@ -205,6 +276,7 @@ impl StaticSolver {
         let mut du = vec![0.0; n];
         let mut dq = vec![0.0; nq];
         let mut energies = Vec::new();
+        let (mut floor_steps, mut floor_previous) = (0, f64::INFINITY);
         for _ in 0..self.settings.max_iterations {
             if !rn.is_finite() {
                 return Ok(StaticStatus::NonFinite {
@@ -251,6 +323,7 @@ impl StaticSolver {
                     }
                     Err(e) => return Err(e.into()),
                 };
+                w.definite = mu == 0.0 && lu.is_positive_definite();
                 du.copy_from_slice(&w.r);
                 lu.solve_in_place(&mut du)?;
                 let slope: f64 = w.r.iter().zip(&du).map(|(a, b)| a * b).sum();
@@ -272,13 +345,22 @@ impl StaticSolver {
             };
             let step_inf = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             if at_floor {
+                // full Newton steps while they shrink (the residual cannot
+                // tell more digits, the step size still can)
+                let shrinking = floor_steps == 0 || step_inf <= 0.5 * floor_previous;
                 model.advance_into(u, &w.q, &du, &dq, 1.0, &mut trial, &mut q_trial)?;
                 let rt = eval(&trial, &q_trial, &mut r_trial)?;
-                if rt.is_finite() && rt <= rn {
+                if shrinking && rt.is_finite() && rt <= rn.max(w.floor) {
                     u.copy_from_slice(&trial);
                     std::mem::swap(&mut w.q, &mut q_trial);
                     std::mem::swap(&mut w.r, &mut r_trial);
                     w.last_step = step_inf;
+                    rn = rt;
+                    floor_steps += 1;
+                    floor_previous = step_inf;
+                    if step_inf > xtol && floor_steps < FLOOR_STEPS {
+                        continue;
+                    }
                 }
                 return Ok(StaticStatus::Converged(StaticCriterion::RoundOffFloor));
             }
@@ -304,6 +386,9 @@ impl StaticSolver {
                     }
                 }
                 s *= 0.5;
+            }
+            if t.strict && (s < 1.0 || !accepted) {
+                return Ok(StaticStatus::LineSearchFailed);
             }
             if !accepted {
                 // no decrease along the Newton direction: at the floor or stuck
