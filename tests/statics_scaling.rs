@@ -19,6 +19,13 @@ const BUDGET: usize = 60;
 /// moment acts on one node slope whose stretch only `EA L_e` holds, so its
 /// budget is wider (an open item of the README's table).
 const FULL_CIRCLE_BUDGET: usize = 90;
+/// The post-buckled column at 8/32/128 elements takes 100/105/106
+/// (measured): the load steps that would step over its buckling load onto
+/// the straight, unstable column are cut until the path bends onto the
+/// stable branch (`tests/statics_stability.rs`; it took 21–27 before, to the
+/// wrong, unstable answer). Over the 60 target: an open item of the
+/// README's table.
+const BUCKLED_COLUMN_BUDGET: usize = 120;
 
 #[test]
 fn cold_solves_converge_within_a_mesh_independent_budget() {
@@ -28,10 +35,10 @@ fn cold_solves_converge_within_a_mesh_independent_budget() {
         for (name, scene) in cases::all(n) {
             let robot = scene.robot().unwrap();
             let loads = scene.loads().unwrap();
-            let budget = if name == "full_circle" {
-                FULL_CIRCLE_BUDGET
-            } else {
-                BUDGET
+            let budget = match name.as_str() {
+                "full_circle" => FULL_CIRCLE_BUDGET,
+                "buckled_column" => BUCKLED_COLUMN_BUDGET,
+                _ => BUDGET,
             };
             match solver.solve(&robot, &loads, None) {
                 Ok(eq) if eq.report.iterations <= budget => {}

@@ -99,6 +99,9 @@ def generate(only, out_dir):
 
         for name in elastica_follower.CASES:
             rows += elastica_follower.run_case(name, out_dir)
+        import elastica_heavy_column
+
+        rows += elastica_heavy_column.run_case(out_dir)
         import elastica
 
         for name in C.CASES:

@@ -148,16 +148,45 @@ pub struct StaticReport {
     pub load_scale_n: f64,
     /// Last Newton step `|dq|_∞` (m).
     pub increment_norm_m: f64,
+    /// Negative eigenvalues of the tangent at the returned configuration,
+    /// from the signs of its `L D Lᵀ` pivots: `Some(0)` a stable
+    /// equilibrium (a local minimum of the potential), more a saddle or a
+    /// maximum the solver could not leave, `None` when no `L D Lᵀ` of the
+    /// tangent exists (singular) or nothing was solved.
+    #[serde(default)]
+    pub negative_eigenvalues: Option<usize>,
     /// Wall time (s).
     pub wall_time_s: f64,
+}
+
+impl StaticReport {
+    /// Whether the answer is a stable equilibrium: its tangent is positive
+    /// definite (no negative eigenvalue).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{scene::Scene, statics::StaticSolver};
+    /// let scene = Scene::two_section();
+    /// let eq = StaticSolver::default().solve(&scene.robot()?, &scene.loads()?, None)?;
+    /// assert!(eq.report.is_stable());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn is_stable(&self) -> bool {
+        self.negative_eigenvalues == Some(0)
+    }
 }
 
 impl std::fmt::Display for StaticReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{}; {} iterations ({} load steps), |Q| = {:.3e} N (tolerance {:.3e} N, round-off floor {:.3e} N), last step {:.3e} m",
+            "{}{}; {} iterations ({} load steps), |Q| = {:.3e} N (tolerance {:.3e} N, round-off floor {:.3e} N), last step {:.3e} m",
             self.status,
+            match self.negative_eigenvalues {
+                Some(0) => String::from(", stable"),
+                Some(k) => format!(", unstable ({k} negative eigenvalues)"),
+                None => String::new(),
+            },
             self.iterations,
             self.load_steps,
             self.residual_norm_n,

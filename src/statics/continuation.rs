@@ -14,6 +14,11 @@
 //! [`PREDICTOR_ROTATION`] rad on any node slope) and the corrector's first
 //! contraction `θ` (the next step is `√(θ_target/θ)` times this one, between
 //! a quarter and twice; a corrector that does not contract cuts the step).
+//! The path is followed on its stable side: a step from a stable point
+//! (positive definite tangent) that lands on an unstable one (a negative
+//! `L D Lᵀ` pivot of the corrector's last tangent) stepped over a
+//! bifurcation, such as a column's buckling load, where the straight column
+//! goes on as a saddle while the stable path bends away; the step is halved.
 //!
 //! Why not natural continuation with a line search on the potential (the
 //! solver before): on a fine mesh the first Newton step of a large rotation
@@ -73,7 +78,7 @@ impl StaticSolver {
         model: &M,
         dead: &[f64],
         loads: &M::Loads,
-        u: &mut Vec<f64>,
+        u: &mut [f64],
         w: &mut Work<'_>,
     ) -> Result<PathEnd> {
         let n = model.n_free();
@@ -88,9 +93,11 @@ impl StaticSolver {
         let mut tangent: Option<(Vec<f64>, f64)> = None;
         let mut previous_tangent: Option<(Vec<f64>, f64)> = None;
         let mut load_steps = 0;
+        // whether the path's last point was a stable equilibrium
+        let mut stable = false;
         let (mut r1, mut rz) = (vec![0.0; n], vec![0.0; n]);
         let mut dq = vec![0.0; nq];
-        let (mut u_try, mut q_try) = (u.clone(), w.q.clone());
+        let (mut u_try, mut q_try) = (u.to_vec(), w.q.clone());
         loop {
             if w.iterations >= self.settings.max_total_iterations {
                 return Ok(PathEnd {
@@ -110,7 +117,12 @@ impl StaticSolver {
                         model.tangent_into(u, &w.q, &dead_l, &loads_l, &mut w.k)?;
                         w.iterations += 1;
                         match factor(w) {
-                            Ok(f) => f,
+                            Ok(f) => {
+                                // the path is followed on its stable side
+                                // when it starts there
+                                stable = f.is_positive_definite();
+                                f
+                            }
                             Err(status) => {
                                 return Ok(PathEnd {
                                     status: Some(status),
@@ -169,12 +181,30 @@ impl StaticSolver {
                 loads: &loads_t,
                 offset: &off,
                 strict: false,
+                descent: false,
             };
             match self.corrector(model, &tgt, &mut u_try, &mut q_try, w)? {
+                // a step from a stable point to an unstable one stepped over
+                // a bifurcation (a column's buckling load: the straight
+                // column goes on as a saddle, the path bends away): shorter
+                Corrected::Done { factors: f, .. } if stable && !f.is_positive_definite() => {
+                    u_try.copy_from_slice(u);
+                    q_try.copy_from_slice(&w.q);
+                    delta = 0.5 * h;
+                    if delta < self.settings.min_load_step {
+                        return Ok(PathEnd {
+                            status: Some(StaticStatus::LoadStepTooSmall {
+                                load_fraction: lambda,
+                            }),
+                            load_steps,
+                        });
+                    }
+                }
                 Corrected::Done {
                     factors: f,
                     contraction,
                 } => {
+                    stable = f.is_positive_definite();
                     load_steps += 1;
                     lambda = target;
                     u.copy_from_slice(&u_try);
@@ -185,7 +215,7 @@ impl StaticSolver {
                             load_steps,
                         });
                     }
-                    factors = Some(f);
+                    factors = Some(*f);
                     previous_tangent = tangent.take().map(|(t, _)| (t, h));
                     delta = h * step_factor(contraction);
                 }
@@ -272,7 +302,7 @@ impl StaticSolver {
             }
             if size * theta <= CORRECTOR_TOLERANCE || size <= f64::EPSILON {
                 return Ok(Corrected::Done {
-                    factors: f,
+                    factors: Box::new(f),
                     contraction: first_contraction,
                 });
             }
@@ -297,7 +327,7 @@ enum Corrected {
     /// Converged; the factors of its last tangent and the contraction of
     /// its first two steps (0 if one step sufficed).
     Done {
-        factors: AutoFactors,
+        factors: Box<AutoFactors>,
         contraction: f64,
     },
     /// Did not contract (`None`: cut the step; the contraction seen, 1 if

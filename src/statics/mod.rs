@@ -19,6 +19,12 @@
 //! status shows which test ended it (or why it failed), with the tolerance
 //! and the floor ([`residual_floor`]).
 //!
+//! Stability: the answer's tangent is factored once more and the signs of
+//! its `L D Lᵀ` pivots give its inertia ([`StaticReport::negative_eigenvalues`]);
+//! a saddle (a column standing straight beyond its buckling load) is left
+//! along its direction of negative curvature by a descent Newton run, so the
+//! answer is a stable equilibrium whenever one is found.
+//!
 //! [`EquilibriumTracker`] (in [`tracker`]) solves the same equilibrium at a
 //! sequence of nearby loads, warm, reusing factorizations: what an estimator
 //! or a controller needs; it falls back to [`StaticSolver`].
@@ -34,6 +40,7 @@ use crate::structure::Assembled;
 
 mod continuation;
 mod newton;
+mod stability;
 pub mod tracker;
 
 pub use tracker::{EquilibriumTracker, FactoredTangent, LinearLoad, TrackedEquilibrium};

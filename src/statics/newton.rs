@@ -26,6 +26,14 @@ const QUICK_ITERATIONS: usize = 8;
 /// Full Newton steps taken at most on the round-off floor.
 const FLOOR_STEPS: usize = 3;
 
+/// The diagonal shifts a descent run tries, smallest first, until the
+/// shifted tangent is positive definite (a decade apart: the smallest
+/// eigenvalue of a fine cable's Jacobi-scaled tangent is ~`(L_e/L)⁴`).
+const DESCENT_SHIFTS: [f64; 19] = [
+    0.0, 1e-16, 1e-15, 1e-14, 1e-13, 1e-12, 1e-11, 1e-10, 1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3,
+    1e-2, 1e-1, 1.0, 1e1,
+];
+
 /// The buffers and counters of one solve.
 pub(super) struct Work<'a> {
     pub k: SymmetricMatrix,
@@ -52,6 +60,10 @@ pub(super) struct Target<'a, M: Assembled> {
     /// Only full Newton steps (the line search's first trial): a quick
     /// first attempt that gives up at the first step it would shorten.
     pub strict: bool,
+    /// Descent only: positive definite (shifted) tangents, steps accepted
+    /// only when they lower the potential (leaving a saddle, see
+    /// [`super::stability`]).
+    pub descent: bool,
 }
 
 impl StaticSolver {
@@ -99,6 +111,7 @@ impl StaticSolver {
                 loads,
                 offset: &zero,
                 strict: true,
+                descent: false,
             };
             let quick = StaticSolver {
                 settings: super::StaticSettings {
@@ -135,6 +148,7 @@ impl StaticSolver {
                         loads,
                         offset: &zero,
                         strict: false,
+                        descent: false,
                     };
                     self.newton(model, &full, &mut u, &mut w, scale)?
                 }
@@ -159,6 +173,7 @@ impl StaticSolver {
                 loads,
                 offset: &zero,
                 strict: false,
+                descent: false,
             };
             status = self.newton(model, &full, &mut u, &mut w, scale)?;
         }
@@ -184,6 +199,7 @@ impl StaticSolver {
                     loads: &loads_t,
                     offset: &off,
                     strict: false,
+                    descent: false,
                 };
                 let step_status = self.newton(model, &t, &mut u, &mut w, scale)?;
                 if step_status.is_converged() {
@@ -219,6 +235,13 @@ impl StaticSolver {
                 };
             }
         }
+        // a saddle (the straight column beyond buckling) is left for a
+        // stable equilibrium; the answer's inertia goes into the report
+        let mut inertia = None;
+        if status.is_converged() {
+            (status, inertia) =
+                self.stabilize(model, &dead, loads, &mut u, &mut w, scale, status)?;
+        }
         // final residual for the report
         model.residual_into(&u, &w.q, &dead, loads, &mut w.r)?;
         let res = norm2(&w.r);
@@ -238,6 +261,7 @@ impl StaticSolver {
             residual_floor_n: finite_or_max(w.floor),
             load_scale_n: finite_or_max(scale),
             increment_norm_m: finite_or_max(w.last_step),
+            negative_eigenvalues: inertia.map(|i| i.negative),
             wall_time_s: start.elapsed().as_secs_f64(),
         };
         if status.is_converged() {
@@ -308,14 +332,20 @@ impl StaticSolver {
             // does. (The tangent is symmetric: L D Lᵀ when positive definite,
             // the pivoted LU otherwise, neither consuming it.)
             let mut found = false;
-            for mu in [0.0, 1e-8, 1e-6, 1e-4, 1e-2, 1.0] {
+            let shifts: &[f64] = if t.descent {
+                &DESCENT_SHIFTS
+            } else {
+                &[0.0, 1e-8, 1e-6, 1e-4, 1e-2, 1.0]
+            };
+            for &mu in shifts {
                 let options = FactorOptions {
                     shift: mu,
-                    ..FactorOptions::default()
+                    require_positive_definite: t.descent,
                 };
                 let lu = match w.solver.factor(&w.k, options) {
                     Ok(lu) => lu,
                     Err(LinsolveError::Singular { .. }) => continue,
+                    Err(LinsolveError::NotPositiveDefinite { .. }) if t.descent => continue,
                     Err(LinsolveError::NonFinite { .. }) => {
                         return Ok(StaticStatus::NonFinite {
                             at: NonFiniteAt::Tangent,
@@ -379,7 +409,7 @@ impl StaticSolver {
                         .potential_change_from(u, &w.q, &energies, &trial, &q_trial, dead, loads)?
                         + offset_work;
                     let energy_ok = dpi <= -1e-4 * s * slope;
-                    let residual_ok = rt * rt <= (1.0 - 1e-4 * s) * rn * rn;
+                    let residual_ok = !t.descent && rt * rt <= (1.0 - 1e-4 * s) * rn * rn;
                     if energy_ok || residual_ok {
                         accepted = true;
                         break;
