@@ -25,8 +25,28 @@ mod forces;
 mod geometry;
 
 /// The largest number of elements a robot (or all rods of a structure) may
-/// have; larger requests are refused before anything is allocated.
-pub const MAX_ELEMENTS: usize = 200_000;
+/// have; larger requests are refused before anything is allocated, with an
+/// error naming the field and this limit. It is the one element limit of
+/// every entry point: a scene (and `softrod` on the command line), a
+/// [`crate::assembly::RobotSpec`], a structure, and so the static solver and
+/// the estimator, which only take built robots. 2048 is the largest mesh
+/// the static solver and the estimator are measured on (cold solves of the
+/// reference cases and hard loads up to 2000 elements,
+/// `benches/statics_scaling.rs`; the estimator's warm step up to 2000). Above
+/// it nothing is known to converge in a bounded time (an estimate at 10 000
+/// elements failed its line search after 20 s, one at 150 000 did not end),
+/// so larger meshes are refused up front rather than left to hang. (A
+/// section that fits alone but not with the sections before it is refused
+/// with the room left, `MAX_ELEMENTS` minus those sections' elements.)
+///
+/// # Example
+/// ```
+/// use softrod::assembly::{RobotSpec, Section, MAX_ELEMENTS};
+/// let too_many = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, MAX_ELEMENTS + 1)]);
+/// let e = too_many.build_planar().unwrap_err();
+/// assert!(e.to_string().contains(&MAX_ELEMENTS.to_string()));
+/// ```
+pub const MAX_ELEMENTS: usize = 2048;
 /// Largest element dof count any element type has (full 3-D ANCF: 24).
 pub(crate) const MAX_EDOF: usize = 24;
 
