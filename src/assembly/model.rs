@@ -13,6 +13,10 @@ use crate::structure::Assembled;
 impl<E: Element> Assembled for Robot<E> {
     type Loads = Loads;
 
+    fn conservative(&self, loads: &Loads) -> bool {
+        loads.follower_loads.is_empty()
+    }
+
     fn n_free(&self) -> usize {
         Robot::n_free(self)
     }

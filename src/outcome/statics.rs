@@ -152,7 +152,8 @@ pub struct StaticReport {
     /// from the signs of its `L D Lᵀ` pivots: `Some(0)` a stable
     /// equilibrium (a local minimum of the potential), more a saddle or a
     /// maximum the solver could not leave, `None` when no `L D Lᵀ` of the
-    /// tangent exists (singular) or nothing was solved.
+    /// tangent exists (singular), under a follower load (no potential) or
+    /// when nothing was solved.
     #[serde(default)]
     pub negative_eigenvalues: Option<usize>,
     /// Wall time (s).

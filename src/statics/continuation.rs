@@ -93,7 +93,9 @@ impl StaticSolver {
         let mut tangent: Option<(Vec<f64>, f64)> = None;
         let mut previous_tangent: Option<(Vec<f64>, f64)> = None;
         let mut load_steps = 0;
-        // whether the path's last point was a stable equilibrium
+        // whether the path's last point was a stable equilibrium (only a
+        // potential's tangent tells)
+        let conservative = model.conservative(loads);
         let mut stable = false;
         let (mut r1, mut rz) = (vec![0.0; n], vec![0.0; n]);
         let mut dq = vec![0.0; nq];
@@ -187,7 +189,9 @@ impl StaticSolver {
                 // a step from a stable point to an unstable one stepped over
                 // a bifurcation (a column's buckling load: the straight
                 // column goes on as a saddle, the path bends away): shorter
-                Corrected::Done { factors: f, .. } if stable && !f.is_positive_definite() => {
+                Corrected::Done { factors: f, .. }
+                    if conservative && stable && !f.is_positive_definite() =>
+                {
                     u_try.copy_from_slice(u);
                     q_try.copy_from_slice(&w.q);
                     delta = 0.5 * h;

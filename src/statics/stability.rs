@@ -49,6 +49,10 @@ impl StaticSolver {
         scale: f64,
         status: StaticStatus,
     ) -> Result<(StaticStatus, Option<Inertia>)> {
+        if !model.conservative(loads) {
+            // no potential: the symmetric tangent is not the stability
+            return Ok((status, None));
+        }
         let zero = vec![0.0; model.n_free()];
         let mut status = status;
         for _ in 0..=ESCAPES {

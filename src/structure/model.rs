@@ -366,6 +366,27 @@ pub trait Assembled {
         Ok(())
     }
 
+    /// Whether `loads` derive from a potential (default: yes). A follower
+    /// load does not: the symmetric tangent the solvers factor is then not
+    /// the stability of the equilibrium, and the static solver neither
+    /// checks nor reports it.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// use softrod::loads::{FollowerLoad, Loads};
+    /// use softrod::structure::Assembled;
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
+    /// assert!(robot.conservative(&Loads::default()));
+    /// let f = FollowerLoad { pressure_n_per_m: -1.0, s_start_m: None, s_end_m: None };
+    /// assert!(!robot.conservative(&Loads { follower_loads: vec![f], ..Loads::default() }));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    fn conservative(&self, loads: &Self::Loads) -> bool {
+        let _ = loads;
+        true
+    }
+
     /// [`Assembled::potential_change`] given what
     /// [`Assembled::energies_into`] wrote at `from`. By default the
     /// energies are not read.
