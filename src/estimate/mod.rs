@@ -269,8 +269,9 @@ pub struct EstimatorSettings {
     /// predicted successor decrease, `dec²/dec_prev`, is below `1e-3 ×` the
     /// threshold (taken without confirming it by another linearization).
     pub tolerance: f64,
-    /// Convergence, statistical (default 0.1; 0 turns it off, leaving
-    /// `tolerance` alone): the estimation also stops when the next
+    /// Convergence, statistical (default 0: off, `tolerance` alone decides;
+    /// 0.1 is the value the streaming benches use): the estimation also
+    /// stops when the next
     /// Gauss–Newton step `dF`, taken with the exact derivatives at the
     /// current estimate, would move it by less than this fraction `κ` of its
     /// own standard deviation. The test is on the step's predicted decrease
@@ -281,8 +282,8 @@ pub struct EstimatorSettings {
     /// by at most `κ σ` together (`|J dF|_W ≤ κ`): no observation can tell
     /// the answer from the exact optimum. The error the early stop adds to
     /// the estimate's own (noise-driven) error grows that by a factor of at
-    /// most `√(1 + κ²)`: 0.5 % at the default. For two estimates to agree to
-    /// round-off (comparisons between backends), set it to 0.
+    /// most `√(1 + κ²)`: 0.5 % at κ = 0.1. For two estimates to agree to
+    /// round-off (comparisons between backends), leave it at 0.
     pub statistical_tolerance: f64,
     /// Largest marker jump (m) between successive observations handled in
     /// one go; larger jumps are split into a sequence of intermediate
@@ -305,7 +306,7 @@ impl Default for EstimatorSettings {
             tangent_sigma: 1e-3,
             max_iterations: 100,
             tolerance: 1e-15,
-            statistical_tolerance: 0.1,
+            statistical_tolerance: 0.0,
             max_observation_jump_m: 0.02,
             bounds: Vec::new(),
             statics: StaticSettings::default(),
