@@ -19,6 +19,18 @@
 //!   load bound (`w_y ≥ −0.3 N/m` at mid-length, active at the solution), 20
 //!   and 80 elements.
 //!
+//! - `estimate_vs_linearization/{linearization,newton,sqp}/20el_5mk`: the
+//!   README's scenario in one group, so the ratios come from one run: one
+//!   exact linearization at the warm estimate (residual, tangent, its
+//!   `L D Lᵀ` factorization and the 10 adjoint solves of the 5 markers)
+//!   and the warm step of each backend with the statistical stopping test
+//!   at 0.1 of a standard deviation (`statistical_tolerance: 0.1`).
+//! - `estimate_first/BACKEND/<load>`: the first step of a fresh estimator
+//!   without `α` (the discrepancy-principle search) at 20 elements and 5
+//!   markers on loads of the tests and of the report (two separated
+//!   bumps, a uniform load plus a tip force, the Gaussian bump, the benches'
+//!   tip mass plus uniform load).
+//!
 //! Run everything (a few minutes; short warm-up and measurement times are
 //! set below, the command line overrides them):
 //! `cargo bench --bench estimate`
@@ -37,6 +49,7 @@ use softrod::estimate::{
     Backend, BoundFrame, Estimate, Estimator, EstimatorSettings, LoadBound, MarkerObservation,
     Observation,
 };
+use softrod::linsolve::{AutoSolver, FactorOptions, Factorization, SymmetricMatrix, TangentSolver};
 use softrod::loads::{LineLoad, Loads, PointForce};
 use softrod::scene::Scene;
 use softrod::statics::StaticSolver;
@@ -361,12 +374,140 @@ fn warm_step_bounded(c: &mut Criterion) {
     group.finish();
 }
 
+fn vs_linearization(c: &mut Criterion) {
+    // `cargo bench --bench estimate -- 'estimate_vs_linearization/'`
+    let mut group = c.benchmark_group("estimate_vs_linearization");
+    let param = "20el_5mk".to_string();
+    let mut state: Option<(Case, Vec<f64>)> = None;
+    group.bench_function(BenchmarkId::new("linearization", &param), |b| {
+        let (c, q) = state.get_or_insert_with(|| {
+            let c = case(20, 5);
+            let mut est = Backend::Newton
+                .build(c.robot.clone(), c.known.clone(), settings())
+                .unwrap();
+            let q = est.step(&c.frames[0]).unwrap().q;
+            (c, q)
+        });
+        let robot = &c.robot;
+        let dead = robot.dead_force(&c.known).unwrap();
+        let nf = robot.n_free();
+        let mut r = vec![0.0; nf];
+        let mut k = SymmetricMatrix::zeros(robot.tangent_pattern().clone());
+        let mut solver = AutoSolver::analyze(robot.tangent_pattern()).unwrap();
+        // the adjoint right-hand sides of the 5 markers (at nodes 4, 8, …, 20)
+        let n_rhs = 10;
+        let mut b0 = vec![0.0; nf * n_rhs];
+        for mk in 0..5 {
+            let node = 4 * (mk + 1);
+            for comp in 0..2 {
+                b0[(2 * mk + comp) * nf + robot.n_base_free() + (node - 1) * 4 + comp] = 1.0;
+            }
+        }
+        let mut bm = b0.clone();
+        b.iter(|| {
+            robot
+                .residual_into(black_box(q), &dead, &c.known, &mut r)
+                .unwrap();
+            robot.tangent_into(black_box(q), &c.known, &mut k).unwrap();
+            let f = solver.factor(&k, FactorOptions::default()).unwrap();
+            bm.copy_from_slice(&b0);
+            f.solve_columns_in_place(black_box(&mut bm), n_rhs).unwrap();
+        })
+    });
+    for backend in BACKENDS {
+        let id = ("estimate_vs_linearization", backend, param.clone());
+        bench_warm(&mut group, id, || {
+            let c = case(20, 5);
+            let s = EstimatorSettings {
+                statistical_tolerance: 0.1,
+                ..settings()
+            };
+            let w = warm(&c, backend, s);
+            (c, w)
+        });
+    }
+    group.finish();
+}
+
+/// The loads of `first_estimate`: `(name, line loads, tip force (N))`.
+fn first_loads() -> Vec<(&'static str, Vec<LineLoad>, f64)> {
+    let bump = |a: f64, c: f64| LineLoad::Gaussian {
+        amplitude_n_per_m: vec![0.0, a],
+        center_m: c,
+        width_m: 0.01,
+    };
+    let uniform = |w: f64| LineLoad::Uniform {
+        w_n_per_m: vec![0.0, w],
+    };
+    vec![
+        ("two_bumps", vec![bump(-10.0, 0.06), bump(10.0, 0.18)], 0.0),
+        ("uniform_tip", vec![uniform(-1.0)], -0.2),
+        ("gaussian", vec![bump(-20.0, 0.16)], 0.0),
+        ("tip_mass_uniform", vec![uniform(-0.5)], -0.02 * 9.81),
+    ]
+}
+
+fn first_estimate(c: &mut Criterion) {
+    // `cargo bench --bench estimate -- 'estimate_first/'`
+    let mut group = c.benchmark_group("estimate_first");
+    for (name, lines, tip) in first_loads() {
+        for backend in BACKENDS {
+            let id = BenchmarkId::new(backend.name(), name);
+            let mut state: Option<(Robot<PlanarCable>, Loads, Observation)> = None;
+            group.bench_function(id, |b| {
+                let (robot, known, obs) = state.get_or_insert_with(|| {
+                    let mut scene = Scene::two_section();
+                    scene.robot.sections[0].elements = 10;
+                    scene.robot.sections[1].elements = 10;
+                    let robot = scene.robot().unwrap();
+                    let known = scene.loads().unwrap();
+                    let mut truth = known.clone();
+                    truth.line_loads.extend(lines.iter().cloned());
+                    if tip != 0.0 {
+                        truth.point_forces.push(PointForce {
+                            s_m: robot.length(),
+                            force_n: vec![0.0, tip],
+                        });
+                    }
+                    let solver = StaticSolver::default();
+                    let q = solver.solve(&robot, &truth, None).unwrap().q;
+                    let markers = (1..=5)
+                        .map(|k| {
+                            let s = robot.length() * f64::from(k) / 5.0;
+                            MarkerObservation::at_arc(s, robot.position_at(&q, s).unwrap())
+                        })
+                        .collect();
+                    let obs = Observation { markers }.with_noise(1e-5, 7);
+                    (robot, known, obs)
+                });
+                b.iter_batched(
+                    || {
+                        let s = EstimatorSettings {
+                            alpha: None,
+                            ..EstimatorSettings::default()
+                        };
+                        backend.build(robot.clone(), known.clone(), s).unwrap()
+                    },
+                    |mut est| {
+                        black_box(
+                            est.step(black_box(&*obs))
+                                .is_ok_and(|e| e.report.status.is_converged()),
+                        )
+                    },
+                    BatchSize::SmallInput,
+                )
+            });
+        }
+    }
+    group.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default()
         .sample_size(10)
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_secs(1));
-    targets = warm_step, warm_step_bounded, warm_scaling, cold_step, alpha_search
+    targets = vs_linearization, first_estimate, warm_step, warm_step_bounded, warm_scaling, cold_step, alpha_search
 }
 criterion_main!(benches);

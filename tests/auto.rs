@@ -15,7 +15,7 @@ mod common;
 use common::reference;
 
 use serde_json::{json, Value};
-use softrod::estimate::{LoadModel, MarkerObservation, Observation};
+use softrod::estimate::{EstimatorSettings, LoadModel, MarkerObservation, Observation};
 use softrod::refine::{auto_elements, Ladder, Phase, Quantity, Refinement};
 use softrod::scene::{Scene, UnknownLoad};
 use softrod::statics::StaticSolver;
@@ -246,7 +246,13 @@ fn load_resultant_of_an_unknown_tip_force_meets_its_tolerance() {
     for tol in [1e-4, 1e-5] {
         let (scene, obs) = tip_force_estimation(tol);
         let resultant = |s: &Scene| {
-            let settings = s.estimator_settings().unwrap();
+            // as the refinement runs it: the tight test alone (an estimate
+            // stopped within the noise differs by up to 0.1 of its standard
+            // deviation, far more than this tolerance)
+            let settings = EstimatorSettings {
+                statistical_tolerance: 0.0,
+                ..s.estimator_settings().unwrap()
+            };
             let mut est = settings
                 .backend
                 .build(s.robot().unwrap(), s.loads().unwrap(), settings)

@@ -263,12 +263,28 @@ pub struct EstimatorSettings {
     pub tangent_sigma: f64,
     /// Outer iterations per observation (default 100).
     pub max_iterations: usize,
-    /// Convergence: the predicted decrease of the objective below
+    /// Convergence, tight: the predicted decrease of the objective below
     /// `tolerance × max(objective, n_ob)` (default 1e-15; a round-off floor
     /// also ends it). The Newton backend also stops after a step whose
-    /// predicted successor decrease, `dec²/dec_prev`, is below `1e-3 ×` that
-    /// (taken without confirming it by another linearization).
+    /// predicted successor decrease, `dec²/dec_prev`, is below `1e-3 ×` the
+    /// threshold (taken without confirming it by another linearization).
     pub tolerance: f64,
+    /// Convergence, statistical (default 0: off, `tolerance` alone decides;
+    /// 0.1 is the value the streaming benches use): the estimation also
+    /// stops when the next
+    /// Gauss–Newton step `dF`, taken with the exact derivatives at the
+    /// current estimate, would move it by less than this fraction `κ` of its
+    /// own standard deviation. The test is on the step's predicted decrease
+    /// `dec = dFᵀ N dF ≤ κ²` (`N = JᵀWJ + αH`, the Gauss–Newton Hessian (30)
+    /// over 2, the posterior precision of `F` for the stated noise). Then
+    /// every linear function `aᵀF` of the load moves by at most `κ` times its
+    /// posterior standard deviation `√(aᵀN⁻¹a)`, and the predicted markers
+    /// by at most `κ σ` together (`|J dF|_W ≤ κ`): no observation can tell
+    /// the answer from the exact optimum. The error the early stop adds to
+    /// the estimate's own (noise-driven) error grows that by a factor of at
+    /// most `√(1 + κ²)`: 0.5 % at κ = 0.1. For two estimates to agree to
+    /// round-off (comparisons between backends), leave it at 0.
+    pub statistical_tolerance: f64,
     /// Largest marker jump (m) between successive observations handled in
     /// one go; larger jumps are split into a sequence of intermediate
     /// observations; also the trust radius of one step's predicted node motion
@@ -290,6 +306,7 @@ impl Default for EstimatorSettings {
             tangent_sigma: 1e-3,
             max_iterations: 100,
             tolerance: 1e-15,
+            statistical_tolerance: 0.0,
             max_observation_jump_m: 0.02,
             bounds: Vec::new(),
             statics: StaticSettings::default(),
@@ -318,6 +335,17 @@ impl EstimatorSettings {
         check_positive("estimator.noise_sigma_m", self.noise_sigma_m)?;
         check_positive("estimator.tangent_sigma", self.tangent_sigma)?;
         check_positive("estimator.tolerance", self.tolerance)?;
+        crate::error::check_finite(
+            "estimator.statistical_tolerance",
+            self.statistical_tolerance,
+        )?;
+        if self.statistical_tolerance < 0.0 {
+            return Err(Error::invalid(
+                "estimator.statistical_tolerance",
+                self.statistical_tolerance,
+                "must be >= 0 (0 turns the statistical test off)",
+            ));
+        }
         check_positive(
             "estimator.max_observation_jump_m",
             self.max_observation_jump_m,

@@ -15,15 +15,22 @@
 //!   `F + dF = Σ_i c_i z_i`, `(α W⁻¹ + Zᵀ B Z) c = J F − e`: a Cholesky of an
 //!   `n_ob × n_ob` matrix, nothing of size `n_q³`.
 //! - Globalization: Armijo backtracking on `J`, each trial a warm static solve
-//!   (chord steps with the last factorization of `K`, then one fresh
-//!   factorization at the solution, which the next iteration's adjoint
-//!   solves use).
-//! - Convergence: the predicted decrease `dec = −½ gᵀ dF` below
-//!   `tolerance × max(J, n_ob)`. Gauss–Newton converges here at least
+//!   from the linearized prediction `q + t M K⁻¹ Mᵀ G dF` (chord steps with
+//!   the last factorization of `K`, then one fresh factorization at the
+//!   solution, which the next iteration's adjoint solves use).
+//! - A warm step of a stream (a new frame near the last) typically takes
+//!   one step from the cached derivatives at the last estimate, one
+//!   factorization and one set of adjoint solves at the new point, which
+//!   the statistical test accepts: about one exact linearization.
+//! - Convergence: the predicted decrease `dec = −½ gᵀ dF = dFᵀ N dF`
+//!   (`N = JᵀWJ + αH`) below `κ²`, `κ = statistical_tolerance` (the next
+//!   step would move the estimate by less than `κ` of its own standard
+//!   deviation, see [`EstimatorSettings::statistical_tolerance`]), or below
+//!   `tolerance × max(J, n_ob)` (the tight test). Gauss–Newton converges here at least
 //!   quadratically near the solution (the predicted decreases of a warm
 //!   step run like 1e-1, 1e-6, 1e-13, 1e-18 relative), so when the decrease
 //!   predicted after the current step, `dec²/dec_prev`, is below
-//!   `1e-3 × tolerance`, that step is the last: it is taken (its
+//!   `1e-3 ×` the threshold, that step is the last: it is taken (its
 //!   equilibrium by chord steps, without a new factorization) and the
 //!   estimate returned without a further linearization to confirm it. It
 //!   is the iterate the confirming iteration would accept; the gradient
@@ -173,6 +180,7 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
         let eq = core.equilibrium(&f, &q0)?;
         let (mut q, mut lu, mut res_n) = (eq.q, eq.factors, eq.residual_n);
         let n_ob = op.len() as f64;
+        let kappa2 = settings.statistical_tolerance.powi(2);
         let mut iterations = 0;
         let mut prev_dec = f64::INFINITY;
         loop {
@@ -194,7 +202,7 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
             let dec = -0.5 * dot(&g, &step);
             // trust region: the predicted motion of every node, M K⁻¹ Mᵀ G dF
             // (one more solve), within max_observation_jump_m
-            let dq = Sensitivity::new(core.robot(), &lu)?.response(&core.gen_force(&step)?)?;
+            let mut dq = Sensitivity::new(core.robot(), &lu)?.response(&core.gen_force(&step)?)?;
             let nd = E::NODE_DOFS;
             let moved = dq
                 .iter()
@@ -207,8 +215,14 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
                 step_cap(&dv, &step, settings.max_observation_jump_m)
             };
             step.iter_mut().for_each(|v| *v *= cap);
+            dq.iter_mut().for_each(|v| *v *= cap);
             let slope = dot(&g, &step);
             let scale = obj.max(n_ob);
+            // the statistical test: dec = dFᵀ N dF ≤ κ² (see
+            // EstimatorSettings::statistical_tolerance)
+            let within_noise = dec <= kappa2;
+            // the threshold the successor's predicted decrease is held to
+            let threshold = (settings.tolerance * scale).max(kappa2);
             let report = |status: EstimateStatus, iterations: usize| EstimateReport {
                 backend: Backend::Newton,
                 status,
@@ -227,6 +241,8 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
             let floor = dec <= 1e-13 * scale && dec > 0.9 * prev_dec;
             let criterion = if dec <= settings.tolerance * scale {
                 Some(EstimateCriterion::PredictedDecrease)
+            } else if within_noise {
+                Some(EstimateCriterion::WithinNoise)
             } else if floor {
                 Some(EstimateCriterion::RoundOffFloor)
             } else if !dec.is_finite() && slope == 0.0 {
@@ -267,7 +283,7 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
             let last = prev_dec.is_finite()
                 && cap == 1.0
                 && dec <= 1e-8 * scale
-                && dec * dec <= 1e-3 * settings.tolerance * scale * prev_dec;
+                && dec * dec <= 1e-3 * threshold * prev_dec;
             iterations += 1;
             prev_dec = dec;
             if last {
@@ -299,13 +315,21 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
             let mut accepted = None;
             for _ in 0..30 {
                 let ft: Vec<f64> = f.iter().zip(&step).map(|(a, b)| a + t * b).collect();
+                // the trial's equilibrium starts from the linearized
+                // prediction q + t dq (a predictor–corrector step, as the
+                // sqp backend's full-space step): the corrector's chord
+                // steps then only remove the second-order error. From q
+                // itself they had to cover the whole step and failed on
+                // large ones, which fell through to the globalized static
+                // solve (10–100× the cost of a first estimate).
+                let qp: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + t * b).collect();
                 // a trial without the globalized fallback unless the step is
                 // already short: cheap
-                let load = core.load();
                 let trial = if t < 0.01 {
-                    core.equilibrium(&ft, &q).ok()
+                    core.equilibrium(&ft, &qp).ok()
                 } else {
-                    core.tracker().try_solve(&load, &ft, &q).ok().flatten()
+                    let load = core.load();
+                    core.tracker().try_solve(&load, &ft, &qp).ok().flatten()
                 };
                 if let Some(eq) = trial {
                     let (wr_t, pen_t, _) = core.objective(op, &eq.q, &ft, alpha)?;

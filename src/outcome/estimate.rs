@@ -23,6 +23,11 @@ pub enum EstimateCriterion {
     /// `dec` at the round-off floor: below `1e-13 scale` and no longer
     /// shrinking.
     RoundOffFloor,
+    /// The statistical test: the next Gauss–Newton step would move the
+    /// estimate by less than `statistical_tolerance` of its own standard
+    /// deviation (`dec ≤ κ²`, see
+    /// [`EstimatorSettings::statistical_tolerance`](crate::estimate::EstimatorSettings::statistical_tolerance)).
+    WithinNoise,
     /// Newton backend: the decrease predicted after the step
     /// (`dec²/dec_prev`, quadratic convergence) was far below the tolerance,
     /// so the step was taken without a further linearization to confirm it.
@@ -42,6 +47,7 @@ impl EstimateCriterion {
         match self {
             EstimateCriterion::PredictedDecrease => "predicted decrease",
             EstimateCriterion::RoundOffFloor => "round-off floor",
+            EstimateCriterion::WithinNoise => "within the noise",
             EstimateCriterion::UnconfirmedLastStep => "unconfirmed last step",
             EstimateCriterion::Stationary => "stationary point",
             EstimateCriterion::NegligibleDecrease => "negligible decrease",

@@ -131,7 +131,7 @@ impl<E: Element> SqpEstimator<E> {
     ) -> std::result::Result<(QpStep, Vec<usize>), QpError> {
         let ineq = self.inequalities(q, f)?;
         let problem = &self.stream.problem;
-        let Unconstrained { dv, df0, g1, l } = self.unconstrained(lu, op, f, e, r, alpha)?;
+        let Unconstrained { dv, df0, g1, fac } = self.unconstrained(lu, op, f, e, r, alpha)?;
         let reduced = Reduced::new(problem, self.gram_lu.as_ref(), &dv, op, alpha);
         let solve_from = |start: &[usize]| -> Option<(Vec<f64>, Vec<usize>)> {
             active_set_solve(reduced.as_ref()?, &ineq, f, &df0, start)
@@ -169,7 +169,7 @@ impl<E: Element> SqpEstimator<E> {
                 exact,
                 bound_violation,
                 dec_opt,
-                derivs: Some((dv, l)),
+                derivs: Some((dv, fac)),
                 tangent_max_abs: k.max_abs(),
             },
             act,

@@ -49,7 +49,11 @@
 //! the manifold, `−g̃ᵀ dF` with `g̃` the reduced gradient (29) at the
 //! feasibility-restored residual `e'` (for a step of clarabel's: `−cᵀ d`,
 //! to 1e-9), and on the bounds holding at the current `F` (in the local
-//! frame they move with the shape).
+//! frame they move with the shape): below `tolerance × max(J, n_ob)`, or,
+//! halved (`dFᵀ N dF`), below `κ²` (the statistical test of
+//! `EstimatorSettings::statistical_tolerance`, as the Newton backend's). The
+//! covariance factor is formed once, from the last QP's Gauss–Newton
+//! factor.
 //! After convergence the shape is re-solved at the final `F` (a chord step
 //! with the last factorization, or a few Newton steps) so the estimate is
 //! an exact equilibrium.
@@ -73,8 +77,9 @@ use crate::outcome::NonFiniteAt;
 use crate::statics::residual_floor;
 use crate::statics::tracker::FactoredTangent;
 
+use super::covariance::cov_factor;
 use super::driver::{run_step, Method, Solved, Stream};
-use super::problem::{columns, Derivs, Problem};
+use super::problem::{columns, Derivs, GnFactor, Problem};
 use super::{
     Backend, Estimate, EstimateCriterion, EstimateReport, EstimateStatus, Estimator,
     EstimatorSettings, LoadModel, Observation,
@@ -268,7 +273,12 @@ impl<E: Element> SqpEstimator<E> {
         alpha: f64,
         c: Vec<f64>,
     ) -> Result<QpStep> {
-        let Unconstrained { dv, df0: df, g1, l } = self.unconstrained(lu, op, f, e, r, alpha)?;
+        let Unconstrained {
+            dv,
+            df0: df,
+            g1,
+            fac,
+        } = self.unconstrained(lu, op, f, e, r, alpha)?;
         let dec_opt = (-dot(&g1, &df)).max(0.0);
         let du = self.du_from(lu, r, &df)?;
         let lambda_max = self.lambda_max(&dv, op, e, &du)?;
@@ -281,7 +291,7 @@ impl<E: Element> SqpEstimator<E> {
             exact: true,
             bound_violation: 0.0,
             dec_opt: Some(dec_opt),
-            derivs: Some((dv, l)),
+            derivs: Some((dv, fac)),
             tangent_max_abs: k.max_abs(),
         })
     }
@@ -308,9 +318,9 @@ impl<E: Element> SqpEstimator<E> {
             .map(|(ei, row)| ei + row.apply(&dq0))
             .collect();
         let dv = problem.derivs(lu, op)?;
-        let (df0, l) = problem.gn_step(&dv, op, &e1, f, alpha)?;
+        let (df0, fac) = problem.gn_solve(&dv, op, &e1, f, alpha)?;
         let g1 = problem.gradient(&dv, op, &e1, f, alpha)?;
-        Ok(Unconstrained { dv, df0, g1, l })
+        Ok(Unconstrained { dv, df0, g1, fac })
     }
 
     /// `du` from the linearized equilibrium, `K du = Q + Mᵀ G dF`.
@@ -375,8 +385,8 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
         let mut dead = self.stream.problem.dead_with(&f)?;
         let mut r = self.stream.problem.residual(&q, &f)?;
         let (mut wr, mut pen, mut e) = self.stream.problem.objective(op, &q, &f, alpha)?;
-        // derivatives and covariance factor of the last QP, taken at q
-        let mut at_q: Option<(Derivs, Vec<f64>)> = None;
+        // derivatives and Gauss–Newton factor of the last QP, taken at q
+        let mut at_q: Option<(Derivs, GnFactor)> = None;
         // the factored tangent of the last QP (the second-order correction,
         // the final chord step)
         let mut last: Option<FactoredTangent> = None;
@@ -445,10 +455,14 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 settings.tolerance
             };
             // convergence is judged on the decrease along the manifold
+            // (−g̃ᵀdF = 2 dFᵀ N dF at the QP's solution: the statistical test
+            // is on half of it, as the Newton backend's)
             let dec_c = dec_opt.unwrap_or(dec);
             if feasible {
                 let criterion = if dec_c <= tol * scale {
                     Some(EstimateCriterion::PredictedDecrease)
+                } else if 0.5 * dec_c <= settings.statistical_tolerance.powi(2) {
+                    Some(EstimateCriterion::WithinNoise)
                 } else if dec_c <= 1e-13 * scale && dec_c > 0.9 * prev_dec {
                     Some(EstimateCriterion::RoundOffFloor)
                 } else {
@@ -532,7 +546,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
         // factorization (taken at q) does it, and that QP's derivatives are
         // exact; otherwise the equilibrium is re-solved and re-factored
         let mut finish = None;
-        if let (Some((dv, l)), Some(FactoredTangent { factors: lu, .. })) = (at_q.take(), &last) {
+        if let (Some((dv, fac)), Some(FactoredTangent { factors: lu, .. })) = (at_q.take(), &last) {
             let mut w = r.clone();
             lu.solve_in_place(&mut w)?;
             let step = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -541,6 +555,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 let dq = problem.robot().expand_step(&w)?;
                 q.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
                 let residual_n = norm2(&problem.robot().residual(&q, &dead, problem.known())?);
+                let l = cov_factor(problem, &dv, op, &fac);
                 finish = Some((q.clone(), dv, l, residual_n));
             }
         }
@@ -623,7 +638,7 @@ struct QpStep {
     dec_opt: Option<f64>,
     /// The derivatives at `q` and the covariance factor there, when the
     /// step computed them.
-    derivs: Option<(Derivs, Vec<f64>)>,
+    derivs: Option<(Derivs, GnFactor)>,
     /// `|K|_max` of the QP's tangent (for the round-off floor of `|Q|`).
     tangent_max_abs: f64,
 }
@@ -636,8 +651,9 @@ struct Unconstrained {
     df0: Vec<f64>,
     /// The reduced gradient (29) at the restored residual.
     g1: Vec<f64>,
-    /// The covariance factor at `q`.
-    l: Vec<f64>,
+    /// The Gauss–Newton system's factor at `q` (the covariance factor is
+    /// formed from it once, at the end).
+    fac: GnFactor,
 }
 
 impl<E: Element + 'static> Estimator for SqpEstimator<E> {

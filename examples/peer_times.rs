@@ -1,0 +1,198 @@
+//! softrod's in-process times for `validation/bench_peers.py`, as JSON on
+//! standard output.
+//!
+//! `cargo run --release --features report --example peer_times [REPO_ROOT]`
+//!
+//! - `forward`: the cold static solve (`StaticSolver::solve` from the
+//!   straight rod) of every exudyn cantilever reference case
+//!   (`reference/exudyn_<case>.json`: its sections, clamp of all four base
+//!   coordinates, 3 bending Gauss points, its loads) at 4–128 elements:
+//!   the same discretization exudyn's `SolveStatic` is timed on.
+//! - `estimate`: the problem (25) on three of the report's references (20
+//!   elements, 5 markers at `L k / 5` read off exudyn's 128-element shape
+//!   with 0.01 mm seeded noise, no known loads, the distributed unknown
+//!   load): `α` by the discrepancy principle (once), then the first
+//!   estimate at that `α` by both backends from a fresh estimator (the time
+//!   a peer is compared with), with the data a peer needs to pose the same
+//!   problem (markers, `σ`, `α`) and softrod's answer to compare with.
+//!
+//! Each time is the median of repeated runs (at least 3, until 0.3 s).
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
+
+use std::time::Instant;
+
+use serde_json::{json, Value};
+use softrod::assembly::Clamp;
+use softrod::estimate::{Backend, EstimatorSettings};
+use softrod::loads::Loads;
+use softrod::report::reference::Reference;
+use softrod::report::sweep;
+use softrod::scene::Scene;
+use softrod::statics::StaticSolver;
+
+const CASES: [&str; 12] = [
+    "uniform_small",
+    "uniform_large",
+    "linear_small",
+    "linear_large",
+    "gaussian_small",
+    "gaussian_large",
+    "tip_force_small",
+    "tip_force_large",
+    "tip_moment_small",
+    "tip_moment_large",
+    "self_weight_moment_small",
+    "self_weight_moment_large",
+];
+const ELEMENTS: [usize; 6] = [4, 8, 16, 32, 64, 128];
+const ESTIMATE_REFERENCES: [&str; 3] = [
+    "exudyn_family_uniform_1",
+    "exudyn_uniform_large",
+    "exudyn_gaussian_large",
+];
+
+/// Median wall time (s) of `run`, repeated at least 3 times and until 0.3 s.
+fn median_time(mut run: impl FnMut()) -> (f64, usize) {
+    let mut times = Vec::new();
+    let start = Instant::now();
+    while times.len() < 3 || (start.elapsed().as_secs_f64() < 0.3 && times.len() < 1000) {
+        let t = Instant::now();
+        run();
+        times.push(t.elapsed().as_secs_f64());
+    }
+    times.sort_by(f64::total_cmp);
+    (times[times.len() / 2], times.len())
+}
+
+/// A scene with the reference's sections, base and loads (as
+/// `tests/references.rs` builds it).
+fn scene(r: &Value, elements: usize) -> Scene {
+    let p = &r["params"];
+    let sections = p["sections"].as_array().unwrap();
+    let mut text = json!({
+        "robot": {
+            "sections": sections.iter().map(|s| json!({
+                "length_m": s["length_m"], "ea_n": s["ea_n"], "ei_nm2": s["ei_nm2"],
+                "elements": elements / sections.len(),
+            })).collect::<Vec<_>>(),
+            "bending_gauss_points": 3,
+        },
+        "base": p["base"],
+        "gravity_m_per_s2": [0.0, 0.0],
+    });
+    text["loads"] = p["loads"].clone();
+    let mut s: Scene = serde_json::from_value(text).unwrap();
+    s.base.clamp = Clamp::Full;
+    s.validate().unwrap();
+    s
+}
+
+fn forward(root: &str) -> Vec<Value> {
+    let mut out = Vec::new();
+    for case in CASES {
+        let path = format!("{root}/reference/exudyn_{case}.json");
+        let r: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        for n in ELEMENTS {
+            let s = scene(&r, n);
+            let robot = s.robot().unwrap();
+            let loads = s.loads().unwrap();
+            let solver = StaticSolver::default();
+            let first = solver.solve(&robot, &loads, None);
+            let (converged, iterations, tip) = match &first {
+                Ok(eq) => (
+                    eq.report.status.is_converged(),
+                    eq.report.iterations,
+                    eq.q[eq.q.len() - 4..eq.q.len() - 2].to_vec(),
+                ),
+                Err(_) => (false, 0, vec![]),
+            };
+            let (median_s, runs) = median_time(|| {
+                let _ = std::hint::black_box(solver.solve(&robot, &loads, None));
+            });
+            out.push(json!({
+                "case": case, "elements": n, "converged": converged,
+                "newton_iterations": iterations, "tip_m": tip,
+                "median_s": median_s, "runs": runs,
+            }));
+        }
+    }
+    out
+}
+
+fn estimate() -> Vec<Value> {
+    let sigma = 1e-5;
+    let n = 20;
+    let mut out = Vec::new();
+    for name in ESTIMATE_REFERENCES {
+        let r = Reference::embedded(name).unwrap();
+        let robot = sweep::model_robot(&r, n).unwrap();
+        let arcs = sweep::marker_arcs(r.length_m, 5);
+        let obs = sweep::observe(&r, &arcs, sigma, 7);
+        let base = EstimatorSettings {
+            noise_sigma_m: sigma,
+            ..EstimatorSettings::default()
+        };
+        let alpha = {
+            let mut est = Backend::Newton
+                .build(robot.clone(), Loads::default(), base.clone())
+                .unwrap();
+            est.step(&obs).unwrap().report.alpha
+        };
+        let settings = EstimatorSettings {
+            alpha: Some(alpha),
+            ..base
+        };
+        let mut backends = serde_json::Map::new();
+        for backend in [Backend::Newton, Backend::Sqp] {
+            let build = || {
+                backend
+                    .build(robot.clone(), Loads::default(), settings.clone())
+                    .unwrap()
+            };
+            let e = build().step(&obs).unwrap();
+            let (median_s, runs) = median_time(|| {
+                let mut est = build();
+                let _ = std::hint::black_box(est.step(&obs));
+            });
+            backends.insert(
+                backend.name().into(),
+                json!({
+                    "median_s": median_s, "runs": runs,
+                    "converged": e.report.status.is_converged(),
+                    "iterations": e.report.iterations,
+                    "objective": e.report.objective,
+                    "f": e.f, "q": e.q,
+                }),
+            );
+        }
+        out.push(json!({
+            "reference": name,
+            "sections": r.sections.iter().map(|s| json!({
+                "length_m": s.length_m, "ea_n": s.ea_n, "ei_nm2": s.ei_nm2,
+            })).collect::<Vec<_>>(),
+            "elements": n,
+            "clamp": "all four base coordinates",
+            "bending_gauss_points": 3,
+            "axial_gauss_points": 5,
+            "markers": obs.markers.iter().map(|m| json!({
+                "s_m": m.s_m, "position_m": m.position_m,
+            })).collect::<Vec<_>>(),
+            "noise_sigma_m": sigma,
+            "alpha": alpha,
+            "penalty": "alpha * F^T B F, B = int S^T S dX (the distributed load field)",
+            "backends": backends,
+        }));
+    }
+    out
+}
+
+fn main() {
+    let root = std::env::args().nth(1).unwrap_or_else(|| ".".into());
+    let doc = json!({
+        "generator": "examples/peer_times.rs",
+        "softrod": env!("CARGO_PKG_VERSION"),
+        "forward": forward(&root),
+        "estimate": estimate(),
+    });
+    println!("{}", serde_json::to_string_pretty(&doc).unwrap());
+}
