@@ -1,28 +1,46 @@
 //! Contact localization sweep on the five-section robot (5 × 93 mm), the
 //! plant not the model (twice the mesh, EI +15 %, gain −10 %, EA −5 %,
-//! σ = 0.05 mm, 5 frames averaged): contact positions × loads (how far the
+//! σ = 0.05 mm, 20 frames averaged by default): contact positions × loads (how far the
 //! disk reaches into the contact-free shape) × marker counts, both methods:
 //! the paper's peak of the estimated load minus the virtual payload, and the
 //! point-force search on the calibrated model.
 //!
-//! Run: `cargo run --release --example avoid_localization [OUT.json]`
-//! (prints the table; writes every case as JSON if a path is given).
+//! Run: `cargo run --release --example avoid_localization [OUT.json [FRAMES [MARKERS…]]]`
+//! (prints the table; writes every case as JSON if a path is given;
+//! FRAMES marker frames averaged per measurement, default 20; marker
+//! counts, default 4 6 11).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use softrod::plant::PlantSettings;
 use softrod::touch::{run_localization, LocalizationCase};
 
 fn main() {
-    let out = std::env::args().nth(1);
+    let args: Vec<String> = std::env::args().collect();
+    let out = args.get(1).filter(|a| a.as_str() != "-").cloned();
+    let frames: usize = args
+        .get(2)
+        .map_or(20, |a| a.parse().expect("FRAMES: a count"));
+    let counts: Vec<usize> = if args.len() > 3 {
+        args[3..]
+            .iter()
+            .map(|a| a.parse().expect("MARKERS: a count"))
+            .collect()
+    } else {
+        vec![4, 6, 11]
+    };
+    println!("{frames} frames averaged per measurement");
     let mut results = Vec::new();
     println!("markers  s_c(m)  depth(mm)  true_s(m)  |f|(N)  | peak: err(mm) ferr(N) | point: err(mm) ferr(N)");
-    for n_markers in [4, 6, 11] {
+    for &n_markers in &counts {
         let mut worst = (0.0f64, 0.0f64);
         let mut sum = (0.0, 0.0);
         let mut count = 0;
         for s in [0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45] {
             for depth in [0.005, 0.01, 0.02] {
-                let case = LocalizationCase::new(s, depth, n_markers, 1);
+                let case = LocalizationCase {
+                    frames,
+                    ..LocalizationCase::new(s, depth, n_markers, 1)
+                };
                 match run_localization(&case, 4, &PlantSettings::default()) {
                     Ok(r) => {
                         let (a, b) = r.location_errors_m();

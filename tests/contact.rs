@@ -388,3 +388,56 @@ fn an_actuated_robot_bending_into_a_disk_stops_on_it() {
     println!("relative residual with the contact forces as point loads {balance:.2e}");
     assert!(balance < 1e-8, "{balance:e}");
 }
+
+#[test]
+fn a_solve_from_afar_with_a_far_obstacle_equals_the_free_solve() {
+    // the pressurized two-section robot on the plant's finer mesh, solved
+    // from its straight reference configuration, a disk 0.1 m from its free
+    // shape: no contact, so the contact solve is the free equilibrium.
+    // (Unbounded SQP steps made the far disk's linearized gap bind and
+    // clarabel stop with InsufficientProgress.)
+    let scene = softrod::scene::Scene::two_section();
+    let plant = softrod::plant::SimulatedPlant::new(
+        &scene,
+        &[0.12, 0.24],
+        softrod::plant::PlantSettings::default(),
+    )
+    .unwrap();
+    let (robot, loads) = (plant.robot().clone(), scene.loads().unwrap());
+    let free = softrod::statics::StaticSolver::default()
+        .solve(&robot, &loads, None)
+        .unwrap();
+    let obstacles = Obstacles::new(
+        vec![Obstacle::Circle {
+            center_m: [0.2, 0.2],
+            radius_m: 0.02,
+        }],
+        0.005,
+    )
+    .unwrap();
+    let min = obstacles
+        .gaps(&robot, &free.q)
+        .unwrap()
+        .iter()
+        .map(|g| g.gap_m)
+        .fold(f64::INFINITY, f64::min);
+    assert!((min - 0.1).abs() < 0.005, "{min}");
+    let sol = ContactSolver::default()
+        .solve(
+            &robot,
+            &loads,
+            &obstacles,
+            Some(&robot.reference_configuration()),
+        )
+        .unwrap();
+    println!("{}", sol.report);
+    assert!(sol.is_converged(), "{}", sol.report);
+    assert!(sol.contacts.is_empty());
+    let d = sol
+        .q
+        .iter()
+        .zip(&free.q)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(d < 1e-9, "{d:e}");
+}

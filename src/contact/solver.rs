@@ -142,6 +142,25 @@ impl ElementMap {
         }
         Ok(ElementMap { base_cols, nbf })
     }
+    /// The trust region of one SQP step per free coordinate: `position_m`
+    /// for a node position (or a base freedom that moves one), `slope`
+    /// for a node slope.
+    fn step_bounds(&self, n: usize, position_m: f64, slope: f64) -> Vec<f64> {
+        (0..n)
+            .map(|j| {
+                let moves_position = if j < self.nbf {
+                    self.base_cols[j][..2].iter().any(|c| *c != 0.0)
+                } else {
+                    (j - self.nbf) % 4 < 2
+                };
+                if moves_position {
+                    position_m
+                } else {
+                    slope
+                }
+            })
+            .collect()
+    }
     /// `(u index, coefficient)` pairs of element coordinate `a` of element `e`.
     fn of(&self, e: usize, a: usize) -> Vec<(usize, f64)> {
         let qi = 4 * e + a;
@@ -390,6 +409,13 @@ impl ContactSolver {
         let mut active: Vec<Active> = Vec::new();
         let mut prev_set: Vec<usize> = Vec::new();
         let mut nu = 0.0f64;
+        // The QP's step is bounded (a rotation of `max_step_rotation` moves
+        // no point further than that times the length): an unbounded step
+        // far from the solution reaches through the linearization of a far
+        // obstacle, whose constraint then binds a meaningless step and
+        // leaves clarabel without progress.
+        let rot = self.settings.max_step_rotation;
+        let bounds = ctx.map.step_bounds(n, rot * l, rot);
         for it in 0..self.settings.max_iterations {
             report.sqp_iterations = it + 1;
             let gaps = ctx.obstacles.gaps(ctx.robot, q)?;
@@ -412,7 +438,7 @@ impl ContactSolver {
                 }
             }
             let grads: Vec<Vec<f64>> = gaps.iter().map(|g| ctx.map.gradient(g, n)).collect();
-            let (du, lambda) = match self.qp(&h, &r, &gaps, &grads) {
+            let (du, lambda) = match self.qp(&h, &r, &gaps, &grads, &bounds) {
                 Ok(x) => x,
                 Err(status) => {
                     let pen = gaps.iter().map(|g| (-g.gap_m).max(0.0)).fold(0.0, f64::max);
@@ -511,15 +537,17 @@ impl ContactSolver {
         ))
     }
 
-    /// The QP `min ½ duᵀ H du − Qᵀ du` subject to `g + G du >= 0` by
-    /// clarabel, on Jacobi-scaled unknowns, `H` shifted to positive
-    /// definite if needed: the step and the multipliers.
+    /// The QP `min ½ duᵀ H du − Qᵀ du` subject to `g + G du >= 0` and
+    /// `|du_j| <= bounds_j` by clarabel, on Jacobi-scaled unknowns and
+    /// unit-norm constraint rows, `H` shifted to positive definite if
+    /// needed: the step and the multipliers of the gaps.
     fn qp(
         &self,
         h: &DMatrix<f64>,
         r: &[f64],
         gaps: &[Gap],
         grads: &[Vec<f64>],
+        bounds: &[f64],
     ) -> std::result::Result<(Vec<f64>, Vec<f64>), SolverStatus> {
         let n = h.nrows();
         let d: Vec<f64> = (0..n)
@@ -557,23 +585,45 @@ impl ContactSolver {
         let p_mat = CscMatrix::new_from_triplets(n, n, ri, ci, vi);
         let c: Vec<f64> = (0..n).map(|i| -d[i] * r[i]).collect();
         let m = gaps.len();
+        // each gap's row scaled to unit norm in the scaled unknowns
+        let rho: Vec<f64> = grads
+            .iter()
+            .map(|g| {
+                let v = g
+                    .iter()
+                    .zip(&d)
+                    .map(|(a, b)| (a * b).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                if v > 0.0 && v.is_finite() {
+                    v
+                } else {
+                    1.0
+                }
+            })
+            .collect();
         let (mut ri, mut ci, mut vi) = (Vec::new(), Vec::new(), Vec::new());
         for (row, g) in grads.iter().enumerate() {
             for (j, v) in g.iter().enumerate() {
                 if *v != 0.0 {
                     ri.push(row);
                     ci.push(j);
-                    vi.push(-v * d[j]);
+                    vi.push(-v * d[j] / rho[row]);
                 }
             }
         }
-        let a_mat = CscMatrix::new_from_triplets(m, n, ri, ci, vi);
-        let b: Vec<f64> = gaps.iter().map(|g| g.gap_m).collect();
-        let cones: Vec<SupportedConeT<f64>> = if m > 0 {
-            vec![NonnegativeConeT(m)]
-        } else {
-            Vec::new()
-        };
+        let mut b: Vec<f64> = gaps.iter().zip(&rho).map(|(g, s)| g.gap_m / s).collect();
+        // the trust region: ±du_j <= bounds_j
+        for (j, (dj, bj)) in d.iter().zip(bounds).enumerate() {
+            for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
+                ri.push(m + 2 * j + k);
+                ci.push(j);
+                vi.push(sign * dj);
+                b.push(*bj);
+            }
+        }
+        let a_mat = CscMatrix::new_from_triplets(m + 2 * n, n, ri, ci, vi);
+        let cones: Vec<SupportedConeT<f64>> = vec![NonnegativeConeT(m + 2 * n)];
         let settings = DefaultSettingsBuilder::default()
             .verbose(false)
             .tol_gap_abs(1e-12)
@@ -593,7 +643,11 @@ impl ContactSolver {
             return Err(sol.status);
         }
         let du: Vec<f64> = sol.x.iter().zip(&d).map(|(x, d)| x * d).collect();
-        let lambda: Vec<f64> = sol.z.iter().map(|z| z.max(0.0)).collect();
+        let lambda: Vec<f64> = sol.z[..m]
+            .iter()
+            .zip(&rho)
+            .map(|(z, s)| (z / s).max(0.0))
+            .collect();
         if !du.iter().chain(&lambda).all(|v| v.is_finite()) {
             return Err(SolverStatus::NumericalError);
         }

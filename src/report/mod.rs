@@ -43,6 +43,8 @@ pub mod stability;
 #[doc(hidden)]
 pub mod sweep;
 #[doc(hidden)]
+pub mod touch;
+#[doc(hidden)]
 pub mod tracking;
 
 use std::io::IsTerminal;
@@ -68,6 +70,8 @@ pub enum Part {
     Spatial,
     /// The closed loop's tracking and mass-estimation figures only.
     Tracking,
+    /// Contact localization and avoidance by touch ([`touch`](mod@touch)).
+    Touch,
 }
 
 /// Options of a report run.
@@ -233,6 +237,9 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
     } else {
         None
     };
+    if matches!(opts.only, None | Some(Part::Touch)) {
+        files.extend(touch::run(opts)?.1);
+    }
     let tracking = if matches!(opts.only, None | Some(Part::Tracking)) {
         let r = tracking::run(opts)?;
         files.extend(r.write(&opts.out_dir)?);

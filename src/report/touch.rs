@@ -1,0 +1,273 @@
+//! The touch report part: contact localization error against the contact's
+//! arc position for both methods (the paper's peak of the estimated load
+//! minus the virtual payload, and the point-force search), six markers,
+//! σ = 0.05 mm, the plant not the model; and one obstacle-avoidance run by
+//! touch (the paper's Fig. 9): the true shapes over time, the obstacle, the
+//! contact points learnt by touch, the goal and the end effector's path.
+//! `touch.png`, `touch.svg`, `touch.json`.
+
+use std::path::PathBuf;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use serde::Serialize;
+
+use super::plot::{both, ms};
+use super::{write_json, ReportOptions};
+use crate::contact::{Obstacle, Obstacles};
+use crate::error::Result;
+use crate::plant::{PlantSettings, SimulatedPlant};
+use crate::touch::{
+    calibrate_on_free_plant, five_section_scene, marker_arcs, run_avoidance, run_localization,
+    AvoidRun, AvoidSettings, AvoidStatus, LocalizationCase, LocalizationResult, ROD_RADIUS_M,
+};
+
+/// The avoidance run's disk (centre, radius; m) and goal (m).
+pub const AVOID_DISK: ([f64; 2], f64) = ([0.08, -0.465], 0.01);
+/// The avoidance run's goal (m).
+pub const AVOID_GOAL: [f64; 2] = [0.15, -0.40];
+
+/// What the part measured.
+#[derive(Debug, Clone, Serialize)]
+pub struct TouchReport {
+    /// Every localization case (a case the plant cannot make is left out).
+    pub localization: Vec<LocalizationResult>,
+    /// Mean and largest location error of the peak method (m).
+    pub peak_mean_max_m: (f64, f64),
+    /// Mean and largest location error of the point search (m).
+    pub point_mean_max_m: (f64, f64),
+    /// The obstacle of the avoidance run: centre and radius (m).
+    pub disk_m: ([f64; 2], f64),
+    /// The avoidance run (touch feedback on).
+    pub avoidance: AvoidRun,
+}
+
+/// Runs the sweep (contact at 0.15 … 0.45 m, intrusion 5 and 10 mm; quick:
+/// 0.2, 0.3, 0.4 m at 10 mm) and the avoidance run (70 s), writes the
+/// chart and the JSON into `opts.out_dir`.
+///
+/// # Errors
+/// The avoidance run's errors; [`crate::Error::Io`] for a file that cannot
+/// be written. A localization case that fails is left out.
+pub fn run(opts: &ReportOptions) -> Result<(TouchReport, Vec<PathBuf>)> {
+    let (positions, depths): (Vec<f64>, Vec<f64>) = if opts.quick {
+        (vec![0.2, 0.3, 0.4], vec![0.01])
+    } else {
+        (
+            (0..7).map(|k| 0.15 + 0.05 * k as f64).collect(),
+            vec![0.005, 0.01],
+        )
+    };
+    let mut localization = Vec::new();
+    for &s in &positions {
+        for &d in &depths {
+            if let Ok(r) = run_localization(
+                &LocalizationCase::new(s, d, 6, 1),
+                4,
+                &PlantSettings::default(),
+            ) {
+                localization.push(r);
+            }
+        }
+    }
+    let stats = |f: &dyn Fn(&LocalizationResult) -> f64| {
+        let n = localization.len().max(1) as f64;
+        (
+            localization.iter().map(f).sum::<f64>() / n,
+            localization.iter().map(f).fold(0.0, f64::max),
+        )
+    };
+    let peak_mean_max_m = stats(&|r| r.location_errors_m().0);
+    let point_mean_max_m = stats(&|r| r.location_errors_m().1);
+    let scene = five_section_scene(4);
+    let arcs = marker_arcs(6);
+    let ps = PlantSettings::default();
+    let cal = calibrate_on_free_plant(&scene, &arcs, &ps)?;
+    let (c, radius) = AVOID_DISK;
+    let obstacles = Obstacles::new(
+        vec![Obstacle::Circle {
+            center_m: c,
+            radius_m: radius,
+        }],
+        ROD_RADIUS_M,
+    )?;
+    let mut plant = SimulatedPlant::new(&scene, &arcs, ps)?.with_obstacles(obstacles)?;
+    let settings = AvoidSettings {
+        duration_s: 70.0,
+        shape_interval_s: 5.0,
+        ..AvoidSettings::default()
+    };
+    let avoidance = run_avoidance(&scene, &cal, &arcs, &mut plant, AVOID_GOAL, &settings)?;
+    let report = TouchReport {
+        localization,
+        peak_mean_max_m,
+        point_mean_max_m,
+        disk_m: AVOID_DISK,
+        avoidance,
+    };
+    let json = opts.out_dir.join("touch.json");
+    write_json(&json, &report)?;
+    let mut files = vec![json];
+    files.extend(both(
+        &opts.out_dir,
+        "touch",
+        (1400, 700),
+        |root| draw(root, &report),
+        |root| draw(root, &report),
+    )?);
+    Ok((report, files))
+}
+
+const PEAK: RGBColor = RGBColor(214, 39, 40);
+const POINT: RGBColor = RGBColor(31, 119, 180);
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    r: &TouchReport,
+) -> std::result::Result<(), String> {
+    root.fill(&WHITE).map_err(ms)?;
+    let panels = root.split_evenly((1, 2));
+    // (a) location error against the contact's arc position
+    let ymax = r
+        .localization
+        .iter()
+        .map(|x| x.location_errors_m().0.max(x.location_errors_m().1) * 1e3)
+        .fold(10.0, f64::max)
+        * 1.1;
+    let mut c = ChartBuilder::on(&panels[0])
+        .caption(
+            "contact localization, 6 markers, σ 0.05 mm",
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(0.1..0.5, 0.0..ymax)
+        .map_err(ms)?;
+    c.configure_mesh()
+        .x_desc("contact arc position s (m)")
+        .y_desc("location error (mm)")
+        .draw()
+        .map_err(ms)?;
+    c.draw_series(LineSeries::new(
+        [(0.1, 5.0), (0.5, 5.0)],
+        BLACK.mix(0.4).stroke_width(1),
+    ))
+    .map_err(ms)?
+    .label("5 mm target")
+    .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK.mix(0.4)));
+    for (name, colour, idx, (mean, max)) in [
+        ("peak of the load (paper)", PEAK, 0, r.peak_mean_max_m),
+        ("point-force search", POINT, 1, r.point_mean_max_m),
+    ] {
+        let pts: Vec<(f64, f64)> = r
+            .localization
+            .iter()
+            .map(|x| {
+                let e = x.location_errors_m();
+                (x.true_s_m, if idx == 0 { e.0 } else { e.1 } * 1e3)
+            })
+            .collect();
+        c.draw_series(pts.iter().map(|&p| Circle::new(p, 5, colour.filled())))
+            .map_err(ms)?
+            .label(format!(
+                "{name}: mean {:.1} mm, max {:.1} mm",
+                mean * 1e3,
+                max * 1e3
+            ))
+            .legend(move |(x, y)| Circle::new((x, y), 5, colour.filled()));
+    }
+    c.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(ms)?;
+    // (b) the avoidance run
+    let a = &r.avoidance;
+    let mut c = ChartBuilder::on(&panels[1])
+        .caption(
+            match a.status {
+                AvoidStatus::Reached { time_s } => {
+                    format!("avoidance by touch: goal reached at {time_s:.1} s")
+                }
+                _ => "avoidance by touch: goal not reached".to_string(),
+            },
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(55)
+        .build_cartesian_2d(-0.16..0.40, -0.52..0.02)
+        .map_err(ms)?;
+    c.configure_mesh()
+        .x_desc("x (m)")
+        .y_desc("y (m)")
+        .draw()
+        .map_err(ms)?;
+    let n = a.shapes.len().max(2) as f64;
+    for (k, (t, nodes)) in a.shapes.iter().enumerate() {
+        let shade = 0.2 + 0.8 * k as f64 / (n - 1.0);
+        let colour = RGBColor(
+            (200.0 * (1.0 - shade)) as u8,
+            (200.0 * (1.0 - shade)) as u8,
+            (200.0 * (1.0 - shade) + 55.0 * shade) as u8,
+        );
+        let s = c
+            .draw_series(LineSeries::new(
+                nodes.iter().map(|p| (p[0], p[1])),
+                colour.stroke_width(2),
+            ))
+            .map_err(ms)?;
+        if k + 1 == a.shapes.len() {
+            s.label(format!("true shape every 5 s (last {t:.0} s)"))
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], colour));
+        }
+    }
+    // the obstacle and the robot's reach of it (its radius)
+    let (centre, radius) = r.disk_m;
+    let ring = |rad: f64| -> Vec<(f64, f64)> {
+        (0..=64)
+            .map(|i| {
+                let th = i as f64 / 64.0 * std::f64::consts::TAU;
+                (centre[0] + rad * th.cos(), centre[1] + rad * th.sin())
+            })
+            .collect()
+    };
+    c.draw_series(std::iter::once(Polygon::new(ring(radius), BLACK.mix(0.5))))
+        .map_err(ms)?
+        .label("obstacle (unknown to the controller)")
+        .legend(|(x, y)| Circle::new((x, y), 5, BLACK.mix(0.5).filled()));
+    let path: Vec<(f64, f64)> = a
+        .samples
+        .iter()
+        .map(|s| (s.tip_true_m[0], s.tip_true_m[1]))
+        .collect();
+    c.draw_series(LineSeries::new(path, RGBColor(44, 160, 44).stroke_width(1)))
+        .map_err(ms)?
+        .label("end effector")
+        .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], RGBColor(44, 160, 44)));
+    c.draw_series(
+        a.touched
+            .iter()
+            .map(|p| Cross::new((p.point_m[0], p.point_m[1]), 7, PEAK.stroke_width(3))),
+    )
+    .map_err(ms)?
+    .label("contact localized by touch")
+    .legend(|(x, y)| Cross::new((x, y), 6, PEAK.stroke_width(3)));
+    c.draw_series(std::iter::once(TriangleMarker::new(
+        (a.goal_m[0], a.goal_m[1]),
+        8,
+        POINT.filled(),
+    )))
+    .map_err(ms)?
+    .label("goal")
+    .legend(|(x, y)| TriangleMarker::new((x, y), 6, POINT.filled()));
+    c.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(ms)?;
+    Ok(())
+}
