@@ -45,3 +45,51 @@ fn quick_tracking_report_writes_both_figures() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("tracking.json")).unwrap()).unwrap();
     assert_eq!(json["rows"].as_array().unwrap().len(), 4);
 }
+
+#[test]
+fn quick_loop_report_writes_the_speed_chart_and_the_failure_map() {
+    use softrod::control::{LoopCause, LoopVerdict};
+    use softrod::report::{loop_failure, loop_pareto};
+    let dir = std::env::temp_dir().join(format!("softrod-loop-report-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let opts = ReportOptions {
+        quick: true,
+        only: Some(Part::Loop),
+        quiet: true,
+        ..ReportOptions::new(&dir)
+    };
+    let p = loop_pareto::run(&opts).unwrap();
+    let f = loop_failure::run(&opts).unwrap();
+    let mut files = p.write(&dir).unwrap();
+    files.extend(f.write(&dir).unwrap());
+    for name in [
+        "loop_pareto.png",
+        "loop_pareto.svg",
+        "loop_pareto.json",
+        "loop_failure.png",
+        "loop_failure.svg",
+        "loop_failure.json",
+    ] {
+        assert!(files.contains(&dir.join(name)), "{name}");
+        let len = std::fs::metadata(dir.join(name)).unwrap().len();
+        assert!(len > 500, "{name}: {len} bytes");
+    }
+    // speed against accuracy: both sizes ran, the finer model is slower
+    assert_eq!(p.rows.len(), 2);
+    for r in &p.rows {
+        assert!(r.failure.is_none(), "{r:?}");
+        assert!(r.mean_error_m.unwrap().is_finite());
+    }
+    assert!(p.rows[1].median_step_time_s.unwrap() > p.rows[0].median_step_time_s.unwrap());
+    // the failure map: every case an outcome; no payload converges, five
+    // robot weights do not
+    assert_eq!(f.rows.len(), 8);
+    for r in &f.rows {
+        let o = r.outcome.as_ref().unwrap_or_else(|| panic!("{r:?}"));
+        let light = r.case.payload_weights == 0.0;
+        assert_eq!(o.verdict == LoopVerdict::Converged, light, "{o:?}");
+        if !light {
+            assert_eq!(o.cause, LoopCause::Watchdog, "{o:?}");
+        }
+    }
+}

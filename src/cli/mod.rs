@@ -189,6 +189,7 @@ enum PartArg {
     Spatial,
     Tracking,
     Touch,
+    Loop,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -696,6 +697,7 @@ fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Resu
         PartArg::Spatial => Part::Spatial,
         PartArg::Tracking => Part::Tracking,
         PartArg::Touch => Part::Touch,
+        PartArg::Loop => Part::Loop,
     });
     let opts = ReportOptions {
         quick,

@@ -7,6 +7,12 @@
 //! 3. the updater (31) moves `F̂` towards `F̄` (feedforward only: `F̂ = 0`);
 //! 4. `f_IK(x_d(t_{k+1}), F̂)` gives the pressures for the next interval;
 //! 5. the plant advances to `t_{k+1}` under them.
+//!
+//! Every instant is a row of the time series with its [`StepStatus`]: an
+//! inverse kinematics that finds no equilibrium holds the last command and
+//! the loop goes on; a plant whose own equilibrium fails ends the run with a
+//! last row saying so (its state is then unknown). Neither is an error of
+//! [`ClosedLoop::run`].
 
 use std::time::Instant;
 
@@ -63,6 +69,13 @@ pub struct LoopSettings {
     /// The estimator (its `alpha`, if unset, is chosen on the first frame
     /// and kept).
     pub estimator: EstimatorSettings,
+    /// Watchdog: [`ClosedLoop::run`] stops with a row of status
+    /// [`StepStatus::Aborted`] when the measured end effector is farther
+    /// than this from its target (m, > 0; default `None`, never). A robot
+    /// that far off is not being tracked, and every estimate from a frame
+    /// that far from the model's prediction costs many fallback solves.
+    #[serde(default)]
+    pub abort_error_m: Option<f64>,
 }
 
 impl Default for LoopSettings {
@@ -76,6 +89,7 @@ impl Default for LoopSettings {
                 noise_sigma_m: 5e-5,
                 ..EstimatorSettings::default()
             },
+            abort_error_m: None,
         }
     }
 }
@@ -84,8 +98,9 @@ impl LoopSettings {
     /// Checks every field.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] naming the field
-    /// (`loop.control_rate_hz`, `updater.k_p_per_s`, …).
+    /// [`Error::InvalidParameter`] naming the field as written in a
+    /// trajectory file (`loop.control_rate_hz`, `loop.gains.k_p_per_s`,
+    /// `loop.ik.max_iterations`, `loop.estimator.…`).
     pub fn validate(&self) -> Result<()> {
         let r = self.control_rate_hz;
         if !(r.is_finite() && r > 0.0 && r <= MAX_RATE_HZ) {
@@ -95,9 +110,27 @@ impl LoopSettings {
                 format!("must be > 0 and at most {MAX_RATE_HZ} Hz"),
             ));
         }
-        self.gains.validate()?;
-        self.ik.validate()?;
-        self.estimator.validate()
+        for (name, v) in [
+            ("loop.gains.k_p_per_s", self.gains.k_p_per_s),
+            ("loop.gains.k_i_per_s2", self.gains.k_i_per_s2),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::invalid(name, v, "must be finite and > 0"));
+            }
+        }
+        if let Some(a) = self.abort_error_m {
+            if !(a.is_finite() && a > 0.0) {
+                return Err(Error::invalid(
+                    "loop.abort_error_m",
+                    a,
+                    "must be finite and > 0",
+                ));
+            }
+        }
+        self.ik.validate().map_err(|e| e.with_prefix("loop."))?;
+        self.estimator
+            .validate()
+            .map_err(|e| e.with_prefix("loop."))
     }
 }
 
@@ -115,6 +148,62 @@ pub enum EstimateFlag {
         /// The estimator's status, `None` if it returned an error.
         status: Option<EstimateStatus>,
     },
+}
+
+/// How one control instant ended.
+///
+/// # Example
+/// ```
+/// use softrod::control::StepStatus;
+/// assert!(StepStatus::Ok.is_ok());
+/// let s = StepStatus::PlantFailed { message: "no equilibrium".into() };
+/// assert_eq!(serde_json::to_string(&s)?, r#"{"plant_failed":{"message":"no equilibrium"}}"#);
+/// # Ok::<(), serde_json::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StepStatus {
+    /// Every part of the step ran.
+    Ok,
+    /// The inverse kinematics found no equilibrium: the last command is held
+    /// and the loop goes on.
+    IkFailed {
+        /// The solver's error.
+        message: String,
+    },
+    /// The plant's own equilibrium failed over the interval ending here: the
+    /// run stops with this row (the tip shown is the plant's last good one).
+    PlantFailed {
+        /// The plant's error.
+        message: String,
+    },
+    /// The watchdog ([`LoopSettings::abort_error_m`]) stopped the run: the
+    /// measured end effector was this far from its target (m).
+    Aborted {
+        /// Distance of the measured end effector from the target (m).
+        error_m: f64,
+    },
+}
+
+impl StepStatus {
+    /// Whether the step ran without a failure.
+    pub fn is_ok(&self) -> bool {
+        matches!(self, StepStatus::Ok)
+    }
+
+    /// Whether the row's tip is the plant's at that time (not after a
+    /// plant failure).
+    pub fn tip_known(&self) -> bool {
+        !matches!(self, StepStatus::PlantFailed { .. })
+    }
+
+    /// Whether the row ended the run (plant failure or watchdog).
+    pub fn ends_run(&self) -> bool {
+        matches!(
+            self,
+            StepStatus::PlantFailed { .. } | StepStatus::Aborted { .. }
+        )
+    }
 }
 
 /// One instant of a run.
@@ -144,6 +233,8 @@ pub struct LoopSample {
     pub estimate: EstimateFlag,
     /// Wall time of estimation + updater + inverse kinematics (s).
     pub step_time_s: f64,
+    /// How the step ended.
+    pub status: StepStatus,
 }
 
 /// The samples of a run.
@@ -154,12 +245,22 @@ pub struct TimeSeries {
 }
 
 impl TimeSeries {
+    /// The time the plant failed and the run stopped (s), if it did.
+    pub fn plant_failed_at_s(&self) -> Option<f64> {
+        self.samples
+            .last()
+            .filter(|s| matches!(s.status, StepStatus::PlantFailed { .. }))
+            .map(|s| s.time_s)
+    }
+
     /// Tracking errors `|tip − x_d|` (m) from `from_s` on, of the true tip
-    /// where known, else of the measured one.
+    /// where known, else of the measured one; a row whose plant failed is
+    /// left out (its tip is not known).
     pub fn errors_after(&self, from_s: f64) -> Vec<f64> {
         self.samples
             .iter()
             .filter(|s| s.time_s >= from_s)
+            .filter(|s| s.status.tip_known())
             .map(|s| {
                 let tip = s.true_tip_m.as_ref().unwrap_or(&s.measured_tip_m);
                 tip.iter()
@@ -340,9 +441,11 @@ impl<E: Element + 'static> ClosedLoop<E> {
     /// next estimate assumes). The caller sends them to the plant.
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] for targets of the wrong dimension; the
-    /// inverse kinematics' errors (no equilibrium found). An estimator
-    /// failure is not an error: the sample's `estimate` says so.
+    /// [`Error::DimensionMismatch`] for targets of the wrong dimension and
+    /// [`Error::InvalidParameter`] for non-finite ones. An estimator failure
+    /// is not an error (the sample's `estimate` says so), nor is an inverse
+    /// kinematics that finds no equilibrium (the last command is held, the
+    /// sample's `status` is [`StepStatus::IkFailed`]).
     pub fn control_step(
         &mut self,
         frame: &crate::plant::MarkerFrame,
@@ -350,6 +453,9 @@ impl<E: Element + 'static> ClosedLoop<E> {
         x_next: &[f64],
     ) -> Result<LoopSample> {
         check_len("x_d", E::DIM, x_now.len())?;
+        check_len("x_d", E::DIM, x_next.len())?;
+        crate::error::check_all_finite("x_d", x_now)?;
+        crate::error::check_all_finite("x_d", x_next)?;
         let start = Instant::now();
         let zeros = vec![0.0; self.model.n_q()];
         let (f_bar, flag, f_hat) = match self.settings.controller {
@@ -365,9 +471,18 @@ impl<E: Element + 'static> ClosedLoop<E> {
                 (f_bar, flag, f_hat)
             }
         };
-        let sol = self.ik.solve(x_next, &f_hat)?;
+        let (pressures_pa, ik, status) = match self.ik.solve(x_next, &f_hat) {
+            Ok(sol) => (sol.pressures_pa, sol.status, StepStatus::Ok),
+            Err(e) => (
+                self.commanded_pa.clone(),
+                IkStatus::NotSolved,
+                StepStatus::IkFailed {
+                    message: e.to_string(),
+                },
+            ),
+        };
         let step_time_s = start.elapsed().as_secs_f64();
-        self.commanded_pa.clone_from(&sol.pressures_pa);
+        self.commanded_pa.clone_from(&pressures_pa);
         Ok(LoopSample {
             time_s: frame.time_s,
             desired_m: x_now.to_vec(),
@@ -376,10 +491,11 @@ impl<E: Element + 'static> ClosedLoop<E> {
             f_bar_resultant_n: self.resultant(&f_bar),
             f_bar,
             f_hat_resultant_n: self.resultant(&f_hat),
-            pressures_pa: sol.pressures_pa,
-            ik: sol.status,
+            pressures_pa,
+            ik,
             estimate: flag,
             step_time_s,
+            status,
         })
     }
 
@@ -393,10 +509,18 @@ impl<E: Element + 'static> ClosedLoop<E> {
     /// every frame and may return the true tip for scoring (it must not
     /// feed the controller).
     ///
+    /// A plant failure over an interval ends the run with a last row of
+    /// status [`StepStatus::PlantFailed`]; an inverse kinematics that finds
+    /// no equilibrium is a row of status [`StepStatus::IkFailed`] (the last
+    /// command held) and the run goes on. The run takes a fixed number of
+    /// steps, each of bounded iterations: it cannot hang.
+    ///
     /// # Errors
     /// [`Error::InvalidParameter`] for an invalid trajectory (naming its
-    /// field) or one of another dimension than the robot; the plant's
-    /// errors; the inverse kinematics' errors (no equilibrium found).
+    /// field), one of another dimension than the robot, or one shorter than
+    /// one control interval (`trajectory.times_s`); the plant's refusal of
+    /// the first command (pressures outside its bounds); the inverse
+    /// kinematics' errors at the start point (no equilibrium to start from).
     pub fn run<P: Plant>(
         &mut self,
         plant: &mut P,
@@ -413,20 +537,88 @@ impl<E: Element + 'static> ClosedLoop<E> {
         let dt = self.dt_s();
         let t0 = trajectory.times_s[0];
         let n = ((trajectory.end_s() - t0) / dt).floor().min(1e7) as usize;
+        if n == 0 {
+            return Err(Error::invalid(
+                "trajectory.times_s",
+                format!("[{t0}, {}]", trajectory.end_s()),
+                format!(
+                    "the trajectory lasts {} s, less than one control interval ({dt} s at {} Hz)",
+                    trajectory.end_s() - t0,
+                    self.settings.control_rate_hz
+                ),
+            ));
+        }
         let zeros = vec![0.0; self.model.n_q()];
         // the first command: the start point, nothing estimated yet
         let first = self.ik.solve(&trajectory.at(t0), &zeros)?;
         self.commanded_pa.clone_from(&first.pressures_pa);
         plant.command(&self.commanded_pa)?;
         let mut series = TimeSeries::default();
+        let mut last_tip_m: Vec<f64> = Vec::new();
         for k in 1..=n {
-            let frame = plant.advance(dt)?;
             let t = t0 + k as f64 * dt;
+            let frame = match plant.advance(dt) {
+                Ok(f) => f,
+                Err(e) => {
+                    let zeros_d = vec![0.0; E::DIM];
+                    let last = series.samples.last();
+                    series.samples.push(LoopSample {
+                        time_s: t,
+                        desired_m: trajectory.at(t),
+                        measured_tip_m: last_tip_m.clone(),
+                        true_tip_m: inspect(plant),
+                        f_bar: zeros.clone(),
+                        f_bar_resultant_n: last
+                            .map_or(zeros_d.clone(), |s| s.f_bar_resultant_n.clone()),
+                        f_hat_resultant_n: last.map_or(zeros_d, |s| s.f_hat_resultant_n.clone()),
+                        pressures_pa: self.commanded_pa.clone(),
+                        ik: IkStatus::NotSolved,
+                        estimate: EstimateFlag::NotRun,
+                        step_time_s: 0.0,
+                        status: StepStatus::PlantFailed {
+                            message: e.to_string(),
+                        },
+                    });
+                    break;
+                }
+            };
             let true_tip_m = inspect(plant);
+            if let (Some(limit), Some(tip)) =
+                (self.settings.abort_error_m, frame.positions_m.last())
+            {
+                let x = trajectory.at(t);
+                let e = tip
+                    .iter()
+                    .zip(&x)
+                    .map(|(a, b)| (a - b).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                if !(e <= limit) {
+                    let zeros_d = vec![0.0; E::DIM];
+                    let last = series.samples.last();
+                    series.samples.push(LoopSample {
+                        time_s: t,
+                        desired_m: x,
+                        measured_tip_m: tip.clone(),
+                        true_tip_m,
+                        f_bar: zeros.clone(),
+                        f_bar_resultant_n: last
+                            .map_or(zeros_d.clone(), |s| s.f_bar_resultant_n.clone()),
+                        f_hat_resultant_n: last.map_or(zeros_d, |s| s.f_hat_resultant_n.clone()),
+                        pressures_pa: self.commanded_pa.clone(),
+                        ik: IkStatus::NotSolved,
+                        estimate: EstimateFlag::NotRun,
+                        step_time_s: 0.0,
+                        status: StepStatus::Aborted { error_m: e },
+                    });
+                    break;
+                }
+            }
             let mut sample =
                 self.control_step(&frame, &trajectory.at(t), &trajectory.at(t + dt))?;
             sample.time_s = t;
             sample.true_tip_m = true_tip_m;
+            last_tip_m.clone_from(&sample.measured_tip_m);
             plant.command(&self.commanded_pa)?;
             series.samples.push(sample);
         }

@@ -15,10 +15,14 @@
 //! - [`VirtualPayload`]: the load estimated on a payload-free run, as a
 //!   function of the configuration, to subtract.
 //! - [`ClosedLoop`]: one controller stepping against a [`crate::plant::Plant`].
+//! - [`run_case`]: one case of the sweep of where the loop fails
+//!   (payload × stiffness error × noise × rate), converged or diverged and
+//!   why.
 
 mod adapter;
 mod boxqp;
 mod closed_loop;
+mod failure;
 mod ik;
 mod mass;
 mod track;
@@ -28,9 +32,15 @@ mod virtual_payload;
 mod weighing;
 
 pub use closed_loop::{
-    ClosedLoop, ControllerKind, EstimateFlag, LoopSample, LoopSettings, TimeSeries,
+    ClosedLoop, ControllerKind, EstimateFlag, LoopSample, LoopSettings, StepStatus, TimeSeries,
 };
-pub use ik::{IkSettings, IkSolution, IkStatus, InverseKinematics, PressureBound};
+pub use failure::{
+    case_file, robot_mass_kg, run_case, FailureSettings, LoopCase, LoopCause, LoopOutcome,
+    LoopVerdict,
+};
+pub use ik::{
+    IkSettings, IkSolution, IkStatus, InverseKinematics, PressureBound, RESTART_RADIUS_M,
+};
 pub use mass::{MassEstimate, MassEstimator, MassForce, MassReference, MassSettings};
 pub use track::{
     build_trajectory, payloads_from_json, run_track, CircleSpec, FigureEightSpec, LineSpec,

@@ -34,7 +34,9 @@ use crate::error::{check_all_finite, check_len, Error, Result};
 use crate::plant::{PayloadSchedule, PlantSettings, SimulatedPlant};
 use crate::scene::Scene;
 
-use super::{ClosedLoop, ControllerKind, EstimateFlag, IkStatus, LoopSettings, Trajectory};
+use super::{
+    ClosedLoop, ControllerKind, EstimateFlag, IkStatus, LoopSettings, StepStatus, Trajectory,
+};
 use super::{IkSettings, InverseKinematics};
 
 /// A desired path as written in a trajectory file (`"kind"` names the
@@ -310,6 +312,9 @@ pub struct TrackSample {
     /// The estimator this frame (`kept_last`: it failed, the last good
     /// estimate was used).
     pub estimate: EstimateFlag,
+    /// How the step ended (`ok`, `ik_failed`: last command held,
+    /// `plant_failed`: the plant's equilibrium failed and the run stopped).
+    pub status: StepStatus,
 }
 
 /// The summary of a tracking run.
@@ -335,6 +340,15 @@ pub struct TrackSummary {
     pub pressure_saturated: usize,
     /// Frames whose estimator failed (last good estimate kept).
     pub estimator_kept_last: usize,
+    /// Steps whose inverse kinematics found no equilibrium (last command
+    /// held).
+    pub ik_failed: usize,
+    /// The time the plant's equilibrium failed and the run stopped (s), or
+    /// `None`.
+    pub plant_failed_at_s: Option<f64>,
+    /// The time the watchdog (`loop.abort_error_m`) stopped the run (s), or
+    /// `None`.
+    pub aborted_at_s: Option<f64>,
     /// The plant (its differences from the model, payloads included).
     pub plant: PlantSettings,
 }
@@ -536,19 +550,7 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
 
 /// Checks the file's settings with the paths of the file.
 fn validate_file(file: &TrackFile, payloads: &PayloadSchedule, length_m: f64) -> Result<()> {
-    let s = &file.loop_settings;
-    let r = s.control_rate_hz;
-    if !(r.is_finite() && r > 0.0 && r <= 10_000.0) {
-        return Err(Error::invalid(
-            "loop.control_rate_hz",
-            r,
-            "must be > 0 and at most 10000 Hz",
-        ));
-    }
-    check_positive("loop.gains.k_p_per_s", s.gains.k_p_per_s)?;
-    check_positive("loop.gains.k_i_per_s2", s.gains.k_i_per_s2)?;
-    s.ik.validate().map_err(|e| e.with_prefix("loop."))?;
-    s.estimator.validate().map_err(|e| e.with_prefix("loop."))?;
+    file.loop_settings.validate()?;
     file.plant.validate()?;
     if let Some(t) = file.score_from_s {
         if !(t.is_finite() && t >= 0.0) {
@@ -566,8 +568,11 @@ fn validate_file(file: &TrackFile, payloads: &PayloadSchedule, length_m: f64) ->
 /// field as written (`loop.control_rate_hz`, `loop.gains.k_p_per_s`,
 /// `plant.ei_factor`, `payloads[0].mass_kg`, …); [`Error::InvalidParameter`]
 /// (field `markers`) for a scene without markers; the plant's and the
-/// inverse kinematics' errors (no equilibrium found). An estimator failure
-/// is not an error: the sample says so.
+/// inverse kinematics' errors at the start (no equilibrium to start from).
+/// After the start nothing is an error: an estimator failure, an inverse
+/// kinematics without equilibrium and a plant whose equilibrium fails are
+/// rows of the time series that say so (the last one ends the run, the
+/// summary's `plant_failed_at_s`).
 pub fn run_track(
     scene: &Scene,
     file: &TrackFile,
@@ -650,6 +655,7 @@ pub fn run_track(
                 step_time_s: s.step_time_s,
                 ik: s.ik,
                 estimate: s.estimate,
+                status: s.status.clone(),
             }
         })
         .collect();
@@ -675,6 +681,16 @@ pub fn run_track(
             .iter()
             .filter(|s| matches!(s.estimate, EstimateFlag::KeptLast { .. }))
             .count(),
+        ik_failed: samples
+            .iter()
+            .filter(|s| matches!(s.status, StepStatus::IkFailed { .. }))
+            .count(),
+        plant_failed_at_s: series.plant_failed_at_s(),
+        aborted_at_s: series
+            .samples
+            .last()
+            .filter(|s| matches!(s.status, StepStatus::Aborted { .. }))
+            .map(|s| s.time_s),
         plant: plant_settings,
     };
     Ok(TrackRun { summary, samples })

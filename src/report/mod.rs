@@ -7,6 +7,9 @@
 //! - [`auto_point`]: where `"elements": "auto"` lands on the Pareto chart.
 //! - [`tracking`]: the closed loop against the simulated plant (tracking
 //!   and payload-mass figures, `tracking*.{png,svg,json}`).
+//! - [`loop_pareto`], [`loop_failure`]: the closed loop's speed against
+//!   accuracy over model size and backend, and where it fails
+//!   (`loop_{pareto,failure}.{png,svg,json}`).
 //! - [`spatial`]: the soft parallel robot's payload estimation and two
 //!   projections of its shape (`spatial.{png,svg,json}`).
 //! - [`stability`]: marker noise, load magnitude, marker count, the jump
@@ -30,6 +33,10 @@
 
 #[doc(hidden)]
 pub mod auto_point;
+#[doc(hidden)]
+pub mod loop_failure;
+#[doc(hidden)]
+pub mod loop_pareto;
 #[doc(hidden)]
 pub mod pareto;
 #[doc(hidden)]
@@ -72,6 +79,8 @@ pub enum Part {
     Tracking,
     /// Contact localization and avoidance by touch ([`touch`](mod@touch)).
     Touch,
+    /// The closed loop's speed against accuracy and its failure map only.
+    Loop,
 }
 
 /// Options of a report run.
@@ -247,6 +256,10 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
     } else {
         None
     };
+    if matches!(opts.only, None | Some(Part::Loop)) {
+        files.extend(loop_pareto::run(opts)?.write(&opts.out_dir)?);
+        files.extend(loop_failure::run(opts)?.write(&opts.out_dir)?);
+    }
     Ok(ReportSummary {
         pareto,
         stability,
