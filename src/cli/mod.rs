@@ -188,6 +188,7 @@ enum PartArg {
     Stability,
     Spatial,
     Tracking,
+    Grasp,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -694,6 +695,7 @@ fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Resu
         PartArg::Stability => Part::Stability,
         PartArg::Spatial => Part::Spatial,
         PartArg::Tracking => Part::Tracking,
+        PartArg::Grasp => Part::Grasp,
     });
     let opts = ReportOptions {
         quick,

@@ -4,11 +4,11 @@
 //! weaker actuation than the model (defaults: twice the elements, EI +15 %,
 //! gain −10 %), solved with exact frictionless contact
 //! ([`crate::contact::ContactSolver`]) against the object and the table;
-//! its markers carry Gaussian noise (default 0.05 mm). The object is held
-//! in place by the contact solve (a fixed obstacle): while the fingers
-//! close it rests on the table; whether it can be lifted is decided from
-//! the contact forces by the friction check
-//! ([`crate::grasp::friction::hold_check`]).
+//! its markers carry Gaussian noise (default 0.05 mm). In each contact
+//! solve the object is a fixed obstacle; between solves the trial moves it
+//! ([`GripperPlant::set_workspace`]): while the fingers close it rests on
+//! the table, after the lift it slides down while the friction check
+//! ([`crate::grasp::friction::hold_check`]) says the contacts cannot carry it.
 
 use serde::{Deserialize, Serialize};
 
@@ -194,6 +194,15 @@ impl GripperPlant {
     /// Removes the table (the gripper has lifted the object off it).
     pub fn remove_table(&mut self) {
         self.table = None;
+    }
+
+    /// Moves the workspace: the object's new circle cover and the table (or
+    /// none). The palm frame is the plant's frame, so a palm that moves
+    /// down is a workspace that moves up, and an object that slips is a
+    /// new cover. The next solve starts warm from the last shapes.
+    pub fn set_workspace(&mut self, object: Vec<Obstacle>, table: Option<Obstacle>) {
+        self.object = object;
+        self.table = table;
     }
 
     /// The plant's finger robots (left, right).

@@ -9,6 +9,8 @@
 //!   and payload-mass figures, `tracking*.{png,svg,json}`).
 //! - [`spatial`]: the soft parallel robot's payload estimation and two
 //!   projections of its shape (`spatial.{png,svg,json}`).
+//! - [`grasp`]: Table I in simulation and one grasp sequence per strategy
+//!   (`grasp.{png,svg,json,md}`).
 //! - [`stability`]: marker noise, load magnitude, marker count, the jump
 //!   between successive observations and `α`, per backend: converged or
 //!   not, the failure cause ([`sweep::FailureCause`]), iterations, errors;
@@ -30,6 +32,8 @@
 
 #[doc(hidden)]
 pub mod auto_point;
+#[doc(hidden)]
+pub mod grasp;
 #[doc(hidden)]
 pub mod pareto;
 #[doc(hidden)]
@@ -68,6 +72,8 @@ pub enum Part {
     Spatial,
     /// The closed loop's tracking and mass-estimation figures only.
     Tracking,
+    /// The grasp's success table and sequences only.
+    Grasp,
 }
 
 /// Options of a report run.
@@ -240,6 +246,9 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
     } else {
         None
     };
+    if matches!(opts.only, None | Some(Part::Grasp)) {
+        files.extend(grasp::run(opts)?.1);
+    }
     Ok(ReportSummary {
         pareto,
         stability,
