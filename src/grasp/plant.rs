@@ -239,30 +239,26 @@ impl GripperPlant {
                 pressures_pa: pressures_pa[k].to_vec(),
                 ..Loads::default()
             };
-            // the solve without the object first: if the object's gaps at
-            // that equilibrium are all open it is the contact solution too
-            // (no constraint of the object active), and the contact solver
-            // never sees a polygon the finger does not touch
-            let free_obstacles =
-                Obstacles::new(self.table.iter().cloned().collect(), self.radius_m)?;
+            // the solve without obstacles first: if every gap (object and
+            // table) at that equilibrium is open it is the contact solution
+            // too, and the contact solver never sees an obstacle the finger
+            // does not touch (measured: the table polygon alone made solves
+            // of a finger far from it fail with LineSearchFailed)
+            let free_obstacles = Obstacles::new(Vec::new(), self.radius_m)?;
             let mut sol =
                 self.solver
                     .solve(robot, &loads, &free_obstacles, self.warm[k].as_deref())?;
             let n_obj = self.object.len();
-            let open = sol.is_converged()
-                && (n_obj == 0
-                    || Obstacles::new(self.object.clone(), self.radius_m)?
-                        .gaps(robot, &sol.q)?
-                        .iter()
-                        .all(|g| g.gap_m > 0.0));
-            if open {
-                // the table's contacts were numbered without the object
-                let shift = n_obj;
-                sol.contacts.iter_mut().for_each(|c| c.obstacle += shift);
-            } else {
+            let open =
+                sol.is_converged() && obstacles.gaps(robot, &sol.q)?.iter().all(|g| g.gap_m > 0.0);
+            if !open {
                 sol = self
                     .solver
                     .solve(robot, &loads, &obstacles, self.warm[k].as_deref())?;
+                if !sol.is_converged() && self.warm[k].is_some() {
+                    // once more from the straight finger
+                    sol = self.solver.solve(robot, &loads, &obstacles, None)?;
+                }
             }
             if !sol.is_converged() {
                 self.warm[k] = None;
