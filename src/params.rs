@@ -125,8 +125,9 @@ pub mod gripper {
     /// Bending stiffness of a finger (N·m²). A silicone finger with a
     /// strain-limiting layer is much softer than the PVC robot of Sec. IV:
     /// chosen so that a free segment bends by about 95° at the upper
-    /// pressure (`θ = M L / EI = 0.2 × 0.05 / 0.006 ≈ 1.67 rad`).
-    pub const EI_NM2: f64 = 0.006;
+    /// pressure (`θ = M L / EI = 0.4 × 0.05 / 0.012 ≈ 1.67 rad`), as the
+    /// fingers of Fig. 10(a) curl.
+    pub const EI_NM2: f64 = 0.012;
     /// Axial stiffness (N): the strain-limiting layer prevents elongation;
     /// as the robot's.
     pub const EA_N: f64 = 300.0;
@@ -134,9 +135,13 @@ pub mod gripper {
     /// it chambers (1.1 g/cm³): about 0.18 kg/m.
     pub const MASS_PER_LENGTH_KG_PER_M: f64 = 0.18;
     /// Torque per chamber pressure (N·m/Pa): a chamber face of about
-    /// 15 × 20 mm at about 7 mm from the strain-limiting layer
-    /// (`3e-4 m² × 0.007 m ≈ 2e-6`), 0.2 N·m at the upper bound.
-    pub const ACTUATION_GAIN_NM_PER_PA: f64 = 2.0e-6;
+    /// 25 × 20 mm (the finger's width by a chamber's height) at about 8 mm
+    /// from the strain-limiting layer (`5e-4 m² × 0.008 m = 4e-6`), 0.4 N·m
+    /// at the upper bound. Measured in the simulated Table I: half of this
+    /// (with half the stiffness, the same free shapes) squeezed about 1.7 N
+    /// per finger and held at most 0.20 kg, the red apple (0.2 kg) slipped;
+    /// this value holds about 0.45 kg, the paper's gripper about 0.4 kg.
+    pub const ACTUATION_GAIN_NM_PER_PA: f64 = 4.0e-6;
     /// Upper chamber pressure (Pa), as the robot's.
     pub const PRESSURE_MAX_PA: f64 = 100.0e3;
     /// Elements per segment of the controller's model (the plant uses more).

@@ -190,6 +190,7 @@ enum PartArg {
     Tracking,
     Touch,
     Loop,
+    Grasp,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -698,6 +699,7 @@ fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Resu
         PartArg::Tracking => Part::Tracking,
         PartArg::Touch => Part::Touch,
         PartArg::Loop => Part::Loop,
+        PartArg::Grasp => Part::Grasp,
     });
     let opts = ReportOptions {
         quick,

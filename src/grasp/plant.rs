@@ -4,11 +4,11 @@
 //! weaker actuation than the model (defaults: twice the elements, EI +15 %,
 //! gain −10 %), solved with exact frictionless contact
 //! ([`crate::contact::ContactSolver`]) against the object and the table;
-//! its markers carry Gaussian noise (default 0.05 mm). The object is held
-//! in place by the contact solve (a fixed obstacle): while the fingers
-//! close it rests on the table; whether it can be lifted is decided from
-//! the contact forces by the friction check
-//! ([`crate::grasp::friction::hold_check`]).
+//! its markers carry Gaussian noise (default 0.05 mm). In each contact
+//! solve the object is a fixed obstacle; between solves the trial moves it
+//! ([`GripperPlant::set_workspace`]): while the fingers close it rests on
+//! the table, after the lift it slides down while the friction check
+//! ([`crate::grasp::friction::hold_check`]) says the contacts cannot carry it.
 
 use serde::{Deserialize, Serialize};
 
@@ -196,6 +196,15 @@ impl GripperPlant {
         self.table = None;
     }
 
+    /// Moves the workspace: the object's new circle cover and the table (or
+    /// none). The palm frame is the plant's frame, so a palm that moves
+    /// down is a workspace that moves up, and an object that slips is a
+    /// new cover. The next solve starts warm from the last shapes.
+    pub fn set_workspace(&mut self, object: Vec<Obstacle>, table: Option<Obstacle>) {
+        self.object = object;
+        self.table = table;
+    }
+
     /// The plant's finger robots (left, right).
     pub fn fingers(&self) -> &[Robot<PlanarCable>; 2] {
         &self.fingers
@@ -230,30 +239,26 @@ impl GripperPlant {
                 pressures_pa: pressures_pa[k].to_vec(),
                 ..Loads::default()
             };
-            // the solve without the object first: if the object's gaps at
-            // that equilibrium are all open it is the contact solution too
-            // (no constraint of the object active), and the contact solver
-            // never sees a polygon the finger does not touch
-            let free_obstacles =
-                Obstacles::new(self.table.iter().cloned().collect(), self.radius_m)?;
+            // the solve without obstacles first: if every gap (object and
+            // table) at that equilibrium is open it is the contact solution
+            // too, and the contact solver never sees an obstacle the finger
+            // does not touch (measured: the table polygon alone made solves
+            // of a finger far from it fail with LineSearchFailed)
+            let free_obstacles = Obstacles::new(Vec::new(), self.radius_m)?;
             let mut sol =
                 self.solver
                     .solve(robot, &loads, &free_obstacles, self.warm[k].as_deref())?;
             let n_obj = self.object.len();
-            let open = sol.is_converged()
-                && (n_obj == 0
-                    || Obstacles::new(self.object.clone(), self.radius_m)?
-                        .gaps(robot, &sol.q)?
-                        .iter()
-                        .all(|g| g.gap_m > 0.0));
-            if open {
-                // the table's contacts were numbered without the object
-                let shift = n_obj;
-                sol.contacts.iter_mut().for_each(|c| c.obstacle += shift);
-            } else {
+            let open =
+                sol.is_converged() && obstacles.gaps(robot, &sol.q)?.iter().all(|g| g.gap_m > 0.0);
+            if !open {
                 sol = self
                     .solver
                     .solve(robot, &loads, &obstacles, self.warm[k].as_deref())?;
+                if !sol.is_converged() && self.warm[k].is_some() {
+                    // once more from the straight finger
+                    sol = self.solver.solve(robot, &loads, &obstacles, None)?;
+                }
             }
             if !sol.is_converged() {
                 self.warm[k] = None;

@@ -22,7 +22,17 @@
 //!   fingertip and (51) moves it inward at `u1` while keeping it vertical
 //!   (the paper ramps the proximal segment instead: in this geometry that
 //!   lifts the fingertips by about 12 mm and misses low objects, measured
-//!   by the open-loop trials); after contact (51) pushes the contact point
+//!   by the open-loop trials). A bent finger is shorter than a straight
+//!   one, so the fingertips rise as they close (25 mm at 55 mm of travel):
+//!   while a finger approaches, the arm lowers the palm by the fingertips'
+//!   rise as the controller estimates it (the smaller of the approaching
+//!   fingers', less 1 mm; measured: stopping at the first contact let the
+//!   second fingertip pass over the marking pen), keeping the object's top `palm_clearance_m` below the
+//!   palm (measured: without it the fingertips passed over the marking pen
+//!   and the walnut, "missed"). The contact solver takes no obstacle that
+//!   overlaps the straight fingers, so once the palm is lower than the
+//!   table clearance the table is left out of the plant (the fingertips,
+//!   risen with the palm's descent, stay above it); after contact (51) pushes the contact point
 //!   inward at `u1` and turns the finger to `θ = 0` at `u2`; when a pressure
 //!   comes within `bound_margin` of its upper bound, (52) turns only, and
 //!   once `|θ| < theta_tolerance_rad` the pressures are held.
@@ -32,15 +42,16 @@
 //! supports the object, the plant is solved again at the held pressures, and
 //! the friction check ([`crate::grasp::friction::hold_check`]) is run on
 //! the fingers' contact forces (normal forces as the bound of each contact's
-//! push). The trial succeeds iff the weight is balanced inside the friction
-//! cones (weight factor `>= 1`). In this quasi-static model, with the
-//! pressures held and no creep, a balanced object stays through the hold
-//! time `hold_time_s` with zero slip (the contacts stick); an unbalanced one
-//! is recorded as a failure "slips" with its weight factor, not simulated
-//! further: the contact solver treats the object as a fixed obstacle, so the
-//! sliding object's pose (and the slip distance, to compare with
-//! `max_slip_m`) is not computed. A plant contact solve that does not
-//! converge ends the trial as a failure with the solver's status.
+//! push). While the weight is not balanced inside the friction cones
+//! (weight factor `< 1`) the object slides: quasi-static, it moves down by
+//! `slip_step_m` along gravity (translation only), the fingers are solved
+//! against it again at the held pressures and the check is repeated, until
+//! it holds or a finger loses it (dropped). The trial succeeds iff the
+//! object is held after the lift with a total slip `<= max_slip_m`; with
+//! the pressures held and no creep in this quasi-static model, a held
+//! object stays through the hold time `hold_time_s`. A plant contact solve
+//! that does not converge ends the trial as a failure with the solver's
+//! status.
 
 use serde::{Deserialize, Serialize};
 
@@ -113,7 +124,9 @@ pub struct GraspSettings {
     /// (51) adds to move it turn the finger instead (measured: without the
     /// band `θ` drifted to −0.3 rad within 1 s on a 60 mm disc).
     pub theta_band_rad: f64,
-    /// Longest closing phase (s; default 6).
+    /// Longest closing phase (s; default 12: measured, the red apple's
+    /// grasp reaches the pressure bound and squares the fingertips after
+    /// 11 s; with 6 s it stopped at 80 % of the bound, |θ| = 0.1).
     pub max_time_s: f64,
     /// Table top below the straight fingertips' surface (m; default 0.004).
     pub table_clearance_m: f64,
@@ -121,8 +134,19 @@ pub struct GraspSettings {
     pub lift_height_m: f64,
     /// Hold time (s; default 3): quasi-static, see the module docs.
     pub hold_time_s: f64,
-    /// Largest slip of a success (m; default 0.005): a held object does not slip here.
+    /// Largest slip of a success (m; default 0.005).
     pub max_slip_m: f64,
+    /// An approaching finger has missed when its fingertip's surface is
+    /// this far past the centreline (m; default 0.012: the largest
+    /// placement offset of Table I, 6 mm, plus the 0.15 s of travel the
+    /// averaged contact detection lags at `u1`, 4.5 mm). The plant has no
+    /// finger–finger contact: past the centreline the fingers may cross.
+    pub miss_overshoot_m: f64,
+    /// Step of a slipping object (m; default 0.002).
+    pub slip_step_m: f64,
+    /// During the approach the palm is lowered at most until the object's
+    /// top is this far below it (m; default 0.005).
+    pub palm_clearance_m: f64,
     /// Ramp time of the open-loop strategy (s; default 2).
     pub open_loop_ramp_s: f64,
     /// Open-loop proximal pressure (Pa); `None` (default): where the free
@@ -150,11 +174,14 @@ impl Default for GraspSettings {
             bound_margin: 0.05,
             theta_tolerance_rad: 0.03,
             theta_band_rad: 0.1,
-            max_time_s: 6.0,
+            max_time_s: 12.0,
             table_clearance_m: 0.004,
             lift_height_m: 0.05,
             hold_time_s: 3.0,
             max_slip_m: 0.005,
+            miss_overshoot_m: 0.012,
+            slip_step_m: 0.002,
+            palm_clearance_m: 0.005,
             open_loop_ramp_s: 2.0,
             open_loop_pressure_pa: None,
             estimator_alpha: 1.0,
@@ -183,6 +210,9 @@ impl GraspSettings {
             ("lift_height_m", self.lift_height_m),
             ("hold_time_s", self.hold_time_s),
             ("max_slip_m", self.max_slip_m),
+            ("slip_step_m", self.slip_step_m),
+            ("miss_overshoot_m", self.miss_overshoot_m),
+            ("palm_clearance_m", self.palm_clearance_m),
             ("open_loop_ramp_s", self.open_loop_ramp_s),
             ("estimator_alpha", self.estimator_alpha),
         ] {
@@ -275,20 +305,31 @@ pub struct Frame {
     pub contacts: Vec<ContactRecord>,
     /// The adaptive controller's contact pose `[p_x, p_y, θ]` per finger.
     pub contact_pose: [Option<[f64; 3]>; 2],
+    /// The object's centre of mass in the palm's frame (m).
+    pub object_position_m: [f64; 2],
 }
 
 /// Why a trial failed.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "cause", rename_all = "snake_case")]
 pub enum Failure {
-    /// The object cannot be held after the lift: the contacts balance only
-    /// this fraction of its weight.
+    /// The object cannot be held after the lift: it slid by more than
+    /// `max_slip_m` before the contacts held it.
     Slips {
-        /// The largest weight factor the contacts balance.
+        /// The largest weight factor the contacts balance right after the lift.
         weight_factor: f64,
+        /// How far it slid (m).
+        slip_m: f64,
     },
-    /// A finger reached the centreline or its pressure bound without
-    /// detecting contact.
+    /// The object slid out of the fingers (one finger lost it).
+    Dropped {
+        /// The largest weight factor the contacts balance right after the lift.
+        weight_factor: f64,
+        /// How far it slid until then (m).
+        slip_m: f64,
+    },
+    /// A finger passed the centreline by `miss_overshoot_m` or reached its
+    /// pressure bound without detecting contact.
     Missed {
         /// The finger.
         side: Side,
@@ -316,15 +357,20 @@ pub struct TrialOutcome {
     pub strategy: Strategy,
     /// The placement.
     pub placement: Placement,
-    /// The object's pose on the table.
+    /// The object's pose on the table, in the palm's frame at the start.
     pub pose: Pose,
+    /// The object's pose at the end (m, rad; palm frame): lowered palm and
+    /// slip included.
+    pub final_pose: Pose,
+    /// How far the object slid after the lift (m).
+    pub slip_m: f64,
     /// The object as an obstacle (for drawings).
     pub outline: Obstacle,
     /// Whether the grasp held.
     pub success: bool,
     /// Why not.
     pub failure: Option<Failure>,
-    /// The friction check after the lift (when the trial got there).
+    /// The friction check right after the lift (when the trial got there).
     pub hold: Option<HoldCheck>,
     /// The heaviest object of this geometry the final grasp holds (kg).
     pub holding_mass_kg: f64,
@@ -411,6 +457,7 @@ fn frame(
     fingers: &[FingerState; 2],
     radius: f64,
     poses: [Option<[f64; 3]>; 2],
+    object_position_m: [f64; 2],
 ) -> Frame {
     Frame {
         time_s,
@@ -422,6 +469,14 @@ fn frame(
         ],
         contacts: contact_records(fingers, radius),
         contact_pose: poses,
+        object_position_m,
+    }
+}
+
+/// The table top at height `y` (m).
+fn table_at(y: f64) -> Obstacle {
+    Obstacle::Polygon {
+        vertices_m: vec![[-0.5, y - 0.05], [0.5, y - 0.05], [0.5, y], [-0.5, y]],
     }
 }
 
@@ -494,14 +549,10 @@ pub fn run_trial(
             ));
         }
     }
-    let table = Obstacle::Polygon {
-        vertices_m: vec![
-            [-0.5, table_y - 0.05],
-            [0.5, table_y - 0.05],
-            [0.5, table_y],
-            [-0.5, table_y],
-        ],
-    };
+    let table = table_at(table_y);
+    // the palm may come down until the object's top is this close
+    let max_descent = (-b[3] - settings.palm_clearance_m).max(0.0);
+    let mut descent = 0.0;
     let mut plant = GripperPlant::new(
         gripper,
         &settings.plant,
@@ -516,6 +567,8 @@ pub fn run_trial(
         strategy,
         placement,
         pose,
+        final_pose: pose,
+        slip_m: 0.0,
         outline,
         success: false,
         failure: None,
@@ -563,6 +616,7 @@ pub fn run_trial(
                     &state,
                     r,
                     poses,
+                    out.final_pose.position_m,
                 ));
             }
         }
@@ -612,6 +666,27 @@ pub fn run_trial(
                     break;
                 }
                 pressures = [ctrl[0].pressures.clone(), ctrl[1].pressures.clone()];
+                // while a finger approaches, the arm lowers the palm by its
+                // estimated fingertip rise (module docs)
+                if phases.contains(&Phase::Approach) {
+                    let rise = ctrl
+                        .iter()
+                        .filter(|c| c.phase == Phase::Approach)
+                        .filter_map(|c| c.pose)
+                        .map(|p| p[1] + gripper.finger_length_m())
+                        .fold(f64::INFINITY, f64::min);
+                    let target = (rise - 0.001).clamp(0.0, max_descent);
+                    if target > descent {
+                        descent = target;
+                        out.final_pose.position_m[1] = pose.position_m[1] + descent;
+                        // the contact solver takes no obstacle overlapping the
+                        // straight fingers: a table risen to their tips is
+                        // left out (the tips have risen above it)
+                        let table = (descent < settings.table_clearance_m - 5e-4)
+                            .then(|| table_at(table_y + descent));
+                        plant.set_workspace(object.contact_cover(&out.final_pose)?, table);
+                    }
+                }
                 state = match plant.solve([&pressures[0], &pressures[1]])? {
                     PlantStep::Solved(s) => *s,
                     PlantStep::Failed { side, status } => {
@@ -626,6 +701,7 @@ pub fn run_trial(
                     &state,
                     r,
                     poses,
+                    out.final_pose.position_m,
                 ));
             }
             // how far the estimated contact point is from the true one
@@ -643,43 +719,80 @@ pub fn run_trial(
             out.contact_estimate_error_m = worst;
         }
     }
-    // the lift: the table no longer carries the object
-    plant.remove_table();
-    let lifted = match plant.solve([&pressures[0], &pressures[1]])? {
-        PlantStep::Solved(s) => *s,
-        PlantStep::Failed { side, status } => {
-            fail_plant(&mut out, side, status);
-            return Ok(out);
-        }
-    };
+    // the lift: the table no longer carries the object; while the contacts
+    // cannot carry it, it slides down (module docs)
     let t_end = out.frames.last().map_or(0.0, |f| f.time_s) + dt;
-    let last = frame(
-        t_end,
-        phases,
-        [&pressures[0], &pressures[1]],
-        &lifted,
-        r,
-        poses,
-    );
-    let contacts: Vec<FrictionContact> = last
-        .contacts
-        .iter()
-        .map(|c| FrictionContact {
-            point_m: c.point_m,
-            normal: c.normal,
-            max_normal_force_n: c.force_n,
-        })
-        .collect();
-    out.frames.push(last);
     let g = gripper.gravity_m_per_s2;
-    let hold = hold_check(&contacts, object.mass_kg, pose.position_m, object.mu, g)?;
-    out.success = hold.holds;
-    out.holding_mass_kg = hold.holding_mass_kg(object.mass_kg);
-    if !hold.holds {
-        out.failure = Some(Failure::Slips {
-            weight_factor: hold.weight_factor,
-        });
+    let glen = g[0].hypot(g[1]);
+    let down = [g[0] / glen, g[1] / glen];
+    let max_steps = (gripper.finger_length_m() / settings.slip_step_m).ceil() as usize;
+    let mut first: Option<HoldCheck> = None;
+    for k in 0..=max_steps {
+        let cover = object.contact_cover(&out.final_pose)?;
+        plant.set_workspace(cover, None);
+        let lifted = match plant.solve([&pressures[0], &pressures[1]])? {
+            PlantStep::Solved(s) => *s,
+            PlantStep::Failed { side, status } => {
+                fail_plant(&mut out, side, status);
+                return Ok(out);
+            }
+        };
+        let last = frame(
+            t_end + k as f64 * dt,
+            phases,
+            [&pressures[0], &pressures[1]],
+            &lifted,
+            r,
+            poses,
+            out.final_pose.position_m,
+        );
+        let contacts: Vec<FrictionContact> = last
+            .contacts
+            .iter()
+            .map(|c| FrictionContact {
+                point_m: c.point_m,
+                normal: c.normal,
+                max_normal_force_n: c.force_n,
+            })
+            .collect();
+        out.frames.push(last);
+        let both = lifted.iter().all(|f| !f.object_contacts.is_empty());
+        let hold = hold_check(
+            &contacts,
+            object.mass_kg,
+            out.final_pose.position_m,
+            object.mu,
+            g,
+        )?;
+        let w0 = first
+            .as_ref()
+            .map_or(hold.weight_factor, |h| h.weight_factor);
+        if first.is_none() {
+            out.holding_mass_kg = hold.holding_mass_kg(object.mass_kg);
+            first = Some(hold.clone());
+        }
+        if hold.holds {
+            out.success = out.slip_m <= settings.max_slip_m;
+            if !out.success {
+                out.failure = Some(Failure::Slips {
+                    weight_factor: w0,
+                    slip_m: out.slip_m,
+                });
+            }
+            break;
+        }
+        if !both || k == max_steps {
+            out.failure = Some(Failure::Dropped {
+                weight_factor: w0,
+                slip_m: out.slip_m,
+            });
+            break;
+        }
+        out.slip_m += settings.slip_step_m;
+        let p = &mut out.final_pose.position_m;
+        p[0] += settings.slip_step_m * down[0];
+        p[1] += settings.slip_step_m * down[1];
     }
-    out.hold = Some(hold);
+    out.hold = first;
     Ok(out)
 }

@@ -12,6 +12,8 @@
 //!   (`loop_{pareto,failure}.{png,svg,json}`).
 //! - [`spatial`]: the soft parallel robot's payload estimation and two
 //!   projections of its shape (`spatial.{png,svg,json}`).
+//! - [`grasp`]: Table I in simulation and one grasp sequence per strategy
+//!   (`grasp.{png,svg,json,md}`).
 //! - [`stability`]: marker noise, load magnitude, marker count, the jump
 //!   between successive observations and `α`, per backend: converged or
 //!   not, the failure cause ([`sweep::FailureCause`]), iterations, errors;
@@ -37,6 +39,8 @@ pub mod auto_point;
 pub mod loop_failure;
 #[doc(hidden)]
 pub mod loop_pareto;
+#[doc(hidden)]
+pub mod grasp;
 #[doc(hidden)]
 pub mod pareto;
 #[doc(hidden)]
@@ -81,6 +85,8 @@ pub enum Part {
     Touch,
     /// The closed loop's speed against accuracy and its failure map only.
     Loop,
+    /// The grasp's success table and sequences only.
+    Grasp,
 }
 
 /// Options of a report run.
@@ -259,6 +265,9 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
     if matches!(opts.only, None | Some(Part::Loop)) {
         files.extend(loop_pareto::run(opts)?.write(&opts.out_dir)?);
         files.extend(loop_failure::run(opts)?.write(&opts.out_dir)?);
+    }
+    if matches!(opts.only, None | Some(Part::Grasp)) {
+        files.extend(grasp::run(opts)?.1);
     }
     Ok(ReportSummary {
         pareto,

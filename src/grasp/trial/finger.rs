@@ -144,7 +144,11 @@ impl FingerController {
             .pressures
             .iter()
             .any(|p| *p >= (1.0 - s.bound_margin) * self.max_pa);
-        if self.phase == Phase::Approach && (inward * pose[0] + self.radius >= 0.0 || near_bound) {
+        // missed: the fingertip's surface is past the centreline by more
+        // than `miss_overshoot_m` (a thin object placed off the centreline
+        // is touched only there) or a pressure is near its bound
+        let past = inward * pose[0] + self.radius - s.miss_overshoot_m;
+        if self.phase == Phase::Approach && (past >= 0.0 || near_bound) {
             return Ok(Some(Failure::Missed { side: self.side }));
         }
         if self.phase == Phase::Squeeze && near_bound {
