@@ -188,6 +188,7 @@ enum PartArg {
     Stability,
     Spatial,
     Tracking,
+    Coverage,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -694,6 +695,7 @@ fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Resu
         PartArg::Stability => Part::Stability,
         PartArg::Spatial => Part::Spatial,
         PartArg::Tracking => Part::Tracking,
+        PartArg::Coverage => Part::Coverage,
     });
     let opts = ReportOptions {
         quick,

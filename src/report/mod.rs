@@ -9,6 +9,8 @@
 //!   and payload-mass figures, `tracking*.{png,svg,json}`).
 //! - [`spatial`]: the soft parallel robot's payload estimation and two
 //!   projections of its shape (`spatial.{png,svg,json}`).
+//! - [`coverage`]: how often the true resultant force lies in the
+//!   estimate's reported 95 % region (`coverage.{png,svg,json}`).
 //! - [`stability`]: marker noise, load magnitude, marker count, the jump
 //!   between successive observations and `α`, per backend: converged or
 //!   not, the failure cause ([`sweep::FailureCause`]), iterations, errors;
@@ -30,6 +32,8 @@
 
 #[doc(hidden)]
 pub mod auto_point;
+#[doc(hidden)]
+pub mod coverage;
 #[doc(hidden)]
 pub mod pareto;
 #[doc(hidden)]
@@ -68,6 +72,8 @@ pub enum Part {
     Spatial,
     /// The closed loop's tracking and mass-estimation figures only.
     Tracking,
+    /// The coverage of the reported uncertainty only.
+    Coverage,
 }
 
 /// Options of a report run.
@@ -233,6 +239,9 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
     } else {
         None
     };
+    if matches!(opts.only, None | Some(Part::Coverage)) {
+        files.extend(coverage::run(opts)?.1);
+    }
     let tracking = if matches!(opts.only, None | Some(Part::Tracking)) {
         let r = tracking::run(opts)?;
         files.extend(r.write(&opts.out_dir)?);

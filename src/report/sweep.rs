@@ -172,7 +172,7 @@ impl FailureCause {
             EstimateStatus::SingularTangent => FailureCause::SingularTangent,
             EstimateStatus::NotPositiveDefinite => FailureCause::IllConditioning,
             EstimateStatus::NonFinite { .. } => FailureCause::Divergence,
-            EstimateStatus::Converged(_) => FailureCause::Other,
+            EstimateStatus::Converged(_) | EstimateStatus::NoInformation => FailureCause::Other,
         }
     }
 }
