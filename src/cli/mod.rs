@@ -660,6 +660,11 @@ pub fn run() -> Result<()> {
             // the last iterate is written (its report says how it ended); the
             // exit status says that it is not an estimate
             let status = result.report.status;
+            if status == softrod::outcome::EstimateStatus::NoInformation {
+                anyhow::bail!(
+                    "{status}; the result written is the prior (zero load, the prior's standard deviations), not an estimate"
+                );
+            }
             if !status.is_converged() {
                 anyhow::bail!(
                     "estimation did not converge: {status}; the result written is the last iterate"
