@@ -263,3 +263,59 @@ fn magnitudes_that_can_only_overflow_are_refused_with_their_path() {
         assert_eq!(err.field(), Some(field), "{err}");
     }
 }
+
+/// The parallel-robot scenes of the examples (`{"parallel": ...}`), swept
+/// like the others (every number × the same values): every refusal names
+/// the field the user wrote. Accepted mutations are not solved here (the
+/// parallel robot's solves are `tests/parallel_scene.rs`'s).
+#[test]
+fn every_refused_parallel_mutation_names_its_field() {
+    use softrod::scene::parallel::ParallelScene;
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|f| f.extension().is_some_and(|e| e == "json"))
+        .collect();
+    files.sort();
+    let (mut total, mut refused, mut scenes, mut wrong) = (0, 0, 0, Vec::new());
+    for file in &files {
+        let text = std::fs::read_to_string(file).unwrap();
+        if !ParallelScene::is_parallel(&text) {
+            continue;
+        }
+        scenes += 1;
+        let base: Value = serde_json::from_str(&text).unwrap();
+        let mut paths = Vec::new();
+        numbers(&base, String::new(), &mut paths, Vec::new());
+        for (path, steps) in &paths {
+            for x in VALUES {
+                total += 1;
+                let mut v = base.clone();
+                set(&mut v, steps, x);
+                if let Err(e) = ParallelScene::from_json(&v.to_string()) {
+                    refused += 1;
+                    let m = e.to_string();
+                    if !names(&m, path) {
+                        let name = file.file_name().unwrap().to_string_lossy();
+                        wrong.push(format!("{name}: {path} = {x:e}: {m}"));
+                    }
+                }
+            }
+        }
+    }
+    println!(
+        "{scenes} parallel scenes, {total} mutations: {refused} refused, {} wrong",
+        wrong.len()
+    );
+    assert!(
+        scenes >= 3 && total > 100,
+        "{scenes} scenes, {total} mutations"
+    );
+    assert!(
+        wrong.is_empty(),
+        "{} of {refused} refusals name the wrong field:\n{}",
+        wrong.len(),
+        wrong.join("\n")
+    );
+}

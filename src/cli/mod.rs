@@ -191,6 +191,7 @@ enum PartArg {
     Touch,
     Loop,
     Grasp,
+    Coverage,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -662,6 +663,11 @@ pub fn run() -> Result<()> {
             // the last iterate is written (its report says how it ended); the
             // exit status says that it is not an estimate
             let status = result.report.status;
+            if status == softrod::outcome::EstimateStatus::NoInformation {
+                anyhow::bail!(
+                    "{status}; the result written is the prior (zero load, the prior's standard deviations), not an estimate"
+                );
+            }
             if !status.is_converged() {
                 anyhow::bail!(
                     "estimation did not converge: {status}; the result written is the last iterate"
@@ -700,6 +706,7 @@ fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Resu
         PartArg::Touch => Part::Touch,
         PartArg::Loop => Part::Loop,
         PartArg::Grasp => Part::Grasp,
+        PartArg::Coverage => Part::Coverage,
     });
     let opts = ReportOptions {
         quick,

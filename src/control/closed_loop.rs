@@ -87,6 +87,8 @@ impl Default for LoopSettings {
             ik: IkSettings::default(),
             estimator: EstimatorSettings {
                 noise_sigma_m: 5e-5,
+                // the loop's gains and tests were tuned with this rule
+                alpha_rule: crate::estimate::AlphaRule::Discrepancy,
                 ..EstimatorSettings::default()
             },
             abort_error_m: None,

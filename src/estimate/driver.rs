@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::observe::{Observation, ObservationOperator};
 
 use super::problem::{Derivs, Problem};
-use super::{Backend, Estimate, EstimateReport};
+use super::{AlphaRule, Backend, Estimate, EstimateReport};
 
 /// Where the cold start of the `newton` backend at a given small `α` begins
 /// its continuation (m/N² with whitened weights; the discrepancy search
@@ -121,8 +121,12 @@ impl<E: Element> Stream<E> {
     ) -> Result<Estimate> {
         let problem = &self.problem;
         let (resultant_force_n, resultant_moment_nm, fw) = problem.resultants(&q, &f)?;
-        let (resultant_force_cov, marker_cov) =
-            super::covariance::resultant_and_marker_cov(&cov_factor, &fw, dv);
+        let (resultant_force_cov, marker_cov, informative) =
+            super::covariance::estimate_cov(problem, &cov_factor, &fw, dv, op, report.alpha);
+        let mut report = report;
+        if !informative {
+            report.status = super::EstimateStatus::NoInformation;
+        }
         Ok(Estimate {
             q,
             f,
@@ -270,6 +274,7 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
     let start = Instant::now();
     let backend = M::BACKEND;
     let op = method.stream().problem.operator(observation)?;
+    let rule = method.stream().problem.settings().alpha_rule;
     let alpha = match method.stream().alpha {
         Some(a) => {
             if backend == Backend::Newton
@@ -278,6 +283,13 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
             {
                 alpha_continuation(method, &op, a)?;
             }
+            a
+        }
+        None if rule == AlphaRule::Evidence => {
+            let (a, warm) = super::evidence::evidence_alpha(method, &op)?;
+            let stream = method.stream();
+            stream.alpha = Some(a);
+            stream.warm = Some(warm);
             a
         }
         None => {

@@ -30,16 +30,28 @@
 //! objective is in m², and a sensible `α` for the paper's robot is around
 //! 1e-10–1e-8 m³/N².)
 //!
-//! # Choosing `α`: the discrepancy principle
+//! # Choosing `α`, and what the standard deviations mean
 //!
-//! Leave `alpha` unset and the first observation picks `α` so that the
-//! weighted residual equals `n_ob` (Morozov's discrepancy principle): with
-//! whitened weights that is the expected value of the residual of the true
-//! shape under the stated noise. A smaller residual would fit the noise (an
-//! `n_q`-parameter load explains any 10 numbers exactly and amplifies noise
-//! into large forces: Fig. 3); a larger one throws information away. The
-//! weighted residual grows monotonically with `α`, so a bisection in `log α`
-//! finds it. The chosen `α` is kept for the following (streaming) steps.
+//! Leave `alpha` unset and the first observation picks it ([`AlphaRule`]);
+//! the chosen `α` is kept for the following (streaming) steps.
+//!
+//! - `evidence` (default): read the penalty as a Gaussian prior on the load,
+//!   `F ~ N(0, (αH)⁻¹)`, and the weights as the noise, `n ~ N(0, W⁻¹)`;
+//!   `α` is the prior precision the observation makes most likely (the
+//!   largest marginal likelihood, linearized at the estimate). The reported
+//!   covariances ([`Estimate::resultant_force_cov`],
+//!   [`Estimate::marker_cov`]) are that model's posterior, `(JᵀWJ + αH)⁻¹`:
+//!   the spread of the noise *and* the bias the penalty puts in. Their 95 %
+//!   intervals cover the true resultant at about their nominal rate for
+//!   smooth loads (measured by `softrod report --only coverage`; the
+//!   README's "Uncertainty" table).
+//! - `discrepancy`: Morozov's principle, the weighted residual equals
+//!   `n_ob`, the expected value of the residual of the true shape under the
+//!   stated noise. The weighted residual grows monotonically with `α`, so a
+//!   bisection in `log α` finds it.
+//!
+//! Markers that do not see the load (all at the clamped base) give the
+//! status [`EstimateStatus::NoInformation`]: the estimate is the prior's.
 //!
 //! # Backends
 //!
@@ -77,6 +89,7 @@
 //!   model, the objective, the marker Jacobian (28), the gradient (29) and
 //!   the Gauss–Newton step (30); the direct solution (24).
 //! - `covariance`: the covariances of an estimate.
+//! - `evidence`: `α` by the evidence.
 //! - `driver`: the stream of observations, `α` by the discrepancy principle,
 //!   the incremental observations of a large jump.
 //! - [`newton`], [`sqp`]: the two methods over the problem.
@@ -88,11 +101,13 @@
 
 mod covariance;
 mod driver;
+mod evidence;
 pub mod newton;
 mod problem;
 pub mod sqp;
 
 pub use driver::ALPHA_CONTINUATION_START;
+pub use evidence::AlphaRule;
 pub use newton::NewtonEstimator;
 pub use problem::direct_solution;
 pub use sqp::SqpEstimator;
@@ -252,8 +267,10 @@ pub struct EstimatorSettings {
     pub load_model: LoadModel,
     /// Regularization weight `α` (units: see the module docs; m/N² for the
     /// distributed field with the default whitened weights). `None`
-    /// (default): chosen on the first observation by the discrepancy principle.
+    /// (default): chosen on the first observation by `alpha_rule`.
     pub alpha: Option<f64>,
+    /// How an unset `alpha` is chosen (default: the largest evidence).
+    pub alpha_rule: AlphaRule,
     /// Standard deviation of each marker position component (m); the default
     /// weights are `1/σ²` and the covariances are stated for this noise
     /// (default 1e-5 m = 0.01 mm).
@@ -302,6 +319,7 @@ impl Default for EstimatorSettings {
             backend: Backend::Newton,
             load_model: LoadModel::Distributed,
             alpha: None,
+            alpha_rule: AlphaRule::Evidence,
             noise_sigma_m: 1e-5,
             tangent_sigma: 1e-3,
             max_iterations: 100,
@@ -448,19 +466,22 @@ pub struct Estimate {
     /// Moment of the estimated load about the base position in the
     /// estimated (deformed) shape, `∫ (r − r_0) × w dX` (N·m).
     pub resultant_moment_nm: Vec<f64>,
-    /// Covariance of the resultant force for the stated marker noise (N², row-major).
+    /// Posterior covariance of the resultant force (N², row-major): the
+    /// spread of the stated marker noise plus the bias of the penalty, with
+    /// the penalty read as a Gaussian prior (see [`AlphaRule`]).
     pub resultant_force_cov: Vec<f64>,
     /// Marker residuals `A q − y` in observation order (m; tangents dimensionless).
     pub marker_residuals: Vec<f64>,
-    /// Covariance factor `L` (`n_F × n_ob`, row-major): `Cov(F) = L Lᵀ`, see
+    /// Covariance factor `L` (`n_F × n_ob`, row-major) of the noise alone
+    /// (no bias): `Cov(F̂) = L Lᵀ`, see
     /// [`Estimate::covariance_f`]. Like the other covariances it is taken at
     /// the last linearization (see [`EstimateReport::gradient_norm`]; after
     /// an unconfirmed last step the two points differ by that step, whose
     /// predicted decrease is below `1e-3 tolerance`: the covariances then
     /// differ by about the square root of that, relatively).
     pub cov_factor: Vec<f64>,
-    /// Covariance of the estimated marker-space shape `A q` (`n_ob × n_ob`,
-    /// row-major; m²).
+    /// Posterior covariance of the estimated marker-space shape `A q`
+    /// (`n_ob × n_ob`, row-major; m²).
     pub marker_cov: Vec<f64>,
     /// The stated marker noise the covariances are for (m).
     pub noise_sigma_m: f64,

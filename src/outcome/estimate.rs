@@ -96,6 +96,10 @@ pub enum EstimateStatus {
         /// Where.
         at: NonFiniteAt,
     },
+    /// The markers do not see the load (every one at the clamped base:
+    /// positions and tangents there do not move): the estimate is the
+    /// penalty's prior, zero load, with the prior's spread, not knowledge.
+    NoInformation,
 }
 
 impl EstimateStatus {
@@ -134,6 +138,10 @@ impl std::fmt::Display for EstimateStatus {
             EstimateStatus::NonFinite { at } => {
                 write!(f, "non-finite {} in a QP subproblem", at.name())
             }
+            EstimateStatus::NoInformation => write!(
+                f,
+                "no information: the markers do not see the load (all at the clamped base)"
+            ),
         }
     }
 }

@@ -14,6 +14,8 @@
 //!   projections of its shape (`spatial.{png,svg,json}`).
 //! - [`grasp`]: Table I in simulation and one grasp sequence per strategy
 //!   (`grasp.{png,svg,json,md}`).
+//! - [`coverage`]: how often the true resultant force lies in the
+//!   estimate's reported 95 % region (`coverage.{png,svg,json}`).
 //! - [`stability`]: marker noise, load magnitude, marker count, the jump
 //!   between successive observations and `α`, per backend: converged or
 //!   not, the failure cause ([`sweep::FailureCause`]), iterations, errors;
@@ -41,6 +43,8 @@ pub mod loop_failure;
 pub mod loop_pareto;
 #[doc(hidden)]
 pub mod grasp;
+#[doc(hidden)]
+pub mod coverage;
 #[doc(hidden)]
 pub mod pareto;
 #[doc(hidden)]
@@ -87,6 +91,8 @@ pub enum Part {
     Loop,
     /// The grasp's success table and sequences only.
     Grasp,
+    /// The coverage of the reported uncertainty only.
+    Coverage,
 }
 
 /// Options of a report run.
@@ -254,6 +260,9 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
     };
     if matches!(opts.only, None | Some(Part::Touch)) {
         files.extend(touch::run(opts)?.1);
+    }
+    if matches!(opts.only, None | Some(Part::Coverage)) {
+        files.extend(coverage::run(opts)?.1);
     }
     let tracking = if matches!(opts.only, None | Some(Part::Tracking)) {
         let r = tracking::run(opts)?;

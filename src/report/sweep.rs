@@ -172,7 +172,7 @@ impl FailureCause {
             EstimateStatus::SingularTangent => FailureCause::SingularTangent,
             EstimateStatus::NotPositiveDefinite => FailureCause::IllConditioning,
             EstimateStatus::NonFinite { .. } => FailureCause::Divergence,
-            EstimateStatus::Converged(_) => FailureCause::Other,
+            EstimateStatus::Converged(_) | EstimateStatus::NoInformation => FailureCause::Other,
         }
     }
 }
@@ -558,6 +558,9 @@ pub fn run_case(spec: &CaseSpec) -> Outcome {
     let settings = EstimatorSettings {
         backend: spec.backend,
         alpha: spec.alpha,
+        // the Pareto chart and the stability map (and the README's tables
+        // of them) are for α by the discrepancy principle
+        alpha_rule: crate::estimate::AlphaRule::Discrepancy,
         noise_sigma_m: spec.declared_noise_m,
         max_iterations: spec.max_iterations,
         ..EstimatorSettings::default()

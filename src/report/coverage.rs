@@ -1,0 +1,633 @@
+//! Coverage of the reported uncertainty: how often the true resultant
+//! force lies in the estimate's 95 % region.
+//!
+//! Every trial draws, from its seed, a load the estimator is not told
+//! about, a marker set and a noise level; a "real robot" makes the
+//! measurement and the estimator (the two-section robot of
+//! [`Scene::two_section`], 2 × 10 elements, its known pressures and
+//! self-weight) estimates the load with `α` by [`AlphaRule`]. The real robot
+//! is *not* the estimator's model: a mesh twice as fine (2 × 20 elements),
+//! its own static solve, marker positions read off it at arc coordinates
+//! that are not nodes of the coarse mesh.
+//!
+//! - Load families: `smooth` (a table of 41 entries of a random sum of the
+//!   first four cosine modes over the robot, both components, amplitude
+//!   0.2–2 N/m log-uniform) and `point` (one force of 0.02–0.3 N in a
+//!   random direction at a random arc coordinate in `[0.3 L, L]`).
+//! - Markers: the tip and 2–10 more at uniformly drawn arc coordinates in
+//!   `[0.1 L, L]` (3–11 in all), seeded Gaussian noise of σ = 5–100 µm
+//!   (log-uniform), the estimator told that σ.
+//!
+//! A trial is covered when the true resultant lies in the 95 % ellipse of
+//! the reported covariance (`d² = Δᵀ Σ⁻¹ Δ ≤ χ²₂(0.95) = 5.991`); also per
+//! component (`|Δ_i| ≤ 1.96 σ_i`, what `force_std_n` promises). A trial
+//! that did not converge counts as not covered.
+//! Outputs: `coverage.{png,svg,json}`.
+
+use std::path::{Path, PathBuf};
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::assembly::Robot;
+use crate::element::PlanarCable;
+use crate::error::Result;
+use crate::estimate::{AlphaRule, Backend, EstimatorSettings, MarkerObservation, Observation};
+use crate::loads::{LineLoad, Loads, PointForce};
+use crate::scene::Scene;
+use crate::statics::StaticSolver;
+
+use super::{plot, progress, write_json, Machine, ReportOptions};
+
+/// `χ²` with two degrees of freedom at 0.95: `−2 ln 0.05`.
+pub const CHI2_2_95: f64 = 5.991_464_547_107_979;
+
+/// A family of true loads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Family {
+    /// A smooth distributed load (four cosine modes per component).
+    Smooth,
+    /// One concentrated force at an arc coordinate.
+    Point,
+}
+
+impl Family {
+    /// The family's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::Smooth => "smooth",
+            Family::Point => "point",
+        }
+    }
+}
+
+/// What one trial draws from its seed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrialSpec {
+    /// The load family.
+    pub family: Family,
+    /// The seed everything below is drawn from.
+    pub seed: u64,
+    /// The unknown load (in the real robot's loads).
+    pub line_load: Option<LineLoad>,
+    /// The unknown concentrated force, if the family is `point`.
+    pub point_force: Option<PointForce>,
+    /// Marker arc coordinates (m), increasing, the tip last.
+    pub marker_s_m: Vec<f64>,
+    /// Marker noise σ (m), per component.
+    pub noise_sigma_m: f64,
+}
+
+/// The outcome of one trial for one backend.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrialOutcome {
+    /// The family.
+    pub family: Family,
+    /// The backend.
+    pub backend: Backend,
+    /// The trial's seed.
+    pub seed: u64,
+    /// Number of markers.
+    pub markers: usize,
+    /// Marker noise σ (m).
+    pub noise_sigma_m: f64,
+    /// The true resultant of the unknown load (N).
+    pub truth_n: [f64; 2],
+    /// The estimated resultant (N).
+    pub estimate_n: [f64; 2],
+    /// The reported standard deviations (N).
+    pub std_n: [f64; 2],
+    /// Squared Mahalanobis distance of the truth under the reported
+    /// covariance (`NaN` if the estimation failed).
+    pub d2: f64,
+    /// The truth in the 95 % ellipse (and the estimate converged).
+    pub covered: bool,
+    /// The truth within 1.96 σ in each component.
+    pub covered_components: [bool; 2],
+    /// The `α` chosen.
+    pub alpha: f64,
+    /// The estimator's status, or the error.
+    pub status: String,
+    /// Whether it converged.
+    pub converged: bool,
+}
+
+/// Coverage of one family and backend.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CoverageRow {
+    /// The family.
+    pub family: Family,
+    /// The backend.
+    pub backend: Backend,
+    /// Trials run.
+    pub trials: usize,
+    /// Trials that converged.
+    pub converged: usize,
+    /// Fraction of trials whose truth lies in the 95 % ellipse.
+    pub coverage: f64,
+    /// Fractions per component (x, y) within 1.96 σ.
+    pub coverage_components: [f64; 2],
+    /// Median `d²` (the χ²₂ median is 1.386).
+    pub median_d2: f64,
+    /// Median relative error of the resultant `|Δ| / |F_true|`.
+    pub median_rel_error: f64,
+}
+
+/// The coverage study.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CoverageReport {
+    /// The rule `α` was chosen by.
+    pub alpha_rule: AlphaRule,
+    /// Trials per family.
+    pub trials_per_family: usize,
+    /// The first seed (trial `k` of a family uses `seed + k`).
+    pub seed: u64,
+    /// One row per family and backend.
+    pub rows: Vec<CoverageRow>,
+    /// Every trial.
+    pub outcomes: Vec<TrialOutcome>,
+    /// The machine.
+    pub machine: Machine,
+}
+
+/// SplitMix64: seeded uniform numbers.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// Uniform in `[a, b)`.
+    fn range(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * self.next()
+    }
+    /// Log-uniform in `[a, b)`.
+    fn log_range(&mut self, a: f64, b: f64) -> f64 {
+        (a.ln() + (b.ln() - a.ln()) * self.next()).exp()
+    }
+}
+
+/// The estimator's scene: the two-section robot.
+pub fn scene() -> Scene {
+    Scene::two_section()
+}
+
+/// The robot of `scene` with `elements` per section.
+fn robot(scene: &Scene, elements: usize) -> Result<Robot<PlanarCable>> {
+    let mut s = scene.clone();
+    for sec in &mut s.robot.sections {
+        sec.elements = elements;
+    }
+    s.robot()
+}
+
+/// What trial `seed` of `family` draws, on a robot of length `length_m`.
+pub fn trial_spec(family: Family, seed: u64, length_m: f64) -> TrialSpec {
+    let mut rng = Rng(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ family as u64);
+    let l = length_m;
+    let n = 3 + (rng.next() * 9.0) as usize; // 3..=11
+    let mut marker_s_m: Vec<f64> = (1..n).map(|_| rng.range(0.1 * l, l)).collect();
+    marker_s_m.sort_by(f64::total_cmp);
+    marker_s_m.push(l);
+    let noise_sigma_m = rng.log_range(5e-6, 1e-4);
+    let (line_load, point_force) = match family {
+        Family::Smooth => {
+            let amp = rng.log_range(0.2, 2.0);
+            let c: Vec<[f64; 2]> = (0..4)
+                .map(|k| {
+                    let s = amp / (1.0 + k as f64);
+                    [rng.range(-s, s), rng.range(-s, s)]
+                })
+                .collect();
+            let m = 40;
+            let s_m: Vec<f64> = (0..=m).map(|i| l * i as f64 / m as f64).collect();
+            let w_n_per_m = s_m
+                .iter()
+                .map(|s| {
+                    (0..2)
+                        .map(|a| {
+                            c.iter()
+                                .enumerate()
+                                .map(|(k, ck)| {
+                                    ck[a] * (k as f64 * std::f64::consts::PI * s / l).cos()
+                                })
+                                .sum()
+                        })
+                        .collect()
+                })
+                .collect();
+            (Some(LineLoad::Tabulated { s_m, w_n_per_m }), None)
+        }
+        Family::Point => {
+            let mag = rng.log_range(0.02, 0.3);
+            let ang = rng.range(0.0, 2.0 * std::f64::consts::PI);
+            let s = rng.range(0.3 * l, l);
+            (
+                None,
+                Some(PointForce {
+                    s_m: s,
+                    force_n: vec![mag * ang.cos(), mag * ang.sin()],
+                }),
+            )
+        }
+    };
+    TrialSpec {
+        family,
+        seed,
+        line_load,
+        point_force,
+        marker_s_m,
+        noise_sigma_m,
+    }
+}
+
+/// The true resultant of the spec's unknown load (N): the table integrated
+/// exactly (linear between entries), or the force.
+pub fn true_resultant(spec: &TrialSpec) -> [f64; 2] {
+    let mut r = [0.0; 2];
+    if let Some(LineLoad::Tabulated { s_m, w_n_per_m }) = &spec.line_load {
+        for k in 1..s_m.len() {
+            let h = s_m[k] - s_m[k - 1];
+            for (a, ra) in r.iter_mut().enumerate() {
+                *ra += 0.5 * h * (w_n_per_m[k - 1][a] + w_n_per_m[k][a]);
+            }
+        }
+    }
+    if let Some(p) = &spec.point_force {
+        r[0] += p.force_n[0];
+        r[1] += p.force_n[1];
+    }
+    r
+}
+
+/// The real robot's markers for `spec`: the fine mesh's static solution
+/// under the known loads and the unknown one, read at the marker arc
+/// coordinates, with seeded noise.
+pub fn measure(fine: &Robot<PlanarCable>, known: &Loads, spec: &TrialSpec) -> Result<Observation> {
+    let mut loads = known.clone();
+    loads.line_loads.extend(spec.line_load.clone());
+    loads.point_forces.extend(spec.point_force.clone());
+    let eq = StaticSolver::default().solve(fine, &loads, None)?;
+    let markers = spec
+        .marker_s_m
+        .iter()
+        .map(|&s| Ok(MarkerObservation::at_arc(s, fine.position_at(&eq.q, s)?)))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Observation { markers }.with_noise(spec.noise_sigma_m, spec.seed ^ 0x5EED))
+}
+
+/// Runs one trial: the measurement on the fine robot, the estimate on the
+/// coarse one (`coarse`, the estimator's model) by `backend` with `rule`.
+pub fn run_trial(
+    coarse: &Robot<PlanarCable>,
+    fine: &Robot<PlanarCable>,
+    known: &Loads,
+    spec: &TrialSpec,
+    backend: Backend,
+    rule: AlphaRule,
+) -> TrialOutcome {
+    let truth_n = true_resultant(spec);
+    let mut out = TrialOutcome {
+        family: spec.family,
+        backend,
+        seed: spec.seed,
+        markers: spec.marker_s_m.len(),
+        noise_sigma_m: spec.noise_sigma_m,
+        truth_n,
+        estimate_n: [f64::NAN; 2],
+        std_n: [f64::NAN; 2],
+        d2: f64::NAN,
+        covered: false,
+        covered_components: [false; 2],
+        alpha: f64::NAN,
+        status: String::new(),
+        converged: false,
+    };
+    let settings = EstimatorSettings {
+        backend,
+        alpha_rule: rule,
+        noise_sigma_m: spec.noise_sigma_m,
+        ..EstimatorSettings::default()
+    };
+    let est = measure(fine, known, spec).and_then(|obs| {
+        backend
+            .build(coarse.clone(), known.clone(), settings)?
+            .step(&obs)
+    });
+    let e = match est {
+        Ok(e) => e,
+        Err(err) => {
+            out.status = err.to_string();
+            return out;
+        }
+    };
+    let f = &e.resultant_force_n;
+    let c = &e.resultant_force_cov;
+    let dx = [truth_n[0] - f[0], truth_n[1] - f[1]];
+    let det = c[0] * c[3] - c[1] * c[2];
+    out.d2 = if det > 0.0 {
+        (c[3] * dx[0] * dx[0] - (c[1] + c[2]) * dx[0] * dx[1] + c[0] * dx[1] * dx[1]) / det
+    } else {
+        f64::INFINITY
+    };
+    out.estimate_n = [f[0], f[1]];
+    out.std_n = [c[0].max(0.0).sqrt(), c[3].max(0.0).sqrt()];
+    out.converged = e.report.status.is_converged();
+    out.covered = out.converged && out.d2 <= CHI2_2_95;
+    out.covered_components = [0, 1].map(|a| out.converged && dx[a].abs() <= 1.96 * out.std_n[a]);
+    out.alpha = e.report.alpha;
+    out.status = e.report.status.to_string();
+    out
+}
+
+/// The rows of `outcomes`, one per family and backend present.
+pub fn summarize(outcomes: &[TrialOutcome]) -> Vec<CoverageRow> {
+    let mut keys: Vec<(Family, Backend)> = outcomes.iter().map(|o| (o.family, o.backend)).collect();
+    keys.sort_by_key(|(f, b)| (*f, b.name()));
+    keys.dedup();
+    keys.into_iter()
+        .map(|(family, backend)| {
+            let os: Vec<&TrialOutcome> = outcomes
+                .iter()
+                .filter(|o| o.family == family && o.backend == backend)
+                .collect();
+            let n = os.len().max(1) as f64;
+            let frac =
+                |p: &dyn Fn(&TrialOutcome) -> bool| os.iter().filter(|o| p(o)).count() as f64 / n;
+            let median = |mut v: Vec<f64>| {
+                v.retain(|x| !x.is_nan());
+                v.sort_by(f64::total_cmp);
+                v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+            };
+            CoverageRow {
+                family,
+                backend,
+                trials: os.len(),
+                converged: os.iter().filter(|o| o.converged).count(),
+                coverage: frac(&|o| o.covered),
+                coverage_components: [
+                    frac(&|o| o.covered_components[0]),
+                    frac(&|o| o.covered_components[1]),
+                ],
+                median_d2: median(os.iter().map(|o| o.d2).collect()),
+                median_rel_error: median(
+                    os.iter()
+                        .map(|o| {
+                            (o.estimate_n[0] - o.truth_n[0]).hypot(o.estimate_n[1] - o.truth_n[1])
+                                / o.truth_n[0].hypot(o.truth_n[1])
+                        })
+                        .collect(),
+                ),
+            }
+        })
+        .collect()
+}
+
+/// Runs `trials` trials per family (seeds `seed ..`) for each backend.
+///
+/// # Errors
+/// As [`Scene::robot`] and [`Scene::loads`] for the fixed scene (they do
+/// not fail); a failing trial is an outcome.
+pub fn sweep(
+    trials: usize,
+    seed: u64,
+    backends: &[Backend],
+    families: &[Family],
+    rule: AlphaRule,
+    quiet: bool,
+) -> Result<CoverageReport> {
+    let sc = scene();
+    let coarse = robot(&sc, 10)?;
+    let fine = robot(&sc, 20)?;
+    let known = sc.loads()?;
+    let l = coarse.length();
+    let mut machine = Machine::detect();
+    let cases: Vec<(TrialSpec, Backend)> = families
+        .iter()
+        .flat_map(|&fam| (0..trials).map(move |k| trial_spec(fam, seed + k as u64, l)))
+        .flat_map(|spec| backends.iter().map(move |&b| (spec.clone(), b)))
+        .collect();
+    let pb = progress(cases.len(), quiet, "coverage");
+    let outcomes: Vec<TrialOutcome> = cases
+        .par_iter()
+        .map(|(spec, b)| {
+            let o = run_trial(&coarse, &fine, &known, spec, *b, rule);
+            pb.inc(1);
+            o
+        })
+        .collect();
+    pb.finish_and_clear();
+    machine.sample_load();
+    Ok(CoverageReport {
+        alpha_rule: rule,
+        trials_per_family: trials,
+        seed,
+        rows: summarize(&outcomes),
+        outcomes,
+        machine,
+    })
+}
+
+/// The report part: 200 trials per family (20 with `quick`), both backends,
+/// `α` by the evidence; `coverage.{png,svg,json}` in the output directory.
+///
+/// # Errors
+/// [`crate::Error::Io`] when a file cannot be written.
+pub fn run(opts: &ReportOptions) -> Result<(CoverageReport, Vec<PathBuf>)> {
+    let trials = if opts.quick { 20 } else { 200 };
+    let r = sweep(
+        trials,
+        1,
+        &[Backend::Newton, Backend::Sqp],
+        &[Family::Smooth, Family::Point],
+        AlphaRule::Evidence,
+        opts.quiet,
+    )?;
+    let files = r.write(&opts.out_dir)?;
+    Ok((r, files))
+}
+
+impl CoverageReport {
+    /// Writes `coverage.{png,svg,json}` into `dir`.
+    ///
+    /// # Errors
+    /// [`crate::Error::Io`] when a file cannot be written.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        let json = dir.join("coverage.json");
+        write_json(&json, self)?;
+        let mut files = plot::both(
+            dir,
+            "coverage",
+            (1200, 520),
+            |a| draw(self, a),
+            |a| draw(self, a),
+        )?;
+        files.push(json);
+        Ok(files)
+    }
+
+    /// The rows as a Markdown table.
+    pub fn markdown(&self) -> String {
+        let mut s = String::from(
+            "| load | backend | trials | converged | in 95 % ellipse | x within 1.96 σ | y within 1.96 σ | median d² (χ²₂: 1.39) | median error |\n|---|---|---|---|---|---|---|---|---|\n",
+        );
+        for r in &self.rows {
+            s += &format!(
+                "| {} | {} | {} | {} | {:.1} % | {:.1} % | {:.1} % | {:.2} | {:.1} % |\n",
+                r.family.name(),
+                r.backend.name(),
+                r.trials,
+                r.converged,
+                100.0 * r.coverage,
+                100.0 * r.coverage_components[0],
+                100.0 * r.coverage_components[1],
+                r.median_d2,
+                100.0 * r.median_rel_error
+            );
+        }
+        s
+    }
+}
+
+fn colour(f: Family, b: Backend) -> RGBColor {
+    match (f, b) {
+        (Family::Smooth, Backend::Newton) => RGBColor(31, 119, 180),
+        (Family::Smooth, Backend::Sqp) => RGBColor(23, 190, 207),
+        (Family::Point, Backend::Newton) => RGBColor(214, 39, 40),
+        (Family::Point, Backend::Sqp) => RGBColor(255, 127, 14),
+    }
+}
+
+/// (a) coverage per family and backend against the 95 % nominal rate and
+/// the 90–99 % target band; (b) the empirical distribution of `d²` against
+/// χ²₂'s, `P(d² ≤ x) = 1 − exp(−x/2)` (calibrated intervals lie on it).
+fn draw<DB: DrawingBackend>(
+    r: &CoverageReport,
+    root: &DrawingArea<DB, Shift>,
+) -> std::result::Result<(), String> {
+    use plot::ms;
+    root.fill(&WHITE).map_err(ms)?;
+    let (left, right) = root.split_horizontally(560);
+    let n = r.rows.len().max(1);
+    let mut c = ChartBuilder::on(&left)
+        .caption("(a) truth in the reported 95 % region", ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(55)
+        .build_cartesian_2d(0f64..n as f64, 0f64..100f64)
+        .map_err(ms)?;
+    c.configure_mesh()
+        .disable_x_mesh()
+        .x_labels(0)
+        .y_desc("coverage (%)")
+        .draw()
+        .map_err(ms)?;
+    c.draw_series([Rectangle::new(
+        [(0.0, 90.0), (n as f64, 99.0)],
+        RGBColor(200, 230, 200).filled(),
+    )])
+    .map_err(ms)?;
+    c.draw_series([PathElement::new(
+        vec![(0.0, 95.0), (n as f64, 95.0)],
+        BLACK.stroke_width(2),
+    )])
+    .map_err(ms)?;
+    for (i, row) in r.rows.iter().enumerate() {
+        let x = i as f64;
+        let col = colour(row.family, row.backend);
+        c.draw_series([Rectangle::new(
+            [(x + 0.15, 0.0), (x + 0.85, 100.0 * row.coverage)],
+            col.filled(),
+        )])
+        .map_err(ms)?;
+        // binomial standard error
+        let p = row.coverage;
+        let se = 100.0 * (p * (1.0 - p) / row.trials.max(1) as f64).sqrt();
+        c.draw_series([PathElement::new(
+            vec![
+                (x + 0.5, 100.0 * p - 1.96 * se),
+                (x + 0.5, 100.0 * p + 1.96 * se),
+            ],
+            BLACK.stroke_width(2),
+        )])
+        .map_err(ms)?;
+        c.draw_series([Text::new(
+            format!("{} {}", row.family.name(), row.backend.name()),
+            (x + 0.2, 8.0),
+            ("sans-serif", 15).into_font().color(&WHITE),
+        )])
+        .map_err(ms)?;
+        c.draw_series([Text::new(
+            format!("{:.1} %", 100.0 * p),
+            (x + 0.25, 100.0 * p - 6.0),
+            ("sans-serif", 15).into_font().color(&WHITE),
+        )])
+        .map_err(ms)?;
+    }
+    let xmax = 16.0;
+    let mut c = ChartBuilder::on(&right)
+        .caption("(b) calibration: P(d² ≤ x) against χ²₂", ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(55)
+        .build_cartesian_2d(0f64..xmax, 0f64..1f64)
+        .map_err(ms)?;
+    c.configure_mesh()
+        .x_desc("squared Mahalanobis distance d² of the truth")
+        .y_desc("fraction of trials")
+        .draw()
+        .map_err(ms)?;
+    c.draw_series(LineSeries::new(
+        (0..=160).map(|i| {
+            let x = xmax * i as f64 / 160.0;
+            (x, 1.0 - (-x / 2.0).exp())
+        }),
+        BLACK.stroke_width(3),
+    ))
+    .map_err(ms)?
+    .label("χ²₂ (calibrated)")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(3)));
+    for row in &r.rows {
+        let mut d: Vec<f64> = r
+            .outcomes
+            .iter()
+            .filter(|o| o.family == row.family && o.backend == row.backend)
+            .map(|o| {
+                if o.converged && !o.d2.is_nan() {
+                    o.d2
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .collect();
+        d.sort_by(f64::total_cmp);
+        let m = d.len().max(1) as f64;
+        let col = colour(row.family, row.backend);
+        c.draw_series(LineSeries::new(
+            d.iter()
+                .enumerate()
+                .filter(|(_, v)| v.is_finite())
+                .map(|(i, v)| (v.min(xmax), (i + 1) as f64 / m)),
+            col.stroke_width(2),
+        ))
+        .map_err(ms)?
+        .label(format!("{} {}", row.family.name(), row.backend.name()))
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], col.stroke_width(2)));
+    }
+    c.configure_series_labels()
+        .position(SeriesLabelPosition::LowerRight)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(ms)?;
+    Ok(())
+}
