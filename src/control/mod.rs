@@ -17,7 +17,7 @@
 //! - [`ClosedLoop`]: one controller stepping against a [`crate::plant::Plant`].
 
 mod adapter;
-mod boxqp;
+pub(crate) mod boxqp;
 mod closed_loop;
 mod ik;
 mod mass;
