@@ -8,7 +8,13 @@
 //!   from the unloaded equilibrium to a platform displaced by a 100 g
 //!   payload (Newton on the payload force with warm static solves);
 //! - the same static solve with spatial-cable legs (the cheaper model the
-//!   torsion test rules out) for the price of the section frames.
+//!   torsion test rules out) for the price of the section frames;
+//! - `parallel/warm_solve/actuated`: the tracking loop's static solve
+//!   (`parallel::warm`): from the equilibrium, chamber 0 of leg 0 up by
+//!   1 kPa, chord steps with the kept factors;
+//! - `parallel/track_step/ff_updater`: one control instant of the tracking
+//!   loop (estimator, updater, inverse kinematics) with the controller's
+//!   model of 2 elements per section, from a settled state.
 //!
 //! Measured (2026-11-30, shared 2-core machine): static solve 129 ms with
 //! full 3-D legs, 4.8 ms with spatial-cable legs; a payload step 205 ms.
@@ -20,7 +26,9 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use softrod::control::{ControllerKind, UpdaterGains};
 use softrod::parallel::payload::fig8_configurations;
+use softrod::parallel::track::ParallelController;
 use softrod::parallel::ParallelSpec;
 
 fn bench(c: &mut Criterion) {
@@ -51,6 +59,45 @@ fn bench(c: &mut Criterion) {
                     .unwrap(),
             )
         })
+    });
+    let mut warm = softrod::parallel::warm::WarmStatics::new(full.clone()).unwrap();
+    warm.factor_at(&free.u, &full.loads(&p, [0.0; 3], [0.0; 3]).unwrap())
+        .unwrap();
+    let mut p1 = p.clone();
+    p1[0] += 1e3;
+    let nudged = full.loads(&p1, [0.0; 3], [0.0; 3]).unwrap();
+    g.bench_function("warm_solve/actuated", |b| {
+        b.iter(|| black_box(warm.clone().solve(&nudged, &free.u).unwrap()))
+    });
+    let model = ParallelSpec {
+        elements_per_section: 2,
+        ..ParallelSpec::default()
+    }
+    .build_full()
+    .unwrap();
+    let eq = model
+        .solve(
+            &model.loads(&p, [0.0, 0.0, -0.981], [0.0; 3]).unwrap(),
+            None,
+        )
+        .unwrap();
+    let x = model.platform_pose(&eq.q).unwrap();
+    let mut ctl = ParallelController::new(
+        model,
+        ControllerKind::FfUpdater,
+        UpdaterGains::default(),
+        0.1,
+        &p,
+        1e-6,
+    )
+    .unwrap();
+    let target = [x[0], x[1], x[2]];
+    for _ in 0..30 {
+        ctl.step(target, target).unwrap();
+    }
+    let next = [x[0] + 1e-4, x[1], x[2]];
+    g.bench_function("track_step/ff_updater", |b| {
+        b.iter(|| black_box(ctl.clone().step(target, next).unwrap()))
     });
     g.finish();
 }

@@ -102,7 +102,9 @@ enum Command {
     /// (circle, figure_eight, line, samples, pressures), the loop's and the
     /// plant's settings; the payload file a schedule {"payloads": [...]}.
     /// Without a trajectory file: a 5 mm circle about the end effector at
-    /// the scene's pressures.
+    /// the scene's pressures. A parallel-robot scene tracks a horizontal
+    /// platform circle instead; its trajectory file holds the run's
+    /// settings (softrod::parallel::track::TrackSettings).
     Track {
         /// Scene file (JSON): the controller's model and the markers.
         scene: PathBuf,

@@ -1,5 +1,6 @@
-//! `softrod solve` and `softrod estimate` on a soft-parallel-robot scene
-//! (a scene file whose top-level object has a `parallel` key).
+//! `softrod solve`, `softrod estimate` and `softrod track` on a
+//! soft-parallel-robot scene (a scene file whose top-level object has a
+//! `parallel` key).
 
 use std::path::{Path, PathBuf};
 
@@ -125,4 +126,61 @@ pub(super) fn estimate(
         },
         out,
     )
+}
+
+/// `softrod track` on a parallel scene: the circle about the platform at
+/// the scene's pressures (the default centre without), the run's settings
+/// from the trajectory file (`softrod::parallel::track::TrackSettings`,
+/// every field optional), the controller overridden by `--controller`.
+pub(super) fn track(
+    scene: ParallelScene,
+    settings: Option<&PathBuf>,
+    payload_file: bool,
+    controller: Option<softrod::control::ControllerKind>,
+    out: Option<&PathBuf>,
+) -> Result<()> {
+    use softrod::parallel::{track, LegElement};
+    if payload_file {
+        anyhow::bail!(
+            "--payload: a parallel-robot run hangs one mass, the trajectory file's `payload_kg`"
+        );
+    }
+    if scene.element != LegElement::Ancf3d {
+        anyhow::bail!(
+            "element: tracking on the parallel robot needs the full 3-D element (\"ancf3d\"); \
+             the spatial cable misses the platform's twist"
+        );
+    }
+    if !(scene.platform_force_n.is_empty() && scene.platform_moment_nm.is_empty()) {
+        anyhow::bail!(
+            "platform_force_n: a tracking scene carries no known platform load (the unknown \
+             mass is the trajectory file's `payload_kg`)"
+        );
+    }
+    let mut settings: track::TrackSettings = match settings {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            serde_json::from_str(&text)
+                .with_context(|| format!("{}: not a parallel tracking file", path.display()))?
+        }
+        None => track::TrackSettings::default(),
+    };
+    if let Some(c) = controller {
+        settings.controller = c;
+    }
+    let run = track::run_track(&scene.parallel, &scene.pressures_pa, &settings)?;
+    let s = &run.summary;
+    eprintln!(
+        "softrod: track (parallel robot): {:?}, {} samples; from {} s: mean error {:.4} mm, \
+         max {:.4} mm; median step {:.1} ms; IK not reached {}",
+        s.controller,
+        s.samples,
+        s.score_from_s,
+        s.mean_error_m * 1e3,
+        s.max_error_m * 1e3,
+        s.median_step_time_s * 1e3,
+        s.ik_not_reached
+    );
+    super::write_json(&run, out)
 }

@@ -60,6 +60,20 @@ pub(super) fn run(
     controller: Option<ControllerArg>,
     out: Option<PathBuf>,
 ) -> Result<()> {
+    // a parallel-robot scene has its own loop (softrod::parallel::track)
+    if let Some(ps) = super::parallel::read(&scene)? {
+        let kind = controller.map(|c| match c {
+            ControllerArg::Ff => ControllerKind::Ff,
+            ControllerArg::FfUpdater => ControllerKind::FfUpdater,
+        });
+        return super::parallel::track(
+            ps,
+            trajectory.as_ref(),
+            payload.is_some(),
+            kind,
+            out.as_ref(),
+        );
+    }
     let scene = Scene::from_file(&scene)?;
     let file = match &trajectory {
         Some(p) => TrackFile::from_json(&read(p)?).with_context(|| p.display().to_string())?,

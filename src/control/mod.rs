@@ -20,7 +20,7 @@
 //!   why.
 
 mod adapter;
-mod boxqp;
+pub(crate) mod boxqp;
 mod closed_loop;
 mod failure;
 mod ik;

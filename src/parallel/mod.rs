@@ -29,6 +29,8 @@
 //!   position.
 
 pub mod payload;
+pub mod track;
+pub mod warm;
 
 use serde::{Deserialize, Serialize};
 

@@ -1,0 +1,651 @@
+//! Tracking a platform trajectory under an unknown hanging mass (Sec. IV
+//! on the parallel robot): feedforward only versus feedforward with the
+//! parameter updater (31).
+//!
+//! ```text
+//! platform marker → estimator F̄ (32)–(35) → updater (31) F̂ → f_IK(x_d, F̂) → 18 pressures → plant
+//! ```
+//!
+//! The pieces of [`crate::control`] that do not depend on the planar robot
+//! are used as they are: the updater [`ParameterUpdater`] and the
+//! bounded least-squares step of the inverse kinematics; the inverse
+//! kinematics and the estimator are this robot's ([`ParallelController`]):
+//!
+//! - the load is the force `F ∈ R³` at the platform's centre (the payload
+//!   model (32)–(35)): `F̄` is the force that puts the model's platform at
+//!   the measured position under the commanded pressures, by Newton's
+//!   method with the platform's compliance `C`;
+//! - `f_IK(x_d, F̂)`: the pressures (within their bounds) putting the
+//!   model's platform at `x_d` under `F̂`, by Gauss–Newton on the pressures
+//!   scaled by their range with the Jacobian `J = ∂x/∂P` (43), the
+//!   redundancy (18 pressures, 3 coordinates) resolved towards the least
+//!   `Σ (P/range)²` (the planar inverse kinematics' rule, weight
+//!   `μ = 10⁻⁴` against the position error in 0.1 mm), each step the exact
+//!   box QP with a damping `λ = 10⁻²` of the step: in the null space of `J`
+//!   a step moves 1 % of the way to the least pressures (a full null-space
+//!   move changes the pressures by tens of kPa, whose nonlinearity the
+//!   next iterations must undo: measured, 10–20 iterations per instant
+//!   instead of 1–3), in the range of `J` it is Gauss–Newton's;
+//! - feedforward only: `F̂ = 0` (the model's own weights only).
+//!
+//! Every equilibrium is a warm chord solve ([`super::warm`]), which is what
+//! makes a control step cost milliseconds instead of a cold solve's 0.1 s.
+//!
+//! The plant is another [`ParallelRobot`]: finer mesh and the stiffness and
+//! gain errors of [`super::payload::plant_spec`], the mass hung from the
+//! platform's centre, solved statically at every control instant (a
+//! quasi-static plant: the platform is taken to settle within a control
+//! interval; the robot's dynamics are not modelled here), its marker read
+//! with Gaussian noise of σ per coordinate, one frame per instant.
+//!
+//! With model error the estimator's `F̄` is not the payload alone (the
+//! virtual payload of [`crate::control::VirtualPayload`]); for tracking
+//! that does not matter: at a steady state `F̂ = F̄`, the model puts the
+//! platform at `x_d` under `F̂` (inverse kinematics) and at the measurement
+//! under `F̄` (estimator), so the measured platform is at `x_d`: the
+//! updater acts as an integral action on the position through the model.
+
+use serde::{Deserialize, Serialize};
+
+use super::warm::{WarmCounts, WarmStatics};
+use super::{ParallelRobot, ParallelSpec};
+use crate::control::{ControllerKind, ParameterUpdater, Trajectory, UpdaterGains};
+use crate::element::{Ancf3d, Element};
+use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::observe::Gaussian;
+
+/// Weight of the scaled pressures' norm against the position error.
+const MU: f64 = 1e-4;
+/// Damping of the pressure step: a step changes the pressures little in
+/// the null space of `J` (the pull towards the least pressures is
+/// `μ/(μ + λ)` = 1 % of the way per iteration), fully in its range.
+const LAMBDA: f64 = 1e-2;
+/// Length scale of the position error (m).
+const ELL_M: f64 = 1e-4;
+/// Largest change of a scaled pressure in one step.
+const MAX_STEP: f64 = 0.25;
+/// Newton iterations of the estimator per control instant, at most.
+const ESTIMATOR_ITERATIONS: usize = 8;
+
+/// The settings of a tracking run; every field has a default.
+///
+/// # Example
+/// ```
+/// let s: softrod::parallel::track::TrackSettings = serde_json::from_str(r#"{"payload_kg": 0.05}"#)?;
+/// assert_eq!(s.control_rate_hz, 10.0);
+/// s.validate()?;
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrackSettings {
+    /// The controller (default feedforward + updater).
+    pub controller: ControllerKind,
+    /// Control rate (Hz, default 10; the plant is quasi-static).
+    pub control_rate_hz: f64,
+    /// Updater gains (31) (default `K_P = K_I = 4`).
+    pub gains: UpdaterGains,
+    /// The unknown mass hung from the platform's centre (kg, default 0.1).
+    pub payload_kg: f64,
+    /// Marker noise per coordinate and frame (m, default 0.05 mm).
+    pub noise_sigma_m: f64,
+    /// Seed of the noise (default 1).
+    pub seed: u64,
+    /// Elements per section of the controller's model (default 2: the
+    /// model's 4 of `params::parallel` cost twice as much per step; the
+    /// coarser mesh is one more model error the loop absorbs).
+    pub model_elements_per_section: usize,
+    /// Radius of the horizontal circle (m, default 2.5 mm: at 4 mm the
+    /// model needs chambers at their 100 kPa bound over part of the circle
+    /// once the updater's load is in, measured: 37 of 231 instants
+    /// unreachable).
+    pub radius_m: f64,
+    /// Time per turn (s, default 20).
+    pub period_s: f64,
+    /// Duration of the circle (s, default 20: one turn).
+    pub duration_s: f64,
+    /// Hold at the start point before the circle (s, default 3).
+    pub hold_s: f64,
+    /// Errors are scored from this time on (s, default 3: the end of the
+    /// hold, by when the updater has settled to 2 %).
+    pub score_from_s: f64,
+    /// The inverse kinematics counts a target reached within this (m,
+    /// default 1 µm, 1/200 of the tracking target).
+    pub ik_tolerance_m: f64,
+}
+
+impl Default for TrackSettings {
+    fn default() -> Self {
+        TrackSettings {
+            controller: ControllerKind::FfUpdater,
+            control_rate_hz: 10.0,
+            gains: UpdaterGains::default(),
+            payload_kg: 0.1,
+            noise_sigma_m: 0.05e-3,
+            seed: 1,
+            model_elements_per_section: 2,
+            radius_m: 2.5e-3,
+            period_s: 20.0,
+            duration_s: 20.0,
+            hold_s: 3.0,
+            score_from_s: 3.0,
+            ik_tolerance_m: 1e-6,
+        }
+    }
+}
+
+impl TrackSettings {
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the field (`track.control_rate_hz`,
+    /// `track.payload_kg`, …, `updater.k_p_per_s`).
+    pub fn validate(&self) -> Result<()> {
+        let f = |n: &str| format!("track.{n}");
+        for (name, v) in [
+            ("control_rate_hz", self.control_rate_hz),
+            ("period_s", self.period_s),
+            ("ik_tolerance_m", self.ik_tolerance_m),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::invalid(f(name), v, "must be finite and > 0"));
+            }
+        }
+        if self.control_rate_hz > 1000.0 {
+            return Err(Error::invalid(
+                f("control_rate_hz"),
+                self.control_rate_hz,
+                "at most 1000 Hz",
+            ));
+        }
+        for (name, v) in [
+            ("payload_kg", self.payload_kg),
+            ("noise_sigma_m", self.noise_sigma_m),
+            ("radius_m", self.radius_m),
+            ("duration_s", self.duration_s),
+            ("hold_s", self.hold_s),
+            ("score_from_s", self.score_from_s),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::invalid(f(name), v, "must be finite and >= 0"));
+            }
+        }
+        if self.duration_s + self.hold_s > 600.0 {
+            return Err(Error::invalid(
+                f("duration_s"),
+                self.duration_s,
+                "hold and duration together at most 600 s",
+            ));
+        }
+        if self.model_elements_per_section == 0 {
+            return Err(Error::invalid(
+                f("model_elements_per_section"),
+                0,
+                "must be >= 1",
+            ));
+        }
+        self.gains.validate()
+    }
+}
+
+/// The controller of one robot model: estimator, updater, inverse
+/// kinematics, with their warm states (see the [module
+/// documentation](self)).
+#[derive(Debug, Clone)]
+pub struct ParallelController<E: Element> {
+    warm: WarmStatics<E>,
+    kind: ControllerKind,
+    updater: ParameterUpdater,
+    /// Scaled bounds and the range of every pressure.
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+    range: Vec<f64>,
+    tolerance_m: f64,
+    /// The last command and its equilibrium under the last `F̂`.
+    p: Vec<f64>,
+    u_ik: Vec<f64>,
+    /// The estimator's last force and equilibrium.
+    f_bar: [f64; 3],
+    u_est: Vec<f64>,
+}
+
+/// What a controller step did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ControlStep {
+    /// The estimator's force `F̄` (N; zeros for feedforward only).
+    pub f_bar_n: [f64; 3],
+    /// The updater's force `F̂` the feedforward used (N).
+    pub f_hat_n: [f64; 3],
+    /// The command (Pa).
+    pub pressures_pa: Vec<f64>,
+    /// Distance of the model's platform from the target at the command (m).
+    pub ik_error_m: f64,
+    /// Inverse-kinematics iterations.
+    pub ik_iterations: usize,
+}
+
+impl<E: Element> ParallelController<E> {
+    /// A controller of `model` starting at rest at the pressures `p0_pa`
+    /// (and `F̂ = 0`), stepping every `dt_s`.
+    ///
+    /// # Errors
+    /// As [`ParameterUpdater::new`] and [`ParallelRobot::solve`];
+    /// [`Error::DimensionMismatch`] (`pressures_pa`) for a wrong count.
+    pub fn new(
+        model: ParallelRobot<E>,
+        kind: ControllerKind,
+        gains: UpdaterGains,
+        dt_s: f64,
+        p0_pa: &[f64],
+        tolerance_m: f64,
+    ) -> Result<Self> {
+        let np = model.spec().n_pressures();
+        check_len("pressures_pa", np, p0_pa.len())?;
+        let (mut lo, mut hi, mut range) = (Vec::new(), Vec::new(), Vec::new());
+        for rod in &model.structure().spec().rods {
+            for sec in &rod.sections {
+                for c in &sec.chambers {
+                    let r = c.pressure_max_pa - c.pressure_min_pa;
+                    if !(r.is_finite() && r > 0.0) {
+                        return Err(Error::invalid(
+                            "chambers.pressure_max_pa",
+                            c.pressure_max_pa,
+                            "tracking needs P_max > P_min",
+                        ));
+                    }
+                    lo.push(c.pressure_min_pa / r);
+                    hi.push(c.pressure_max_pa / r);
+                    range.push(r);
+                }
+            }
+        }
+        check_len("chambers", np, range.len())?;
+        let eq = model.solve(&model.loads(p0_pa, [0.0; 3], [0.0; 3])?, None)?;
+        let mut warm = WarmStatics::new(model)?;
+        warm.factor_at(&eq.u, &warm.robot().loads(p0_pa, [0.0; 3], [0.0; 3])?)?;
+        Ok(ParallelController {
+            warm,
+            kind,
+            updater: ParameterUpdater::new(3, gains, dt_s)?,
+            lo,
+            hi,
+            range,
+            tolerance_m,
+            p: p0_pa.to_vec(),
+            u_ik: eq.u.clone(),
+            f_bar: [0.0; 3],
+            u_est: eq.u,
+        })
+    }
+
+    /// The model's platform position (m) at free coordinates `u`.
+    fn platform(&self, u: &[f64]) -> Result<[f64; 3]> {
+        let x0 = self.warm.robot().platform_free_start()?;
+        check_len("u", self.warm.robot().structure().n_free(), u.len())?;
+        Ok([u[x0], u[x0 + 1], u[x0 + 2]])
+    }
+
+    /// The model's equilibrium at pressures `p` and platform force `f`.
+    fn forward(&mut self, p: &[f64], f: [f64; 3], u0: &[f64]) -> Result<(Vec<f64>, [f64; 3])> {
+        let loads = self.warm.robot().loads(p, f, [0.0; 3])?;
+        let u = self.warm.solve(&loads, u0)?;
+        let x = self.platform(&u)?;
+        Ok((u, x))
+    }
+
+    /// The estimator: the force at the platform's centre that puts the
+    /// model's platform at `measured` under the last command.
+    fn estimate(&mut self, measured: [f64; 3]) -> Result<[f64; 3]> {
+        let mut f = self.f_bar;
+        let u0 = self.u_est.clone();
+        let p = self.p.clone();
+        let (mut u, mut x) = self.forward(&p, f, &u0)?;
+        for _ in 0..ESTIMATOR_ITERATIONS {
+            let r = nalgebra::Vector3::from_fn(|i, _| measured[i] - x[i]);
+            if r.norm() <= 0.1 * self.tolerance_m {
+                break;
+            }
+            let c = self.warm.compliance()?;
+            let df = c.lu().solve(&r).ok_or_else(|| {
+                Error::invalid("measured_m", format!("{measured:?}"), "singular compliance")
+            })?;
+            for i in 0..3 {
+                f[i] += df[i];
+            }
+            (u, x) = self.forward(&p, f, &u)?;
+        }
+        self.u_est = u;
+        self.f_bar = f;
+        Ok(f)
+    }
+
+    /// `f_IK(x_d, F̂)` from the last command; returns the command, the
+    /// remaining distance and the iterations.
+    fn inverse_kinematics(&mut self, x_d: [f64; 3], f_hat: [f64; 3]) -> Result<(f64, usize)> {
+        let np = self.range.len();
+        let mut p = self.p.clone();
+        let u0 = self.u_ik.clone();
+        let (mut u, mut x) = self.forward(&p, f_hat, &u0)?;
+        let merit = |x: &[f64; 3], p: &[f64], range: &[f64]| -> f64 {
+            let r2: f64 = (0..3).map(|i| (x_d[i] - x[i]).powi(2)).sum();
+            let p2: f64 = p.iter().zip(range).map(|(p, r)| (p / r).powi(2)).sum();
+            0.5 * r2 / (ELL_M * ELL_M) + 0.5 * MU * p2
+        };
+        let dist = |x: &[f64; 3]| (0..3).map(|i| (x_d[i] - x[i]).powi(2)).sum::<f64>().sqrt();
+        let mut phi = merit(&x, &p, &self.range);
+        let mut iterations = 0;
+        while iterations < 20 && dist(&x) > self.tolerance_m {
+            iterations += 1;
+            // the Jacobian at the tangent of this iterate: Newton's rate
+            let loads = self.warm.robot().loads(&p, f_hat, [0.0; 3])?;
+            self.warm.factor_at(&u, &loads)?;
+            let jac = self.warm.sensitivities(&u)?.jacobian_m_per_pa;
+            let jh = nalgebra::DMatrix::from_fn(3, np, |r, c| jac[(r, c)] * self.range[c]);
+            let w = 1.0 / (ELL_M * ELL_M);
+            let h = jh.transpose() * &jh * w + nalgebra::DMatrix::identity(np, np) * (MU + LAMBDA);
+            let ph: Vec<f64> = p.iter().zip(&self.range).map(|(p, r)| p / r).collect();
+            let g: Vec<f64> = (0..np)
+                .map(|c| {
+                    -w * (0..3).map(|k| jh[(k, c)] * (x_d[k] - x[k])).sum::<f64>() + MU * ph[c]
+                })
+                .collect();
+            let lo: Vec<f64> = (0..np)
+                .map(|c| (self.lo[c] - ph[c]).max(-MAX_STEP))
+                .collect();
+            let hi: Vec<f64> = (0..np)
+                .map(|c| (self.hi[c] - ph[c]).min(MAX_STEP))
+                .collect();
+            let sol = crate::control::boxqp::solve(&h, &g, &lo, &hi)?;
+            let dec: f64 = -g.iter().zip(&sol.x).map(|(a, b)| a * b).sum::<f64>();
+            let small = sol.x.iter().fold(0.0f64, |m, v| m.max(v.abs())) <= 1e-7;
+            if small || dec <= 1e-12 * phi.max(1e-2) {
+                break;
+            }
+            let mut t = 1.0;
+            let mut accepted = false;
+            for _ in 0..10 {
+                let trial: Vec<f64> = (0..np)
+                    .map(|c| {
+                        ((ph[c] + t * sol.x[c]) * self.range[c])
+                            .clamp(self.lo[c] * self.range[c], self.hi[c] * self.range[c])
+                    })
+                    .collect();
+                if let Ok((ut, xt)) = self.forward(&trial, f_hat, &u) {
+                    let phit = merit(&xt, &trial, &self.range);
+                    if phit <= phi - 1e-4 * t * dec {
+                        (p, u, x, phi) = (trial, ut, xt, phit);
+                        accepted = true;
+                        break;
+                    }
+                }
+                t *= 0.5;
+            }
+            if !accepted {
+                break;
+            }
+        }
+        self.p = p;
+        self.u_ik = u;
+        Ok((dist(&x), iterations))
+    }
+
+    /// One control instant: the measured platform (m) in, the command for
+    /// the next interval (towards `x_next`, the target at the next instant)
+    /// out.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for non-finite input; the errors of the
+    /// static solves.
+    pub fn step(&mut self, measured_m: [f64; 3], x_next_m: [f64; 3]) -> Result<ControlStep> {
+        check_all_finite("measured_m", &measured_m)?;
+        check_all_finite("x_d", &x_next_m)?;
+        let (f_bar, f_hat) = match self.kind {
+            ControllerKind::Ff => ([0.0; 3], [0.0; 3]),
+            ControllerKind::FfUpdater => {
+                let f_bar = self.estimate(measured_m)?;
+                let h = self.updater.step(&f_bar)?;
+                (f_bar, [h[0], h[1], h[2]])
+            }
+        };
+        let (ik_error_m, ik_iterations) = self.inverse_kinematics(x_next_m, f_hat)?;
+        Ok(ControlStep {
+            f_bar_n: f_bar,
+            f_hat_n: f_hat,
+            pressures_pa: self.p.clone(),
+            ik_error_m,
+            ik_iterations,
+        })
+    }
+}
+
+/// One instant of a tracking run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrackSample {
+    /// Time (s).
+    pub time_s: f64,
+    /// Desired platform position (m).
+    pub desired_m: [f64; 3],
+    /// The plant's platform (m).
+    pub actual_m: [f64; 3],
+    /// Its marker as measured (m).
+    pub measured_m: [f64; 3],
+    /// `|actual − desired|` (m).
+    pub error_m: f64,
+    /// What the controller did at this instant.
+    pub control: ControlStep,
+    /// Wall time of the controller's step (s).
+    pub step_time_s: f64,
+}
+
+/// The summary of a run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrackSummary {
+    /// Which controller ran.
+    pub controller: ControllerKind,
+    /// Samples in all.
+    pub samples: usize,
+    /// Errors are scored from this time on (s).
+    pub score_from_s: f64,
+    /// Mean tracking error from then on (m).
+    pub mean_error_m: f64,
+    /// Largest tracking error from then on (m).
+    pub max_error_m: f64,
+    /// Median wall time of a controller step (s).
+    pub median_step_time_s: f64,
+    /// Instants whose inverse kinematics ended farther than its tolerance.
+    pub ik_not_reached: usize,
+    /// The hung mass (kg).
+    pub payload_kg: f64,
+    /// The static solves of the controller's model and what they cost.
+    pub model_solves: WarmCounts,
+    /// The plant's static solves.
+    pub plant_solves: WarmCounts,
+    /// The longest controller step (s).
+    pub max_step_time_s: f64,
+}
+
+/// A tracking run: its summary and samples.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrackRun {
+    /// The summary.
+    pub summary: TrackSummary,
+    /// One per control instant.
+    pub samples: Vec<TrackSample>,
+}
+
+/// The trajectory of a run: a horizontal circle of `settings.radius_m`
+/// about the model's platform under the centre pressures, starting from
+/// rest after the hold (the built-in circle's smooth start).
+///
+/// # Errors
+/// As [`Trajectory::new`].
+fn circle(centre: [f64; 3], s: &TrackSettings) -> Result<Trajectory> {
+    let planar = Trajectory::circle(
+        [centre[0], centre[1]],
+        s.radius_m,
+        s.period_s,
+        s.duration_s,
+        s.hold_s,
+    )?;
+    let points = planar
+        .points_m
+        .iter()
+        .map(|p| vec![p[0], p[1], centre[2]])
+        .collect();
+    Trajectory::new(planar.times_s.clone(), points)
+}
+
+/// The centre pressures of a run: chamber 0 of every leg's first section
+/// at 40 kPa (the second configuration of the Fig. 8 experiment): the
+/// legs bent, the pressures inside their bounds.
+///
+/// # Example
+/// ```
+/// let spec = softrod::parallel::ParallelSpec::default();
+/// assert_eq!(softrod::parallel::track::centre_pressures(&spec)[0], 40e3);
+/// ```
+pub fn centre_pressures(spec: &ParallelSpec) -> Vec<f64> {
+    super::payload::fig8_configurations(spec)
+        .get(1)
+        .cloned()
+        .unwrap_or_default()
+}
+
+/// Tracks the circle of `settings` with the robot of `spec` as the
+/// controller's model (at `settings.model_elements_per_section`) against the
+/// plant [`super::payload::plant_spec`] of it carrying
+/// `settings.payload_kg`, legs of the full 3-D element in both. The circle
+/// is about the model's platform at the pressures `centre_pa` (Pa; empty:
+/// [`centre_pressures`]), where the first command starts.
+///
+/// # Errors
+/// As [`TrackSettings::validate`] and [`ParallelSpec::validate`];
+/// [`Error::DimensionMismatch`] (`pressures_pa`) for a wrong count; the
+/// static solves' errors.
+///
+/// # Example
+/// See `tests/parallel_track.rs` and `examples/parallel_track.rs`.
+pub fn run_track(
+    spec: &ParallelSpec,
+    centre_pa: &[f64],
+    settings: &TrackSettings,
+) -> Result<TrackRun> {
+    settings.validate()?;
+    spec.validate()?;
+    let mut model_spec = spec.clone();
+    model_spec.elements_per_section = settings.model_elements_per_section;
+    let model: ParallelRobot<Ancf3d> = model_spec.build_full()?;
+    let plant = super::payload::plant_spec(spec).build_full()?;
+    let dt = 1.0 / settings.control_rate_hz;
+    let p_c = if centre_pa.is_empty() {
+        centre_pressures(spec)
+    } else {
+        check_len("pressures_pa", spec.n_pressures(), centre_pa.len())?;
+        check_all_finite("pressures_pa", centre_pa)?;
+        centre_pa.to_vec()
+    };
+    let centre_eq = model.solve(&model.loads(&p_c, [0.0; 3], [0.0; 3])?, None)?;
+    let c = model.platform_pose(&centre_eq.q)?;
+    let trajectory = circle([c[0], c[1], c[2]], settings)?;
+    let x_at = |t: f64| -> [f64; 3] {
+        let v = trajectory.at(t);
+        [v[0], v[1], v[2]]
+    };
+    let mut ctl = ParallelController::new(
+        model,
+        settings.controller,
+        settings.gains,
+        dt,
+        &p_c,
+        settings.tolerance(),
+    )?;
+    // the first command: the start point without a load estimate
+    let first = ctl.step_ff(x_at(0.0))?;
+    let g = &plant.spec().gravity_m_per_s2;
+    let weight = [0, 1, 2].map(|i| settings.payload_kg * g[i]);
+    let plant_eq = plant.solve(&plant.loads(&first, weight, [0.0; 3])?, None)?;
+    let mut plant_warm = WarmStatics::new(plant)?;
+    let mut u_plant = plant_eq.u;
+    let x0 = plant_warm.robot().platform_free_start()?;
+    let mut noise = Gaussian::new(settings.seed);
+    let n = (trajectory.end_s() / dt).floor() as usize + 1;
+    let mut samples = Vec::with_capacity(n);
+    for k in 0..n {
+        let t = k as f64 * dt;
+        let actual = [u_plant[x0], u_plant[x0 + 1], u_plant[x0 + 2]];
+        let measured = actual.map(|v| v + settings.noise_sigma_m * noise.sample());
+        let desired = x_at(t);
+        let clock = std::time::Instant::now();
+        let control = ctl.step(measured, x_at(t + dt))?;
+        let step_time_s = clock.elapsed().as_secs_f64();
+        let loads = plant_warm
+            .robot()
+            .loads(&control.pressures_pa, weight, [0.0; 3])?;
+        u_plant = plant_warm.solve(&loads, &u_plant)?;
+        let error_m = (0..3)
+            .map(|i| (actual[i] - desired[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        samples.push(TrackSample {
+            time_s: t,
+            desired_m: desired,
+            actual_m: actual,
+            measured_m: measured,
+            error_m,
+            control,
+            step_time_s,
+        });
+    }
+    let mut summary = summarize(settings, &samples);
+    summary.model_solves = ctl.warm.counts();
+    summary.plant_solves = plant_warm.counts();
+    Ok(TrackRun { summary, samples })
+}
+
+impl TrackSettings {
+    fn tolerance(&self) -> f64 {
+        self.ik_tolerance_m
+    }
+}
+
+impl<E: Element> ParallelController<E> {
+    /// The feedforward command towards `x_d` with the updater's current
+    /// `F̂`, without a new estimate (the first instant, before a frame).
+    fn step_ff(&mut self, x_d: [f64; 3]) -> Result<Vec<f64>> {
+        let e = self.updater.estimate();
+        let f_hat = [e[0], e[1], e[2]];
+        self.inverse_kinematics(x_d, f_hat)?;
+        Ok(self.p.clone())
+    }
+}
+
+fn summarize(settings: &TrackSettings, samples: &[TrackSample]) -> TrackSummary {
+    let scored: Vec<f64> = samples
+        .iter()
+        .filter(|s| s.time_s >= settings.score_from_s)
+        .map(|s| s.error_m)
+        .collect();
+    let mean = if scored.is_empty() {
+        0.0
+    } else {
+        scored.iter().sum::<f64>() / scored.len() as f64
+    };
+    let mut times: Vec<f64> = samples.iter().map(|s| s.step_time_s).collect();
+    times.sort_by(f64::total_cmp);
+    TrackSummary {
+        controller: settings.controller,
+        samples: samples.len(),
+        score_from_s: settings.score_from_s,
+        mean_error_m: mean,
+        max_error_m: scored.iter().fold(0.0, |m: f64, v| m.max(*v)),
+        median_step_time_s: times.get(times.len() / 2).copied().unwrap_or(0.0),
+        ik_not_reached: samples
+            .iter()
+            .filter(|s| s.control.ik_error_m > settings.ik_tolerance_m)
+            .count(),
+        payload_kg: settings.payload_kg,
+        model_solves: WarmCounts::default(),
+        plant_solves: WarmCounts::default(),
+        max_step_time_s: times.last().copied().unwrap_or(0.0),
+    }
+}
