@@ -595,7 +595,8 @@ impl<E: Element + 'static> ClosedLoop<E> {
                     .map(|(a, b)| (a - b).powi(2))
                     .sum::<f64>()
                     .sqrt();
-                if !(e <= limit) {
+                // A NaN distance aborts the run too.
+                if e.is_nan() || e > limit {
                     let zeros_d = vec![0.0; E::DIM];
                     let last = series.samples.last();
                     series.samples.push(LoopSample {

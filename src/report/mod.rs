@@ -38,13 +38,13 @@
 #[doc(hidden)]
 pub mod auto_point;
 #[doc(hidden)]
-pub mod loop_failure;
-#[doc(hidden)]
-pub mod loop_pareto;
+pub mod coverage;
 #[doc(hidden)]
 pub mod grasp;
 #[doc(hidden)]
-pub mod coverage;
+pub mod loop_failure;
+#[doc(hidden)]
+pub mod loop_pareto;
 #[doc(hidden)]
 pub mod pareto;
 #[doc(hidden)]
