@@ -200,7 +200,7 @@ impl ParallelSpec {
                 f("platform_radius_m"),
                 self.platform_radius_m,
                 format!(
-                    "joins the legs off the platform (its radius is {} m)",
+                    "joins the legs off the platform (`parallel.platform_disc_radius_m` = {} m)",
                     self.platform_disc_radius_m
                 ),
             ));
@@ -211,7 +211,9 @@ impl ParallelSpec {
                 f("leg_length_m"),
                 self.leg_length_m,
                 format!(
-                    "legs must be longer than the radii's difference {gap} m to reach the platform"
+                    "legs must be longer than the difference of `parallel.base_radius_m` = {} m \
+                     and `parallel.platform_radius_m` = {} m ({gap:e} m) to reach the platform",
+                    self.base_radius_m, self.platform_radius_m
                 ),
             ));
         }

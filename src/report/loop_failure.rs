@@ -43,7 +43,10 @@ impl FailureGrid {
         if quick {
             FailureGrid {
                 payload_weights: vec![0.0, 5.0],
-                ei_error: vec![-0.3, 0.3],
+                // +30 % at 5 Hz is a measured marginal case of the full grid
+                // (mean 0.51–0.80 mm, "estimate inaccurate"): the quick grid
+                // keeps to cases the full grid converges on
+                ei_error: vec![-0.3, 0.15],
                 noise_sigma_m: vec![1e-4],
                 control_rate_hz: vec![5.0, 60.0],
             }

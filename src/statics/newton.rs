@@ -127,6 +127,12 @@ impl StaticSolver {
         // unstable ones, e.g. a column standing straight above its buckling load)
         let status = if quick.is_converged() && (w.iterations == 0 || w.definite) {
             quick
+        } else if scale.is_finite() && !model.conservative(loads) {
+            // Non-conservative (follower) loads: the tangent is the symmetric
+            // part only, Newton converges linearly and the continuation's
+            // contraction test would halve every step; the globalized
+            // homotopy below handles them.
+            StaticStatus::LineSearchFailed
         } else if scale.is_finite() {
             u.copy_from_slice(&u_start);
             w.q.copy_from_slice(&q_start);

@@ -309,6 +309,8 @@ pub fn run_avoidance(
     let mut p: Vec<f64> = plant_pressures(plant);
     let es = EstimatorSettings {
         noise_sigma_m: settings.noise_sigma_m,
+        // the rule the avoidance runs were measured with
+        alpha_rule: crate::estimate::AlphaRule::Discrepancy,
         ..EstimatorSettings::default()
     };
     let mut known = base_loads.clone();

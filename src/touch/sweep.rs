@@ -200,6 +200,8 @@ pub fn run_localization(
     };
     let es = EstimatorSettings {
         noise_sigma_m: settings.noise_sigma_m.max(1e-6),
+        // the rule the localization tables were measured with
+        alpha_rule: crate::estimate::AlphaRule::Discrepancy,
         ..EstimatorSettings::default()
     };
     // the paper's method on the nominal model: the virtual payload (the
