@@ -26,9 +26,9 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use softrod::control::parallel::ParallelController;
 use softrod::control::{ControllerKind, UpdaterGains};
 use softrod::parallel::payload::fig8_configurations;
-use softrod::parallel::track::ParallelController;
 use softrod::parallel::ParallelSpec;
 
 fn bench(c: &mut Criterion) {

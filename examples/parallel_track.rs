@@ -6,8 +6,8 @@
 //! Run: `cargo run --release --example parallel_track [-- <duration_s> [<model elements per section> [<radius_mm>]]]`.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
+use softrod::control::parallel::{run_track, TrackSettings};
 use softrod::control::ControllerKind;
-use softrod::parallel::track::{run_track, TrackSettings};
 use softrod::parallel::ParallelSpec;
 
 fn main() -> Result<(), softrod::Error> {

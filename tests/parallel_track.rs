@@ -12,8 +12,8 @@
 //! from `elements_per_section = 1` doubled) 2.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
+use softrod::control::parallel::{run_track, TrackSettings};
 use softrod::control::ControllerKind;
-use softrod::parallel::track::{run_track, TrackSettings};
 use softrod::parallel::ParallelSpec;
 
 #[test]
@@ -87,7 +87,7 @@ fn platform_sensitivities_match_finite_differences() {
         ..ParallelSpec::default()
     };
     let robot = spec.build_full().unwrap();
-    let mut p = softrod::parallel::track::centre_pressures(&spec);
+    let mut p = softrod::control::parallel::centre_pressures(&spec);
     // every chamber inside its bounds, so central differences stay in them
     p.iter_mut()
         .enumerate()

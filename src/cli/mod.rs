@@ -104,7 +104,7 @@ enum Command {
     /// Without a trajectory file: a 5 mm circle about the end effector at
     /// the scene's pressures. A parallel-robot scene tracks a horizontal
     /// platform circle instead; its trajectory file holds the run's
-    /// settings (softrod::parallel::track::TrackSettings).
+    /// settings (softrod::control::parallel::TrackSettings).
     Track {
         /// Scene file (JSON): the controller's model and the markers.
         scene: PathBuf,

@@ -130,7 +130,7 @@ pub(super) fn estimate(
 
 /// `softrod track` on a parallel scene: the circle about the platform at
 /// the scene's pressures (the default centre without), the run's settings
-/// from the trajectory file (`softrod::parallel::track::TrackSettings`,
+/// from the trajectory file (`softrod::control::parallel::TrackSettings`,
 /// every field optional), the controller overridden by `--controller`.
 pub(super) fn track(
     scene: ParallelScene,
@@ -139,7 +139,8 @@ pub(super) fn track(
     controller: Option<softrod::control::ControllerKind>,
     out: Option<&PathBuf>,
 ) -> Result<()> {
-    use softrod::parallel::{track, LegElement};
+    use softrod::control::parallel as track;
+    use softrod::parallel::LegElement;
     if payload_file {
         anyhow::bail!(
             "--payload: a parallel-robot run hangs one mass, the trajectory file's `payload_kg`"

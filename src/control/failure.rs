@@ -165,13 +165,13 @@ impl Default for FailureSettings {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LoopVerdict {
-    /// See the [module documentation](self).
+    /// See [`run_case`](crate::control::run_case).
     Converged,
-    /// See the [module documentation](self).
+    /// See [`run_case`](crate::control::run_case).
     Diverged,
 }
 
-/// Why a case diverged (see the [module documentation](self) for the
+/// Why a case diverged (see [`run_case`](crate::control::run_case) for the
 /// order in which they are tested).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -266,8 +266,7 @@ pub fn robot_mass_kg(scene: &Scene) -> f64 {
         .sum()
 }
 
-/// The trajectory file of `case` under `settings` (see the [module
-/// documentation](self)).
+/// The trajectory file of `case` under `settings` (see [`run_case`](crate::control::run_case)).
 ///
 /// # Errors
 /// As [`LoopCase::validate`].
@@ -367,8 +366,7 @@ fn mean(v: &[f64]) -> f64 {
     }
 }
 
-/// The verdict and cause of a finished run (see the [module
-/// documentation](self)).
+/// The verdict and cause of a finished run (see [`run_case`](crate::control::run_case)).
 fn judge(scene: &Scene, case: LoopCase, settings: &FailureSettings, run: &TrackRun) -> LoopOutcome {
     let from = run.summary.score_from_s;
     let scored: Vec<_> = run

@@ -15,6 +15,8 @@
 //! - [`VirtualPayload`]: the load estimated on a payload-free run, as a
 //!   function of the configuration, to subtract.
 //! - [`ClosedLoop`]: one controller stepping against a [`crate::plant::Plant`].
+//! - [`parallel`]: the same loop on the soft parallel robot (its own
+//!   inverse kinematics and platform estimator, this module's updater).
 //! - [`run_case`]: one case of the sweep of where the loop fails
 //!   (payload × stiffness error × noise × rate), converged or diverged and
 //!   why.
@@ -25,6 +27,7 @@ mod closed_loop;
 mod failure;
 mod ik;
 mod mass;
+pub mod parallel;
 mod track;
 mod trajectory;
 mod updater;

@@ -29,7 +29,6 @@
 //!   position.
 
 pub mod payload;
-pub mod track;
 pub mod warm;
 
 use serde::{Deserialize, Serialize};

@@ -28,11 +28,11 @@
 //!   instead of 1–3), in the range of `J` it is Gauss–Newton's;
 //! - feedforward only: `F̂ = 0` (the model's own weights only).
 //!
-//! Every equilibrium is a warm chord solve ([`super::warm`]), which is what
+//! Every equilibrium is a warm chord solve ([`crate::parallel::warm`]), which is what
 //! makes a control step cost milliseconds instead of a cold solve's 0.1 s.
 //!
 //! The plant is another [`ParallelRobot`]: finer mesh and the stiffness and
-//! gain errors of [`super::payload::plant_spec`], the mass hung from the
+//! gain errors of [`crate::parallel::payload::plant_spec`], the mass hung from the
 //! platform's centre, solved statically at every control instant (a
 //! quasi-static plant: the platform is taken to settle within a control
 //! interval; the robot's dynamics are not modelled here), its marker read
@@ -47,12 +47,12 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::warm::{WarmCounts, WarmStatics};
-use super::{ParallelRobot, ParallelSpec};
-use crate::control::{ControllerKind, ParameterUpdater, Trajectory, UpdaterGains};
+use super::{ControllerKind, ParameterUpdater, Trajectory, UpdaterGains};
 use crate::element::{Ancf3d, Element};
 use crate::error::{check_all_finite, check_len, Error, Result};
 use crate::observe::Gaussian;
+use crate::parallel::warm::{WarmCounts, WarmStatics};
+use crate::parallel::{ParallelRobot, ParallelSpec};
 
 /// Weight of the scaled pressures' norm against the position error.
 const MU: f64 = 1e-4;
@@ -71,7 +71,7 @@ const ESTIMATOR_ITERATIONS: usize = 8;
 ///
 /// # Example
 /// ```
-/// let s: softrod::parallel::track::TrackSettings = serde_json::from_str(r#"{"payload_kg": 0.05}"#)?;
+/// let s: softrod::control::parallel::TrackSettings = serde_json::from_str(r#"{"payload_kg": 0.05}"#)?;
 /// assert_eq!(s.control_rate_hz, 10.0);
 /// s.validate()?;
 /// # Ok::<(), Box<dyn std::error::Error>>(())
@@ -355,7 +355,7 @@ impl<E: Element> ParallelController<E> {
             let hi: Vec<f64> = (0..np)
                 .map(|c| (self.hi[c] - ph[c]).min(MAX_STEP))
                 .collect();
-            let sol = crate::control::boxqp::solve(&h, &g, &lo, &hi)?;
+            let sol = super::boxqp::solve(&h, &g, &lo, &hi)?;
             let dec: f64 = -g.iter().zip(&sol.x).map(|(a, b)| a * b).sum::<f64>();
             let small = sol.x.iter().fold(0.0f64, |m, v| m.max(v.abs())) <= 1e-7;
             if small || dec <= 1e-12 * phi.max(1e-2) {
@@ -502,10 +502,10 @@ fn circle(centre: [f64; 3], s: &TrackSettings) -> Result<Trajectory> {
 /// # Example
 /// ```
 /// let spec = softrod::parallel::ParallelSpec::default();
-/// assert_eq!(softrod::parallel::track::centre_pressures(&spec)[0], 40e3);
+/// assert_eq!(softrod::control::parallel::centre_pressures(&spec)[0], 40e3);
 /// ```
 pub fn centre_pressures(spec: &ParallelSpec) -> Vec<f64> {
-    super::payload::fig8_configurations(spec)
+    crate::parallel::payload::fig8_configurations(spec)
         .get(1)
         .cloned()
         .unwrap_or_default()
@@ -513,7 +513,7 @@ pub fn centre_pressures(spec: &ParallelSpec) -> Vec<f64> {
 
 /// Tracks the circle of `settings` with the robot of `spec` as the
 /// controller's model (at `settings.model_elements_per_section`) against the
-/// plant [`super::payload::plant_spec`] of it carrying
+/// plant [`crate::parallel::payload::plant_spec`] of it carrying
 /// `settings.payload_kg`, legs of the full 3-D element in both. The circle
 /// is about the model's platform at the pressures `centre_pa` (Pa; empty:
 /// [`centre_pressures`]), where the first command starts.
@@ -535,7 +535,7 @@ pub fn run_track(
     let mut model_spec = spec.clone();
     model_spec.elements_per_section = settings.model_elements_per_section;
     let model: ParallelRobot<Ancf3d> = model_spec.build_full()?;
-    let plant = super::payload::plant_spec(spec).build_full()?;
+    let plant = crate::parallel::payload::plant_spec(spec).build_full()?;
     let dt = 1.0 / settings.control_rate_hz;
     let p_c = if centre_pa.is_empty() {
         centre_pressures(spec)
