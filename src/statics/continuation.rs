@@ -72,7 +72,9 @@ pub(super) struct PathEnd {
 impl StaticSolver {
     /// Follows the path from `u` (the start, `w.q = φ(u)`) to `λ = 1`; on
     /// success `u` is near the full load's equilibrium (the caller
-    /// polishes it with [`StaticSolver::newton`]).
+    /// polishes it with [`StaticSolver::newton`]). Conservative loads only:
+    /// the caller sends non-conservative ones to the homotopy, so every
+    /// tangent here is a potential's and its inertia tells stability.
     pub(super) fn continuation<M: Assembled>(
         &self,
         model: &M,
@@ -93,9 +95,7 @@ impl StaticSolver {
         let mut tangent: Option<(Vec<f64>, f64)> = None;
         let mut previous_tangent: Option<(Vec<f64>, f64)> = None;
         let mut load_steps = 0;
-        // whether the path's last point was a stable equilibrium (only a
-        // potential's tangent tells)
-        let conservative = model.conservative(loads);
+        // whether the path's last point was a stable equilibrium
         let mut stable = false;
         let (mut r1, mut rz) = (vec![0.0; n], vec![0.0; n]);
         let mut dq = vec![0.0; nq];
@@ -189,9 +189,7 @@ impl StaticSolver {
                 // a step from a stable point to an unstable one stepped over
                 // a bifurcation (a column's buckling load: the straight
                 // column goes on as a saddle, the path bends away): shorter
-                Corrected::Done { factors: f, .. }
-                    if conservative && stable && !f.is_positive_definite() =>
-                {
+                Corrected::Done { factors: f, .. } if stable && !f.is_positive_definite() => {
                     u_try.copy_from_slice(u);
                     q_try.copy_from_slice(&w.q);
                     delta = 0.5 * h;
