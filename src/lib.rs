@@ -19,6 +19,7 @@
 //! - [`observe`]: marker observations and the observation operator `A` (25).
 //! - [`estimate`]: shape and load estimation (25)–(30), backends `newton` and `sqp`.
 //! - [`scene`]: JSON scene files; [`params`]: the values the paper leaves open.
+//! - [`shape`]: typed results (nalgebra): positions, angles, tip pose, clamp reaction, the estimated load and its covariance.
 //! - [`outcome`]: how a solve ended: the status enums and the reports errors carry.
 //! - [`refine`]: `"elements": "auto"`, the smallest mesh meeting a tolerance.
 //! - [`linsolve`]: linear solvers for the tangent (banded, faer sparse); [`quadrature`]: Gauss rules.
@@ -67,6 +68,7 @@ pub mod refine;
 pub mod report;
 pub mod scene;
 pub mod sensitivity;
+pub mod shape;
 pub mod statics;
 pub mod structure;
 pub mod touch;

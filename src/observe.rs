@@ -133,6 +133,33 @@ impl Observation {
         }
     }
 
+    /// The exact positions of the configuration `q` of `robot` at the given
+    /// nodes (a noise-free synthetic observation), refusing what
+    /// [`Observation::at_nodes`] skips: a node beyond the robot, or a `q`
+    /// of another size.
+    ///
+    /// # Errors
+    /// [`crate::Error::DimensionMismatch`] named `q`;
+    /// [`crate::Error::IndexOutOfRange`] named `nodes[i]`.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{observe::Observation, scene::Scene};
+    /// let robot = Scene::two_section().robot()?;
+    /// let q = robot.reference_configuration();
+    /// let o = Observation::of_nodes(&robot, &q, &[10, 20])?;
+    /// assert_eq!(o.markers[1].position_m, q[80..82].to_vec());
+    /// assert!(Observation::of_nodes(&robot, &q, &[10, 21]).is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn of_nodes<E: Element>(robot: &Robot<E>, q: &[f64], nodes: &[usize]) -> Result<Self> {
+        check_len("q", robot.n_q(), q.len())?;
+        for (i, &n) in nodes.iter().enumerate() {
+            check_index(&format!("nodes[{i}]"), n, robot.n_nodes())?;
+        }
+        Ok(Self::at_nodes(robot, q, nodes))
+    }
+
     /// Number of observed scalar components `n_ob`.
     ///
     /// # Example

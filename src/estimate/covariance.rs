@@ -4,18 +4,19 @@
 //! - the reported ones (resultant force, marker-space shape) are the
 //!   posterior's, `Cov(F | y) = (JᵀWJ + αH)⁻¹`, of the model in which the
 //!   penalty is a Gaussian prior (see [`super::evidence`]): noise spread
-//!   plus the bias of the penalty;
+//!   plus the bias of the penalty; when `α` is the evidence's, averaged
+//!   over `α`'s own uncertainty ([`posterior_alpha_marginal`]);
 //! - the covariance factor `L = σ (JᵀWJ + αH)⁻¹ JᵀW` (`n_F × n_ob`) of
 //!   the linearized estimator `F̂ ≈ (JᵀWJ + αH)⁻¹ JᵀW y` with `Cov(y) =
 //!   σ² I`, `Cov(F̂) = L Lᵀ`, is the noise spread alone (no bias).
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 use crate::element::Element;
 use crate::observe::ObservationOperator;
 
 use super::problem::{jittered_cholesky, weighted_columns, Derivs, GnFactor, Problem};
-use super::{Estimate, LoadModel};
+use super::{AlphaRule, Estimate, LoadModel};
 
 /// The covariance factor `L = σ (JᵀWJ + αH)⁻¹ JᵀW` (`n_F × n_ob`,
 /// row-major) from the factor of [`Problem::gn_solve`] at the same
@@ -121,6 +122,159 @@ fn posterior(
     }
 }
 
+/// The largest `σ` of `ln α` (one decade): where the evidence is flatter
+/// than that, its curvature says little about where the truth's `α` is.
+pub(crate) const SIGMA_LN_ALPHA_MAX: f64 = std::f64::consts::LN_10;
+
+/// How uncertain the evidence leaves `α`, and how the estimate moves with
+/// it, at a fixed linearization.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct AlphaSpread {
+    /// Standard deviation of `ln α` under the evidence (Laplace):
+    /// `σ² = 2 / (d²(−2 log p)/d(ln α)²)`, at most [`SIGMA_LN_ALPHA_MAX`].
+    pub sigma_ln: f64,
+    /// `d(C F̂)/d ln α`: how the resultant force moves with `α` (`DIM`).
+    pub force: DVector<f64>,
+    /// `d(J F̂)/d ln α`: how the predicted markers move with `α` (`n_ob`).
+    pub marker: DVector<f64>,
+}
+
+/// The curvature `d²(−2 log p(y | α))/d(ln α)²` of the evidence of the
+/// linearized model `y = J F + n`, `F ~ N(0, (αH)⁻¹)`, `n ~ N(0, W⁻¹)`, at
+/// its minimizer `F̂` (with `u = J F̂`, `pen = F̂ᵀ H F̂`) and `K = J H⁻¹ Jᵀ`
+/// (`n_ob × n_ob`). With `C = W⁻¹ + K/α` the marginal covariance of `y`,
+/// `P = C⁻¹`, `T = P K/α` (so `γ = tr T`):
+///
+/// ```text
+/// −2 log p = yᵀ P y + log det C + const
+/// d/d ln α   = α pen − γ
+/// d²/d ln α² = 2 uᵀ P u − α pen − tr(T²) + γ
+/// ```
+///
+/// (`P y = W e`, `Jᵀ W e = α H F̂` and `u = K P y / α` express the data
+/// through the estimate). `None` if `C` cannot be factored.
+pub(crate) fn evidence_curvature(
+    k: &DMatrix<f64>,
+    w: &[f64],
+    alpha: f64,
+    u: &DVector<f64>,
+    pen: f64,
+) -> Option<f64> {
+    let m = w.len();
+    let mut c = k / alpha;
+    for i in 0..m {
+        c[(i, i)] += 1.0 / w[i];
+    }
+    let c = (&c + c.transpose()) * 0.5;
+    let chol = jittered_cholesky(c)?;
+    let t = chol.solve(&(k / alpha));
+    let gamma = t.trace();
+    let tt = (&t * &t).trace();
+    let pu = chol.solve(u);
+    Some(2.0 * u.dot(&pu) - alpha * pen - tt + gamma)
+}
+
+/// The [`AlphaSpread`] of the estimate `f` (penalty `pen = fᵀ H f`) at
+/// `alpha`, for the load model `load` (see [`posterior`] for `nd`, `fw`,
+/// `dv`, `w`). At a fixed linearization the minimizer moves as
+/// `dF̂/d ln α = −N⁻¹ α H F̂` (`N = JᵀWJ + αH`): for the distributed field
+/// `−(F̂ − Z S⁻¹ J F̂)` (representer form), for a concentrated force
+/// `−α N⁻¹ F̂`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn alpha_spread(
+    load: LoadModel,
+    fw: &[f64],
+    dv: &Derivs,
+    w: &[f64],
+    alpha: f64,
+    f: &[f64],
+    pen: f64,
+) -> Option<AlphaSpread> {
+    let m = w.len();
+    let nf = dv.jt.nrows();
+    if f.len() != nf || m != dv.jt.ncols() {
+        return None;
+    }
+    let d = fw.len().checked_div(nf).unwrap_or(0);
+    let cm = DMatrix::from_row_slice(d, nf, fw);
+    let fv = DVector::from_column_slice(f);
+    let u = dv.jt.tr_mul(&fv);
+    let (k, df) = match load {
+        LoadModel::Distributed => {
+            let k = dv.z.tr_mul(&dv.jt);
+            let k = (&k + k.transpose()) * 0.5;
+            let mut s = k.clone();
+            for i in 0..m {
+                s[(i, i)] += alpha / w[i];
+            }
+            let chol = jittered_cholesky(s)?;
+            let df = -(&fv - &dv.z * chol.solve(&u));
+            (k, df)
+        }
+        LoadModel::Concentrated { .. } => {
+            let k = dv.jt.tr_mul(&dv.jt);
+            let mut n = weighted_columns(&dv.jt, w) * dv.jt.transpose();
+            for i in 0..n.nrows() {
+                n[(i, i)] += alpha;
+            }
+            let chol = jittered_cholesky(n)?;
+            let df = -chol.solve(&fv) * alpha;
+            (k, df)
+        }
+    };
+    let curv = evidence_curvature(&k, w, alpha, &u, pen)?;
+    let sigma_ln = if curv > 2.0 / (SIGMA_LN_ALPHA_MAX * SIGMA_LN_ALPHA_MAX) {
+        (2.0 / curv).sqrt()
+    } else {
+        SIGMA_LN_ALPHA_MAX
+    };
+    Some(AlphaSpread {
+        sigma_ln,
+        force: &cm * &df,
+        marker: dv.jt.tr_mul(&df),
+    })
+}
+
+/// The posterior covariances of [`posterior`] with `α` integrated out
+/// under the evidence: `ln α ~ N(ln α̂, σ²)` ([`AlphaSpread`]), the
+/// covariances averaged by the three-point Gauss–Hermite rule (`ln α̂`,
+/// `ln α̂ ± √3 σ`, weights 2/3, 1/6, 1/6) and the spread of the estimate
+/// itself added, `σ² g gᵀ` with `g = d(C F̂)/d ln α` (or `d(J F̂)/d ln α`).
+/// That is the mean squared error about the reported estimate `F̂(α̂)`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn posterior_alpha_marginal(
+    load: LoadModel,
+    nd: usize,
+    fw: &[f64],
+    dv: &Derivs,
+    w: &[f64],
+    alpha: f64,
+    f: &[f64],
+    pen: f64,
+) -> Option<(Vec<f64>, Vec<f64>)> {
+    let sp = alpha_spread(load, fw, dv, w, alpha, f, pen)?;
+    let h = 3f64.sqrt() * sp.sigma_ln;
+    let mut r: Option<DMatrix<f64>> = None;
+    let mut mk: Option<DMatrix<f64>> = None;
+    for (a, wt) in [
+        (alpha, 2.0 / 3.0),
+        (alpha * h.exp(), 1.0 / 6.0),
+        (alpha * (-h).exp(), 1.0 / 6.0),
+    ] {
+        let (ri, mi) = posterior(load, nd, fw, dv, w, a)?;
+        let d = sp.force.len();
+        let m = sp.marker.len();
+        let ri = DMatrix::from_row_slice(d, d, &ri) * wt;
+        let mi = DMatrix::from_row_slice(m, m, &mi) * wt;
+        r = Some(r.map_or(ri.clone(), |x| x + ri));
+        mk = Some(mk.map_or(mi.clone(), |x| x + mi));
+    }
+    let s2 = sp.sigma_ln * sp.sigma_ln;
+    let r = r? + &sp.force * sp.force.transpose() * s2;
+    let mk = mk? + &sp.marker * sp.marker.transpose() * s2;
+    Some((row_major(&r), row_major(&mk)))
+}
+
 /// `Cov(resultant force)` and `Cov(A q)` (row-major) of the estimate at
 /// `alpha`: the posterior's ([`posterior_cov`]), or, when its matrix cannot
 /// be factored, the spread the noise alone causes, from the covariance
@@ -133,8 +287,21 @@ pub(crate) fn estimate_cov<E: Element>(
     dv: &Derivs,
     op: &ObservationOperator,
     alpha: f64,
+    f: &[f64],
 ) -> (Vec<f64>, Vec<f64>, bool) {
     let informative = super::evidence::informative(dv);
+    let settings = problem.settings();
+    let by_evidence = settings.alpha.is_none() && settings.alpha_rule == AlphaRule::Evidence;
+    if by_evidence && informative {
+        if let Ok(pen) = problem.penalty(f) {
+            let load = problem.load();
+            let w = op.weights();
+            if let Some(c) = posterior_alpha_marginal(load, E::NODE_DOFS, fw, dv, w, alpha, f, pen)
+            {
+                return (c.0, c.1, informative);
+            }
+        }
+    }
     if let Some((r, mk)) = posterior_cov(problem, fw, dv, op, alpha) {
         return (r, mk, informative);
     }
@@ -285,5 +452,124 @@ mod tests {
             .unwrap();
         assert!(close(&rc, &post));
         assert!(close(&mc, &(jt.transpose() * &post * &jt)));
+    }
+
+    /// A linear problem with the minimizer `F̂(α)` in closed form: `B`
+    /// (`nf × nf`, SPD), `Z`, `J = Zᵀ B` (distributed) or `J = Zᵀ`
+    /// (concentrated), weights `w`, data `y`, a resultant map `C`.
+    struct Lin {
+        b: DMatrix<f64>,
+        z: DMatrix<f64>,
+        w: Vec<f64>,
+        y: nalgebra::DVector<f64>,
+        c: DMatrix<f64>,
+    }
+
+    impl Lin {
+        fn new(nf: usize, m: usize, seed: u64) -> Lin {
+            let r = DMatrix::from_vec(nf, nf, lcg(seed, nf * nf));
+            Lin {
+                b: &r * r.transpose() + DMatrix::identity(nf, nf) * 0.5,
+                z: DMatrix::from_vec(nf, m, lcg(seed + 1, nf * m)),
+                w: lcg(seed + 2, m).iter().map(|v| 2.0 + v).collect(),
+                y: nalgebra::DVector::from_vec(lcg(seed + 3, m)) * 3.0,
+                c: DMatrix::from_vec(2, nf, lcg(seed + 4, 2 * nf)),
+            }
+        }
+        fn jt(&self, load: LoadModel) -> DMatrix<f64> {
+            match load {
+                LoadModel::Distributed => &self.b * &self.z,
+                LoadModel::Concentrated { .. } => self.z.clone(),
+            }
+        }
+        fn h(&self, load: LoadModel) -> DMatrix<f64> {
+            match load {
+                LoadModel::Distributed => self.b.clone(),
+                LoadModel::Concentrated { .. } => DMatrix::identity(self.b.nrows(), self.b.nrows()),
+            }
+        }
+        /// `F̂(α)` and `−2 log p(y | α)` (up to a constant), densely.
+        fn at(&self, load: LoadModel, alpha: f64) -> (nalgebra::DVector<f64>, f64) {
+            let jt = self.jt(load);
+            let wm = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&self.w));
+            let n = &jt * &wm * jt.transpose() + self.h(load) * alpha;
+            let f = n.cholesky().unwrap().solve(&(&jt * &wm * &self.y));
+            let winv = wm.try_inverse().unwrap();
+            let cy = winv + jt.transpose() * self.h(load).try_inverse().unwrap() * &jt / alpha;
+            let chol = cy.cholesky().unwrap();
+            let ld = 2.0 * chol.l().diagonal().iter().map(|v| v.ln()).sum::<f64>();
+            (f, (self.y.transpose() * chol.solve(&self.y))[(0, 0)] + ld)
+        }
+        fn k(&self, load: LoadModel) -> DMatrix<f64> {
+            let jt = self.jt(load);
+            jt.transpose() * self.h(load).try_inverse().unwrap() * jt
+        }
+    }
+
+    const MODELS: [LoadModel; 2] = [LoadModel::Distributed, LoadModel::Concentrated { node: 1 }];
+
+    /// The evidence's curvature in `ln α` equals central second differences
+    /// of the evidence written out (each side re-minimized), for both load
+    /// models over five decades. Bound 1e-5 relative to `max(|curv|, 1)`
+    /// (a missing term, `2 uᵀPu` or `tr T²`, is off by O(1)).
+    #[test]
+    fn evidence_curvature_matches_finite_differences() {
+        for load in MODELS {
+            let p = Lin::new(6, 4, 21);
+            for alpha in [1e-3, 1e-2, 0.3, 5.0, 80.0] {
+                let (f, _) = p.at(load, alpha);
+                let u = p.jt(load).tr_mul(&f);
+                let pen = (f.transpose() * p.h(load) * &f)[(0, 0)];
+                let curv = evidence_curvature(&p.k(load), &p.w, alpha, &u, pen).unwrap();
+                let h: f64 = 1e-3;
+                let up = p.at(load, alpha * h.exp()).1;
+                let mid = p.at(load, alpha).1;
+                let dn = p.at(load, alpha * (-h).exp()).1;
+                let fd = (up - 2.0 * mid + dn) / (h * h);
+                assert!(
+                    (curv - fd).abs() <= 1e-5 * curv.abs().max(1.0),
+                    "{load:?} alpha {alpha}: {curv} vs fd {fd}"
+                );
+            }
+        }
+    }
+
+    /// `d(C F̂)/d ln α` and `d(J F̂)/d ln α` of [`alpha_spread`] equal
+    /// central differences of the re-minimized `F̂`, for both load models.
+    /// Bound 1e-6 relative to the largest entry (a sign or a missing `α` is
+    /// off by O(1)).
+    #[test]
+    fn estimate_slope_in_alpha_matches_finite_differences() {
+        for load in MODELS {
+            let p = Lin::new(6, 4, 33);
+            let fw: Vec<f64> = p.c.transpose().as_slice().to_vec();
+            for alpha in [1e-2, 0.3, 5.0] {
+                let (f, _) = p.at(load, alpha);
+                let jt = p.jt(load);
+                let dv = Derivs {
+                    z: p.z.clone(),
+                    jt: jt.clone(),
+                };
+                let pen = (f.transpose() * p.h(load) * &f)[(0, 0)];
+                let sp = alpha_spread(load, &fw, &dv, &p.w, alpha, f.as_slice(), pen).unwrap();
+                let h: f64 = 1e-5;
+                let df =
+                    (p.at(load, alpha * h.exp()).0 - p.at(load, alpha * (-h).exp()).0) / (2.0 * h);
+                let fd_force = &p.c * &df;
+                let fd_marker = jt.tr_mul(&df);
+                let scale = fd_force.amax().max(fd_marker.amax());
+                assert!(
+                    (&sp.force - &fd_force).amax() <= 1e-6 * scale,
+                    "{load:?} {alpha}: {} vs {}",
+                    sp.force,
+                    fd_force
+                );
+                assert!(
+                    (&sp.marker - &fd_marker).amax() <= 1e-6 * scale,
+                    "{load:?} {alpha}"
+                );
+                assert!(sp.sigma_ln > 0.0 && sp.sigma_ln <= SIGMA_LN_ALPHA_MAX);
+            }
+        }
     }
 }

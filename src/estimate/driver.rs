@@ -122,7 +122,7 @@ impl<E: Element> Stream<E> {
         let problem = &self.problem;
         let (resultant_force_n, resultant_moment_nm, fw) = problem.resultants(&q, &f)?;
         let (resultant_force_cov, marker_cov, informative) =
-            super::covariance::estimate_cov(problem, &cov_factor, &fw, dv, op, report.alpha);
+            super::covariance::estimate_cov(problem, &cov_factor, &fw, dv, op, report.alpha, &f);
         let mut report = report;
         if !informative {
             report.status = super::EstimateStatus::NoInformation;

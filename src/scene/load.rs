@@ -7,7 +7,7 @@ use crate::element::Element;
 use crate::error::{
     check_all_finite, check_finite, check_index, check_len, check_positive, Error, Result,
 };
-use crate::loads::{FollowerLoad, LineLoad};
+use crate::loads::{FollowerLoad, LineLoad, Loads, NodeMoment, PointForce, PointMoment};
 
 /// A known load of a scene (dead, world axes, SI). Vectors have as many
 /// components as the scene's element has dimensions (2 for `planar_cable`,
@@ -77,6 +77,79 @@ pub enum SceneLoad {
         /// Mass (kg).
         mass_kg: f64,
     },
+}
+
+impl SceneLoad {
+    /// Adds this load, the scene's `loads[i]`, to `loads` in the code's
+    /// terms ([`Loads`]): the one conversion from a scene's loads, which
+    /// [`super::Scene::loads`] runs for each. A tip load acts at the arc
+    /// coordinate `length_m` or the last of `n_nodes` nodes; a tip mass
+    /// under `gravity` (m/s²), which must have `dim` components.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `loads[i]....` for a non-positive
+    /// tip mass or a negative extra weight; [`Error::DimensionMismatch`]
+    /// for a gravity vector of the wrong size.
+    pub(crate) fn resolve_into(
+        &self,
+        i: usize,
+        dim: usize,
+        length_m: f64,
+        n_nodes: usize,
+        gravity: &[f64],
+        loads: &mut Loads,
+    ) -> Result<()> {
+        let (total, d) = (length_m, dim);
+        match self {
+            SceneLoad::Distributed(p) => loads.line_loads.push(p.clone()),
+            SceneLoad::Follower(f) => loads.follower_loads.push(f.clone()),
+            SceneLoad::TipForce { force_n } => loads.point_forces.push(PointForce {
+                s_m: total,
+                force_n: force_n.clone(),
+            }),
+            SceneLoad::PointForce { s_m, force_n } => loads.point_forces.push(PointForce {
+                s_m: *s_m,
+                force_n: force_n.clone(),
+            }),
+            SceneLoad::TipMoment { moment_nm } => loads.node_moments.push(NodeMoment {
+                node: n_nodes - 1,
+                moment_nm: moment_nm.components(),
+            }),
+            SceneLoad::NodeMoment { node, moment_nm } => loads.node_moments.push(NodeMoment {
+                node: *node,
+                moment_nm: moment_nm.components(),
+            }),
+            SceneLoad::Moment { s_m, moment_nm } => loads.point_moments.push(PointMoment {
+                s_m: *s_m,
+                moment_nm: moment_nm.components(),
+            }),
+            SceneLoad::SelfWeight {
+                mass_per_length_kg_per_m: m,
+                gravity_m_per_s2: g,
+            } => {
+                if !(m.is_finite() && *m >= 0.0) {
+                    return Err(Error::invalid(
+                        format!("loads[{i}].mass_per_length_kg_per_m"),
+                        m,
+                        "must be finite and >= 0",
+                    ));
+                }
+                check_len(&format!("loads[{i}].gravity_m_per_s2"), d, g.len())?;
+                loads.line_loads.push(LineLoad::Uniform {
+                    w_n_per_m: g.iter().map(|g| m * g).collect(),
+                })
+            }
+            SceneLoad::TipMass { mass_kg } => {
+                check_positive(&format!("loads[{i}].mass_kg"), *mass_kg)?;
+                check_len("gravity_m_per_s2", d, gravity.len())?;
+                loads.point_forces.push(PointForce {
+                    s_m: total,
+                    force_n: gravity.iter().map(|g| mass_kg * g).collect(),
+                })
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A concentrated moment in a scene file (N·m): a number in a planar scene,

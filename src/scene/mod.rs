@@ -17,7 +17,7 @@ use crate::assembly::{Base, Chamber, Robot, RobotSpec, Section};
 use crate::element::{Element, NodeKinematics, PlanarCable, SpatialCable, DEFAULT_GAUSS_POINTS};
 use crate::error::{check_at_most, check_index, check_len, check_positive, Error, Result};
 use crate::estimate::{EstimatorSettings, LoadModel};
-use crate::loads::{LineLoad, Loads, NodeMoment, PointForce, PointMoment};
+use crate::loads::Loads;
 use crate::params;
 
 pub use ladder::Ladder;
@@ -671,54 +671,7 @@ impl Scene {
             .iter()
             .fold(1usize, |a, s| a.saturating_add(s.elements));
         for (i, l) in self.loads.iter().enumerate() {
-            match l {
-                SceneLoad::Distributed(p) => loads.line_loads.push(p.clone()),
-                SceneLoad::Follower(f) => loads.follower_loads.push(f.clone()),
-                SceneLoad::TipForce { force_n } => loads.point_forces.push(PointForce {
-                    s_m: total,
-                    force_n: force_n.clone(),
-                }),
-                SceneLoad::PointForce { s_m, force_n } => loads.point_forces.push(PointForce {
-                    s_m: *s_m,
-                    force_n: force_n.clone(),
-                }),
-                SceneLoad::TipMoment { moment_nm } => loads.node_moments.push(NodeMoment {
-                    node: n_nodes - 1,
-                    moment_nm: moment_nm.components(),
-                }),
-                SceneLoad::NodeMoment { node, moment_nm } => loads.node_moments.push(NodeMoment {
-                    node: *node,
-                    moment_nm: moment_nm.components(),
-                }),
-                SceneLoad::Moment { s_m, moment_nm } => loads.point_moments.push(PointMoment {
-                    s_m: *s_m,
-                    moment_nm: moment_nm.components(),
-                }),
-                SceneLoad::SelfWeight {
-                    mass_per_length_kg_per_m: m,
-                    gravity_m_per_s2: g,
-                } => {
-                    if !(m.is_finite() && *m >= 0.0) {
-                        return Err(Error::invalid(
-                            format!("loads[{i}].mass_per_length_kg_per_m"),
-                            m,
-                            "must be finite and >= 0",
-                        ));
-                    }
-                    check_len(&format!("loads[{i}].gravity_m_per_s2"), d, g.len())?;
-                    loads.line_loads.push(LineLoad::Uniform {
-                        w_n_per_m: g.iter().map(|g| m * g).collect(),
-                    })
-                }
-                SceneLoad::TipMass { mass_kg } => {
-                    check_positive(&format!("loads[{i}].mass_kg"), *mass_kg)?;
-                    check_len("gravity_m_per_s2", d, self.gravity_m_per_s2.len())?;
-                    loads.point_forces.push(PointForce {
-                        s_m: total,
-                        force_n: self.gravity_m_per_s2.iter().map(|g| mass_kg * g).collect(),
-                    })
-                }
-            }
+            l.resolve_into(i, d, total, n_nodes, &self.gravity_m_per_s2, &mut loads)?;
         }
         Ok(loads)
     }
