@@ -5,17 +5,27 @@
 //! the paper's peak of the estimated load minus the virtual payload, and the
 //! point-force search on the calibrated model.
 //!
-//! Run: `cargo run --release --example avoid_localization [OUT.json [FRAMES [MARKERS…]]]`
-//! (prints the table; writes every case as JSON if a path is given;
-//! FRAMES marker frames averaged per measurement, default 20; marker
-//! counts, default 4 6 11).
+//! Run: `cargo run --release --example avoid_localization [OUT.json [FRAMES [MARKERS…]]]
+//! [--alpha=evidence|discrepancy]` (prints the table; writes every case as
+//! JSON if a path is given; FRAMES marker frames averaged per measurement,
+//! default 20; marker counts, default 4 6 11; the estimators' α rule,
+//! default `softrod::touch::ALPHA_RULE`).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use softrod::plant::PlantSettings;
 use softrod::touch::{run_localization, LocalizationCase};
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
+    let mut alpha_rule = softrod::touch::ALPHA_RULE;
+    let args: Vec<String> = std::env::args()
+        .filter(|a| match a.strip_prefix("--alpha=") {
+            Some(v) => {
+                alpha_rule = serde_json::from_str(&format!("\"{v}\"")).expect("an α rule");
+                false
+            }
+            None => true,
+        })
+        .collect();
     let out = args.get(1).filter(|a| a.as_str() != "-").cloned();
     let frames: usize = args
         .get(2)
@@ -28,7 +38,7 @@ fn main() {
     } else {
         vec![4, 6, 11]
     };
-    println!("{frames} frames averaged per measurement");
+    println!("{frames} frames averaged per measurement, α rule {alpha_rule:?}");
     let mut results = Vec::new();
     println!("markers  s_c(m)  depth(mm)  true_s(m)  |f|(N)  | peak: err(mm) ferr(N) | point: err(mm) ferr(N)");
     for &n_markers in &counts {
@@ -39,6 +49,7 @@ fn main() {
             for depth in [0.005, 0.01, 0.02] {
                 let case = LocalizationCase {
                     frames,
+                    alpha_rule,
                     ..LocalizationCase::new(s, depth, n_markers, 1)
                 };
                 match run_localization(&case, 4, &PlantSettings::default()) {

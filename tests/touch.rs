@@ -362,6 +362,9 @@ fn avoidance_by_touch_reaches_the_goal_the_baseline_pushes_into_the_obstacle() {
     );
     assert!(!base.status.is_reached());
     assert!(base.max_force_before_n > 20.0 * run.max_force_before_n);
+    // it stalls: still pressing at the end, the end effector ~107 mm short
+    assert!(base.final_force_n > 0.3, "{}", base.final_force_n);
+    assert!(base.final_error_m > 0.05, "{}", base.final_error_m);
 }
 
 #[test]

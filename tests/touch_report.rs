@@ -30,8 +30,16 @@ fn quick_touch_report_writes_the_figure_and_its_data() {
         a.status
     );
     assert!(!a.shapes.is_empty());
+    // the table (quick: one placement and goal): by touch reached, the
+    // baseline met the disk and did not
+    assert_eq!(r.table.len(), 1);
+    let row = &r.table[0];
+    assert!(row.touch.status.is_reached(), "{row:?}");
+    assert!(row.touch.touches >= 1 && row.touch.final_error_m <= 2e-3);
+    assert!(row.baseline_met_obstacle() && !row.baseline.status.is_reached());
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("touch.json")).unwrap()).unwrap();
     assert_eq!(json["localization"].as_array().unwrap().len(), 3);
+    assert_eq!(json["table"].as_array().unwrap().len(), 1);
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -3,7 +3,9 @@
 //! minus the virtual payload, and the point-force search), six markers,
 //! σ = 0.05 mm, the plant not the model; and one obstacle-avoidance run by
 //! touch (the paper's Fig. 9): the true shapes over time, the obstacle, the
-//! contact points learnt by touch, the goal and the end effector's path.
+//! contact points learnt by touch, the goal and the end effector's path;
+//! and the avoidance table (obstacle placements × goals, by touch and the
+//! baseline without it: final error of every run).
 //! `touch.png`, `touch.svg`, `touch.json`.
 
 use std::path::PathBuf;
@@ -18,8 +20,9 @@ use crate::contact::{Obstacle, Obstacles};
 use crate::error::Result;
 use crate::plant::{PlantSettings, SimulatedPlant};
 use crate::touch::{
-    calibrate_on_free_plant, five_section_scene, marker_arcs, run_avoidance, run_localization,
-    AvoidRun, AvoidSettings, AvoidStatus, LocalizationCase, LocalizationResult, ROD_RADIUS_M,
+    avoidance_table, calibrate_on_free_plant, five_section_scene, marker_arcs, run_avoidance,
+    run_localization, AvoidRow, AvoidRun, AvoidSettings, AvoidStatus, LocalizationCase,
+    LocalizationResult, FIG9_GOALS, FIG9_PLACEMENTS, ROD_RADIUS_M,
 };
 
 /// The avoidance run's disk (centre, radius; m) and goal (m).
@@ -40,11 +43,17 @@ pub struct TouchReport {
     pub disk_m: ([f64; 2], f64),
     /// The avoidance run (touch feedback on).
     pub avoidance: AvoidRun,
+    /// Length of each run of the table (s).
+    pub table_duration_s: f64,
+    /// The avoidance table: every placement × goal by touch and the
+    /// baseline (quick: the first placement and goal only).
+    pub table: Vec<AvoidRow>,
 }
 
 /// Runs the sweep (contact at 0.15 … 0.45 m, intrusion 5 and 10 mm; quick:
-/// 0.2, 0.3, 0.4 m at 10 mm) and the avoidance run (70 s), writes the
-/// chart and the JSON into `opts.out_dir`.
+/// 0.2, 0.3, 0.4 m at 10 mm), the avoidance run (70 s) and the avoidance
+/// table ([`FIG9_PLACEMENTS`] × [`FIG9_GOALS`], 120 s per run; quick: the
+/// first of each, 70 s), writes the chart and the JSON into `opts.out_dir`.
 ///
 /// # Errors
 /// The avoidance run's errors; [`crate::Error::Io`] for a file that cannot
@@ -98,12 +107,28 @@ pub fn run(opts: &ReportOptions) -> Result<(TouchReport, Vec<PathBuf>)> {
         ..AvoidSettings::default()
     };
     let avoidance = run_avoidance(&scene, &cal, &arcs, &mut plant, AVOID_GOAL, &settings)?;
+    let (placements, goals, table_duration_s) = if opts.quick {
+        (&FIG9_PLACEMENTS[..1], &FIG9_GOALS[..1], 70.0)
+    } else {
+        (&FIG9_PLACEMENTS[..], &FIG9_GOALS[..], 120.0)
+    };
+    let table = avoidance_table(
+        placements,
+        goals,
+        &PlantSettings::default(),
+        &AvoidSettings {
+            duration_s: table_duration_s,
+            ..AvoidSettings::default()
+        },
+    )?;
     let report = TouchReport {
         localization,
         peak_mean_max_m,
         point_mean_max_m,
         disk_m: AVOID_DISK,
         avoidance,
+        table_duration_s,
+        table,
     };
     let json = opts.out_dir.join("touch.json");
     write_json(&json, &report)?;
@@ -111,7 +136,7 @@ pub fn run(opts: &ReportOptions) -> Result<(TouchReport, Vec<PathBuf>)> {
     files.extend(both(
         &opts.out_dir,
         "touch",
-        (1400, 700),
+        (2100, 700),
         |root| draw(root, &report),
         |root| draw(root, &report),
     )?);
@@ -126,7 +151,7 @@ fn draw<DB: DrawingBackend>(
     r: &TouchReport,
 ) -> std::result::Result<(), String> {
     root.fill(&WHITE).map_err(ms)?;
-    let panels = root.split_evenly((1, 2));
+    let panels = root.split_evenly((1, 3));
     // (a) location error against the contact's arc position
     let ymax = r
         .localization
@@ -267,6 +292,80 @@ fn draw<DB: DrawingBackend>(
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(ms)?;
+    draw_table(&panels[2], r)
+}
+
+/// (c) the avoidance table: final error of every placement × goal, by
+/// touch and the baseline.
+fn draw_table<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    r: &TouchReport,
+) -> std::result::Result<(), String> {
+    let n = r.table.len().max(1) as f64;
+    let reached = r
+        .table
+        .iter()
+        .filter(|x| x.touch.status.is_reached())
+        .count();
+    let base = r
+        .table
+        .iter()
+        .filter(|x| x.baseline.status.is_reached())
+        .count();
+    let mut c = ChartBuilder::on(area)
+        .caption(
+            format!(
+                "avoidance table: by touch {reached}/{}, baseline {base}/{} reached",
+                r.table.len(),
+                r.table.len()
+            ),
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(55)
+        .build_cartesian_2d(0.5..n + 0.5, (0.01..2000.0).log_scale())
+        .map_err(ms)?;
+    c.configure_mesh()
+        .x_desc("placement × goal (row of touch.json's table)")
+        .y_desc("final end-effector error (mm)")
+        .x_labels(r.table.len().max(2))
+        .draw()
+        .map_err(ms)?;
+    c.draw_series(LineSeries::new(
+        [(0.5, 2.0), (n + 0.5, 2.0)],
+        BLACK.mix(0.4).stroke_width(1),
+    ))
+    .map_err(ms)?
+    .label("2 mm: reached")
+    .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK.mix(0.4)));
+    let clip = |v: f64| v.clamp(0.011, 1999.0);
+    c.draw_series(r.table.iter().enumerate().map(|(i, x)| {
+        Circle::new(
+            ((i + 1) as f64, clip(x.touch.final_error_m * 1e3)),
+            6,
+            POINT.filled(),
+        )
+    }))
+    .map_err(ms)?
+    .label(format!("by touch ({} s runs)", r.table_duration_s))
+    .legend(|(x, y)| Circle::new((x, y), 5, POINT.filled()));
+    c.draw_series(r.table.iter().enumerate().map(|(i, x)| {
+        TriangleMarker::new(
+            ((i + 1) as f64, clip(x.baseline.final_error_m * 1e3)),
+            7,
+            PEAK.filled(),
+        )
+    }))
+    .map_err(ms)?
+    .label("baseline (no touch feedback)")
+    .legend(|(x, y)| TriangleMarker::new((x, y), 5, PEAK.filled()));
+    c.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::MiddleLeft)
         .draw()
         .map_err(ms)?;
     Ok(())

@@ -29,7 +29,7 @@ use serde::{Deserialize, Serialize};
 use crate::contact::Obstacles;
 use crate::control::{IkSettings, IkStatus, InverseKinematics};
 use crate::error::{check_len, check_positive, Error, Result};
-use crate::estimate::{Backend, Estimator, EstimatorSettings};
+use crate::estimate::{AlphaRule, Backend, Estimator, EstimatorSettings};
 use crate::plant::{Plant, PlantSettings, SimulatedPlant};
 use crate::scene::Scene;
 
@@ -73,6 +73,10 @@ pub struct AvoidSettings {
     pub model_elements: usize,
     /// Shapes kept for the figure every this many seconds (default 1).
     pub shape_interval_s: f64,
+    /// How the estimator chooses its regularization `α` (default
+    /// [`ALPHA_RULE`](super::ALPHA_RULE), the touch default, with its
+    /// reason there).
+    pub alpha_rule: AlphaRule,
 }
 
 impl Default for AvoidSettings {
@@ -88,6 +92,7 @@ impl Default for AvoidSettings {
             noise_sigma_m: 5e-5,
             model_elements: 4,
             shape_interval_s: 1.0,
+            alpha_rule: super::ALPHA_RULE,
         }
     }
 }
@@ -309,8 +314,7 @@ pub fn run_avoidance(
     let mut p: Vec<f64> = plant_pressures(plant);
     let es = EstimatorSettings {
         noise_sigma_m: settings.noise_sigma_m,
-        // the rule the avoidance runs were measured with
-        alpha_rule: crate::estimate::AlphaRule::Discrepancy,
+        alpha_rule: settings.alpha_rule,
         ..EstimatorSettings::default()
     };
     let mut known = base_loads.clone();

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::contact::{Obstacle, Obstacles};
 use crate::error::{Error, Result};
-use crate::estimate::{Backend, Estimator, EstimatorSettings};
+use crate::estimate::{AlphaRule, Backend, Estimator, EstimatorSettings};
 use crate::plant::{MarkerFrame, Plant, PlantSettings, SimulatedPlant};
 
 use super::{
@@ -43,6 +43,15 @@ pub struct LocalizationCase {
     /// 8–17 mN, are located to 16 mm only, the noise's share of their
     /// small marker signal).
     pub frames: usize,
+    /// How the estimators choose their regularization `α` (default
+    /// [`ALPHA_RULE`](super::ALPHA_RULE), the touch default, with its
+    /// reason there).
+    #[serde(default = "touch_alpha_rule")]
+    pub alpha_rule: AlphaRule,
+}
+
+fn touch_alpha_rule() -> AlphaRule {
+    super::ALPHA_RULE
 }
 
 impl LocalizationCase {
@@ -58,6 +67,7 @@ impl LocalizationCase {
             n_markers,
             seed,
             frames: 20,
+            alpha_rule: super::ALPHA_RULE,
         }
     }
 }
@@ -200,8 +210,7 @@ pub fn run_localization(
     };
     let es = EstimatorSettings {
         noise_sigma_m: settings.noise_sigma_m.max(1e-6),
-        // the rule the localization tables were measured with
-        alpha_rule: crate::estimate::AlphaRule::Discrepancy,
+        alpha_rule: case.alpha_rule,
         ..EstimatorSettings::default()
     };
     // the paper's method on the nominal model: the virtual payload (the
