@@ -3,8 +3,10 @@
 //! figure-eight and a straight line; five payload conditions; feedforward
 //! only against feedforward + updater (31).
 //!
-//! Run: `cargo run --release --example track_fig6` (prints the table; a
-//! first argument `quick` runs the circle only).
+//! Run: `cargo run --release --example track_fig6 [quick] [evidence]`
+//! (prints the table; `quick` runs the circle only; `evidence` runs the
+//! estimator with the crate's default `α` rule, the evidence, instead of
+//! the loop's default, the discrepancy principle).
 //!
 //! Trajectories about the tip position of the model at pressures
 //! (45, 0, 45, 0) kPa, (0.1911, 0.1203) m, where the model's pressures on
@@ -26,7 +28,14 @@ use softrod::plant::{Payload, PayloadKind, PayloadSchedule, PlantSettings, Simul
 use softrod::scene::Scene;
 
 fn main() -> softrod::Result<()> {
-    let quick = std::env::args().nth(1).as_deref() == Some("quick");
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let quick = args.iter().any(|a| a == "quick");
+    let rule = if args.iter().any(|a| a == "evidence") {
+        softrod::estimate::AlphaRule::Evidence
+    } else {
+        softrod::estimate::AlphaRule::Discrepancy
+    };
+    println!("alpha rule: {rule:?}");
     let scene = Scene::two_section();
     let robot = scene.robot()?;
     let arcs: Vec<f64> = scene
@@ -126,10 +135,11 @@ fn main() -> softrod::Result<()> {
                     ..Default::default()
                 };
                 let mut plant = SimulatedPlant::new(&scene, &arcs, settings)?;
-                let loop_settings = LoopSettings {
+                let mut loop_settings = LoopSettings {
                     controller,
                     ..Default::default()
                 };
+                loop_settings.estimator.alpha_rule = rule;
                 let mut lp = ClosedLoop::new(robot.clone(), scene.loads()?, &arcs, loop_settings)?;
                 let ts = lp.run(&mut plant, traj, |p| p.true_tip_m().ok())?;
                 let (mean, max) = ts.mean_max_after(hold);

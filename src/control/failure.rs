@@ -30,20 +30,26 @@
 //!   swung from step to step by more than its own mean change
 //!   ([`LoopCause::UpdaterInstability`]); else the estimator converged
 //!   every frame but its load was off ([`LoopCause::EstimateInaccurate`]).
-//!   A run that could not start is [`LoopCause::StartFailed`]; one the
-//!   loop's watchdog stopped (the tip more than
-//!   [`FailureSettings::abort_error_m`] off) is [`LoopCause::Watchdog`],
-//!   its counts of IK misses and saturation say what it saw before.
+//!   A run that could not start is [`LoopCause::StartFailed`].
+//!
+//! The sweep runs without the loop's watchdog
+//! ([`FailureSettings::abort_error_m`] `None`): a watchdog stop would hide
+//! the cause (2 × the robot's weight at the tip puts the tip more than
+//! 100 mm off at the first frame, before any step is scored), and no run
+//! needs it to end. A case stopped by a watchdog set there is
+//! [`LoopCause::Watchdog`]. [`plant_reach_m`] checks an "IK unreachable"
+//! against the plant itself: how close the plant, with the true payload and
+//! no model error, can get to the scored path within the pressure bounds.
 
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::plant::{PayloadSchedule, PlantSettings};
+use crate::plant::{PayloadSchedule, PlantSettings, SimulatedPlant};
 use crate::scene::Scene;
 
 use super::{
-    run_track, CircleSpec, ControllerKind, EstimateFlag, IkStatus, LoopSettings, StepStatus,
-    TrackFile, TrackRun, TrajectorySpec,
+    build_trajectory, run_track, CircleSpec, ControllerKind, EstimateFlag, IkSettings, IkStatus,
+    InverseKinematics, LoopSettings, StepStatus, TrackFile, TrackRun, TrajectorySpec,
 };
 
 /// One case of the sweep.
@@ -141,9 +147,13 @@ pub struct FailureSettings {
     /// 0.1).
     pub flag_fraction: f64,
     /// The loop's watchdog ([`LoopSettings::abort_error_m`], m; default
-    /// 0.1: twenty times the circle's radius, above feedforward's 30–60 mm
-    /// with the tracking figure's payloads).
-    pub abort_error_m: f64,
+    /// `None`, off). The sweep runs without it: every run is bounded by its
+    /// iteration limits and its fixed number of steps, and a watchdog stop
+    /// hides the cause (with 2× the robot's weight at the tip the tip is
+    /// more than 100 mm off at the first frame, before any step is scored).
+    /// A case stopped by a watchdog set here is [`LoopCause::Watchdog`].
+    #[serde(default)]
+    pub abort_error_m: Option<f64>,
 }
 
 impl Default for FailureSettings {
@@ -156,7 +166,7 @@ impl Default for FailureSettings {
             duration_s: 6.0,
             converged_mean_m: 5e-4,
             flag_fraction: 0.1,
-            abort_error_m: 0.1,
+            abort_error_m: None,
         }
     }
 }
@@ -210,7 +220,7 @@ impl LoopCause {
             LoopCause::UpdaterInstability => "updater instability",
             LoopCause::EstimateInaccurate => "estimate inaccurate",
             LoopCause::StartFailed => "start failed",
-            LoopCause::Watchdog => "tip > 100 mm off (watchdog)",
+            LoopCause::Watchdog => "watchdog",
         }
     }
 
@@ -276,7 +286,7 @@ pub fn case_file(scene: &Scene, case: &LoopCase, settings: &FailureSettings) -> 
     let mut loop_settings = LoopSettings {
         control_rate_hz: case.control_rate_hz,
         controller: ControllerKind::FfUpdater,
-        abort_error_m: Some(settings.abort_error_m),
+        abort_error_m: settings.abort_error_m,
         ..Default::default()
     };
     if case.noise_sigma_m > 0.0 {
@@ -303,6 +313,63 @@ pub fn case_file(scene: &Scene, case: &LoopCase, settings: &FailureSettings) -> 
         },
         score_from_s: Some(settings.hold_s),
     })
+}
+
+/// How close the plant itself can get to the scored path of `case` (m): the
+/// largest, over `points` instants evenly spread over the scored window, of
+/// the distance of the closest pose within the pressure bounds, found by
+/// [`InverseKinematics`] on the plant's own robot (its mesh and parameter
+/// errors) carrying the case's true payload. Zero (below the inverse
+/// kinematics' tolerance) when the plant can follow the path: a loop that
+/// then reports "IK unreachable" failed by its estimate, not by the
+/// physics.
+///
+/// # Errors
+/// As [`LoopCase::validate`]; [`Error::InvalidParameter`] (field `points`)
+/// for fewer than 1; the plant's and the inverse kinematics' errors.
+///
+/// # Example
+/// ```
+/// use softrod::control::{plant_reach_m, FailureSettings, LoopCase};
+/// let mut scene = softrod::scene::Scene::two_section();
+/// scene.pressures_pa = vec![45e3, 0.0, 45e3, 0.0];
+/// let d = plant_reach_m(&scene, &LoopCase::nominal(), &FailureSettings::default(), 2)?;
+/// assert!(d < 1e-6);
+/// # Ok::<(), softrod::Error>(())
+/// ```
+pub fn plant_reach_m(
+    scene: &Scene,
+    case: &LoopCase,
+    settings: &FailureSettings,
+    points: usize,
+) -> Result<f64> {
+    if points == 0 {
+        return Err(Error::invalid("points", 0, "must be >= 1"));
+    }
+    let file = case_file(scene, case, settings)?;
+    let trajectory = build_trajectory(scene, &file.trajectory)?;
+    let length: f64 = scene.robot.sections.iter().map(|s| s.length_m).sum();
+    let plant = SimulatedPlant::new(scene, &[length], file.plant.clone())?;
+    let own = plant.scene();
+    let known = file
+        .plant
+        .payloads
+        .loads_at(settings.hold_s, &own.gravity_m_per_s2, &own.loads()?);
+    let robot = plant.robot().clone();
+    let zero = vec![0.0; robot.n_q()];
+    let mut ik = InverseKinematics::new(robot, known, IkSettings::default())?;
+    let mut worst = 0.0f64;
+    for k in 0..points {
+        let frac = if points == 1 {
+            0.0
+        } else {
+            k as f64 / (points - 1) as f64
+        };
+        let x = trajectory.at(settings.hold_s + frac * settings.duration_s);
+        let sol = ik.solve(&x, &zero)?;
+        worst = worst.max(sol.status.error_m());
+    }
+    Ok(worst)
 }
 
 /// Runs one case and judges it.

@@ -72,6 +72,23 @@ pub struct IkSettings {
     pub max_step: f64,
     /// Static solver of the equilibria `q(P)`.
     pub statics: StaticSettings,
+    /// Newton iterations in all (over every load step) of the static solve
+    /// of one line-search trial (default 150; at most
+    /// `statics.max_total_iterations` is used). A trial the warm solver
+    /// does not reach within it is rejected, as one that does not lower
+    /// the merit is, and the step is halved: a trial that needs a long
+    /// homotopy crosses a fold of the equilibria (a heavily loaded robot
+    /// snapping over) or is too long. Measured on the failure sweep's
+    /// cases: converging trials take at most 135 iterations (2 × the
+    /// robot's weight at the tip), failing ones 550–990 (5 ×), which made
+    /// one control step cost up to 10 s.
+    pub trial_max_total_iterations: usize,
+    /// Static Newton iterations one [`InverseKinematics::solve`] may spend
+    /// in all: its equilibria, line-search trials and restarts (default
+    /// 20 000). When they are spent the solve ends with the closest pose
+    /// found so far and [`IkStatus::IterationLimit`], so one control step
+    /// has a bounded cost whatever the load.
+    pub max_static_iterations: usize,
 }
 
 impl Default for IkSettings {
@@ -81,6 +98,8 @@ impl Default for IkSettings {
             tolerance_m: 1e-7,
             max_step: 0.25,
             statics: StaticSettings::default(),
+            trial_max_total_iterations: 150,
+            max_static_iterations: 20_000,
         }
     }
 }
@@ -93,6 +112,20 @@ impl IkSettings {
     pub fn validate(&self) -> Result<()> {
         if self.max_iterations == 0 {
             return Err(Error::invalid("ik.max_iterations", 0, "must be >= 1"));
+        }
+        if self.max_static_iterations == 0 {
+            return Err(Error::invalid(
+                "ik.max_static_iterations",
+                0,
+                "must be >= 1",
+            ));
+        }
+        if self.trial_max_total_iterations == 0 {
+            return Err(Error::invalid(
+                "ik.trial_max_total_iterations",
+                0,
+                "must be >= 1",
+            ));
         }
         for (name, v) in [
             ("ik.tolerance_m", self.tolerance_m),
@@ -205,6 +238,9 @@ pub struct InverseKinematics<E: Element> {
     known: Loads,
     settings: IkSettings,
     solver: StaticSolver,
+    /// The solver of the line search's trials (its total budget
+    /// [`IkSettings::trial_max_total_iterations`]).
+    trial_solver: StaticSolver,
     linear: AutoSolver,
     effector_s_m: f64,
     /// Scaled pressure bounds and the scale (range) of each chamber.
@@ -215,6 +251,8 @@ pub struct InverseKinematics<E: Element> {
     /// The target of the last solve, if it ended unreachable after its
     /// restarts.
     unreached_target: Option<Vec<f64>>,
+    /// Static Newton iterations spent by the current solve.
+    spent: usize,
 }
 
 /// A solve that does not reach its target skips the cold restarts when the
@@ -222,6 +260,24 @@ pub struct InverseKinematics<E: Element> {
 /// a 5 Hz loop moves along the slowest paths a person would choose for this
 /// robot in a fifth of a second is ten times less.
 pub const RESTART_RADIUS_M: f64 = 1e-3;
+
+/// Static Newton iterations a solve's result took (1 for an error without
+/// a report).
+fn spent(eq: &Result<crate::statics::Equilibrium>) -> usize {
+    match eq {
+        Ok(e) => e.report.iterations.max(1),
+        Err(Error::NotConverged { report }) => report.iterations.max(1),
+        Err(_) => 1,
+    }
+}
+
+/// Line-search trials whose equilibrium the warm solver does not reach
+/// after which one Newton run ends as stalled: such a trial marks a fold
+/// of the equilibria (a heavily loaded robot snapping over) between the
+/// iterate and the trial, and an iterate at the fold only ever accepts
+/// ever shorter steps (measured: 5 × the robot's weight at the tip, steps
+/// of 1e-4 of the pressure range after 9 failed trials each).
+const FAILED_TRIALS: usize = 8;
 
 /// Weight of the pressures' norm against the position error (see the
 /// module documentation).
@@ -264,6 +320,14 @@ impl<E: Element> InverseKinematics<E> {
         let lo = bounds.iter().zip(&range).map(|((l, _), r)| l / r).collect();
         let hi = bounds.iter().zip(&range).map(|((_, h), r)| h / r).collect();
         let solver = StaticSolver::new(settings.statics.clone())?;
+        let total = settings
+            .trial_max_total_iterations
+            .min(settings.statics.max_total_iterations);
+        let trial_solver = StaticSolver::new(StaticSettings {
+            max_iterations: settings.statics.max_iterations.min(total),
+            max_total_iterations: total,
+            ..settings.statics.clone()
+        })?;
         let linear =
             AutoSolver::with_kind(robot.tangent_pattern(), settings.statics.linear_solver)?;
         Ok(InverseKinematics {
@@ -272,12 +336,14 @@ impl<E: Element> InverseKinematics<E> {
             known,
             settings,
             solver,
+            trial_solver,
             linear,
             lo,
             hi,
             range,
             warm: None,
             unreached_target: None,
+            spent: 0,
         })
     }
 
@@ -315,7 +381,27 @@ impl<E: Element> InverseKinematics<E> {
         let loads = self.loads(p, f_hat);
         let eq = self
             .solver
-            .solve_with(&self.robot, &loads, q0, &mut self.linear)?;
+            .solve_with(&self.robot, &loads, q0, &mut self.linear);
+        self.spent += spent(&eq);
+        let eq = eq?;
+        let x = self.robot.position_at(&eq.q, self.effector_s_m)?;
+        Ok((eq.q, x))
+    }
+
+    /// As [`InverseKinematics::forward`] from `q0`, with the line-search
+    /// trials' budget ([`IkSettings::trial_max_total_iterations`]).
+    fn forward_trial(
+        &mut self,
+        p: &[f64],
+        f_hat: &[f64],
+        q0: &[f64],
+    ) -> Result<(Vec<f64>, Vec<f64>)> {
+        let loads = self.loads(p, f_hat);
+        let eq = self
+            .trial_solver
+            .solve_with(&self.robot, &loads, Some(q0), &mut self.linear);
+        self.spent += spent(&eq);
+        let eq = eq?;
         let x = self.robot.position_at(&eq.q, self.effector_s_m)?;
         Ok((eq.q, x))
     }
@@ -368,6 +454,7 @@ impl<E: Element> InverseKinematics<E> {
         check_all_finite("f_hat", f_hat)?;
         let np = self.range.len();
         let bounds = self.robot.pressure_bounds();
+        self.spent = 0;
         let (p0, q0) = match self.warm.take() {
             Some((p, q)) => (p, Some(q)),
             None => {
@@ -409,6 +496,9 @@ impl<E: Element> InverseKinematics<E> {
         let n_starts = if np <= 6 { 1usize << np } else { 2 };
         let mut iterations = best.as_ref().map_or(0, |b| b.iterations);
         for code in 0..n_starts {
+            if self.spent >= self.settings.max_static_iterations {
+                break;
+            }
             let p: Vec<f64> = bounds
                 .iter()
                 .enumerate()
@@ -499,7 +589,10 @@ impl<E: Element> InverseKinematics<E> {
         let mut iterations = 0;
         let mut stalled = false;
         let mut damping = 0.0f64;
-        while iterations < self.settings.max_iterations {
+        let mut failed_trials = 0usize;
+        while iterations < self.settings.max_iterations
+            && self.spent < self.settings.max_static_iterations
+        {
             iterations += 1;
             let J = self.jacobian(&q, &P, f_hat)?;
             // scaled Jacobian Ĵ = J diag(range), residual r = x_d − x
@@ -542,7 +635,11 @@ impl<E: Element> InverseKinematics<E> {
                         }
                     })
                     .collect();
-                if let Ok((qt, xt)) = self.forward(&trial, f_hat, Some(&q)) {
+                let ft = self.forward_trial(&trial, f_hat, &q);
+                if ft.is_err() {
+                    failed_trials += 1;
+                }
+                if let Ok((qt, xt)) = ft {
                     let phit = merit(&xt, &trial, &self.range);
                     if phit <= phi - 1e-4 * t * dec {
                         let ratio = (phi - phit) / dec.max(f64::MIN_POSITIVE);
@@ -566,6 +663,12 @@ impl<E: Element> InverseKinematics<E> {
                     }
                 }
                 t *= 0.5;
+            }
+            if failed_trials >= FAILED_TRIALS {
+                // the iterate sits at a fold of the equilibria: the closest
+                // pose on this branch
+                stalled = true;
+                break;
             }
             if !accepted && damping < 1.0 {
                 // a shorter, more gradient-like step before giving up

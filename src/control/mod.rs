@@ -38,8 +38,8 @@ pub use closed_loop::{
     ClosedLoop, ControllerKind, EstimateFlag, LoopSample, LoopSettings, StepStatus, TimeSeries,
 };
 pub use failure::{
-    case_file, robot_mass_kg, run_case, FailureSettings, LoopCase, LoopCause, LoopOutcome,
-    LoopVerdict,
+    case_file, plant_reach_m, robot_mass_kg, run_case, FailureSettings, LoopCase, LoopCause,
+    LoopOutcome, LoopVerdict,
 };
 pub use ik::{
     IkSettings, IkSolution, IkStatus, InverseKinematics, PressureBound, RESTART_RADIUS_M,

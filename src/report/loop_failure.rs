@@ -4,7 +4,9 @@
 //! [`crate::control::run_case`] (its verdict and cause are documented
 //! there). Outputs `loop_failure.{png,svg,json}`: a failure map, one panel
 //! per noise × rate, payload across and `EI` error up, each cell coloured by
-//! its cause and labelled with its mean error (mm).
+//! its cause and labelled with its mean error (mm); a `*` marks the
+//! payload × `EI` cells whose plant cannot reach the path at all
+//! ([`crate::control::plant_reach_m`], 20 points of the scored path).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -14,7 +16,9 @@ use plotters::prelude::*;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::control::{run_case, FailureSettings, LoopCase, LoopCause, LoopOutcome, LoopVerdict};
+use crate::control::{
+    plant_reach_m, run_case, FailureSettings, LoopCase, LoopCause, LoopOutcome, LoopVerdict,
+};
 use crate::error::Result;
 
 use super::plot::{both, ms};
@@ -96,6 +100,25 @@ pub struct FailureRow {
     pub wall_time_s: f64,
 }
 
+/// How close the plant itself gets to the scored path (see
+/// [`plant_reach_m`]) for one payload and `EI` error.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReachRow {
+    /// Tip payload in robot weights.
+    pub payload_weights: f64,
+    /// The plant's `EI` error.
+    pub ei_error: f64,
+    /// The largest distance of the plant's closest pose to the path (m),
+    /// or `None` if it could not be computed.
+    pub reach_m: Option<f64>,
+    /// Why not, if not.
+    pub failure: Option<String>,
+}
+
+/// A plant farther than this from the path cannot follow it (m: ten times
+/// the inverse kinematics' default tolerance).
+pub const UNREACHABLE_M: f64 = 1e-6;
+
 /// The part's results.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct LoopFailureReport {
@@ -107,6 +130,11 @@ pub struct LoopFailureReport {
     pub robot_mass_kg: f64,
     /// One row per case.
     pub rows: Vec<FailureRow>,
+    /// The plant's own reach per payload × `EI` error.
+    pub plant_reach: Vec<ReachRow>,
+    /// Cases per cause whose plant cannot reach the path
+    /// ([`UNREACHABLE_M`]).
+    pub counts_plant_unreachable: Vec<(LoopCause, usize)>,
     /// Cases per cause.
     pub counts: Vec<(LoopCause, usize)>,
     /// Wall time (s).
@@ -148,6 +176,60 @@ pub fn run(opts: &ReportOptions) -> Result<LoopFailureReport> {
         })
         .collect();
     pb.finish_and_clear();
+    let mut pairs = Vec::new();
+    for &p in &grid.payload_weights {
+        for &e in &grid.ei_error {
+            pairs.push((p, e));
+        }
+    }
+    let plant_reach: Vec<ReachRow> = pairs
+        .par_iter()
+        .map(|&(p, e)| {
+            let case = LoopCase {
+                payload_weights: p,
+                ei_error: e,
+                noise_sigma_m: 0.0,
+                control_rate_hz: 30.0,
+                seed: 1,
+            };
+            let (scene, settings) = (scene.clone(), settings.clone());
+            let r = guarded(opts.case_cap, move || {
+                plant_reach_m(&scene, &case, &settings, 20)
+            });
+            let (reach_m, failure) = match r {
+                Ok(Ok(d)) => (Some(d), None),
+                Ok(Err(e)) => (None, Some(e.to_string())),
+                Err(e) => (None, Some(e)),
+            };
+            ReachRow {
+                payload_weights: p,
+                ei_error: e,
+                reach_m,
+                failure,
+            }
+        })
+        .collect();
+    let unreachable = |c: &LoopCase| {
+        plant_reach.iter().any(|r| {
+            r.payload_weights == c.payload_weights
+                && r.ei_error == c.ei_error
+                && r.reach_m.is_some_and(|d| d > UNREACHABLE_M)
+        })
+    };
+    let counts_plant_unreachable = LoopCause::ALL
+        .iter()
+        .map(|c| {
+            (
+                *c,
+                rows.iter()
+                    .filter(|r| {
+                        unreachable(&r.case) && r.outcome.as_ref().is_some_and(|o| o.cause == *c)
+                    })
+                    .count(),
+            )
+        })
+        .filter(|(_, n)| *n > 0)
+        .collect();
     let counts = LoopCause::ALL
         .iter()
         .map(|c| {
@@ -165,6 +247,8 @@ pub fn run(opts: &ReportOptions) -> Result<LoopFailureReport> {
         robot_mass_kg: crate::control::robot_mass_kg(&scene),
         settings,
         rows,
+        plant_reach,
+        counts_plant_unreachable,
         counts,
         wall_time_s: start.elapsed().as_secs_f64(),
     })
@@ -194,7 +278,7 @@ fn draw<DB: DrawingBackend>(
     title
         .draw(&Text::new(
             format!(
-                "Where the closed loop fails (FF + updater, circle 5 mm after a 3 s hold; converged: mean error <= {:.1} mm). Payload x robot weight ({:.0} g) across, plant EI error up; cell: mean error (mm)",
+                "Where the closed loop fails (FF + updater, circle 5 mm after a 3 s hold, no watchdog; converged: mean error <= {:.1} mm). Payload x robot weight ({:.0} g) across, plant EI error up; cell: mean error (mm)",
                 r.settings.converged_mean_m * 1e3,
                 r.robot_mass_kg * 1e3
             ),
@@ -263,11 +347,14 @@ fn draw<DB: DrawingBackend>(
                         cause_colour(cause).filled(),
                     )))
                     .map_err(ms)?;
-                let label = match row.outcome.as_ref().and_then(|o| o.mean_error_m) {
+                let mut label = match row.outcome.as_ref().and_then(|o| o.mean_error_m) {
                     Some(e) if e < 0.01 => format!("{:.2}", e * 1e3),
                     Some(e) => format!("{:.0}", e * 1e3),
                     None => "-".into(),
                 };
+                if r.plant_unreachable(&row.case) {
+                    label.push('*');
+                }
                 let colour = if matches!(cause, Some(LoopCause::Watchdog)) {
                     WHITE
                 } else {
@@ -302,10 +389,27 @@ fn draw<DB: DrawingBackend>(
             .map_err(ms)?;
         x += 30 + 8 * text.len() as i32;
     }
+    legend
+        .draw(&Text::new(
+            "* the plant itself cannot reach the path with this payload",
+            (x, 12),
+            (FONT, 13).into_font(),
+        ))
+        .map_err(ms)?;
     Ok(())
 }
 
 impl LoopFailureReport {
+    /// Whether the plant of `case` cannot reach the path (its payload and
+    /// `EI` error's [`ReachRow`] farther than [`UNREACHABLE_M`]).
+    pub fn plant_unreachable(&self, case: &LoopCase) -> bool {
+        self.plant_reach.iter().any(|r| {
+            r.payload_weights == case.payload_weights
+                && r.ei_error == case.ei_error
+                && r.reach_m.is_some_and(|d| d > UNREACHABLE_M)
+        })
+    }
+
     /// Cases that converged.
     pub fn converged(&self) -> usize {
         self.rows
