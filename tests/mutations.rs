@@ -144,7 +144,7 @@ fn every_refused_mutation_names_its_field() {
 
 /// The markers files of the examples (`{"markers": [...]}`), swept like the
 /// scenes against the robot of `examples/two_section.json` (the same
-/// 0.24 m length): every number × every value, each refusal naming
+/// 0.24 m length; 3-D markers against `examples/ancf3d_cantilever.json`'s): every number × every value, each refusal naming
 /// `observation.<path>` (the file's path under `observation.`).
 #[test]
 fn every_refused_marker_mutation_names_its_field() {
@@ -153,6 +153,13 @@ fn every_refused_marker_mutation_names_its_field() {
         Scene::from_json(&std::fs::read_to_string(format!("{dir}/two_section.json")).unwrap())
             .unwrap();
     let robot = scene.robot().unwrap();
+    // 3-D markers go against the robot of the ancf3d example (also 0.24 m)
+    let spatial = Scene::from_json(
+        &std::fs::read_to_string(format!("{dir}/ancf3d_cantilever.json")).unwrap(),
+    )
+    .unwrap()
+    .robot_as::<softrod::element::Ancf3d>()
+    .unwrap();
     let (mut total, mut refused, mut wrong) = (0, 0, Vec::new());
     let mut files: Vec<_> = std::fs::read_dir(dir)
         .unwrap()
@@ -165,6 +172,9 @@ fn every_refused_marker_mutation_names_its_field() {
         if base.get("markers").is_none() {
             continue; // a parallel robot's measurement, not planar markers
         }
+        let three_d = base["markers"][0]["position_m"]
+            .as_array()
+            .is_some_and(|p| p.len() == 3);
         let mut paths = Vec::new();
         numbers(&base, String::new(), &mut paths, Vec::new());
         for (path, steps) in &paths {
@@ -173,8 +183,12 @@ fn every_refused_marker_mutation_names_its_field() {
                 let mut v = base.clone();
                 set(&mut v, steps, x);
                 let obs: softrod::estimate::Observation = serde_json::from_value(v).unwrap();
-                if let Err(e) = softrod::observe::ObservationOperator::new(&robot, &obs, 1e-5, 1e-3)
-                {
+                let op = if three_d {
+                    softrod::observe::ObservationOperator::new(&spatial, &obs, 1e-5, 1e-3)
+                } else {
+                    softrod::observe::ObservationOperator::new(&robot, &obs, 1e-5, 1e-3)
+                };
+                if let Err(e) = op {
                     refused += 1;
                     let m = e.to_string();
                     if !names(&m, &format!("observation.{path}")) {

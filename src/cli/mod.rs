@@ -74,7 +74,7 @@ enum Command {
     ///
     /// The markers file is JSON: {"markers": [{"node": 4, "position_m": [x, y]},
     /// {"s_m": 0.24, "position_m": [x, y], "tangent": [tx, ty]}, ...]} (positions in m,
-    /// world axes; [x, y, z] and [tx, ty, tz] in a "spatial_cable" scene; optional
+    /// world axes; [x, y, z] and [tx, ty, tz] in a "spatial_cable" or "ancf3d" scene; optional
     /// "position_weight"/"tangent_weight" per component).
     /// Without it, the observation is synthesized: the scene is solved forward
     /// with its own loads and seeded 0.01 mm noise is added at the scene's markers.
@@ -498,7 +498,7 @@ fn observe<E: Element>(scene: &Scene, robot: &Robot<E>, q: &[f64]) -> Result<Obs
         };
         if m.tangent {
             let mut t = vec![0.0; E::DIM];
-            point.slope_into(q, &mut t)?;
+            point.node_slope_into(q, E::NODE_DOFS, &mut t)?;
             mo.tangent = Some(t);
         }
         markers.push(mo);
@@ -518,15 +518,7 @@ fn estimate(
             Ok(out)
         }
         SceneRobot::Spatial(robot) => estimate_with(scene, robot, backend, markers),
-        SceneRobot::Full(_) => Err(softrod::Error::InvalidParameter {
-            name: "robot.element".into(),
-            value: "ancf3d".into(),
-            reason: "the estimator observes cable nodes [r, r']: estimation on a chain of full 3-D \
-                     elements is not implemented (the parallel robot's payload estimation is: a scene \
-                     with a `parallel` object)"
-                .into(),
-        }
-        .into()),
+        SceneRobot::Full(robot) => estimate_with(scene, robot, backend, markers),
     }
 }
 

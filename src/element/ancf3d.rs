@@ -64,8 +64,9 @@
 //!
 //! What it does not do: shear deformation (Kirchhoff rod, the slender
 //! limit of Simo–Reissner), rest curvature or twist, warping, Poisson's
-//! effect. The twist converges at second order in the element length (the
-//! section gradients are linear along the element; a twisted section is not).
+//! effect. The section gradients are linear along the element and a twisted
+//! section is not: the uniform twist is met only in the limit, observed at
+//! fourth order in the element length (tests/ancf3d.rs).
 //!
 //! # Derivatives
 //! The densities are written once over a scalar type and evaluated with

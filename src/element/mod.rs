@@ -300,17 +300,76 @@ impl ArcPoint {
         self.combine(&self.slopes, field, out)
     }
 
+    /// [`ArcPoint::value_into`] for a field of `node_dofs` numbers per node
+    /// whose first `2 DIM` are `[v_i, v_i']` (`DIM = out.len()`): a full 3-D
+    /// element's coordinates `[r, r_X, r_Y, r_Z]` (12 per node), or a load
+    /// field laid out like them. `node_dofs = 2 DIM` is
+    /// [`ArcPoint::value_into`].
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `field` ends before the element's
+    /// second node; [`Error::InvalidParameter`] naming `node_dofs` if it is
+    /// below `2 DIM`.
+    ///
+    /// # Example
+    /// ```
+    /// // a full 3-D element along z: [r, r_X, r_Y, r_Z] per node
+    /// let mut q = [0.0; 24];
+    /// q[5] = 1.0; // r_X of node 0 along z
+    /// q[14] = 0.4; // r of node 1
+    /// q[17] = 1.0; // r_X of node 1
+    /// let p = softrod::element::ArcPoint::new(0, 0.5, 0.4);
+    /// let (mut r, mut t) = ([0.0; 3], [0.0; 3]);
+    /// p.node_value_into(&q, 12, &mut r)?;
+    /// p.node_slope_into(&q, 12, &mut t)?;
+    /// assert!((r[2] - 0.2).abs() < 1e-15 && (t[2] - 1.0).abs() < 1e-14);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn node_value_into(&self, field: &[f64], node_dofs: usize, out: &mut [f64]) -> Result<()> {
+        self.combine_strided(&self.values, field, node_dofs, out)
+    }
+
+    /// [`ArcPoint::slope_into`] for a field of `node_dofs` numbers per node
+    /// (as [`ArcPoint::node_value_into`]).
+    ///
+    /// # Errors
+    /// As [`ArcPoint::node_value_into`].
+    ///
+    /// # Example
+    /// See [`ArcPoint::node_value_into`].
+    pub fn node_slope_into(&self, field: &[f64], node_dofs: usize, out: &mut [f64]) -> Result<()> {
+        self.combine_strided(&self.slopes, field, node_dofs, out)
+    }
+
     fn combine(&self, w: &[f64; 4], field: &[f64], out: &mut [f64]) -> Result<()> {
+        self.combine_strided(w, field, 2 * out.len(), out)
+    }
+
+    fn combine_strided(
+        &self,
+        w: &[f64; 4],
+        field: &[f64],
+        nd: usize,
+        out: &mut [f64],
+    ) -> Result<()> {
         let d = out.len();
-        let start = self.element.saturating_mul(2 * d);
-        let needed = start.saturating_add(4 * d);
+        if nd < 2 * d {
+            return Err(Error::invalid(
+                "node_dofs",
+                nd,
+                format!("a node holds at least [v, v']: {} numbers", 2 * d),
+            ));
+        }
+        let start = self.element.saturating_mul(nd);
+        let needed = start.saturating_add(nd).saturating_add(2 * d);
         if field.len() < needed {
             check_len("cable field", needed, field.len())?;
         }
-        let fe = &field[start..needed];
+        // slot k: node e + k/2, its value (k even) or slope (k odd)
+        let at = |k: usize, i: usize| field[start + (k / 2) * nd + (k % 2) * d + i];
         for (i, o) in out.iter_mut().enumerate() {
             // the sum in slot order from 0.0, as Robot::position_at always did
-            *o = (0..4).map(|k| w[k] * fe[k * d + i]).sum();
+            *o = (0..4).map(|k| w[k] * at(k, i)).sum();
         }
         Ok(())
     }

@@ -120,6 +120,8 @@ impl<E: Element> Stream<E> {
         report: EstimateReport,
     ) -> Result<Estimate> {
         let problem = &self.problem;
+        let (mut f, mut cov_factor) = (f, cov_factor);
+        unused_load_slots_zeroed::<E>(problem.load(), &mut f, &mut cov_factor, op.len());
         let (resultant_force_n, resultant_moment_nm, fw) = problem.resultants(&q, &f)?;
         let (resultant_force_cov, marker_cov, informative) =
             super::covariance::estimate_cov(problem, &cov_factor, &fw, dv, op, report.alpha, &f);
@@ -144,6 +146,34 @@ impl<E: Element> Stream<E> {
             node_dofs: E::NODE_DOFS,
             n_ob: op.len(),
         })
+    }
+}
+
+/// A distributed load field is laid out like the node coordinates, its
+/// `[w, w']` in the first `2 DIM` numbers of each node's; a node of the
+/// full 3-D element holds `r_Y, r_Z` after them, numbers no load is made
+/// of (`G F` and the penalty ignore them). The representer steps leave
+/// values there that mean nothing: zeroed, with their rows of the
+/// covariance factor (`n_F × n_ob`, row-major).
+fn unused_load_slots_zeroed<E: Element>(
+    load: super::LoadModel,
+    f: &mut [f64],
+    cov_factor: &mut [f64],
+    n_ob: usize,
+) {
+    let (nd, d) = (E::NODE_DOFS, E::DIM);
+    if load != super::LoadModel::Distributed || nd <= 2 * d {
+        return;
+    }
+    for (i, v) in f.iter_mut().enumerate() {
+        if i % nd >= 2 * d {
+            *v = 0.0;
+        }
+    }
+    for (i, row) in cov_factor.chunks_mut(n_ob.max(1)).enumerate() {
+        if i % nd >= 2 * d {
+            row.iter_mut().for_each(|v| *v = 0.0);
+        }
     }
 }
 

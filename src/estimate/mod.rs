@@ -456,8 +456,10 @@ impl std::fmt::Display for EstimateReport {
 pub struct Estimate {
     /// All coordinates of the estimated shape (m, dimensionless slopes).
     pub q: Vec<f64>,
-    /// The load parameters `F` (distributed: `n_q` entries, N/m and N/m²;
-    /// concentrated: the force, N).
+    /// The load parameters `F` (distributed: `n_q` entries laid out like
+    /// the node coordinates, `[w, w']` first in each node's, N/m and N/m²,
+    /// the full 3-D element's `r_Y, r_Z` slots zero; concentrated: the
+    /// force, N).
     pub f: Vec<f64>,
     /// The parameterization of `f`.
     pub load_model: LoadModel,
@@ -503,9 +505,10 @@ impl Estimate {
         if self.load_model != LoadModel::Distributed || self.node_s.len() < 2 {
             return w;
         }
-        // w(s) = S(s) F (8): the cable field F at the point
+        // w(s) = S(s) F (8): the cable field F at the point (laid out like
+        // the node coordinates: [w, w'] first in each node's numbers)
         if let Some(p) = ArcPoint::locate(&self.node_s, s) {
-            if p.value_into(&self.f, &mut w).is_err() {
+            if p.node_value_into(&self.f, self.node_dofs, &mut w).is_err() {
                 w.iter_mut().for_each(|v| *v = f64::NAN);
             }
         }
