@@ -158,7 +158,7 @@ pub struct SqpEstimator<E: Element> {
     warm_qp: Option<WarmQp>,
 }
 
-/// See [`SqpEstimator::warm_qp`].
+/// The kept last QP (see the `warm_qp` field of `SqpEstimator`).
 #[derive(Debug, Clone)]
 struct WarmQp {
     q: Vec<f64>,
