@@ -30,20 +30,12 @@ use softrod::report::sweep;
 use softrod::scene::Scene;
 use softrod::statics::StaticSolver;
 
-const CASES: [&str; 12] = [
-    "uniform_small",
-    "uniform_large",
-    "linear_small",
-    "linear_large",
-    "gaussian_small",
-    "gaussian_large",
-    "tip_force_small",
-    "tip_force_large",
-    "tip_moment_small",
-    "tip_moment_large",
-    "self_weight_moment_small",
-    "self_weight_moment_large",
-];
+/// The exudyn reference cases: the one list the static solver's tests and
+/// benches use.
+#[path = "../tests/common/statics_cases.rs"]
+mod statics_cases;
+use statics_cases::EXUDYN as CASES;
+
 const ELEMENTS: [usize; 6] = [4, 8, 16, 32, 64, 128];
 const ESTIMATE_REFERENCES: [&str; 3] = [
     "exudyn_family_uniform_1",

@@ -209,7 +209,8 @@ fn json_reports_carry_a_typed_status() {
     // one Gauss-Newton step at a small alpha: the last iterate is written
     let mut scene: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(example).unwrap()).unwrap();
-    scene["solver"]["estimator"] = serde_json::json!({"alpha": 1e-2, "max_iterations": 1});
+    scene["solver"]["estimator"] =
+        serde_json::json!({"alpha": 1e-2, "max_iterations": 1, "statistical_tolerance": 0.0});
     let path = temp_file("one_iteration.json", &scene.to_string());
     let (code, stdout, stderr) = run(&["estimate", &path]);
     assert_ne!(code, 0, "{stdout}");

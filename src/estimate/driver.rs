@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use crate::element::Element;
 use crate::error::{Error, Result};
+use crate::linsolve::LinearWork;
 use crate::observe::{Observation, ObservationOperator};
 
 use super::problem::{Derivs, Problem};
@@ -302,6 +303,7 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
     observation: &Observation,
 ) -> Result<Estimate> {
     let start = Instant::now();
+    let work = LinearWork::now();
     let backend = M::BACKEND;
     let op = method.stream().problem.operator(observation)?;
     let rule = method.stream().problem.settings().alpha_rule;
@@ -367,6 +369,7 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
             report.objective = wr + pen;
             report.weighted_residual = wr;
             report.wall_time_s = start.elapsed().as_secs_f64();
+            report.linear_work = LinearWork::now().since(work);
             return stream.finish(s.q, s.f, &op, &s.derivs, s.cov_factor, e, report);
         }
         last = Some(s);
@@ -385,5 +388,6 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
     report.sub_steps = n_sub;
     report.backend = backend;
     report.wall_time_s = start.elapsed().as_secs_f64();
+    report.linear_work = LinearWork::now().since(work);
     stream.finish(s.q, s.f, &op, &s.derivs, s.cov_factor, s.e, report)
 }

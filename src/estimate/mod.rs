@@ -286,8 +286,8 @@ pub struct EstimatorSettings {
     /// predicted successor decrease, `dec²/dec_prev`, is below `1e-3 ×` the
     /// threshold (taken without confirming it by another linearization).
     pub tolerance: f64,
-    /// Convergence, statistical (default 0: off, `tolerance` alone decides;
-    /// 0.1 is the value the streaming benches use): the estimation also
+    /// Convergence, statistical (default 0.1; 0 turns it off and leaves
+    /// `tolerance` alone to decide): the estimation also
     /// stops when the next
     /// Gauss–Newton step `dF`, taken with the exact derivatives at the
     /// current estimate, would move it by less than this fraction `κ` of its
@@ -324,7 +324,7 @@ impl Default for EstimatorSettings {
             tangent_sigma: 1e-3,
             max_iterations: 100,
             tolerance: 1e-15,
-            statistical_tolerance: 0.0,
+            statistical_tolerance: 0.1,
             max_observation_jump_m: 0.02,
             bounds: Vec::new(),
             statics: StaticSettings::default(),
@@ -431,6 +431,11 @@ pub struct EstimateReport {
     pub alpha: f64,
     /// Wall time of the step (s).
     pub wall_time_s: f64,
+    /// Tangent factorizations and solved right-hand sides of the step
+    /// (the `α` choice of a first step included): its cost, counted
+    /// instead of timed.
+    #[serde(default)]
+    pub linear_work: crate::linsolve::LinearWork,
 }
 
 impl std::fmt::Display for EstimateReport {

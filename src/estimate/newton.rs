@@ -200,23 +200,6 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
             // the step only: the covariance factor is formed once, at the end
             let (mut step, fac) = core.gn_solve(&dv, op, &e, &f, alpha)?;
             let dec = -0.5 * dot(&g, &step);
-            // trust region: the predicted motion of every node, M K⁻¹ Mᵀ G dF
-            // (one more solve), within max_observation_jump_m
-            let mut dq = Sensitivity::new(core.robot(), &lu)?.response(&core.gen_force(&step)?)?;
-            let nd = E::NODE_DOFS;
-            let moved = dq
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| i % nd < E::DIM)
-                .fold(0.0f64, |m, (_, v)| m.max(v.abs()));
-            let cap = if moved > settings.max_observation_jump_m && moved.is_finite() {
-                settings.max_observation_jump_m / moved
-            } else {
-                step_cap(&dv, &step, settings.max_observation_jump_m)
-            };
-            step.iter_mut().for_each(|v| *v *= cap);
-            dq.iter_mut().for_each(|v| *v *= cap);
-            let slope = dot(&g, &step);
             let scale = obj.max(n_ob);
             // the statistical test: dec = dFᵀ N dF ≤ κ² (see
             // EstimatorSettings::statistical_tolerance)
@@ -235,6 +218,7 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
                 equilibrium_residual_n: res_n,
                 alpha,
                 wall_time_s: 0.0,
+                linear_work: Default::default(),
             };
             // converged: predicted decrease below tolerance, or at the
             // round-off floor (tiny and no longer shrinking)
@@ -245,7 +229,7 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
                 Some(EstimateCriterion::WithinNoise)
             } else if floor {
                 Some(EstimateCriterion::RoundOffFloor)
-            } else if !dec.is_finite() && slope == 0.0 {
+            } else if !dec.is_finite() && dot(&g, &step) == 0.0 {
                 Some(EstimateCriterion::Stationary)
             } else {
                 None
@@ -273,6 +257,24 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
                     report: report(EstimateStatus::IterationLimit { iterations }, iterations),
                 });
             }
+            // trust region (after the convergence tests: a converged
+            // iterate takes no step): the predicted motion of every node,
+            // M K⁻¹ Mᵀ G dF (one more solve), within max_observation_jump_m
+            let mut dq = Sensitivity::new(core.robot(), &lu)?.response(&core.gen_force(&step)?)?;
+            let nd = E::NODE_DOFS;
+            let moved = dq
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| i % nd < E::DIM)
+                .fold(0.0f64, |m, (_, v)| m.max(v.abs()));
+            let cap = if moved > settings.max_observation_jump_m && moved.is_finite() {
+                settings.max_observation_jump_m / moved
+            } else {
+                step_cap(&dv, &step, settings.max_observation_jump_m)
+            };
+            step.iter_mut().for_each(|v| *v *= cap);
+            dq.iter_mut().for_each(|v| *v *= cap);
+            let slope = dot(&g, &step);
             // The last step: when the decrease predicted after this step
             // (convergence at least quadratic, dec²/dec_prev, with a margin
             // of 1000) is far below the tolerance, the step is taken without

@@ -65,11 +65,13 @@ mod pattern;
 pub mod sparse;
 #[cfg(test)]
 mod tests;
+mod work;
 
 pub use auto::{AutoFactors, AutoSolver, SolverKind};
 pub use banded::BandedMatrix;
 pub use pattern::{SymmetricMatrix, SymmetricPattern, MAX_ELEMENT_DOFS};
 pub use sparse::{CholeskyKind, SparseFactors, SparseSettings, SparseSolver};
+pub use work::LinearWork;
 
 /// Why a factorization or a solve failed. Indices are rows (dofs) of the
 /// matrix as given, not of a reordering.

@@ -561,6 +561,7 @@ impl TangentSolver for SparseSolver {
         options: FactorOptions,
     ) -> Result<SparseFactors, LinsolveError> {
         check_factor_input(&self.pattern, matrix, &options)?;
+        super::work::count_factorization();
         let n = matrix.n();
         // the Jacobi scaling |k_ii|^-1/2 (1 for a zero or non-finite
         // diagonal), in the permuted order

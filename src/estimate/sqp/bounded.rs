@@ -131,7 +131,8 @@ impl<E: Element> SqpEstimator<E> {
     ) -> std::result::Result<(QpStep, Vec<usize>), QpError> {
         let ineq = self.inequalities(q, f)?;
         let problem = &self.stream.problem;
-        let Unconstrained { dv, df0, g1, fac } = self.unconstrained(lu, op, f, e, r, alpha)?;
+        let Unconstrained { dv, df0, g1, fac } =
+            self.unconstrained(lu, op, f, e, r, alpha, None)?;
         let reduced = Reduced::new(problem, self.gram_lu.as_ref(), &dv, op, alpha);
         let solve_from = |start: &[usize]| -> Option<(Vec<f64>, Vec<usize>)> {
             active_set_solve(reduced.as_ref()?, &ineq, f, &df0, start)
@@ -521,7 +522,7 @@ mod tests {
         let r = problem.residual(&q, &f).unwrap();
         let c = est.linear_term(&op, &f, &e, alpha).unwrap();
         let ineq = est.inequalities(&q, &f).unwrap();
-        let un = est.unconstrained(lu, &op, &f, &e, &r, alpha).unwrap();
+        let un = est.unconstrained(lu, &op, &f, &e, &r, alpha, None).unwrap();
         let mut w0 = r.clone();
         lu.solve_in_place(&mut w0).unwrap();
         let dq0 = problem.robot().expand_step(&w0).unwrap();

@@ -54,9 +54,11 @@
 //! `EstimatorSettings::statistical_tolerance`, as the Newton backend's). The
 //! covariance factor is formed once, from the last QP's Gauss–Newton
 //! factor.
-//! After convergence the shape is re-solved at the final `F` (a chord step
+//! After convergence the shape is re-solved at the final `F` (chord steps
 //! with the last factorization, or a few Newton steps) so the estimate is
-//! an exact equilibrium.
+//! an exact equilibrium. The last QP's factored tangent and derivatives are
+//! kept: the next warm step's first QP, at this estimate, starts from them,
+//! so a warm step of a stream factors once (the second QP's tangent).
 
 mod bounded;
 
@@ -72,7 +74,7 @@ use crate::linsolve::{
 };
 use crate::loads::Loads;
 use crate::numeric::{dot, max_abs, norm2};
-use crate::observe::ObservationOperator;
+use crate::observe::{ObsRow, ObservationOperator};
 use crate::outcome::NonFiniteAt;
 use crate::statics::residual_floor;
 use crate::statics::tracker::FactoredTangent;
@@ -149,6 +151,20 @@ pub struct SqpEstimator<E: Element> {
     /// of the bounds' inequalities): the first guess for the next QP
     /// (`None` before the first: clarabel then finds one).
     active_set: Option<Vec<usize>>,
+    /// The last QP's factored tangent and derivatives, taken at (within a
+    /// final chord step of `1e-10 L` of) the last estimate's shape, for
+    /// its observation rows: the first QP of the next warm step starts
+    /// there instead of factoring again.
+    warm_qp: Option<WarmQp>,
+}
+
+/// The kept last QP (see the `warm_qp` field of `SqpEstimator`).
+#[derive(Debug, Clone)]
+struct WarmQp {
+    q: Vec<f64>,
+    rows: Vec<ObsRow>,
+    tangent: FactoredTangent,
+    dv: Derivs,
 }
 
 impl<E: Element> SqpEstimator<E> {
@@ -191,6 +207,7 @@ impl<E: Element> SqpEstimator<E> {
             h_upper,
             gram_lu,
             active_set: None,
+            warm_qp: None,
         })
     }
 
@@ -217,11 +234,20 @@ impl<E: Element> SqpEstimator<E> {
         r: &[f64],
         alpha: f64,
     ) -> std::result::Result<(QpStep, FactoredTangent), QpError> {
-        let tangent = self.stream.problem.factor_tangent(q)?;
+        // at the last estimate's shape (a warm step's first QP) its
+        // factored tangent and derivatives are known
+        let warm = self
+            .warm_qp
+            .take()
+            .filter(|w| w.q == q && w.rows == op.rows());
+        let (tangent, cached) = match warm {
+            Some(w) => (w.tangent, Some(w.dv)),
+            None => (self.stream.problem.factor_tangent(q)?, None),
+        };
         let (k, lu) = (&tangent.matrix, &tangent.factors);
         let c = self.linear_term(op, f, e, alpha)?;
         let step = if self.stream.problem.settings().bounds.is_empty() {
-            self.equality_qp(k, lu, op, f, e, r, alpha, c)?
+            self.equality_qp(k, lu, op, f, e, r, alpha, c, cached)?
         } else {
             let (step, act) = self.bounded_qp(k, lu, op, q, f, e, r, alpha, c)?;
             self.active_set = Some(act);
@@ -272,13 +298,14 @@ impl<E: Element> SqpEstimator<E> {
         r: &[f64],
         alpha: f64,
         c: Vec<f64>,
+        cached: Option<Derivs>,
     ) -> Result<QpStep> {
         let Unconstrained {
             dv,
             df0: df,
             g1,
             fac,
-        } = self.unconstrained(lu, op, f, e, r, alpha)?;
+        } = self.unconstrained(lu, op, f, e, r, alpha, cached)?;
         let dec_opt = (-dot(&g1, &df)).max(0.0);
         let du = self.du_from(lu, r, &df)?;
         let lambda_max = self.lambda_max(&dv, op, e, &du)?;
@@ -299,6 +326,8 @@ impl<E: Element> SqpEstimator<E> {
     /// The QP's solution without bounds, by block elimination: the
     /// restored residual `e' = e + A M K⁻¹ Q`, the derivatives at `q`, the
     /// Gauss–Newton load step there and the reduced gradient at `e'`.
+    /// `cached`: the derivatives at `q`, if known.
+    #[allow(clippy::too_many_arguments)]
     fn unconstrained(
         &self,
         lu: &AutoFactors,
@@ -307,6 +336,7 @@ impl<E: Element> SqpEstimator<E> {
         e: &[f64],
         r: &[f64],
         alpha: f64,
+        cached: Option<Derivs>,
     ) -> Result<Unconstrained> {
         let problem = &self.stream.problem;
         let mut w0 = r.to_vec();
@@ -317,7 +347,10 @@ impl<E: Element> SqpEstimator<E> {
             .zip(op.rows())
             .map(|(ei, row)| ei + row.apply(&dq0))
             .collect();
-        let dv = problem.derivs(lu, op)?;
+        let dv = match cached {
+            Some(dv) => dv,
+            None => problem.derivs(lu, op)?,
+        };
         let (df0, fac) = problem.gn_solve(&dv, op, &e1, f, alpha)?;
         let g1 = problem.gradient(&dv, op, &e1, f, alpha)?;
         Ok(Unconstrained { dv, df0, g1, fac })
@@ -542,23 +575,55 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
             }
         }
         // exact equilibrium at the final F, derivatives and covariance
-        // there: at a feasible point one chord step with the last QP's
-        // factorization (taken at q) does it, and that QP's derivatives are
-        // exact; otherwise the equilibrium is re-solved and re-factored
+        // there: at a feasible point a few chord steps with the last QP's
+        // factorization (taken at q) do it, and while they move the shape
+        // by no more than 1e-6 L that QP's derivatives stay exact to about
+        // 1e-6 relative (they serve the covariances, the reported gradient
+        // norm and the next warm step's first QP, not the estimate itself);
+        // otherwise the equilibrium is re-solved and re-factored. (One
+        // chord step of 1e-10 L at most, as before, missed at fine meshes,
+        // where the feasibility test's round-off floor is larger: the
+        // shape then moves by 1e-8 m at 800 elements, and the re-solve cost
+        // a second linearization per warm step.)
         let mut finish = None;
-        if let (Some((dv, fac)), Some(FactoredTangent { factors: lu, .. })) = (at_q.take(), &last) {
-            let mut w = r.clone();
-            lu.solve_in_place(&mut w)?;
-            let step = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            if step <= 1e-10 * len {
-                let problem = &self.stream.problem;
+        let mut warm_qp = None;
+        if let (Some((dv, fac)), Some(tangent)) = (at_q.take(), last) {
+            let lu = &tangent.factors;
+            let problem = &self.stream.problem;
+            let mut qc = q.clone();
+            let mut rc = r.clone();
+            let mut moved = 0.0;
+            let mut done = false;
+            for _ in 0..4 {
+                let mut w = rc.clone();
+                lu.solve_in_place(&mut w)?;
+                let step = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                moved += step;
+                if !step.is_finite() || moved > 1e-6 * len {
+                    break;
+                }
                 let dq = problem.robot().expand_step(&w)?;
-                q.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
-                let residual_n = norm2(&problem.robot().residual(&q, &dead, problem.known())?);
+                qc.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
+                rc = problem.robot().residual(&qc, &dead, problem.known())?;
+                if step <= 1e-10 * len {
+                    done = true;
+                    break;
+                }
+            }
+            if done {
+                q = qc;
+                let residual_n = norm2(&rc);
                 let l = cov_factor(problem, &dv, op, &fac);
+                warm_qp = Some(WarmQp {
+                    q: q.clone(),
+                    rows: op.rows().to_vec(),
+                    tangent,
+                    dv: dv.clone(),
+                });
                 finish = Some((q.clone(), dv, l, residual_n));
             }
         }
+        self.warm_qp = warm_qp;
         let (q, dv, l, residual_n) = match finish {
             Some(x) => x,
             None => {
@@ -591,6 +656,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 equilibrium_residual_n: residual_n,
                 alpha,
                 wall_time_s: 0.0,
+                linear_work: Default::default(),
             },
         })
     }
@@ -671,9 +737,12 @@ impl<E: Element + 'static> Estimator for SqpEstimator<E> {
 
     fn reset(&mut self) {
         self.stream.reset();
+        self.warm_qp = None;
     }
 
     fn set_known_loads(&mut self, known: Loads) -> Result<()> {
-        self.stream.problem.tracker().set_known(known)
+        self.stream.problem.tracker().set_known(known)?;
+        self.warm_qp = None;
+        Ok(())
     }
 }

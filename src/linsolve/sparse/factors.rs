@@ -187,6 +187,7 @@ impl Factorization for SparseFactors {
         if nrhs == 0 || self.n == 0 {
             return Ok(());
         }
+        super::super::work::count_solves(nrhs);
         self.solve_cols(b, nrhs)
     }
 }
