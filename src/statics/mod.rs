@@ -40,6 +40,7 @@ use crate::structure::Assembled;
 
 mod continuation;
 mod newton;
+mod sequence;
 mod stability;
 pub mod tracker;
 

@@ -100,9 +100,43 @@ impl StaticSolver {
         let zero = vec![0.0; n];
         let (u_start, q_start) = (u.clone(), w.q.clone());
         let mut load_steps = 0;
+        // a cold solve of a fine mesh: from the coarse mesh's equilibrium
+        // (see `super::sequence`), kept when plain Newton reaches a stable
+        // equilibrium from it
+        let mut sequenced = None;
+        if cold && scale.is_finite() {
+            if let Some(start) =
+                self.coarse_start(model, loads, self.settings.max_total_iterations)?
+            {
+                w.iterations += start.iterations;
+                load_steps += start.load_steps;
+                if let Some(uc) = start.u {
+                    u.copy_from_slice(&uc);
+                    model.configuration_into(&u, &mut w.q)?;
+                    let full = Target::<M> {
+                        dead: &dead,
+                        loads,
+                        offset: &zero,
+                        strict: true,
+                        descent: false,
+                    };
+                    let before = w.iterations;
+                    let status = self.fine_newton(model, &full, &mut u, &mut w, scale)?;
+                    if status.is_converged() && (w.iterations == before || w.definite) {
+                        sequenced = Some(status);
+                    } else {
+                        u.copy_from_slice(&u_start);
+                        w.q.copy_from_slice(&q_start);
+                    }
+                }
+            }
+        }
         // loads so large that their norm overflows (or a start point where the
         // forces do): no tolerance can be stated, so no solve is attempted
-        let quick = if scale.is_finite() {
+        let quick_before = w.iterations;
+        let quick = if let Some(status) = sequenced {
+            status
+        } else if scale.is_finite() {
             // first plain Newton from the start point (a warm start, a
             // robot's arcs of its actuation), given up at the first step it
             // would have to shorten
@@ -125,7 +159,9 @@ impl StaticSolver {
         };
         // kept only at a stable equilibrium (plain Newton also finds the
         // unstable ones, e.g. a column standing straight above its buckling load)
-        let status = if quick.is_converged() && (w.iterations == 0 || w.definite) {
+        let status = if sequenced.is_some()
+            || (quick.is_converged() && (w.iterations == quick_before || w.definite))
+        {
             quick
         } else if scale.is_finite() && !model.conservative(loads) {
             // Non-conservative (follower) loads: the tangent is the symmetric
