@@ -126,7 +126,9 @@ impl<E: Element> Robot<E> {
     /// let fine = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 64)]).build_planar()?;
     /// let coarse = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 16)]).build_planar()?;
     /// let u = fine.prolong_from(&coarse, &coarse.reference_configuration())?;
-    /// assert_eq!(u, fine.reference_free_coordinates());
+    /// let straight = fine.reference_free_coordinates();
+    /// // a straight line is a cubic: interpolated to round-off
+    /// assert!(u.iter().zip(&straight).all(|(a, b)| (a - b).abs() < 1e-14));
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn prolong_from(&self, coarse: &Robot<E>, q_coarse: &[f64]) -> Result<Vec<f64>> {

@@ -427,7 +427,8 @@ pub trait Assembled {
     /// let robot = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 64)]).build_planar()?;
     /// let (coarse, _) = robot.coarse_model(&softrod::loads::Loads::default())?.unwrap();
     /// let u = robot.prolong(&coarse, &coarse.reference_configuration())?;
-    /// assert_eq!(u, robot.reference_free_coordinates());
+    /// let straight = robot.reference_free_coordinates();
+    /// assert!(u.iter().zip(&straight).all(|(a, b)| (a - b).abs() < 1e-14));
     /// # Ok::<(), softrod::Error>(())
     /// ```
     fn prolong(&self, coarse: &Self, q_coarse: &[f64]) -> Result<Vec<f64>>
