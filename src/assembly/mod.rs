@@ -28,6 +28,8 @@ use crate::structure::rod::MAX_EDOF;
 use crate::structure::{BlockRule, DofMap, Rod};
 
 mod angles;
+mod coarse;
+mod configuration;
 mod follower;
 mod model;
 mod spec;
@@ -55,6 +57,9 @@ pub struct Robot<E: Element> {
     /// The tangent's sparsity over the free coordinates: element `e` of
     /// the pattern is the chain's element `e`.
     pattern: Arc<SymmetricPattern>,
+    /// Builds one element of a section (what [`Robot::new`] was given): a
+    /// coarser mesh of the same robot is built with it.
+    make: coarse::ElementMaker<E>,
 }
 
 impl<E: Element> Robot<E> {
@@ -74,8 +79,13 @@ impl<E: Element> Robot<E> {
     /// path prefixed to the field name.
     pub fn new(
         spec: RobotSpec,
-        make: impl Fn(&Section, f64, usize, usize) -> Result<E>,
+        make: impl Fn(&Section, f64, usize, usize) -> Result<E> + Send + Sync + 'static,
     ) -> Result<Self> {
+        Self::with_maker(spec, coarse::ElementMaker::new(make))
+    }
+
+    /// [`Robot::new`] with the element builder already kept.
+    fn with_maker(spec: RobotSpec, make: coarse::ElementMaker<E>) -> Result<Self> {
         let d = E::DIM;
         let nd = E::NODE_DOFS;
         Rod::<E>::check_layout(&spec.sections, "robot")?;
@@ -90,7 +100,7 @@ impl<E: Element> Robot<E> {
             spec.axial_gauss_points,
             spec.bending_gauss_points,
             "robot",
-            make,
+            |s: &Section, le, ax, be| make.build(s, le, ax, be),
         )?;
         let dir = base_direction(&spec.base, d)?;
         let base_node = E::straight_node(&spec.base.position_m, &dir);
@@ -116,6 +126,7 @@ impl<E: Element> Robot<E> {
             base_node,
             dofs,
             pattern,
+            make,
         })
     }
 
@@ -279,58 +290,6 @@ impl<E: Element> Robot<E> {
     /// The clamped base node's coordinates.
     pub fn base_node(&self) -> &[f64] {
         &self.base_node
-    }
-
-    /// The stress-free straight configuration along the base direction
-    /// (exact equilibrium without loads, actuation and rest curvature).
-    pub fn reference_configuration(&self) -> Vec<f64> {
-        let d = E::DIM;
-        self.rod
-            .straight_configuration(&self.base_node[..d], &self.base_node[d..2 * d])
-    }
-
-    /// The configuration the section torques of `pressures` (plus rest
-    /// curvature) would give without any other load: each section a circular
-    /// arc of curvature `κ_s = M_s / EI_s + κ0_s`, inextensible (planar
-    /// robots; a spatial robot gets the straight configuration). The static
-    /// solver starts cold solves here: it is exact for pure actuation and
-    /// much closer to equilibrium than the straight line.
-    pub fn arc_configuration(&self, pressures: &[f64]) -> Vec<f64> {
-        if E::DIM != 2 || E::MOMENT_DIM != 1 {
-            return self.reference_configuration();
-        }
-        let nd = E::NODE_DOFS;
-        let torques = self.section_torques(pressures);
-        let mut q = Vec::with_capacity(self.n_q());
-        let th0 = match self.spec.base.direction {
-            None => self.spec.base.angle_rad,
-            Some(_) => self.base_node[3].atan2(self.base_node[2]),
-        };
-        let (mut x, mut y, mut th) = (self.base_node[0], self.base_node[1], th0);
-        let mut s_prev = 0.0;
-        for (i, &s) in self.rod.node_arc().iter().enumerate() {
-            if i > 0 {
-                let sec = self.section_of_element(i - 1);
-                let spec = &self.rod.sections()[sec];
-                let ds = s - s_prev;
-                let start = self.rod.node_arc()[self.section_nodes()[sec].0];
-                let k = torques[sec].first().copied().unwrap_or(0.0) / spec.ei_nm2
-                    + spec.rest_curvature_at(s_prev + 0.5 * ds - start);
-                let dth = k * ds;
-                if dth.abs() < 1e-9 {
-                    x += ds * (th + 0.5 * dth).cos();
-                    y += ds * (th + 0.5 * dth).sin();
-                } else {
-                    x += ((th + dth).sin() - th.sin()) / k;
-                    y += (th.cos() - (th + dth).cos()) / k;
-                }
-                th += dth;
-            }
-            s_prev = s;
-            let node = E::straight_node(&[x, y], &[th.cos(), th.sin()]);
-            q.extend(node.iter().take(nd));
-        }
-        q
     }
 
     /// Element holding arc coordinate `s` and the local coordinate `ξ` in it.

@@ -17,6 +17,14 @@ impl<E: Element> Assembled for Robot<E> {
         loads.follower_loads.is_empty()
     }
 
+    fn coarse_model(&self, loads: &Loads) -> Result<Option<(Self, Loads)>> {
+        self.coarsened(loads)
+    }
+
+    fn prolong(&self, coarse: &Self, q_coarse: &[f64]) -> Result<Vec<f64>> {
+        self.prolong_from(coarse, q_coarse)
+    }
+
     fn n_free(&self) -> usize {
         Robot::n_free(self)
     }

@@ -18,7 +18,13 @@
 //! (positive definite tangent) that lands on an unstable one (a negative
 //! `L D Lᵀ` pivot of the corrector's last tangent) stepped over a
 //! bifurcation, such as a column's buckling load, where the straight column
-//! goes on as a saddle while the stable path bends away; the step is halved.
+//! goes on as a saddle while the stable path bends away. The saddle is left
+//! at that load along its direction of most negative curvature by a descent
+//! Newton run ([`super::stability`]) and the path goes on from the stable
+//! equilibrium it reaches; only if that fails is the step halved. (Measured
+//! on a column under `q L³/EI = 12`: halving until the path bends onto the
+//! stable branch took 22 load steps, 100–110 iterations at every mesh; the
+//! escape at the saddle 2 steps, 41 iterations at 8 elements, 45 at 32.)
 //!
 //! Why not natural continuation with a line search on the potential (the
 //! solver before): on a fine mesh the first Newton step of a large rotation
@@ -82,6 +88,7 @@ impl StaticSolver {
         loads: &M::Loads,
         u: &mut [f64],
         w: &mut Work<'_>,
+        scale: f64,
     ) -> Result<PathEnd> {
         let n = model.n_free();
         let nq = model.n_q();
@@ -190,6 +197,40 @@ impl StaticSolver {
                 // a bifurcation (a column's buckling load: the straight
                 // column goes on as a saddle, the path bends away): shorter
                 Corrected::Done { factors: f, .. } if stable && !f.is_positive_definite() => {
+                    // leave the saddle at this load for the stable branch
+                    // (from the unloaded start, whose homotopy offset is nil:
+                    // the escape's descent knows no offset)
+                    if norm2(&r0) <= self.settings.residual_tolerance * scale {
+                        let mut u_s = u_try.clone();
+                        let saved_q = std::mem::replace(&mut w.q, q_try.clone());
+                        let (st, inertia) = self.stabilize(
+                            model,
+                            &dead_t,
+                            &loads_t,
+                            &mut u_s,
+                            w,
+                            scale,
+                            StaticStatus::Converged(crate::outcome::StaticCriterion::Residual),
+                        )?;
+                        if st.is_converged() && inertia.is_some_and(|i| i.negative == 0) {
+                            stable = true;
+                            load_steps += 1;
+                            lambda = target;
+                            u.copy_from_slice(&u_s);
+                            q_try.copy_from_slice(&w.q);
+                            u_try.copy_from_slice(u);
+                            if lambda >= 1.0 {
+                                return Ok(PathEnd {
+                                    status: None,
+                                    load_steps,
+                                });
+                            }
+                            tangent = None;
+                            previous_tangent = None;
+                            continue;
+                        }
+                        w.q = saved_q;
+                    }
                     u_try.copy_from_slice(u);
                     q_try.copy_from_slice(&w.q);
                     delta = 0.5 * h;

@@ -4,7 +4,12 @@
 //! free coordinates `u` with `q = φ(u)` (the equilibrium is
 //! `R(u) = T(u)ᵀ Q(φ(u)) = 0`).
 //!
-//! Globalization: a backtracking line search that accepts a decrease of the
+//! Globalization: a quick plain Newton run from the start point; for a cold
+//! solve of a fine mesh (64 elements or more), then a start from the
+//! equilibrium of a 16-element mesh of the same model interpolated onto the
+//! fine one (mesh sequencing, `sequence.rs`: the iteration count no longer
+//! grows with the mesh); then a predictor–corrector continuation in the
+//! load (`continuation.rs`); as the last resort, a backtracking line search that accepts a decrease of the
 //! total potential or of `|R|²` (the Newton direction always descends the
 //! latter, whatever the tangent's definiteness), a cap on the rotation of
 //! the node slopes (and rigid bodies) per step, and, when the full problem
@@ -40,6 +45,7 @@ use crate::structure::Assembled;
 
 mod continuation;
 mod newton;
+mod sequence;
 mod stability;
 pub mod tracker;
 

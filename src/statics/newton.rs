@@ -125,8 +125,39 @@ impl StaticSolver {
         };
         // kept only at a stable equilibrium (plain Newton also finds the
         // unstable ones, e.g. a column standing straight above its buckling load)
-        let status = if quick.is_converged() && (w.iterations == 0 || w.definite) {
+        let quick_ok = quick.is_converged() && (w.iterations == 0 || w.definite);
+        // when that fails, a cold solve of a fine mesh starts from the
+        // coarse mesh's equilibrium (see `super::sequence`), kept when plain
+        // Newton reaches a stable equilibrium from it
+        let mut sequenced = None;
+        if !quick_ok && cold && scale.is_finite() {
+            if let Some(start) =
+                self.coarse_start(model, loads, self.settings.max_total_iterations)?
+            {
+                w.iterations += start.iterations;
+                load_steps += start.load_steps;
+                if let Some(uc) = start.u {
+                    u.copy_from_slice(&uc);
+                    model.configuration_into(&u, &mut w.q)?;
+                    let full = Target::<M> {
+                        dead: &dead,
+                        loads,
+                        offset: &zero,
+                        strict: true,
+                        descent: false,
+                    };
+                    let before = w.iterations;
+                    let status = self.fine_newton(model, &full, &mut u, &mut w, scale)?;
+                    if status.is_converged() && (w.iterations == before || w.definite) {
+                        sequenced = Some(status);
+                    }
+                }
+            }
+        }
+        let status = if quick_ok {
             quick
+        } else if let Some(status) = sequenced {
+            status
         } else if scale.is_finite() && !model.conservative(loads) {
             // Non-conservative (follower) loads: the tangent is the symmetric
             // part only, Newton converges linearly and the continuation's
@@ -144,8 +175,8 @@ impl StaticSolver {
                 u = model.reference_free_coordinates();
                 model.configuration_into(&u, &mut w.q)?;
             }
-            let end = self.continuation(model, &dead, loads, &mut u, &mut w)?;
-            load_steps = end.load_steps;
+            let end = self.continuation(model, &dead, loads, &mut u, &mut w, scale)?;
+            load_steps += end.load_steps;
             match end.status {
                 // near the full load's equilibrium: Newton to the tolerance
                 None => {
@@ -386,7 +417,13 @@ impl StaticSolver {
                 let shrinking = floor_steps == 0 || step_inf <= 0.5 * floor_previous;
                 model.advance_into(u, &w.q, &du, &dq, 1.0, &mut trial, &mut q_trial)?;
                 let rt = eval(&trial, &q_trial, &mut r_trial)?;
-                if shrinking && rt.is_finite() && rt <= rn.max(w.floor) {
+                // the first step is taken whatever the residual says (below
+                // the floor it cannot tell a good step from a bad one; a
+                // small load on a fine mesh starts below it: left at the
+                // start point, 2000 elements under a 1e-3-scale load reported
+                // the straight rod)
+                let kept = floor_steps == 0 || rt <= rn.max(w.floor);
+                if shrinking && rt.is_finite() && kept {
                     u.copy_from_slice(&trial);
                     std::mem::swap(&mut w.q, &mut q_trial);
                     std::mem::swap(&mut w.r, &mut r_trial);

@@ -387,6 +387,62 @@ pub trait Assembled {
         true
     }
 
+    /// Mesh sequencing: a coarser model of the same body with `loads`
+    /// carried over, whose equilibrium ([`Assembled::prolong`] onto this
+    /// model) starts a cold static solve; `None`, the default, when the
+    /// model has none (a robot: [`crate::assembly::Robot::coarsened`]).
+    ///
+    /// # Errors
+    /// As [`Assembled::validate_loads`] and the model's construction.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// use softrod::structure::Assembled;
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 8)]).build_planar()?;
+    /// // coarse enough already
+    /// assert!(robot.coarse_model(&softrod::loads::Loads::default())?.is_none());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    fn coarse_model(&self, loads: &Self::Loads) -> Result<Option<(Self, Self::Loads)>>
+    where
+        Self: Sized,
+    {
+        let _ = loads;
+        Ok(None)
+    }
+
+    /// The free coordinates of this model interpolating the configuration
+    /// `q_coarse` of `coarse` (from [`Assembled::coarse_model`]).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] (field `coarse`) for a model without
+    /// a coarse one (the default); a robot's as
+    /// [`crate::assembly::Robot::prolong_from`].
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// use softrod::structure::Assembled;
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 64)]).build_planar()?;
+    /// let (coarse, _) = robot.coarse_model(&softrod::loads::Loads::default())?.unwrap();
+    /// let u = robot.prolong(&coarse, &coarse.reference_configuration())?;
+    /// let straight = robot.reference_free_coordinates();
+    /// assert!(u.iter().zip(&straight).all(|(a, b)| (a - b).abs() < 1e-14));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    fn prolong(&self, coarse: &Self, q_coarse: &[f64]) -> Result<Vec<f64>>
+    where
+        Self: Sized,
+    {
+        let _ = (coarse, q_coarse);
+        Err(Error::invalid(
+            "coarse",
+            "a model",
+            "this model has no coarse mesh",
+        ))
+    }
+
     /// [`Assembled::potential_change`] given what
     /// [`Assembled::energies_into`] wrote at `from`. By default the
     /// energies are not read.
