@@ -117,7 +117,9 @@ pub struct ContactSolver {
 }
 
 /// Smallest force of an active contact in an SQP step, relative to the
-/// largest one.
+/// largest: above the QP's multipliers of open gaps (measured up to 2e-8 at
+/// a fingertip near several circles; taken as active they over-constrained
+/// the point and the polish's KKT system was singular).
 const ACTIVE_FORCE_RATIO: f64 = 1e-6;
 
 /// One active contact during the solve: its obstacle, where it is, its force.
@@ -459,11 +461,6 @@ impl ContactSolver {
                 }
             };
             let lmax = lambda.iter().fold(0.0f64, |m, v| m.max(*v));
-            // a contact carries a force above the interior-point solver's
-            // residual multipliers of open gaps (measured up to 2e-8 of the
-            // largest at a fingertip near several circles of a cover: taken
-            // as active they over-constrain one point and the polish's KKT
-            // system is singular)
             let is_active = |lam: f64| lam > ACTIVE_FORCE_RATIO * lmax.max(1e-300);
             active = gaps
                 .iter()
@@ -475,12 +472,7 @@ impl ContactSolver {
                     lambda: *lam,
                 })
                 .collect();
-            let set: Vec<usize> = gaps
-                .iter()
-                .zip(&lambda)
-                .filter(|(_, lam)| is_active(**lam))
-                .map(|(g, _)| g.obstacle)
-                .collect();
+            let set: Vec<usize> = active.iter().map(|a| a.obstacle).collect();
             let dq = ctx.expand(&du)?;
             let step = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             // polish once the step is small or the active set settled
