@@ -441,3 +441,41 @@ fn a_solve_from_afar_with_a_far_obstacle_equals_the_free_solve() {
         .fold(0.0, f64::max);
     assert!(d < 1e-9, "{d:e}");
 }
+
+#[test]
+fn a_fingertip_pressed_against_a_column_of_small_circles_converges() {
+    // the right finger of the gripper's plant pressing its tip against a
+    // ruler's circle cover (37 circles of 1.5 mm, 0.75 mm apart): the
+    // fingertip is near several circles at once, and the interior-point
+    // QP gives the open ones multipliers of up to 2e-8 of the contact's.
+    // Taken as active they over-constrained the tip point and the solve
+    // ended with LineSearchFailed (measured before the fix).
+    use softrod::grasp::gripper::{GripperSpec, Side};
+    let robot = GripperSpec::default()
+        .finger_spec(Side::Right, 1.15, 0.9, 2)
+        .build_planar()
+        .unwrap();
+    let y0 = -0.093_813_949_742_768_8;
+    let circles: Vec<Obstacle> = (0..37)
+        .map(|k| Obstacle::Circle {
+            center_m: [0.0035, y0 + 0.00075 * k as f64],
+            radius_m: 0.0015,
+        })
+        .collect();
+    let obstacles = Obstacles::new(circles, 0.008).unwrap();
+    let loads = Loads {
+        pressures_pa: vec![68_601.311_472_840_68, 0.0, 0.0, 65_037.856_817_770_71],
+        ..Loads::default()
+    };
+    let sol = ContactSolver::default()
+        .solve(&robot, &loads, &obstacles, None)
+        .unwrap();
+    check_solution(&sol);
+    assert!(sol.report.min_gap_m >= -1e-10, "{}", sol.report);
+    // one contact, at the tip, pushing the finger outward (+x)
+    assert_eq!(sol.contacts.len(), 1, "{:?}", sol.contacts);
+    let c = &sol.contacts[0];
+    assert!((c.s_m - robot.length()).abs() < 1e-12 && c.force_n > 0.0);
+    assert!(c.normal[0] > 0.9, "{:?}", c.normal);
+    assert!(contact_forces_balance(&robot, &loads, &sol) < 1e-8);
+}

@@ -158,3 +158,33 @@ fn the_quick_report_part_writes_the_table_and_the_sequences() {
     assert_eq!(r.sequences[0].success, r.rows[0].successes == 1);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn the_rulers_plant_solves_converge_and_a_seeded_try_holds() {
+    // the ruler (a 3 mm × 30 mm section) is covered by 37 circles of
+    // 1.5 mm: before the contact solver's fix these adaptive tries ended in
+    // failed plant solves (IterationLimit, LineSearchFailed); now they get
+    // to the friction check, and try 3 (offset −4.6 mm) holds
+    let o = &table_objects()[0];
+    for k in [0, 1, 3] {
+        let out = run_trial(
+            &GripperSpec::default(),
+            o,
+            placement(1, 0, k),
+            Strategy::Adaptive,
+            &GraspSettings::default(),
+            1 ^ (k as u64),
+        )
+        .unwrap();
+        assert!(
+            !matches!(out.failure, Some(Failure::PlantSolve { .. })),
+            "try {k}: {:?}",
+            out.failure
+        );
+        assert!(out.hold.is_some(), "try {k}");
+        if k == 3 {
+            assert!(out.success, "{:?}", out.failure);
+            assert!(out.holding_mass_kg > o.mass_kg);
+        }
+    }
+}

@@ -116,6 +116,12 @@ pub struct ContactSolver {
     pub settings: ContactSettings,
 }
 
+/// Smallest force of an active contact in an SQP step, relative to the
+/// largest: above the QP's multipliers of open gaps (measured up to 2e-8 at
+/// a fingertip near several circles; taken as active they over-constrained
+/// the point and the polish's KKT system was singular).
+const ACTIVE_FORCE_RATIO: f64 = 1e-6;
+
 /// One active contact during the solve: its obstacle, where it is, its force.
 #[derive(Debug, Clone, Copy)]
 struct Active {
@@ -455,22 +461,18 @@ impl ContactSolver {
                 }
             };
             let lmax = lambda.iter().fold(0.0f64, |m, v| m.max(*v));
+            let is_active = |lam: f64| lam > ACTIVE_FORCE_RATIO * lmax.max(1e-300);
             active = gaps
                 .iter()
                 .zip(&lambda)
-                .filter(|(_, lam)| **lam > 1e-9 * lmax.max(1e-300))
+                .filter(|(_, lam)| is_active(**lam))
                 .map(|(g, lam)| Active {
                     obstacle: g.obstacle,
                     s: g.s_m,
                     lambda: *lam,
                 })
                 .collect();
-            let set: Vec<usize> = gaps
-                .iter()
-                .zip(&lambda)
-                .filter(|(_, lam)| **lam > 1e-9 * lmax.max(1e-300))
-                .map(|(g, _)| g.obstacle)
-                .collect();
+            let set: Vec<usize> = active.iter().map(|a| a.obstacle).collect();
             let dq = ctx.expand(&du)?;
             let step = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             // polish once the step is small or the active set settled

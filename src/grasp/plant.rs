@@ -128,6 +128,8 @@ pub struct GripperPlant {
     seed: u64,
     step: u64,
     warm: [Option<Vec<f64>>; 2],
+    /// Whether each finger touched anything at the last solve.
+    touching: [bool; 2],
     solver: ContactSolver,
 }
 
@@ -173,6 +175,7 @@ impl GripperPlant {
             seed,
             step: 0,
             warm: [None, None],
+            touching: [false, false],
             solver: ContactSolver::default(),
         };
         let obs = plant.obstacles()?;
@@ -243,22 +246,33 @@ impl GripperPlant {
             // table) at that equilibrium is open it is the contact solution
             // too, and the contact solver never sees an obstacle the finger
             // does not touch (measured: the table polygon alone made solves
-            // of a finger far from it fail with LineSearchFailed)
+            // of a finger far from it fail with LineSearchFailed). Only for
+            // a finger that touched nothing at the last solve: a pressed
+            // finger's free equilibrium may lie wholly beyond a thin object
+            // (measured: after the lift a finger pressing the 3 mm ruler
+            // passed through it, all gaps open on its far side)
             let free_obstacles = Obstacles::new(Vec::new(), self.radius_m)?;
-            let mut sol =
-                self.solver
-                    .solve(robot, &loads, &free_obstacles, self.warm[k].as_deref())?;
             let n_obj = self.object.len();
-            let open =
-                sol.is_converged() && obstacles.gaps(robot, &sol.q)?.iter().all(|g| g.gap_m > 0.0);
-            if !open {
-                sol = self
-                    .solver
-                    .solve(robot, &loads, &obstacles, self.warm[k].as_deref())?;
-                if !sol.is_converged() && self.warm[k].is_some() {
-                    // once more from the straight finger
-                    sol = self.solver.solve(robot, &loads, &obstacles, None)?;
+            let mut free = None;
+            if !self.touching[k] {
+                let sol =
+                    self.solver
+                        .solve(robot, &loads, &free_obstacles, self.warm[k].as_deref())?;
+                if sol.is_converged()
+                    && obstacles.gaps(robot, &sol.q)?.iter().all(|g| g.gap_m > 0.0)
+                {
+                    free = Some(sol);
                 }
+            }
+            let mut sol = match free {
+                Some(sol) => sol,
+                None => self
+                    .solver
+                    .solve(robot, &loads, &obstacles, self.warm[k].as_deref())?,
+            };
+            if !sol.is_converged() && self.warm[k].is_some() {
+                // once more from the straight finger
+                sol = self.solver.solve(robot, &loads, &obstacles, None)?;
             }
             if !sol.is_converged() {
                 self.warm[k] = None;
@@ -287,6 +301,7 @@ impl GripperPlant {
                 .cloned()
                 .partition(|c| c.obstacle < n_obj);
             self.warm[k] = Some(sol.q.clone());
+            self.touching[k] = !sol.contacts.is_empty();
             out.push(FingerState {
                 q: sol.q,
                 object_contacts,

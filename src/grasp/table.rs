@@ -165,31 +165,62 @@ pub fn run_table(
     let mut rows = Vec::new();
     for (i, o) in objects.iter().enumerate() {
         for &strategy in strategies {
-            let mut row = TableRow {
-                object: o.name.clone(),
-                strategy,
-                successes: 0,
-                tries,
-                failures: Vec::new(),
-                holding_mass_kg: Vec::new(),
-            };
-            for k in 0..tries {
-                let p = placement(seed, i, k);
-                let out = run_trial(
-                    gripper,
-                    o,
-                    p,
-                    strategy,
-                    settings,
-                    seed ^ ((i * 100 + k) as u64),
-                )?;
-                row.successes += usize::from(out.success);
-                row.failures.push(out.failure.clone());
-                row.holding_mass_kg.push(out.holding_mass_kg);
-                each(&out);
-            }
-            rows.push(row);
+            rows.push(run_row(
+                gripper, o, i, strategy, tries, settings, seed, &mut each,
+            )?);
         }
     }
     Ok(rows)
+}
+
+/// One row of [`run_table`]: `tries` seeded tries of `object`, which is
+/// number `index` of the table (the placements are keyed by it), with one
+/// strategy. A subset of the table reruns exactly by its indices.
+///
+/// # Errors
+/// Bad input only (see [`run_trial`]).
+///
+/// # Example
+/// ```no_run
+/// use softrod::grasp::{gripper::GripperSpec, table::{run_row, table_objects}, trial::{GraspSettings, Strategy}};
+/// let mouse = &table_objects()[6];
+/// let row = run_row(&GripperSpec::default(), mouse, 6, Strategy::Adaptive, 5, &GraspSettings::default(), 1, |_| {})?;
+/// println!("{}/{}", row.successes, row.tries);
+/// # Ok::<(), softrod::Error>(())
+/// ```
+#[allow(clippy::too_many_arguments)]
+pub fn run_row(
+    gripper: &GripperSpec,
+    object: &GraspObject,
+    index: usize,
+    strategy: Strategy,
+    tries: usize,
+    settings: &GraspSettings,
+    seed: u64,
+    mut each: impl FnMut(&TrialOutcome),
+) -> Result<TableRow> {
+    let mut row = TableRow {
+        object: object.name.clone(),
+        strategy,
+        successes: 0,
+        tries,
+        failures: Vec::new(),
+        holding_mass_kg: Vec::new(),
+    };
+    for k in 0..tries {
+        let p = placement(seed, index, k);
+        let out = run_trial(
+            gripper,
+            object,
+            p,
+            strategy,
+            settings,
+            seed ^ ((index * 100 + k) as u64),
+        )?;
+        row.successes += usize::from(out.success);
+        row.failures.push(out.failure.clone());
+        row.holding_mass_kg.push(out.holding_mass_kg);
+        each(&out);
+    }
+    Ok(row)
 }

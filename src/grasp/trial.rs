@@ -70,7 +70,9 @@ use crate::loads::Loads;
 use crate::statics::StaticSolver;
 
 mod finger;
+mod record;
 use finger::{calibrate, FingerController};
+use record::{contact_records, Stop};
 
 /// Which grasp strategy.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -431,48 +433,6 @@ pub fn meeting_pressure_pa(gripper: &GripperSpec) -> Result<f64> {
     Ok(0.5 * (lo + hi))
 }
 
-fn contact_records(fingers: &[FingerState; 2], radius: f64) -> Vec<ContactRecord> {
-    let mut out = Vec::new();
-    for (f, side) in fingers.iter().zip([Side::Left, Side::Right]) {
-        for c in &f.object_contacts {
-            let d = radius + c.gap_m;
-            out.push(ContactRecord {
-                side,
-                point_m: [
-                    c.point_m[0] - d * c.normal[0],
-                    c.point_m[1] - d * c.normal[1],
-                ],
-                normal: [-c.normal[0], -c.normal[1]],
-                force_n: c.force_n,
-            });
-        }
-    }
-    out
-}
-
-fn frame(
-    time_s: f64,
-    phases: [Phase; 2],
-    pressures: [&[f64]; 2],
-    fingers: &[FingerState; 2],
-    radius: f64,
-    poses: [Option<[f64; 3]>; 2],
-    object_position_m: [f64; 2],
-) -> Frame {
-    Frame {
-        time_s,
-        phases,
-        pressures_pa: [pressures[0].to_vec(), pressures[1].to_vec()],
-        centreline_m: [
-            fingers[0].centreline_m.clone(),
-            fingers[1].centreline_m.clone(),
-        ],
-        contacts: contact_records(fingers, radius),
-        contact_pose: poses,
-        object_position_m,
-    }
-}
-
 /// The table top at height `y` (m).
 fn table_at(y: f64) -> Obstacle {
     Obstacle::Polygon {
@@ -552,7 +512,6 @@ pub fn run_trial(
     let table = table_at(table_y);
     // the palm may come down until the object's top is this close
     let max_descent = (-b[3] - settings.palm_clearance_m).max(0.0);
-    let mut descent = 0.0;
     let mut plant = GripperPlant::new(
         gripper,
         &settings.plant,
@@ -561,7 +520,6 @@ pub fn run_trial(
         &settings.markers_s_m,
         seed,
     )?;
-    let dt = 1.0 / settings.control_rate_hz;
     let mut out = TrialOutcome {
         object: object.name.clone(),
         strategy,
@@ -577,17 +535,63 @@ pub fn run_trial(
         contact_estimate_error_m: None,
         frames: Vec::new(),
     };
-    let fail_plant = |out: &mut TrialOutcome, side, status| {
-        out.failure = Some(Failure::PlantSolve { side, status });
+    let scene = Scene {
+        gripper,
+        object,
+        settings,
+        strategy,
+        seed,
+        pose,
+        table_y,
+        max_descent,
     };
-    let zero = vec![0.0; FINGER_PRESSURES];
-    let mut state = match plant.solve([&zero, &zero])? {
-        PlantStep::Solved(s) => *s,
-        PlantStep::Failed { side, status } => {
-            fail_plant(&mut out, side, status);
-            return Ok(out);
+    match simulate(&scene, &mut plant, &mut out) {
+        Ok(()) => Ok(out),
+        Err(Stop::Fail(f)) => {
+            out.failure = Some(f);
+            Ok(out)
         }
-    };
+        Err(Stop::Bad(e)) => Err(e),
+    }
+}
+
+/// What a trial's simulation needs besides the plant.
+struct Scene<'a> {
+    gripper: &'a GripperSpec,
+    object: &'a GraspObject,
+    settings: &'a GraspSettings,
+    strategy: Strategy,
+    seed: u64,
+    /// The object's pose on the table.
+    pose: Pose,
+    /// The table top (m).
+    table_y: f64,
+    /// How far the palm may come down (m).
+    max_descent: f64,
+}
+
+/// The closing and the lift (module docs); a failed trial stops with its
+/// cause, which the caller records.
+fn simulate(
+    scene: &Scene<'_>,
+    plant: &mut GripperPlant,
+    out: &mut TrialOutcome,
+) -> std::result::Result<(), Stop> {
+    let Scene {
+        gripper,
+        object,
+        settings,
+        strategy,
+        seed,
+        pose,
+        table_y,
+        max_descent,
+    } = *scene;
+    let r = gripper.finger_radius_m;
+    let dt = 1.0 / settings.control_rate_hz;
+    let mut descent = 0.0;
+    let zero = vec![0.0; FINGER_PRESSURES];
+    let mut state = plant.solve([&zero, &zero])?.states()?;
     let mut pressures = [zero.clone(), zero.clone()];
     let mut phases = [Phase::Ramp; 2];
     let mut poses = [None; 2];
@@ -602,33 +606,13 @@ pub fn run_trial(
                 let p = (k as f64 * dt / settings.open_loop_ramp_s).min(1.0) * p_ol;
                 let cmd = vec![p, 0.0, 0.0, 0.0];
                 pressures = [cmd.clone(), cmd];
-                state = match plant.solve([&pressures[0], &pressures[1]])? {
-                    PlantStep::Solved(s) => *s,
-                    PlantStep::Failed { side, status } => {
-                        fail_plant(&mut out, side, status);
-                        return Ok(out);
-                    }
-                };
-                out.frames.push(frame(
-                    k as f64 * dt,
-                    phases,
-                    [&pressures[0], &pressures[1]],
-                    &state,
-                    r,
-                    poses,
-                    out.final_pose.position_m,
-                ));
+                state = plant.solve([&pressures[0], &pressures[1]])?.states()?;
+                out.push_frame(k as f64 * dt, phases, &pressures, &state, r, poses);
             }
         }
         Strategy::Adaptive => {
             let noise = settings.plant.marker_noise_m;
-            let vp = match calibrate(gripper, settings, seed)? {
-                Ok(vp) => vp,
-                Err(f) => {
-                    out.failure = Some(f);
-                    return Ok(out);
-                }
-            };
+            let vp = calibrate(gripper, settings, seed)?;
             let mut ctrl = [
                 FingerController::new(
                     gripper,
@@ -648,16 +632,11 @@ pub fn run_trial(
             let n = (settings.max_time_s / dt).ceil() as usize;
             for k in 1..=n {
                 for (c, st) in ctrl.iter_mut().zip(&state) {
-                    let res = c.step(st, settings);
-                    let failure = match res {
-                        Ok(f) => f,
-                        Err(e) => Some(Failure::Controller {
-                            message: e.to_string(),
-                        }),
-                    };
-                    if failure.is_some() {
-                        out.failure = failure;
-                        return Ok(out);
+                    let failure = c.step(st, settings).map_err(|e| Failure::Controller {
+                        message: e.to_string(),
+                    })?;
+                    if let Some(f) = failure {
+                        return Err(f.into());
                     }
                 }
                 phases = [ctrl[0].phase, ctrl[1].phase];
@@ -687,22 +666,8 @@ pub fn run_trial(
                         plant.set_workspace(object.contact_cover(&out.final_pose)?, table);
                     }
                 }
-                state = match plant.solve([&pressures[0], &pressures[1]])? {
-                    PlantStep::Solved(s) => *s,
-                    PlantStep::Failed { side, status } => {
-                        fail_plant(&mut out, side, status);
-                        return Ok(out);
-                    }
-                };
-                out.frames.push(frame(
-                    k as f64 * dt,
-                    phases,
-                    [&pressures[0], &pressures[1]],
-                    &state,
-                    r,
-                    poses,
-                    out.final_pose.position_m,
-                ));
+                state = plant.solve([&pressures[0], &pressures[1]])?.states()?;
+                out.push_frame(k as f64 * dt, phases, &pressures, &state, r, poses);
             }
             // how far the estimated contact point is from the true one
             let mut worst: Option<f64> = None;
@@ -730,24 +695,9 @@ pub fn run_trial(
     for k in 0..=max_steps {
         let cover = object.contact_cover(&out.final_pose)?;
         plant.set_workspace(cover, None);
-        let lifted = match plant.solve([&pressures[0], &pressures[1]])? {
-            PlantStep::Solved(s) => *s,
-            PlantStep::Failed { side, status } => {
-                fail_plant(&mut out, side, status);
-                return Ok(out);
-            }
-        };
-        let last = frame(
-            t_end + k as f64 * dt,
-            phases,
-            [&pressures[0], &pressures[1]],
-            &lifted,
-            r,
-            poses,
-            out.final_pose.position_m,
-        );
-        let contacts: Vec<FrictionContact> = last
-            .contacts
+        let lifted = plant.solve([&pressures[0], &pressures[1]])?.states()?;
+        out.push_frame(t_end + k as f64 * dt, phases, &pressures, &lifted, r, poses);
+        let contacts: Vec<FrictionContact> = contact_records(&lifted, r)
             .iter()
             .map(|c| FrictionContact {
                 point_m: c.point_m,
@@ -755,7 +705,6 @@ pub fn run_trial(
                 max_normal_force_n: c.force_n,
             })
             .collect();
-        out.frames.push(last);
         let both = lifted.iter().all(|f| !f.object_contacts.is_empty());
         let hold = hold_check(
             &contacts,
@@ -794,5 +743,5 @@ pub fn run_trial(
         p[1] += settings.slip_step_m * down[1];
     }
     out.hold = first;
-    Ok(out)
+    Ok(())
 }

@@ -191,7 +191,7 @@ pub(super) fn calibrate(
     gripper: &GripperSpec,
     settings: &GraspSettings,
     seed: u64,
-) -> Result<std::result::Result<[VirtualPayload; 2], Failure>> {
+) -> std::result::Result<[VirtualPayload; 2], Stop> {
     let mut plant = GripperPlant::new(
         gripper,
         &settings.plant,
@@ -209,21 +209,17 @@ pub(super) fn calibrate(
     let mut p = [zero.clone(), zero];
     let n = (settings.max_time_s * settings.control_rate_hz).ceil() as usize;
     for _ in 0..n {
-        let state = match plant.solve([&p[0], &p[1]])? {
-            PlantStep::Solved(s) => *s,
-            PlantStep::Failed { side, status } => {
-                return Ok(Err(Failure::PlantSolve { side, status }))
-            }
-        };
+        let state = plant.solve([&p[0], &p[1]])?.states()?;
         let mut done = false;
         for (c, st) in ctrl.iter_mut().zip(&state) {
             match c.step(st, settings) {
                 Ok(None) => {}
                 Ok(Some(_)) => done = true,
                 Err(e) => {
-                    return Ok(Err(Failure::Controller {
+                    return Err(Failure::Controller {
                         message: format!("virtual payload run: {e}"),
-                    }))
+                    }
+                    .into())
                 }
             }
         }
@@ -233,5 +229,5 @@ pub(super) fn calibrate(
         p = [ctrl[0].pressures.clone(), ctrl[1].pressures.clone()];
     }
     let [a, b] = ctrl;
-    Ok(Ok([a.vp, b.vp]))
+    Ok([a.vp, b.vp])
 }
