@@ -31,7 +31,7 @@ fn robot() -> Robot<Ancf3d> {
     k.ei_z_nm2 = EI_Z;
     let mut spec = RobotSpec::spatial(vec![Section::uniform(L, EA, EI_Y, N)]);
     spec.gravity_m_per_s2 = vec![0.0; 3];
-    Robot::new(spec, |_, le, ax, be| {
+    Robot::new(spec, move |_, le, ax, be| {
         Ancf3d::with_stiffness(le, k, ax.max(be))
     })
     .unwrap()
