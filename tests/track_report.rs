@@ -82,14 +82,27 @@ fn quick_loop_report_writes_the_speed_chart_and_the_failure_map() {
     }
     assert!(p.rows[1].median_step_time_s.unwrap() > p.rows[0].median_step_time_s.unwrap());
     // the failure map: every case an outcome; no payload converges, five
-    // robot weights do not
+    // robot weights do not, and (the sweep runs without the watchdog) for
+    // the cause a user can act on: the plant itself cannot reach the path
     assert_eq!(f.rows.len(), 8);
     for r in &f.rows {
         let o = r.outcome.as_ref().unwrap_or_else(|| panic!("{r:?}"));
         let light = r.case.payload_weights == 0.0;
         assert_eq!(o.verdict == LoopVerdict::Converged, light, "{o:?}");
         if !light {
-            assert_eq!(o.cause, LoopCause::Watchdog, "{o:?}");
+            assert_eq!(o.cause, LoopCause::IkUnreachable, "{o:?}");
+            let reach = f
+                .plant_reach
+                .iter()
+                .find(|p| {
+                    p.payload_weights == r.case.payload_weights && p.ei_error == r.case.ei_error
+                })
+                .and_then(|p| p.reach_m)
+                .unwrap_or_else(|| panic!("no plant reach for {r:?}"));
+            assert!(
+                reach > softrod::report::loop_failure::UNREACHABLE_M,
+                "{reach}"
+            );
         }
     }
 }
