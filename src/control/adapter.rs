@@ -20,10 +20,20 @@ pub(crate) fn dq_dp<E: Element>(
     loads: &Loads,
     q: &[f64],
 ) -> Result<DMatrix<f64>> {
-    let pattern = robot.tangent_pattern();
-    let mut k = SymmetricMatrix::zeros(pattern.clone());
+    let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), SolverKind::Auto)?;
+    dq_dp_with(robot, loads, q, &mut solver)
+}
+
+/// As [`dq_dp`] with a linear solver already analyzed on the robot's
+/// tangent pattern (the inverse kinematics' own: no analysis per call).
+pub(crate) fn dq_dp_with<E: Element>(
+    robot: &Robot<E>,
+    loads: &Loads,
+    q: &[f64],
+    solver: &mut AutoSolver,
+) -> Result<DMatrix<f64>> {
+    let mut k = SymmetricMatrix::zeros(robot.tangent_pattern().clone());
     robot.tangent_into(q, loads, &mut k)?;
-    let mut solver = AutoSolver::with_kind(pattern, SolverKind::Auto)?;
     let factors = solver.factor(&k, FactorOptions::default())?;
     Sensitivity::new(robot, &factors)?.dq_dp(q)
 }

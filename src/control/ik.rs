@@ -423,6 +423,20 @@ impl<E: Element> InverseKinematics<E> {
     /// [`Error::Singular`] if the tangent cannot be factored; dimension errors.
     pub fn jacobian(&self, q: &[f64], p: &[f64], f_hat: &[f64]) -> Result<DMatrix<f64>> {
         let dqdp = self.dq_dp(q, p, f_hat)?;
+        self.effector_columns(&dqdp)
+    }
+
+    /// As [`InverseKinematics::jacobian`], factoring with the solver's own
+    /// linear solver, analyzed once at construction (the Newton loop's: a
+    /// fresh solver would analyze the tangent's pattern at every iteration).
+    fn jacobian_warm(&mut self, q: &[f64], p: &[f64], f_hat: &[f64]) -> Result<DMatrix<f64>> {
+        let loads = self.loads(p, f_hat);
+        let dqdp = adapter::dq_dp_with(&self.robot, &loads, q, &mut self.linear)?;
+        self.effector_columns(&dqdp)
+    }
+
+    /// `S(X_e) ∂q/∂P`: the end effector's rows of the columns of `dqdp`.
+    fn effector_columns(&self, dqdp: &DMatrix<f64>) -> Result<DMatrix<f64>> {
         let point = self.robot.arc_point("effector", self.effector_s_m)?;
         let d = E::DIM;
         let mut jac = DMatrix::zeros(d, dqdp.ncols());
@@ -594,7 +608,7 @@ impl<E: Element> InverseKinematics<E> {
             && self.spent < self.settings.max_static_iterations
         {
             iterations += 1;
-            let J = self.jacobian(&q, &P, f_hat)?;
+            let J = self.jacobian_warm(&q, &P, f_hat)?;
             // scaled Jacobian Ĵ = J diag(range), residual r = x_d − x
             let Jh = DMatrix::from_fn(d, np, |r, c| J[(r, c)] * self.range[c]);
             let r: Vec<f64> = x_d.iter().zip(&x).map(|(a, b)| a - b).collect();
