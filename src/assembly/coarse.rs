@@ -55,13 +55,13 @@ impl<E> std::fmt::Debug for ElementMaker<E> {
 }
 
 impl<E: Element> Robot<E> {
-    /// The same robot on a coarse mesh (about [`COARSE_ELEMENTS`] elements,
+    /// The same robot on a coarse mesh (about 16 elements,
     /// each section keeping its share, at least one), with `loads` carried
     /// over: the distributed-load parameters interpolated to the coarse
     /// nodes, a moment at a node turned into the same moment at that node's
     /// arc coordinate; the rest is given by arc coordinate or per chamber
-    /// and stays. `None` for a robot below [`SEQUENCING_RATIO`] ×
-    /// [`COARSE_ELEMENTS`] elements or whose nodes are not `[r, r']` (the
+    /// and stays. `None` for a robot below 4 ×
+    /// 16 elements or whose nodes are not `[r, r']` (the
     /// cables; not the full 3-D element).
     ///
     /// # Errors
