@@ -5,7 +5,11 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 mod common;
+#[path = "common/statics_cases.rs"]
+mod statics_cases;
 use common::reference;
+// the exudyn reference cases: the one list the statics tests and benches share
+use statics_cases::EXUDYN as CASES;
 
 use serde_json::Value;
 use softrod::assembly::Clamp;
@@ -54,21 +58,6 @@ fn dist(a: [f64; 2], b: &Value) -> f64 {
     let b: Vec<f64> = serde_json::from_value(b.clone()).unwrap();
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
 }
-
-const CASES: [&str; 12] = [
-    "uniform_small",
-    "uniform_large",
-    "linear_small",
-    "linear_large",
-    "gaussian_small",
-    "gaussian_large",
-    "tip_force_small",
-    "tip_force_large",
-    "tip_moment_small",
-    "tip_moment_large",
-    "self_weight_moment_small",
-    "self_weight_moment_large",
-];
 
 fn exudyn_clamp(r: &Value) -> Clamp {
     let c = r["params"]["discretization"]["clamp"]
