@@ -21,7 +21,7 @@
 //!   (payload × stiffness error × noise × rate), converged or diverged and
 //!   why.
 
-mod adapter;
+pub(crate) mod adapter;
 pub(crate) mod boxqp;
 mod closed_loop;
 mod failure;

@@ -24,9 +24,7 @@ use nalgebra::DMatrix;
 use crate::assembly::Robot;
 use crate::element::PlanarCable;
 use crate::error::{check_len, Error, Result};
-use crate::linsolve::{AutoSolver, FactorOptions, SolverKind, SymmetricMatrix, TangentSolver};
 use crate::loads::Loads;
-use crate::sensitivity::Sensitivity;
 
 /// The finger's pose at arc coordinate `s_m`: `[p_x, p_y, θ]` (m, m, rad),
 /// (46)–(49) with the signed angle from the downward vertical.
@@ -51,16 +49,6 @@ pub fn contact_pose(robot: &Robot<PlanarCable>, q: &[f64], s_m: f64) -> Result<[
     point.slope_into(q, &mut eta)?;
     // η0 = (0, −1): η0 × η = η_x, η0 · η = −η_y
     Ok([p[0], p[1], eta[0].atan2(-eta[1])])
-}
-
-/// (43) `∂q/∂P` of `robot` at its equilibrium `q` under `loads`.
-fn dq_dp(robot: &Robot<PlanarCable>, loads: &Loads, q: &[f64]) -> Result<DMatrix<f64>> {
-    let pattern = robot.tangent_pattern();
-    let mut k = SymmetricMatrix::zeros(pattern.clone());
-    robot.tangent_into(q, loads, &mut k)?;
-    let mut solver = AutoSolver::with_kind(pattern, SolverKind::Auto)?;
-    let factors = solver.factor(&k, FactorOptions::default())?;
-    Sensitivity::new(robot, &factors)?.dq_dp(q)
 }
 
 /// (50) `J_c = ∂x_c/∂P` (3 × n_pressures; m/Pa, m/Pa, rad/Pa) at the
@@ -89,7 +77,8 @@ pub fn contact_jacobian(
     loads: &Loads,
     s_m: f64,
 ) -> Result<DMatrix<f64>> {
-    let dqdp = dq_dp(robot, loads, q)?;
+    // (43) `∂q/∂P` at the equilibrium `q` under `loads`
+    let dqdp = crate::control::adapter::dq_dp(robot, loads, q)?;
     let point = robot.arc_point("s_m", s_m)?;
     let mut eta = [0.0; 2];
     point.slope_into(q, &mut eta)?;
