@@ -97,7 +97,7 @@ fn bench(c: &mut Criterion) {
         .iter()
         .map(|f| f.observation(&arcs).unwrap())
         .collect();
-    let mut est = NewtonEstimator::new(robot.clone(), known, est_settings).unwrap();
+    let mut est = NewtonEstimator::new(&robot, &known, &est_settings).unwrap();
     for o in &obs {
         assert!(est.step(o).unwrap().report.status.is_converged());
     }

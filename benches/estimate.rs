@@ -134,9 +134,12 @@ fn settings() -> EstimatorSettings {
 /// fails too, the estimator is returned with the error (the benchmark then
 /// times steps that do not converge, and says so).
 fn warm(c: &Case, backend: Backend, settings: EstimatorSettings) -> Warm {
-    let mut est = backend
-        .build(c.robot.clone(), c.known.clone(), settings)
-        .unwrap();
+    let mut est = softrod::estimate::EstimatorSettings {
+        backend,
+        ..settings
+    }
+    .build_for(&c.robot, &c.known)
+    .unwrap();
     if est.step(&c.frames[0]).and_then(Estimate::converged).is_ok() {
         return (est, None);
     }
@@ -255,9 +258,12 @@ fn cold_step(c: &mut Criterion) {
                     });
                     b.iter_batched(
                         || {
-                            backend
-                                .build(c.robot.clone(), c.known.clone(), settings())
-                                .unwrap()
+                            softrod::estimate::EstimatorSettings {
+                                backend,
+                                ..settings()
+                            }
+                            .build_for(&c.robot, &c.known)
+                            .unwrap()
                         },
                         // the time to the answer, an estimate or a
                         // non-convergence (marked by `note_failure`)
@@ -283,9 +289,12 @@ fn note_failure(group: &str, backend: Backend, param: &str, c: &Case, settings: 
     let dir = marker_dir(group, backend, param);
     let marker = dir.join("not_converged");
     let _ = std::fs::remove_file(&marker);
-    let mut est = backend
-        .build(c.robot.clone(), c.known.clone(), settings)
-        .unwrap();
+    let mut est = softrod::estimate::EstimatorSettings {
+        backend,
+        ..settings
+    }
+    .build_for(&c.robot, &c.known)
+    .unwrap();
     if let Err(e) = est.step(&c.frames[1]).and_then(Estimate::converged) {
         eprintln!("{group}/{}/{param}: {e}", backend.name());
         let _ = std::fs::create_dir_all(&dir);
@@ -307,7 +316,9 @@ fn alpha_search(c: &mut Criterion) {
                         alpha: None,
                         ..EstimatorSettings::default()
                     };
-                    backend.build(c.robot.clone(), c.known.clone(), s).unwrap()
+                    softrod::estimate::EstimatorSettings { backend, ..s }
+                        .build_for(&c.robot, &c.known)
+                        .unwrap()
                 },
                 |mut est| {
                     black_box(
@@ -361,9 +372,12 @@ fn warm_step_bounded(c: &mut Criterion) {
                 bounds: vec![bound],
                 ..settings()
             };
-            let mut est = Backend::Sqp
-                .build(c.robot.clone(), c.known.clone(), s)
-                .unwrap();
+            let mut est = softrod::estimate::EstimatorSettings {
+                backend: Backend::Sqp,
+                ..s
+            }
+            .build_for(&c.robot, &c.known)
+            .unwrap();
             let e = est.step(&c.frames[0]).unwrap();
             // the bound must be active, else this measures the free case
             let w = e.load_at(s_m)[1];
@@ -382,11 +396,14 @@ fn vs_linearization(c: &mut Criterion) {
     group.bench_function(BenchmarkId::new("linearization", &param), |b| {
         let (c, q) = state.get_or_insert_with(|| {
             let c = case(20, 5);
-            let mut est = Backend::Newton
-                .build(c.robot.clone(), c.known.clone(), settings())
-                .unwrap();
+            let mut est = softrod::estimate::EstimatorSettings {
+                backend: Backend::Newton,
+                ..settings()
+            }
+            .build_for(&c.robot, &c.known)
+            .unwrap();
             let q = est.step(&c.frames[0]).unwrap().q;
-            (c, q)
+            (c, q.as_slice().to_vec())
         });
         let robot = &c.robot;
         let dead = robot.dead_force(&c.known).unwrap();
@@ -486,7 +503,9 @@ fn first_estimate(c: &mut Criterion) {
                             alpha: None,
                             ..EstimatorSettings::default()
                         };
-                        backend.build(robot.clone(), known.clone(), s).unwrap()
+                        softrod::estimate::EstimatorSettings { backend, ..s }
+                            .build_for(robot, known)
+                            .unwrap()
                     },
                     |mut est| {
                         black_box(

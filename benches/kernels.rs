@@ -128,15 +128,17 @@ fn kernels(c: &mut Criterion) {
                 f.solve_columns_in_place(black_box(&mut bm), m).unwrap();
             })
         });
-        let obs = Observation::at_nodes(&robot, &q, &nodes).with_noise(1e-5, 3);
+        let obs = Observation::of_nodes(&robot, &q, &nodes)
+            .unwrap()
+            .with_noise(1e-5, 3);
         let settings = EstimatorSettings {
             alpha: Some(31.0),
             ..EstimatorSettings::default()
         };
-        let mut est = NewtonEstimator::new(robot.clone(), loads.clone(), settings).unwrap();
+        let mut est = NewtonEstimator::new(&robot, &loads, &settings).unwrap();
         let e = softrod::estimate::Estimator::step(&mut est, &obs).unwrap();
         group.bench_with_input(BenchmarkId::new("marker_jacobian", n), &n, |b, _| {
-            b.iter(|| black_box(est.markers_and_jacobian(&obs, &e.f).unwrap()))
+            b.iter(|| black_box(est.markers_and_jacobian(&obs, e.f.as_slice()).unwrap()))
         });
     }
     group.finish();

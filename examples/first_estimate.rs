@@ -197,9 +197,12 @@ fn main() {
             let mut last = None;
             for _ in 0..repeats {
                 let settings = EstimatorSettings::default();
-                let mut est = backend
-                    .build(c.robot.clone(), c.known.clone(), settings)
-                    .unwrap();
+                let mut est = softrod::estimate::EstimatorSettings {
+                    backend,
+                    ..settings
+                }
+                .build_for(&c.robot, &c.known)
+                .unwrap();
                 let t = Instant::now();
                 let e = est.step(&c.obs);
                 times.push(t.elapsed().as_secs_f64());

@@ -125,9 +125,12 @@ fn estimate() -> Vec<Value> {
             ..EstimatorSettings::default()
         };
         let alpha = {
-            let mut est = Backend::Newton
-                .build(robot.clone(), Loads::default(), base.clone())
-                .unwrap();
+            let mut est = softrod::estimate::EstimatorSettings {
+                backend: Backend::Newton,
+                ..base.clone()
+            }
+            .build_for(&robot, &Loads::default())
+            .unwrap();
             est.step(&obs).unwrap().report.alpha
         };
         let settings = EstimatorSettings {
@@ -137,9 +140,12 @@ fn estimate() -> Vec<Value> {
         let mut backends = serde_json::Map::new();
         for backend in [Backend::Newton, Backend::Sqp] {
             let build = || {
-                backend
-                    .build(robot.clone(), Loads::default(), settings.clone())
-                    .unwrap()
+                softrod::estimate::EstimatorSettings {
+                    backend,
+                    ..settings.clone()
+                }
+                .build_for(&robot, &Loads::default())
+                .unwrap()
             };
             let e = build().step(&obs).unwrap();
             let (median_s, runs) = median_time(|| {
@@ -153,7 +159,7 @@ fn estimate() -> Vec<Value> {
                     "converged": e.report.status.is_converged(),
                     "iterations": e.report.iterations,
                     "objective": e.report.objective,
-                    "f": e.f, "q": e.q,
+                    "f": e.f.as_slice(), "q": e.q.as_slice(),
                 }),
             );
         }

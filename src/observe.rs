@@ -14,6 +14,7 @@
 //! slope), so the same code serves the planar cable (4 per node) and the
 //! spatial one (6 per node).
 
+use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
@@ -88,6 +89,47 @@ impl MarkerObservation {
             tangent_weight: None,
         }
     }
+
+    /// The measured position as a `D`-vector (m, world axes).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `position_m` if it does not have
+    /// `D` components.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::observe::MarkerObservation;
+    /// let mut m = MarkerObservation::at_node(20, vec![0.2, 0.05]);
+    /// assert_eq!(m.position::<2>()?, nalgebra::Vector2::new(0.2, 0.05));
+    /// assert!(m.position::<3>().is_err());
+    /// assert_eq!(m.tangent_vector::<2>()?, None);
+    /// m.tangent = Some(vec![1.0, 0.0]);
+    /// assert_eq!(m.tangent_vector::<2>()?, Some(nalgebra::Vector2::x()));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn position<const D: usize>(&self) -> Result<SVector<f64, D>> {
+        check_len("position_m", D, self.position_m.len())?;
+        Ok(SVector::from_column_slice(&self.position_m))
+    }
+
+    /// The measured tangent `r'` as a `D`-vector (dimensionless), if
+    /// observed.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `tangent` if it does not have `D`
+    /// components.
+    ///
+    /// # Example
+    /// See [`MarkerObservation::position`].
+    pub fn tangent_vector<const D: usize>(&self) -> Result<Option<SVector<f64, D>>> {
+        self.tangent
+            .as_ref()
+            .map(|t| {
+                check_len("tangent", D, t.len())?;
+                Ok(SVector::from_column_slice(t))
+            })
+            .transpose()
+    }
 }
 
 /// One observation: the markers measured at one instant. This is also the
@@ -109,34 +151,9 @@ pub struct Observation {
 }
 
 impl Observation {
-    /// The exact positions of the configuration `q` at the given nodes (a
-    /// noise-free synthetic observation); nodes beyond `q` are skipped.
-    ///
-    /// # Example
-    /// ```
-    /// use softrod::{observe::Observation, scene::Scene};
-    /// let robot = Scene::two_section().robot()?;
-    /// let q = robot.reference_configuration();
-    /// let o = Observation::at_nodes(&robot, &q, &[10, 20]);
-    /// assert_eq!(o.markers[1].position_m, q[80..82].to_vec());
-    /// # Ok::<(), softrod::Error>(())
-    /// ```
-    pub fn at_nodes<E: Element>(_robot: &Robot<E>, q: &[f64], nodes: &[usize]) -> Self {
-        let nd = E::NODE_DOFS;
-        let d = E::DIM;
-        Observation {
-            markers: nodes
-                .iter()
-                .filter(|&&n| (n + 1) * nd <= q.len())
-                .map(|&n| MarkerObservation::at_node(n, q[n * nd..n * nd + d].to_vec()))
-                .collect(),
-        }
-    }
-
     /// The exact positions of the configuration `q` of `robot` at the given
-    /// nodes (a noise-free synthetic observation), refusing what
-    /// [`Observation::at_nodes`] skips: a node beyond the robot, or a `q`
-    /// of another size.
+    /// nodes (a noise-free synthetic observation), refusing a node beyond
+    /// the robot or a `q` of another size.
     ///
     /// # Errors
     /// [`crate::Error::DimensionMismatch`] named `q`;
@@ -157,7 +174,13 @@ impl Observation {
         for (i, &n) in nodes.iter().enumerate() {
             check_index(&format!("nodes[{i}]"), n, robot.n_nodes())?;
         }
-        Ok(Self::at_nodes(robot, q, nodes))
+        let (nd, d) = (E::NODE_DOFS, E::DIM);
+        Ok(Observation {
+            markers: nodes
+                .iter()
+                .map(|&n| MarkerObservation::at_node(n, q[n * nd..n * nd + d].to_vec()))
+                .collect(),
+        })
     }
 
     /// Number of observed scalar components `n_ob`.
@@ -234,31 +257,19 @@ impl Gaussian {
 
 /// One row of the observation operator: an observed scalar
 /// `Σ_j w_j q[j]`, sparse over all `n_q` coordinates.
-///
-/// # Example
-/// ```
-/// use softrod::{observe::{Observation, ObservationOperator}, scene::Scene};
-/// let robot = Scene::two_section().robot()?;
-/// let q = robot.reference_configuration();
-/// let op = ObservationOperator::new(&robot, &Observation::at_nodes(&robot, &q, &[20]), 1e-5, 1e-3)?;
-/// // the tip's y coordinate: one entry of weight 1 at node 20's y
-/// let tip_y = &op.rows()[1];
-/// assert_eq!(tip_y.apply(&q), q[81]);
-/// # Ok::<(), softrod::Error>(())
-/// ```
 #[derive(Debug, Clone, PartialEq)]
-pub struct ObsRow {
+pub(crate) struct ObsRow {
     entries: Vec<(usize, f64)>,
 }
 
 impl ObsRow {
     /// The entries `(coordinate index, weight)`.
-    pub fn entries(&self) -> &[(usize, f64)] {
+    pub(crate) fn entries(&self) -> &[(usize, f64)] {
         &self.entries
     }
 
     /// The observed scalar at `q` (`n_q` coordinates; NaN if `q` is too short).
-    pub fn apply(&self, q: &[f64]) -> f64 {
+    pub(crate) fn apply(&self, q: &[f64]) -> f64 {
         self.entries
             .iter()
             .map(|&(j, w)| w * q.get(j).copied().unwrap_or(f64::NAN))
@@ -278,11 +289,10 @@ impl ObsRow {
 /// use softrod::{observe::{Observation, ObservationOperator}, scene::Scene};
 /// let robot = Scene::two_section().robot()?;
 /// let q = robot.reference_configuration();
-/// let obs = Observation::at_nodes(&robot, &q, &[4, 20]);
+/// let obs = Observation::of_nodes(&robot, &q, &[4, 20])?;
 /// let op = ObservationOperator::new(&robot, &obs, 1e-5, 1e-3)?;
-/// assert_eq!(op.len(), 4);
-/// assert!(op.residual(&q).iter().all(|e| *e == 0.0));
-/// assert!((op.weights()[0] - 1e10).abs() < 1e-3); // 1/σ²
+/// assert_eq!(op.len(), 4); // two markers, two components each
+/// assert!(!op.is_empty());
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone)]
@@ -440,32 +450,27 @@ impl ObservationOperator {
     }
 
     /// The rows of `A`.
-    pub fn rows(&self) -> &[ObsRow] {
+    pub(crate) fn rows(&self) -> &[ObsRow] {
         &self.rows
     }
 
     /// The measurements `y`.
-    pub fn measurements(&self) -> &[f64] {
+    pub(crate) fn measurements(&self) -> &[f64] {
         &self.y
     }
 
     /// The diagonal of `W`.
-    pub fn weights(&self) -> &[f64] {
+    pub(crate) fn weights(&self) -> &[f64] {
         &self.weights
     }
 
-    /// Row `i` of `A q` (NaN for a row beyond the last).
-    pub fn value(&self, i: usize, q: &[f64]) -> f64 {
-        self.rows.get(i).map_or(f64::NAN, |r| r.apply(q))
-    }
-
     /// `A q`.
-    pub fn apply(&self, q: &[f64]) -> Vec<f64> {
+    pub(crate) fn apply(&self, q: &[f64]) -> Vec<f64> {
         self.rows.iter().map(|r| r.apply(q)).collect()
     }
 
     /// `A q − y`.
-    pub fn residual(&self, q: &[f64]) -> Vec<f64> {
+    pub(crate) fn residual(&self, q: &[f64]) -> Vec<f64> {
         self.rows
             .iter()
             .zip(&self.y)
@@ -474,7 +479,7 @@ impl ObservationOperator {
     }
 
     /// `eᵀ W e`.
-    pub fn weighted(&self, e: &[f64]) -> f64 {
+    pub(crate) fn weighted(&self, e: &[f64]) -> f64 {
         e.iter().zip(&self.weights).map(|(e, w)| w * e * e).sum()
     }
 
@@ -482,7 +487,7 @@ impl ObservationOperator {
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] if `y` has the wrong length.
-    pub fn with_measurements(&self, y: Vec<f64>) -> Result<Self> {
+    pub(crate) fn with_measurements(&self, y: Vec<f64>) -> Result<Self> {
         check_len("y", self.len(), y.len())?;
         Ok(ObservationOperator {
             rows: self.rows.clone(),

@@ -449,10 +449,10 @@ fn load_resultant(
         statistical_tolerance: 0.0,
         ..scene.estimator_settings()?
     };
-    let mut estimator = settings.backend.build(robot, known, settings)?;
+    let mut estimator = settings.build_for(&robot, &known)?;
     let e = estimator.step(observation)?;
     Ok(if e.report.status.is_converged() {
-        Ok(e.resultant_force_n)
+        Ok(e.resultant_force_n.as_slice().to_vec())
     } else {
         Err(TrialFailure::Estimate(e.report.status))
     })

@@ -33,12 +33,14 @@
 //! # Ok::<(), softrod::Error>(())
 //! ```
 
-use nalgebra::{DMatrix, DVector, Point2, SMatrix, SVector, Vector2};
+use nalgebra::{DVector, Point2, SMatrix, SVector, Vector2};
 
 use crate::assembly::Robot;
 use crate::element::{Element, NodeKinematics, PlanarCable};
 use crate::error::{check_len, Error, Result};
-use crate::estimate::{Estimate, Estimator, EstimatorSettings};
+use crate::estimate::{
+    Backend, Estimate, Estimator, EstimatorSettings, NewtonEstimator, SqpEstimator,
+};
 use crate::loads::Loads;
 use crate::statics::Equilibrium;
 
@@ -339,7 +341,7 @@ impl Equilibrium {
     /// # Example
     /// See the [module documentation](self).
     pub fn shape<'a>(&'a self, robot: &'a Robot<PlanarCable>) -> Result<Shape<'a>> {
-        Shape::new(robot, &self.q)
+        Shape::new(robot, self.q.as_slice())
     }
 }
 
@@ -353,7 +355,7 @@ impl Estimate {
     /// # Example
     /// See [`Estimate::resultant`].
     pub fn shape<'a>(&'a self, robot: &'a Robot<PlanarCable>) -> Result<Shape<'a>> {
-        Shape::new(robot, &self.q)
+        Shape::new(robot, self.q.as_slice())
     }
 
     /// The resultant force of the estimated load (N) as a `D`-vector
@@ -370,7 +372,7 @@ impl Estimate {
     /// let scene = Scene::two_section();
     /// let (robot, loads) = (scene.robot()?, scene.loads()?);
     /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
-    /// let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]).with_noise(1e-5, 1);
+    /// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20])?.with_noise(1e-5, 1);
     /// let mut est = EstimatorSettings::default().build_for(&robot, &loads)?;
     /// let e = est.step(&obs)?;
     /// let f: nalgebra::Vector2<f64> = e.resultant::<2>()?;
@@ -385,7 +387,9 @@ impl Estimate {
     /// ```
     pub fn resultant<const D: usize>(&self) -> Result<SVector<f64, D>> {
         check_len("resultant_force_n", D, self.resultant_force_n.len())?;
-        Ok(SVector::from_column_slice(&self.resultant_force_n))
+        Ok(SVector::from_column_slice(
+            self.resultant_force_n.as_slice(),
+        ))
     }
 
     /// The covariance of [`Estimate::resultant`] (N²) as a `D × D` matrix
@@ -399,32 +403,7 @@ impl Estimate {
     /// See [`Estimate::resultant`].
     pub fn resultant_cov<const D: usize>(&self) -> Result<SMatrix<f64, D, D>> {
         check_len("resultant_force_cov", D * D, self.resultant_force_cov.len())?;
-        Ok(SMatrix::from_row_slice(&self.resultant_force_cov))
-    }
-
-    /// The posterior covariance of the estimated marker-space shape `A q`
-    /// (m²; `n_ob × n_ob`), [`Estimate::marker_cov`] as a matrix.
-    ///
-    /// # Example
-    /// ```
-    /// use softrod::estimate::{EstimatorSettings, Observation};
-    /// use softrod::{scene::Scene, statics::StaticSolver};
-    /// let scene = Scene::two_section();
-    /// let (robot, loads) = (scene.robot()?, scene.loads()?);
-    /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
-    /// let obs = Observation::at_nodes(&robot, &eq.q, &[10, 20]).with_noise(1e-5, 1);
-    /// let e = EstimatorSettings::default().build_for(&robot, &loads)?.step(&obs)?;
-    /// let c = e.marker_cov_matrix();
-    /// assert_eq!(c.shape(), (4, 4));
-    /// assert!((c.clone() - c.transpose()).norm() <= 1e-12 * c.norm());
-    /// # Ok::<(), softrod::Error>(())
-    /// ```
-    pub fn marker_cov_matrix(&self) -> DMatrix<f64> {
-        let m = (self.marker_cov.len() as f64).sqrt().round() as usize;
-        if m * m != self.marker_cov.len() {
-            return DMatrix::zeros(0, 0);
-        }
-        DMatrix::from_row_slice(m, m, &self.marker_cov)
+        Ok(SMatrix::from_fn(|i, j| self.resultant_force_cov[(i, j)]))
     }
 
     /// The estimated load per undeformed length at arc position `s_m` (m)
@@ -454,7 +433,7 @@ impl Estimate {
                 context: format!("the estimated load at s_m = {s_m} m"),
             });
         }
-        Ok(SVector::from_column_slice(&w))
+        Ok(SVector::from_column_slice(w.as_slice()))
     }
 }
 
@@ -465,7 +444,7 @@ impl EstimatorSettings {
     /// chosen once, in the settings.
     ///
     /// # Errors
-    /// As [`crate::estimate::Backend::build`].
+    /// As [`NewtonEstimator::new`] and [`SqpEstimator::new`].
     ///
     /// # Example
     /// ```
@@ -484,7 +463,9 @@ impl EstimatorSettings {
         robot: &Robot<E>,
         known: &Loads,
     ) -> Result<Box<dyn Estimator>> {
-        self.backend
-            .build(robot.clone(), known.clone(), self.clone())
+        Ok(match self.backend {
+            Backend::Newton => Box::new(NewtonEstimator::new(robot, known, self)?),
+            Backend::Sqp => Box::new(SqpEstimator::new(robot, known, self)?),
+        })
     }
 }

@@ -43,7 +43,12 @@ fn estimate(obs: &Observation, settings: EstimatorSettings) -> [Estimate; 2] {
             backend,
             ..settings.clone()
         };
-        let mut est = backend.build(robot(), Loads::default(), settings).unwrap();
+        let mut est = softrod::estimate::EstimatorSettings {
+            backend,
+            ..settings
+        }
+        .build_for(&robot(), &Loads::default())
+        .unwrap();
         let e = est.step(obs).unwrap();
         assert!(e.report.status.is_converged(), "{backend:?}: {}", e.report);
         assert_eq!(e.q.len(), 12 * (N + 1));

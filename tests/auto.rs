@@ -254,8 +254,7 @@ fn load_resultant_of_an_unknown_tip_force_meets_its_tolerance() {
                 ..s.estimator_settings().unwrap()
             };
             let mut est = settings
-                .backend
-                .build(s.robot().unwrap(), s.loads().unwrap(), settings)
+                .build_for(&s.robot().unwrap(), &s.loads().unwrap())
                 .unwrap();
             let e = est.step(&obs).unwrap();
             assert_eq!(
@@ -264,7 +263,7 @@ fn load_resultant_of_an_unknown_tip_force_meets_its_tolerance() {
                     node: s.robot().unwrap().n_nodes() - 1
                 }
             );
-            norm(&e.resultant_force_n, &truth)
+            norm(e.resultant_force_n.as_slice(), &truth)
         };
         let r = auto_elements(&scene, Some(&obs)).unwrap();
         assert_eq!(r.quantity, Quantity::LoadResultant);

@@ -76,7 +76,11 @@ fn estimate(
             .collect(),
     };
     fo(&mut obs);
-    let mut est = backend.build(robot, scene.loads()?, settings)?;
+    let mut est = softrod::estimate::EstimatorSettings {
+        backend,
+        ..settings
+    }
+    .build_for(&robot, &scene.loads()?)?;
     est.step(&obs).map(|_| ())
 }
 
@@ -140,7 +144,7 @@ fn estimate_spatial(
             .collect(),
     };
     fo(&mut obs);
-    let mut est = settings.backend.build(robot, scene.loads()?, settings)?;
+    let mut est = settings.build_for(&robot, &scene.loads()?)?;
     est.step(&obs).map(|_| ())
 }
 

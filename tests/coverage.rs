@@ -85,11 +85,14 @@ fn a_marker_at_the_clamped_base_is_no_information() {
                 alpha_rule: rule,
                 ..EstimatorSettings::default()
             };
-            let e = backend
-                .build(robot.clone(), loads.clone(), settings)
-                .unwrap()
-                .step(&obs)
-                .unwrap();
+            let e = softrod::estimate::EstimatorSettings {
+                backend,
+                ..settings
+            }
+            .build_for(&robot, &loads)
+            .unwrap()
+            .step(&obs)
+            .unwrap();
             assert_eq!(
                 e.report.status,
                 EstimateStatus::NoInformation,

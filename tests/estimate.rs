@@ -53,7 +53,7 @@ fn marker_jacobian_matches_finite_differences() {
             alpha: Some(1.0),
             ..EstimatorSettings::default()
         };
-        let mut est = NewtonEstimator::new(robot.clone(), known(), settings).unwrap();
+        let mut est = NewtonEstimator::new(&robot, &known(), &settings).unwrap();
         let n_f = match model {
             LoadModel::Distributed => robot.n_q(),
             _ => 2,
@@ -97,14 +97,16 @@ fn gradient_matches_finite_differences() {
     let eq = StaticSolver::default()
         .solve(&robot, &known(), None)
         .unwrap();
-    let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]).with_noise(1e-4, 11);
+    let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20])
+        .unwrap()
+        .with_noise(1e-4, 11);
     for model in [LoadModel::Distributed, LoadModel::Concentrated { node: 20 }] {
         let settings = EstimatorSettings {
             load_model: model,
             alpha: Some(3.0),
             ..EstimatorSettings::default()
         };
-        let mut est = NewtonEstimator::new(robot.clone(), known(), settings).unwrap();
+        let mut est = NewtonEstimator::new(&robot, &known(), &settings).unwrap();
         let n_f = match model {
             LoadModel::Distributed => robot.n_q(),
             _ => 2,
@@ -232,9 +234,14 @@ fn estimate_truth(
     }
     .with_noise(1e-5, seed);
     let settings = EstimatorSettings::default();
-    let mut est = backend.build(coarse.clone(), known(), settings).unwrap();
+    let mut est = softrod::estimate::EstimatorSettings {
+        backend,
+        ..settings
+    }
+    .build_for(&coarse, &known())
+    .unwrap();
     let e = est.step(&obs).unwrap();
-    let rms = backbone_rms(&coarse, &e.q, &fine, &eq.q);
+    let rms = backbone_rms(&coarse, e.q.as_slice(), &fine, &eq.q);
     let (f_true, m_true) = true_resultant(&fine, &eq.q, &truth.load);
     let df = ((e.resultant_force_n[0] - f_true[0]).powi(2)
         + (e.resultant_force_n[1] - f_true[1]).powi(2))
@@ -310,18 +317,18 @@ proptest! {
         truth.point_forces.push(PointForce { s_m: 0.24, force_n: vec![0.05 * u[2], -0.1 - 0.05 * u[3]] });
         truth.line_loads.push(LineLoad::Uniform { w_n_per_m: vec![0.0, -0.5 + 0.3 * u[4]] });
         let eq = StaticSolver::default().solve(&robot, &truth, None).unwrap();
-        let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]).with_noise(1e-5, seed);
+        let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20]).unwrap().with_noise(1e-5, seed);
         let alpha = 10f64.powf(1.0 + u[5]);
         let model = if concentrated { LoadModel::Concentrated { node: 20 } } else { LoadModel::Distributed };
         // both at the tight tolerance only (the statistical test would stop
         // each within 10 % of a standard deviation of the optimum, not 1e-6)
         let settings = EstimatorSettings { alpha: Some(alpha), load_model: model, statistical_tolerance: 0.0, ..EstimatorSettings::default() };
-        let en = Backend::Newton.build(robot.clone(), k.clone(), settings.clone()).unwrap().step(&obs).unwrap();
-        let es = Backend::Sqp.build(robot.clone(), k.clone(), settings).unwrap().step(&obs).unwrap();
+        let en = softrod::estimate::EstimatorSettings { backend: Backend::Newton, ..settings.clone() }.build_for(&robot, &k).unwrap().step(&obs).unwrap();
+        let es = softrod::estimate::EstimatorSettings { backend: Backend::Sqp, ..settings }.build_for(&robot, &k).unwrap().step(&obs).unwrap();
         prop_assert!(en.report.status.is_converged() && es.report.status.is_converged());
         let nf: f64 = en.f.iter().map(|v| v * v).sum::<f64>().sqrt();
         let df: f64 = en.f.iter().zip(&es.f).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
-        let dq = en.node_positions().iter().zip(es.node_positions()).map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1])).fold(0.0f64, f64::max);
+        let dq = en.node_positions::<2>().unwrap().iter().zip(es.node_positions::<2>().unwrap()).map(|(a, b)| (a - b).norm()).fold(0.0f64, f64::max);
         eprintln!("{model:?} alpha {alpha:.2e}: |dF|/|F| = {:.2e}, max node distance {:.2e} m (newton {} it, sqp {} it)", df / nf, dq, en.report.iterations, es.report.iterations);
         prop_assert!(df <= 1e-6 * nf, "F differs: {}", df / nf);
         prop_assert!(dq <= 1e-9, "positions differ: {dq}");
@@ -343,8 +350,8 @@ fn warm_steps_and_incremental_observations() {
     let eq1 = StaticSolver::default().solve(&robot, &truth, None).unwrap();
     truth.point_forces[0].force_n = vec![0.0, -1.0];
     let eq2 = StaticSolver::default().solve(&robot, &truth, None).unwrap();
-    let o1 = Observation::at_nodes(&robot, &eq1.q, &[4, 8, 12, 16, 20]);
-    let o2 = Observation::at_nodes(&robot, &eq2.q, &[4, 8, 12, 16, 20]);
+    let o1 = Observation::of_nodes(&robot, eq1.q.as_slice(), &[4, 8, 12, 16, 20]).unwrap();
+    let o2 = Observation::of_nodes(&robot, eq2.q.as_slice(), &[4, 8, 12, 16, 20]).unwrap();
     let settings = EstimatorSettings {
         alpha: Some(10.0),
         max_observation_jump_m: 0.01,
@@ -352,9 +359,12 @@ fn warm_steps_and_incremental_observations() {
         statistical_tolerance: 0.0,
         ..EstimatorSettings::default()
     };
-    let mut est = Backend::Newton
-        .build(robot.clone(), k.clone(), settings.clone())
-        .unwrap();
+    let mut est = softrod::estimate::EstimatorSettings {
+        backend: Backend::Newton,
+        ..settings.clone()
+    }
+    .build_for(&robot, &k)
+    .unwrap();
     let a = est.step(&o1).unwrap();
     let b = est.step(&o1).unwrap();
     assert!(b.report.iterations <= 1, "{}", b.report);
@@ -366,7 +376,12 @@ fn warm_steps_and_incremental_observations() {
     assert!(d < 1e-6, "{d}");
     let c = est.step(&o2).unwrap();
     assert!(c.report.sub_steps > 1, "{}", c.report);
-    let mut cold = Backend::Newton.build(robot, k, settings).unwrap();
+    let mut cold = softrod::estimate::EstimatorSettings {
+        backend: Backend::Newton,
+        ..settings
+    }
+    .build_for(&robot, &k)
+    .unwrap();
     let c2 = cold.step(&o2).unwrap();
     let nf: f64 = c2.f.iter().map(|v| v * v).sum::<f64>().sqrt();
     let d: f64 =
@@ -388,7 +403,9 @@ fn bump_observation(robot: &Robot<PlanarCable>, known: &Loads) -> Observation {
         width_m: 0.01,
     });
     let eq = StaticSolver::default().solve(robot, &truth, None).unwrap();
-    Observation::at_nodes(robot, &eq.q, &[4, 8, 12, 16, 20]).with_noise(1e-5, 3)
+    Observation::of_nodes(robot, eq.q.as_slice(), &[4, 8, 12, 16, 20])
+        .unwrap()
+        .with_noise(1e-5, 3)
 }
 
 /// Bounds on the component of `w` along (0, 1) in `frame` at every
@@ -424,26 +441,31 @@ fn sqp_respects_load_bounds() {
         bounds: bounds.clone(),
         ..EstimatorSettings::default()
     };
-    assert!(Backend::Newton
-        .build(robot.clone(), k.clone(), settings.clone())
-        .is_err());
-    let e = Backend::Sqp
-        .build(robot.clone(), k.clone(), settings)
-        .unwrap()
-        .step(&obs)
-        .unwrap();
-    let free = Backend::Sqp
-        .build(
-            robot,
-            k,
-            EstimatorSettings {
-                alpha: Some(10.0),
-                ..EstimatorSettings::default()
-            },
-        )
-        .unwrap()
-        .step(&obs)
-        .unwrap();
+    assert!(softrod::estimate::EstimatorSettings {
+        backend: Backend::Newton,
+        ..settings.clone()
+    }
+    .build_for(&robot, &k)
+    .is_err());
+    let e = softrod::estimate::EstimatorSettings {
+        backend: Backend::Sqp,
+        ..settings
+    }
+    .build_for(&robot, &k)
+    .unwrap()
+    .step(&obs)
+    .unwrap();
+    let free = softrod::estimate::EstimatorSettings {
+        backend: Backend::Sqp,
+        ..EstimatorSettings {
+            alpha: Some(10.0),
+            ..EstimatorSettings::default()
+        }
+    }
+    .build_for(&robot, &k)
+    .unwrap()
+    .step(&obs)
+    .unwrap();
     let worst = bounds
         .iter()
         .map(|b| e.load_at(b.s_m)[1])
@@ -478,7 +500,7 @@ fn sqp_respects_local_frame_bounds() {
         let (el, xi) = robot.locate("s", s).unwrap();
         let le = robot.elements()[el].length();
         let (_, ds, _) = softrod::element::hermite(xi, le);
-        let qe = &e.q[el * 4..el * 4 + 8];
+        let qe = &e.q.as_slice()[el * 4..el * 4 + 8];
         let t: Vec<f64> = (0..2)
             .map(|i| (0..4).map(|k| ds[k] * qe[2 * k + i]).sum())
             .collect();
@@ -491,23 +513,25 @@ fn sqp_respects_local_frame_bounds() {
         bounds: bounds.clone(),
         ..EstimatorSettings::default()
     };
-    let e = Backend::Sqp
-        .build(robot.clone(), k.clone(), settings)
-        .unwrap()
-        .step(&obs)
-        .unwrap();
-    let free = Backend::Sqp
-        .build(
-            robot.clone(),
-            k,
-            EstimatorSettings {
-                alpha: Some(10.0),
-                ..EstimatorSettings::default()
-            },
-        )
-        .unwrap()
-        .step(&obs)
-        .unwrap();
+    let e = softrod::estimate::EstimatorSettings {
+        backend: Backend::Sqp,
+        ..settings
+    }
+    .build_for(&robot, &k)
+    .unwrap()
+    .step(&obs)
+    .unwrap();
+    let free = softrod::estimate::EstimatorSettings {
+        backend: Backend::Sqp,
+        ..EstimatorSettings {
+            alpha: Some(10.0),
+            ..EstimatorSettings::default()
+        }
+    }
+    .build_for(&robot, &k)
+    .unwrap()
+    .step(&obs)
+    .unwrap();
     let worst = bounds
         .iter()
         .map(|b| normal_load(&e, b.s_m))
@@ -548,7 +572,9 @@ fn both_backends_estimate_on_the_spatial_cable() {
         ..Loads::default()
     };
     let eq = StaticSolver::default().solve(&robot, &truth, None).unwrap();
-    let obs = Observation::at_nodes(&robot, &eq.q, &[3, 6, 9, 12]).with_noise(1e-6, 1);
+    let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[3, 6, 9, 12])
+        .unwrap()
+        .with_noise(1e-6, 1);
     assert_eq!(obs.n_components(), 12);
     for model in [LoadModel::Distributed, LoadModel::Concentrated { node: 12 }] {
         let estimates: Vec<Estimate> = [Backend::Newton, Backend::Sqp]
@@ -562,9 +588,12 @@ fn both_backends_estimate_on_the_spatial_cable() {
                     noise_sigma_m: 1e-6,
                     ..EstimatorSettings::default()
                 };
-                let mut est = backend
-                    .build(robot.clone(), Loads::default(), settings)
-                    .unwrap();
+                let mut est = softrod::estimate::EstimatorSettings {
+                    backend,
+                    ..settings
+                }
+                .build_for(&robot, &Loads::default())
+                .unwrap();
                 let e = est.step(&obs).unwrap();
                 assert!(e.report.status.is_converged(), "{model:?}: {}", e.report);
                 assert_eq!(e.resultant_force_n.len(), 3);

@@ -78,15 +78,18 @@ fn fig3_direct_solution_amplifies_a_marker_error() {
         tangent_sigma: 1e-5,
         ..EstimatorSettings::default()
     };
-    let e = Backend::Newton
-        .build(robot.clone(), known, settings)
-        .unwrap()
-        .step(&obs)
-        .unwrap();
+    let e = softrod::estimate::EstimatorSettings {
+        backend: Backend::Newton,
+        ..settings
+    }
+    .build_for(&robot, &known)
+    .unwrap()
+    .step(&obs)
+    .unwrap();
     let (ed, ee, ec) = (
-        axial_error(&f_direct),
-        axial_error(&e.f),
-        axial_error(&f_clean),
+        axial_error(f_direct.as_slice()),
+        axial_error(e.f.as_slice()),
+        axial_error(f_clean.as_slice()),
     );
     eprintln!("Fig. 3: max axial load error: direct (24) {ed:.3e} N/m (without the marker error {ec:.3e}), estimator {ee:.3e} N/m, ratio {:.0}", ed / ee);
     assert!(
@@ -165,12 +168,15 @@ fn fig4_error_against_feature_points() {
         let obs = observe(&coarse, &fine, &eq.q, &nodes, 7 + k as u64);
         let mut per_backend = Vec::new();
         for backend in [Backend::Newton, Backend::Sqp] {
-            let e = backend
-                .build(coarse.clone(), known.clone(), EstimatorSettings::default())
-                .unwrap()
-                .step(&obs)
-                .unwrap();
-            let rms = rms_backbone(&coarse, &e.q, &fine, &eq.q);
+            let e = softrod::estimate::EstimatorSettings {
+                backend,
+                ..EstimatorSettings::default()
+            }
+            .build_for(&coarse, &known)
+            .unwrap()
+            .step(&obs)
+            .unwrap();
+            let rms = rms_backbone(&coarse, e.q.as_slice(), &fine, &eq.q);
             let df = resultant_error(&e, truth);
             eprintln!(
                 "Fig. 4: {k:2} points {:<6} rms {:.3e} m, resultant error {:.3e} N, alpha {:.2e}",
@@ -260,12 +266,15 @@ fn fig5_virtual_payload_from_model_error() {
         let est = |loads: &Loads, seed: u64| {
             let eq = StaticSolver::default().solve(&fine, loads, None).unwrap();
             let obs = observe(&coarse, &fine, &eq.q, &nodes, seed);
-            let e = Backend::Newton
-                .build(coarse.clone(), known.clone(), EstimatorSettings::default())
-                .unwrap()
-                .step(&obs)
-                .unwrap();
-            (rms_backbone(&coarse, &e.q, &fine, &eq.q), e)
+            let e = softrod::estimate::EstimatorSettings {
+                backend: Backend::Newton,
+                ..EstimatorSettings::default()
+            }
+            .build_for(&coarse, &known)
+            .unwrap()
+            .step(&obs)
+            .unwrap();
+            (rms_backbone(&coarse, e.q.as_slice(), &fine, &eq.q), e)
         };
         let (rms0, virt) = est(&plant.loads().unwrap(), 5);
         let mut payload = plant.loads().unwrap();

@@ -137,10 +137,15 @@ fn run(name: &str, markers: usize, backend: Backend, seed: u64, sigma_model_m: f
         alpha_rule: AlphaRule::Discrepancy,
         ..EstimatorSettings::default()
     };
-    let mut est = backend.build(robot, Loads::default(), settings).unwrap();
+    let mut est = softrod::estimate::EstimatorSettings {
+        backend,
+        ..settings
+    }
+    .build_for(&robot, &Loads::default())
+    .unwrap();
     let e = est.step(&obs).unwrap();
     assert!(e.report.status.is_converged(), "{name}: {:?}", e.report);
-    let nodes = e.node_positions();
+    let nodes = e.node_positions::<2>().unwrap();
     let n = nodes.len();
     let rms = (nodes
         .iter()

@@ -78,9 +78,12 @@ fn both(
             backend,
             ..settings.clone()
         };
-        let mut est = backend
-            .build(robot.clone(), Loads::default(), settings)
-            .unwrap();
+        let mut est = softrod::estimate::EstimatorSettings {
+            backend,
+            ..settings
+        }
+        .build_for(robot, &Loads::default())
+        .unwrap();
         let e = est.step(obs).unwrap();
         assert!(
             e.report.status.is_converged(),
@@ -107,8 +110,9 @@ fn agreement(e: &[Estimate; 2]) -> (f64, f64) {
     let [n, s] = e;
     let f = max_abs(n.f.iter().zip(&s.f).map(|(a, b)| a - b)) / max_abs(n.f.iter().copied());
     let shape =
-        n.q.chunks(6)
-            .zip(s.q.chunks(6))
+        n.q.as_slice()
+            .chunks(6)
+            .zip(s.q.as_slice().chunks(6))
             .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt())
             .fold(0.0, f64::max)
             / L;
@@ -147,8 +151,8 @@ fn tip_force_from_exudyn_markers_both_backends_agree() {
     let e = both(&robot, &obs, settings);
     let (df, dq) = agreement(&e);
     let size = dist(&force, &[0.0; 3]);
-    let err = dist(&e[0].resultant_force_n, &force) / size;
-    let tip = dist(&e[0].q[n * 6..n * 6 + 3], &shape[n][..3]);
+    let err = dist(e[0].resultant_force_n.as_slice(), &force) / size;
+    let tip = dist(&e[0].q.as_slice()[n * 6..n * 6 + 3], &shape[n][..3]);
     println!(
         "tip force: backends differ by {df:.1e} (F, relative), {dq:.1e} L (shape); \
          resultant error {err:.1e} of |F| = {size:.3} N; tip {tip:.1e} m from exudyn's"
@@ -187,7 +191,7 @@ fn distributed_load_from_exudyn_markers_both_backends_agree() {
     assert_eq!(e[0].f.len(), robot.n_q());
     let (df, dq) = agreement(&e);
     let size = dist(&applied, &[0.0; 3]);
-    let err = dist(&e[0].resultant_force_n, &applied) / size;
+    let err = dist(e[0].resultant_force_n.as_slice(), &applied) / size;
     println!(
         "uniform load: backends differ by {df:.1e} (F, relative), {dq:.1e} L (shape); \
          resultant {:?} N vs {applied:?} N: error {err:.1e}",
@@ -224,17 +228,23 @@ fn world_bounds_hold_in_3d_and_the_local_frame_is_refused() {
         bounds: vec![bound(frame)],
         ..EstimatorSettings::default()
     };
-    let mut est = Backend::Sqp
-        .build(robot.clone(), Loads::default(), settings(BoundFrame::World))
-        .unwrap();
+    let mut est = softrod::estimate::EstimatorSettings {
+        backend: Backend::Sqp,
+        ..settings(BoundFrame::World)
+    }
+    .build_for(&robot, &Loads::default())
+    .unwrap();
     let e = est.step(&obs).unwrap();
     assert!(e.report.status.is_converged(), "{}", e.report);
     let fz = e.resultant_force_n[2];
     println!("bounded tip force: {:?} N", e.resultant_force_n);
     assert!((fz + 1.0).abs() <= 1e-6, "{fz}");
-    let err = Backend::Sqp
-        .build(robot, Loads::default(), settings(BoundFrame::Local))
-        .err()
-        .unwrap();
+    let err = softrod::estimate::EstimatorSettings {
+        backend: Backend::Sqp,
+        ..settings(BoundFrame::Local)
+    }
+    .build_for(&robot, &Loads::default())
+    .err()
+    .unwrap();
     assert_eq!(err.field(), Some("estimator.bounds[0].frame"), "{err}");
 }

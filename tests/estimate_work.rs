@@ -72,7 +72,12 @@ fn warm_work(backend: Backend, n: usize, frames: u64) -> Vec<(LinearWork, usize)
         alpha: Some(31.0),
         ..EstimatorSettings::default()
     };
-    let mut est = backend.build(robot, known, settings).unwrap();
+    let mut est = softrod::estimate::EstimatorSettings {
+        backend,
+        ..settings
+    }
+    .build_for(&robot, &known)
+    .unwrap();
     est.step(&obs[0]).unwrap().converged().unwrap();
     obs[1..]
         .iter()

@@ -211,9 +211,9 @@ fn a_scene_takes_a_follower_load_and_names_its_faults() {
     // the estimator refuses them (its sensitivities use the symmetric tangent)
     let robot = planar(4);
     let err = softrod::estimate::NewtonEstimator::new(
-        robot,
-        follower(1.0, None, None),
-        softrod::estimate::EstimatorSettings::default(),
+        &robot,
+        &follower(1.0, None, None),
+        &softrod::estimate::EstimatorSettings::default(),
     )
     .err()
     .unwrap();

@@ -274,13 +274,12 @@ fn constructed_failures_are_classified() {
     // a non-finite marker position: invalid input, typed
     let r = Reference::embedded("exudyn_family_uniform_3").unwrap();
     let robot = model_robot(&r, 8).unwrap();
-    let mut est = Backend::Newton
-        .build(
-            robot.clone(),
-            Loads::default(),
-            EstimatorSettings::default(),
-        )
-        .unwrap();
+    let mut est = softrod::estimate::EstimatorSettings {
+        backend: Backend::Newton,
+        ..EstimatorSettings::default()
+    }
+    .build_for(&robot, &Loads::default())
+    .unwrap();
     let bad = Observation {
         markers: vec![MarkerObservation::at_arc(0.24, vec![f64::NAN, 0.0])],
     };
@@ -309,9 +308,12 @@ fn constructed_failures_are_classified() {
         ],
         ..EstimatorSettings::default()
     };
-    let mut est = Backend::Sqp
-        .build(robot, Loads::default(), settings)
-        .unwrap();
+    let mut est = softrod::estimate::EstimatorSettings {
+        backend: Backend::Sqp,
+        ..settings
+    }
+    .build_for(&robot, &Loads::default())
+    .unwrap();
     let obs = Observation {
         markers: (1..=5)
             .map(|j| {

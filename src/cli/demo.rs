@@ -41,7 +41,7 @@ fn estimation_demo() -> Result<()> {
     let eq = StaticSolver::default().solve(&robot, &truth, None)?;
     let nodes: Vec<usize> = scene.markers.iter().filter_map(|m| m.node).collect();
     let sigma = 1e-5;
-    let obs = Observation::at_nodes(&robot, &eq.q, &nodes).with_noise(sigma, 1);
+    let obs = Observation::of_nodes(&robot, &eq.q, &nodes)?.with_noise(sigma, 1);
     let true_force = [
         uniform[0] * robot.length(),
         uniform[1] * robot.length() - 9.81 * tip_mass_kg,
@@ -63,12 +63,15 @@ fn estimation_demo() -> Result<()> {
         true_force[1]
     );
     for backend in [Backend::Newton, Backend::Sqp] {
-        let mut est =
-            backend.build(robot.clone(), known.clone(), scene.solver.estimator.clone())?;
+        let settings = softrod::estimate::EstimatorSettings {
+            backend,
+            ..scene.solver.estimator.clone()
+        };
+        let mut est = settings.build_for(&robot, &known)?;
         let e = est.step(&obs)?.converged()?;
-        let (ex, ey) = tip(&e.q);
+        let (ex, ey) = tip(e.q.as_slice());
         let sd: Vec<f64> = (0..2)
-            .map(|a| e.resultant_force_cov[a * 2 + a].max(0.0).sqrt())
+            .map(|a| e.resultant_force_cov[(a, a)].max(0.0).sqrt())
             .collect();
         outln!(
             "  {:<6}    tip ({:+.5}, {:+.5}) m (error {:.3} mm), resultant ({:+.4} ± {:.4}, {:+.4} ± {:.4}) N, moment {:+.4} N·m; {} iterations, alpha {:.3e}, first step {:.1} ms",
@@ -76,8 +79,8 @@ fn estimation_demo() -> Result<()> {
         );
         // streaming: 50 new noisy frames of the same scene, warm-started
         let frames: Vec<Observation> = (0..50)
-            .map(|k| Observation::at_nodes(&robot, &eq.q, &nodes).with_noise(sigma, 100 + k))
-            .collect();
+            .map(|k| Ok(Observation::of_nodes(&robot, &eq.q, &nodes)?.with_noise(sigma, 100 + k)))
+            .collect::<softrod::Result<_>>()?;
         let t = median_warm_step(est.as_mut(), &frames)?;
         outln!(
             "            warm step (new noisy frame, median of 50): {:.1} µs",

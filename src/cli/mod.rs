@@ -438,7 +438,7 @@ fn estimate_out<E: Element>(
     e: &Estimate,
     observation: String,
 ) -> EstimateOut {
-    let nodes = node_outs(robot, &e.q);
+    let nodes = node_outs(robot, e.q.as_slice());
     let d = e.resultant_force_n.len();
     let m = e.marker_residuals.len();
     EstimateOut {
@@ -450,26 +450,29 @@ fn estimate_out<E: Element>(
         load: e
             .sample_load(LOAD_GRID)
             .into_iter()
-            .map(|(s, w)| LoadSample { s, w })
+            .map(|(s, w)| LoadSample {
+                s,
+                w: w.as_slice().to_vec(),
+            })
             .collect(),
         load_grid_points: LOAD_GRID,
-        load_parameters: e.f.clone(),
+        load_parameters: e.f.as_slice().to_vec(),
         resultant: ResultantOut {
-            force_n: e.resultant_force_n.clone(),
+            force_n: e.resultant_force_n.as_slice().to_vec(),
             force_std_n: (0..d)
-                .map(|a| e.resultant_force_cov[a * d + a].max(0.0).sqrt())
+                .map(|a| e.resultant_force_cov[(a, a)].max(0.0).sqrt())
                 .collect(),
-            moment_nm: e.resultant_moment_nm.clone(),
+            moment_nm: e.resultant_moment_nm.as_slice().to_vec(),
         },
-        marker_residuals_m: e.marker_residuals.clone(),
+        marker_residuals_m: e.marker_residuals.as_slice().to_vec(),
         marker_std_m: (0..m)
-            .map(|i| e.marker_cov[i * m + i].max(0.0).sqrt())
+            .map(|i| e.marker_cov[(i, i)].max(0.0).sqrt())
             .collect(),
-        max_load_parameter_std: e.std_f().into_iter().fold(0.0, f64::max),
+        max_load_parameter_std: e.std_f().iter().copied().fold(0.0, f64::max),
         noise_sigma_m: e.noise_sigma_m,
         report: e.report.clone(),
-        q: e.q.clone(),
-        warnings: robot.validity(&e.q).unwrap_or_default(),
+        q: e.q.as_slice().to_vec(),
+        warnings: robot.validity(e.q.as_slice()).unwrap_or_default(),
         refinement: None,
     }
 }
@@ -547,7 +550,7 @@ fn estimate_with<E: Element + 'static>(
         }
     };
     let pressures = known.pressures_pa.clone();
-    let mut est = settings.backend.build(robot.clone(), known, settings)?;
+    let mut est = settings.build_for(&robot, &known)?;
     let e = est.step(&obs)?;
     Ok(estimate_out(scene, &robot, pressures, &e, source))
 }

@@ -72,11 +72,10 @@ pub(crate) fn estimator_at<E: Element + 'static>(
 ) -> Result<LoopEstimator<E>> {
     let mut loads = known.clone();
     loads.pressures_pa = pressures_pa.to_vec();
-    let (robot, settings) = (robot.clone(), settings.clone());
     Ok(match settings.backend {
         Backend::Newton => {
-            LoopEstimator::Newton(Box::new(NewtonEstimator::new(robot, loads, settings)?))
+            LoopEstimator::Newton(Box::new(NewtonEstimator::new(robot, &loads, settings)?))
         }
-        Backend::Sqp => LoopEstimator::Sqp(Box::new(SqpEstimator::new(robot, loads, settings)?)),
+        Backend::Sqp => LoopEstimator::Sqp(Box::new(SqpEstimator::new(robot, &loads, settings)?)),
     })
 }

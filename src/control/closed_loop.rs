@@ -434,8 +434,8 @@ impl<E: Element + 'static> ClosedLoop<E> {
         });
         match est {
             Ok(e) if e.report.status.is_converged() && e.f.iter().all(|v| v.is_finite()) => {
-                self.last_good = Some(e.f.clone());
-                (e.f, EstimateFlag::Converged)
+                self.last_good = Some(e.f.as_slice().to_vec());
+                (e.f.as_slice().to_vec(), EstimateFlag::Converged)
             }
             Ok(e) => keep(self, Some(e.report.status)),
             Err(_) => keep(self, None),

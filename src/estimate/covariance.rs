@@ -334,31 +334,31 @@ fn row_major(a: &DMatrix<f64>) -> Vec<f64> {
 }
 
 impl Estimate {
-    /// `Cov(F) = L Lᵀ` (`n_F × n_F`, row-major) for the stated marker noise:
+    /// `Cov(F) = L Lᵀ` (`n_F × n_F`) for the stated marker noise:
     /// the covariance of the Gauss–Newton-linearized estimator,
     /// `F̂ ≈ (JᵀWJ + αH)⁻¹ JᵀW y`, with `J` the marker Jacobian `∂(Aq)/∂F`
     /// and `Cov(y) = σ² I`.
     ///
     /// # Example
     /// ```
-    /// use softrod::estimate::{Backend, EstimatorSettings, LoadModel, Observation};
+    /// use softrod::estimate::{EstimatorSettings, LoadModel, Observation};
     /// use softrod::{scene::Scene, statics::StaticSolver};
     /// let scene = Scene::two_section();
     /// let (robot, loads) = (scene.robot()?, scene.loads()?);
     /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
-    /// let obs = Observation::at_nodes(&robot, &eq.q, &[10, 20]);
+    /// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[10, 20])?;
     /// let settings = EstimatorSettings {
     ///     load_model: LoadModel::Concentrated { node: 20 }, alpha: Some(1.0), ..Default::default()
     /// };
-    /// let e = Backend::Newton.build(robot, loads, settings)?.step(&obs)?;
-    /// let c = e.covariance_f();
-    /// assert_eq!(c.len(), 4);
-    /// assert!((c[0].sqrt() - e.std_f()[0]).abs() <= 1e-12 * c[0].sqrt() && c[1] == c[2]);
+    /// let e = settings.build_for(&robot, &loads)?.step(&obs)?;
+    /// let c: nalgebra::DMatrix<f64> = e.covariance_f();
+    /// assert_eq!(c.shape(), (2, 2));
+    /// assert!((c[(0, 0)].sqrt() - e.std_f()[0]).abs() <= 1e-12 * c[(0, 0)].sqrt());
+    /// assert!((c[(0, 1)] - c[(1, 0)]).abs() <= 1e-14 * c.norm());
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    pub fn covariance_f(&self) -> Vec<f64> {
-        let lt = self.cov_factor_t();
-        row_major(&lt.tr_mul(&lt))
+    pub fn covariance_f(&self) -> DMatrix<f64> {
+        &self.cov_factor * self.cov_factor.transpose()
     }
 
     /// Standard deviations of the entries of `F` (square roots of the
@@ -366,16 +366,11 @@ impl Estimate {
     ///
     /// # Example
     /// See [`Estimate::covariance_f`].
-    pub fn std_f(&self) -> Vec<f64> {
-        self.cov_factor_t()
-            .column_iter()
-            .map(|c| c.norm())
-            .collect()
-    }
-
-    /// `Lᵀ` (`n_ob × n_F`).
-    fn cov_factor_t(&self) -> DMatrix<f64> {
-        DMatrix::from_column_slice(self.n_ob, self.f.len(), &self.cov_factor)
+    pub fn std_f(&self) -> DVector<f64> {
+        DVector::from_iterator(
+            self.cov_factor.nrows(),
+            self.cov_factor.row_iter().map(|r| r.norm()),
+        )
     }
 }
 

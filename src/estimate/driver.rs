@@ -5,6 +5,8 @@
 
 use std::time::Instant;
 
+use nalgebra::{DMatrix, DVector};
+
 use crate::element::Element;
 use crate::error::{Error, Result};
 use crate::linsolve::LinearWork;
@@ -22,34 +24,34 @@ pub const ALPHA_CONTINUATION_START: f64 = 100.0;
 /// the observation it fitted.
 #[derive(Debug, Clone)]
 pub(crate) struct Warm {
-    pub f: Vec<f64>,
-    pub q: Vec<f64>,
-    pub y: Vec<f64>,
+    pub(crate) f: Vec<f64>,
+    pub(crate) q: Vec<f64>,
+    pub(crate) y: Vec<f64>,
 }
 
 /// One solve of a backend at a fixed `α` and observation, converged or not
 /// (its report's status says).
 pub(crate) struct Solved {
-    pub f: Vec<f64>,
-    pub q: Vec<f64>,
-    pub derivs: Derivs,
-    pub cov_factor: Vec<f64>,
-    pub e: Vec<f64>,
-    pub report: EstimateReport,
+    pub(crate) f: Vec<f64>,
+    pub(crate) q: Vec<f64>,
+    pub(crate) derivs: Derivs,
+    pub(crate) cov_factor: Vec<f64>,
+    pub(crate) e: Vec<f64>,
+    pub(crate) report: EstimateReport,
 }
 
 /// An estimator's state along a stream of observations: the problem, the
 /// `α` in use and the warm start.
 #[derive(Debug, Clone)]
 pub(crate) struct Stream<E: Element> {
-    pub problem: Problem<E>,
-    pub alpha: Option<f64>,
-    pub warm: Option<Warm>,
+    pub(crate) problem: Problem<E>,
+    pub(crate) alpha: Option<f64>,
+    pub(crate) warm: Option<Warm>,
 }
 
 impl<E: Element> Stream<E> {
     /// A fresh stream over `problem` (`α` from its settings).
-    pub fn new(problem: Problem<E>) -> Self {
+    pub(crate) fn new(problem: Problem<E>) -> Self {
         Stream {
             alpha: problem.settings().alpha,
             problem,
@@ -59,7 +61,7 @@ impl<E: Element> Stream<E> {
 
     /// Forgets the warm start, the tracker's state and an automatically
     /// chosen `α`.
-    pub fn reset(&mut self) {
+    pub(crate) fn reset(&mut self) {
         self.warm = None;
         self.problem.tracker().forget();
         self.alpha = self.problem.settings().alpha;
@@ -67,7 +69,7 @@ impl<E: Element> Stream<E> {
 
     /// The starting point of a step: the warm state, else zero load and the
     /// shape of the known loads.
-    pub fn start(&self) -> Result<(Vec<f64>, Vec<f64>)> {
+    pub(crate) fn start(&self) -> Result<(Vec<f64>, Vec<f64>)> {
         if let Some(w) = &self.warm {
             return Ok((w.f.clone(), w.q.clone()));
         }
@@ -130,22 +132,22 @@ impl<E: Element> Stream<E> {
         if !informative {
             report.status = super::EstimateStatus::NoInformation;
         }
+        let (n_f, n_ob, d) = (f.len(), op.len(), resultant_force_n.len());
         Ok(Estimate {
-            q,
-            f,
+            q: DVector::from_vec(q),
+            f: DVector::from_vec(f),
             load_model: problem.load(),
-            resultant_force_n,
-            resultant_moment_nm,
-            resultant_force_cov,
-            marker_residuals: e,
-            cov_factor,
-            marker_cov,
+            resultant_force_n: DVector::from_vec(resultant_force_n),
+            resultant_moment_nm: DVector::from_vec(resultant_moment_nm),
+            resultant_force_cov: DMatrix::from_row_slice(d, d, &resultant_force_cov),
+            marker_residuals: DVector::from_vec(e),
+            cov_factor: DMatrix::from_row_slice(n_f, n_ob, &cov_factor),
+            marker_cov: DMatrix::from_row_slice(n_ob, n_ob, &marker_cov),
             noise_sigma_m: problem.settings().noise_sigma_m,
             report,
             node_s: problem.robot().node_arc().to_vec(),
             dim: E::DIM,
             node_dofs: E::NODE_DOFS,
-            n_ob: op.len(),
         })
     }
 }

@@ -72,9 +72,9 @@
 //! let loads = scene.loads()?;
 //! // the "measurement": the solved shape at the five marker nodes
 //! let eq = StaticSolver::default().solve(&robot, &loads, None)?;
-//! let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]);
+//! let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20])?;
 //! let settings = EstimatorSettings { alpha: Some(1.0), ..EstimatorSettings::default() };
-//! let mut est = Backend::Newton.build(robot, loads, settings)?;
+//! let mut est = settings.build_for(&robot, &loads)?; // the backend settings.backend names
 //! let e = est.step(&obs)?;
 //! assert!(e.report.status.is_converged());
 //! // nothing but the known loads acts: the estimated load is small
@@ -115,10 +115,10 @@ pub use sqp::SqpEstimator;
 pub use crate::observe::{MarkerObservation, Observation};
 pub use crate::outcome::{EstimateCriterion, EstimateStatus};
 
+use nalgebra::{DMatrix, DVector, SVector};
 use serde::{Deserialize, Serialize};
 
-use crate::assembly::Robot;
-use crate::element::{ArcPoint, Element};
+use crate::element::ArcPoint;
 use crate::error::{check_all_finite, check_positive, Error, Result};
 use crate::loads::Loads;
 use crate::statics::StaticSettings;
@@ -141,41 +141,6 @@ pub enum Backend {
 }
 
 impl Backend {
-    /// Builds the estimator of this backend for a robot of any element with
-    /// known loads `known` (self-weight comes from the robot; pressures,
-    /// known line loads, point forces and moments from `known`).
-    ///
-    /// # Errors
-    /// [`Error::InvalidParameter`] for invalid settings (or bounds given to
-    /// the Newton backend); the errors of [`Robot::validate_loads`].
-    ///
-    /// # Example
-    /// Generic over the element (see also the [module documentation](self)):
-    /// ```
-    /// use softrod::assembly::{Robot, RobotSpec, Section};
-    /// use softrod::{element::Element, loads::Loads};
-    /// use softrod::estimate::{Backend, Estimator, EstimatorSettings};
-    /// fn newton<E: Element + 'static>(robot: Robot<E>) -> softrod::Result<Box<dyn Estimator>> {
-    ///     let settings = EstimatorSettings { alpha: Some(1.0), ..Default::default() };
-    ///     Backend::Newton.build(robot, Loads::default(), settings)
-    /// }
-    /// let robot = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 8)]).build_planar()?;
-    /// let est = newton(robot)?;
-    /// assert_eq!(est.backend(), Backend::Newton);
-    /// # Ok::<(), softrod::Error>(())
-    /// ```
-    pub fn build<E: Element + 'static>(
-        self,
-        robot: Robot<E>,
-        known: Loads,
-        settings: EstimatorSettings,
-    ) -> Result<Box<dyn Estimator>> {
-        Ok(match self {
-            Backend::Newton => Box::new(NewtonEstimator::new(robot, known, settings)?),
-            Backend::Sqp => Box::new(SqpEstimator::new(robot, known, settings)?),
-        })
-    }
-
     /// The backend's name as on the command line ("newton" or "sqp").
     pub fn name(self) -> &'static str {
         match self {
@@ -460,36 +425,36 @@ impl std::fmt::Display for EstimateReport {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Estimate {
     /// All coordinates of the estimated shape (m, dimensionless slopes).
-    pub q: Vec<f64>,
+    pub q: DVector<f64>,
     /// The load parameters `F` (distributed: `n_q` entries laid out like
     /// the node coordinates, `[w, w']` first in each node's, N/m and N/m²,
     /// the full 3-D element's `r_Y, r_Z` slots zero; concentrated: the
     /// force, N).
-    pub f: Vec<f64>,
+    pub f: DVector<f64>,
     /// The parameterization of `f`.
     pub load_model: LoadModel,
     /// Resultant force of the estimated load, `∫ w dX` or the force (N).
-    pub resultant_force_n: Vec<f64>,
+    pub resultant_force_n: DVector<f64>,
     /// Moment of the estimated load about the base position in the
     /// estimated (deformed) shape, `∫ (r − r_0) × w dX` (N·m).
-    pub resultant_moment_nm: Vec<f64>,
-    /// Posterior covariance of the resultant force (N², row-major): the
+    pub resultant_moment_nm: DVector<f64>,
+    /// Posterior covariance of the resultant force (N², `DIM × DIM`): the
     /// spread of the stated marker noise plus the bias of the penalty, with
     /// the penalty read as a Gaussian prior (see [`AlphaRule`]).
-    pub resultant_force_cov: Vec<f64>,
+    pub resultant_force_cov: DMatrix<f64>,
     /// Marker residuals `A q − y` in observation order (m; tangents dimensionless).
-    pub marker_residuals: Vec<f64>,
-    /// Covariance factor `L` (`n_F × n_ob`, row-major) of the noise alone
+    pub marker_residuals: DVector<f64>,
+    /// Covariance factor `L` (`n_F × n_ob`) of the noise alone
     /// (no bias): `Cov(F̂) = L Lᵀ`, see
     /// [`Estimate::covariance_f`]. Like the other covariances it is taken at
     /// the last linearization (see [`EstimateReport::gradient_norm`]; after
     /// an unconfirmed last step the two points differ by that step, whose
     /// predicted decrease is below `1e-3 tolerance`: the covariances then
     /// differ by about the square root of that, relatively).
-    pub cov_factor: Vec<f64>,
+    pub cov_factor: DMatrix<f64>,
     /// Posterior covariance of the estimated marker-space shape `A q`
-    /// (`n_ob × n_ob`, row-major; m²).
-    pub marker_cov: Vec<f64>,
+    /// (`n_ob × n_ob`; m²).
+    pub marker_cov: DMatrix<f64>,
     /// The stated marker noise the covariances are for (m).
     pub noise_sigma_m: f64,
     /// What the estimator did.
@@ -497,23 +462,47 @@ pub struct Estimate {
     node_s: Vec<f64>,
     dim: usize,
     node_dofs: usize,
-    n_ob: usize,
 }
 
 impl Estimate {
     /// The estimated load per undeformed length at arc coordinate `s` (N/m,
-    /// world axes), `w(s) = S(s) F` (8). Zero for a concentrated load
-    /// (see [`Estimate::f`]) and outside the robot.
-    pub fn load_at(&self, s: f64) -> Vec<f64> {
+    /// world axes, `DIM` entries), `w(s) = S(s) F` (8). Zero for a
+    /// concentrated load (see [`Estimate::f`]) and outside the robot; see
+    /// [`Estimate::load_vector_at`] for a fixed-size vector that refuses an
+    /// arc position off the robot.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::estimate::{EstimatorSettings, Observation};
+    /// use softrod::{scene::Scene, statics::StaticSolver};
+    /// let scene = Scene::two_section();
+    /// let (robot, loads) = (scene.robot()?, scene.loads()?);
+    /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+    /// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[10, 20])?.with_noise(1e-5, 1);
+    /// let e = EstimatorSettings::default().build_for(&robot, &loads)?.step(&obs)?;
+    /// let w: nalgebra::DVector<f64> = e.load_at(0.12);
+    /// assert_eq!(w.len(), 2);
+    /// assert_eq!(e.load_at(1.0).norm(), 0.0); // off the robot
+    /// let samples = e.sample_load(5);
+    /// assert_eq!((samples.len(), samples[4].0), (5, 0.24));
+    /// let nodes = e.node_positions::<2>()?;
+    /// assert_eq!(nodes.len(), robot.n_nodes());
+    /// assert!((nodes[20] - eq.shape(&robot)?.tip_pose()?.position_m.coords).norm() < 1e-3);
+    /// assert!(e.node_positions::<3>().is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn load_at(&self, s: f64) -> DVector<f64> {
         let d = self.dim;
-        let mut w = vec![0.0; d];
+        let mut w = DVector::zeros(d);
         if self.load_model != LoadModel::Distributed || self.node_s.len() < 2 {
             return w;
         }
         // w(s) = S(s) F (8): the cable field F at the point (laid out like
         // the node coordinates: [w, w'] first in each node's numbers)
         if let Some(p) = ArcPoint::locate(&self.node_s, s) {
-            if p.node_value_into(&self.f, self.node_dofs, &mut w).is_err() {
+            if p.node_value_into(self.f.as_slice(), self.node_dofs, w.as_mut_slice())
+                .is_err()
+            {
                 w.iter_mut().for_each(|v| *v = f64::NAN);
             }
         }
@@ -522,7 +511,10 @@ impl Estimate {
 
     /// `w` sampled at `n` evenly spaced arc coordinates from base to tip:
     /// `(s (m), w (N/m))`.
-    pub fn sample_load(&self, n: usize) -> Vec<(f64, Vec<f64>)> {
+    ///
+    /// # Example
+    /// See [`Estimate::load_at`].
+    pub fn sample_load(&self, n: usize) -> Vec<(f64, DVector<f64>)> {
         let total = self.node_s.last().copied().unwrap_or(0.0);
         (0..n)
             .map(|i| {
@@ -536,12 +528,22 @@ impl Estimate {
             .collect()
     }
 
-    /// Node positions of the estimated shape (m).
-    pub fn node_positions(&self) -> Vec<Vec<f64>> {
-        self.q
+    /// Node positions of the estimated shape (m) as `D`-vectors.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `q` if the robot has another
+    /// dimension than `D`.
+    ///
+    /// # Example
+    /// See [`Estimate::load_at`].
+    pub fn node_positions<const D: usize>(&self) -> Result<Vec<SVector<f64, D>>> {
+        crate::error::check_len("q", D, self.dim)?;
+        Ok(self
+            .q
+            .as_slice()
             .chunks(self.node_dofs.max(1))
-            .map(|c| c[..self.dim.min(c.len())].to_vec())
-            .collect()
+            .map(|c| SVector::from_fn(|i, _| c.get(i).copied().unwrap_or(0.0)))
+            .collect())
     }
 
     /// Undeformed arc coordinates of the nodes (m).
@@ -562,10 +564,10 @@ impl Estimate {
     /// let scene = Scene::two_section();
     /// let (robot, loads) = (scene.robot()?, scene.loads()?);
     /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
-    /// let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]);
+    /// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20])?;
     /// // one Gauss-Newton step is not enough at a small alpha
     /// let settings = EstimatorSettings { alpha: Some(1e-2), max_iterations: 1, ..Default::default() };
-    /// let mut est = Backend::Newton.build(robot, loads, settings)?;
+    /// let mut est = settings.build_for(&robot, &loads)?;
     /// let e = est.step(&obs.with_noise(1e-4, 3))?;
     /// assert!(!e.report.status.is_converged()); // the last iterate, with its status
     /// assert!(matches!(e.converged(), Err(Error::EstimateNotConverged { .. })));

@@ -48,6 +48,7 @@ use crate::loads::Loads;
 use crate::numeric::{dot, norm2};
 use crate::observe::{ObsRow, ObservationOperator};
 use crate::sensitivity::Sensitivity;
+use nalgebra::{DMatrix, DVector};
 
 use super::covariance::cov_factor;
 use super::driver::{run_step, Method, Solved, Stream};
@@ -66,8 +67,8 @@ use super::{
 /// let scene = Scene::two_section();
 /// let (robot, loads) = (scene.robot()?, scene.loads()?);
 /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
-/// let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]).with_noise(1e-5, 1);
-/// let mut est = NewtonEstimator::new(robot, loads, EstimatorSettings::default())?;
+/// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20])?.with_noise(1e-5, 1);
+/// let mut est = NewtonEstimator::new(&robot, &loads, &EstimatorSettings::default())?;
 /// let e = est.step(&obs)?; // α by the discrepancy principle
 /// assert!(e.report.status.is_converged());
 /// let again = est.step(&obs)?; // warm: converges at once
@@ -83,12 +84,37 @@ pub struct NewtonEstimator<E: Element> {
 }
 
 impl<E: Element> NewtonEstimator<E> {
-    /// An estimator for `robot` under the known loads `known`.
+    /// An estimator for `robot` under the known loads `known` (both
+    /// borrowed; the estimator keeps copies). `settings.backend` must be
+    /// [`super::Backend::Newton`]: the backend is chosen once, by the
+    /// settings ([`EstimatorSettings::build_for`] builds the one they name).
     ///
     /// # Errors
-    /// [`crate::Error::InvalidParameter`] for invalid settings or bounds
-    /// (bounds need the SQP backend); the errors of [`Robot::validate_loads`].
-    pub fn new(robot: Robot<E>, known: Loads, settings: EstimatorSettings) -> Result<Self> {
+    /// [`crate::Error::InvalidParameter`] for invalid settings, another
+    /// backend (`estimator.backend`) or bounds (bounds need the SQP
+    /// backend); the errors of [`Robot::validate_loads`].
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::estimate::{Backend, EstimatorSettings, NewtonEstimator};
+    /// use softrod::scene::Scene;
+    /// let scene = Scene::two_section();
+    /// let (robot, loads) = (scene.robot()?, scene.loads()?);
+    /// let est = NewtonEstimator::new(&robot, &loads, &EstimatorSettings::default())?;
+    /// assert_eq!(est.robot().n_q(), robot.n_q());
+    /// let sqp = EstimatorSettings { backend: Backend::Sqp, ..Default::default() };
+    /// let err = NewtonEstimator::new(&robot, &loads, &sqp).unwrap_err();
+    /// assert_eq!(err.field(), Some("estimator.backend"));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn new(robot: &Robot<E>, known: &Loads, settings: &EstimatorSettings) -> Result<Self> {
+        if settings.backend != super::Backend::Newton {
+            return Err(crate::Error::invalid(
+                "estimator.backend",
+                settings.backend.name(),
+                "NewtonEstimator runs the newton backend (build the one the settings name with EstimatorSettings::build_for)",
+            ));
+        }
         if !settings.bounds.is_empty() {
             return Err(crate::Error::invalid(
                 "estimator.bounds",
@@ -97,7 +123,11 @@ impl<E: Element> NewtonEstimator<E> {
             ));
         }
         Ok(NewtonEstimator {
-            stream: Stream::new(Problem::new(robot, known, settings)?),
+            stream: Stream::new(Problem::new(
+                robot.clone(),
+                known.clone(),
+                settings.clone(),
+            )?),
             derivs_cache: None,
         })
     }
@@ -118,17 +148,17 @@ impl<E: Element> NewtonEstimator<E> {
         observation: &Observation,
         f: &[f64],
         alpha: f64,
-    ) -> Result<(f64, Vec<f64>)> {
+    ) -> Result<(f64, DVector<f64>)> {
         let (q, lu, op) = self.equilibrium_at(observation, f)?;
         let problem = &self.stream.problem;
         let (wr, pen, e) = problem.objective(&op, &q, f, alpha)?;
         let dv = problem.derivs(&lu, &op)?;
         let g = problem.gradient(&dv, &op, &e, f, alpha)?;
-        Ok((wr + pen, g))
+        Ok((wr + pen, DVector::from_vec(g)))
     }
 
     /// The observed quantities `A q(F)` and the marker Jacobian
-    /// `∂(A q)/∂F` (row-major, `n_ob × n_F`) at `F`.
+    /// `∂(A q)/∂F` (`n_ob × n_F`) at `F`.
     ///
     /// # Errors
     /// As [`Estimator::step`].
@@ -136,11 +166,10 @@ impl<E: Element> NewtonEstimator<E> {
         &mut self,
         observation: &Observation,
         f: &[f64],
-    ) -> Result<(Vec<f64>, Vec<f64>)> {
+    ) -> Result<(DVector<f64>, DMatrix<f64>)> {
         let (q, lu, op) = self.equilibrium_at(observation, f)?;
         let dv = self.stream.problem.derivs(&lu, &op)?;
-        // column i of Jᵀ is row i of J
-        Ok((op.apply(&q), dv.jt.as_slice().to_vec()))
+        Ok((DVector::from_vec(op.apply(&q)), dv.jt.transpose()))
     }
 
     /// The equilibrium at `F` from the warm shape, the tangent's factors

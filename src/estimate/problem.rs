@@ -90,10 +90,10 @@ impl<E: Element> LinearLoad<E> for LoadModel {
 #[derive(Debug, Clone)]
 pub(crate) struct Derivs {
     /// Adjoint fields `z_i = M K⁻¹ Mᵀ a_iᵀ`, column `i` (`n_q × n_ob`).
-    pub z: DMatrix<f64>,
+    pub(crate) z: DMatrix<f64>,
     /// The marker Jacobian transposed (28): column `i` is `J_i = Gᵀ z_i`,
     /// the gradient of observed scalar `i` with respect to `F` (`n_F × n_ob`).
-    pub jt: DMatrix<f64>,
+    pub(crate) jt: DMatrix<f64>,
 }
 
 /// The Cholesky factor of a Gauss–Newton system ([`Problem::gn_solve`]):
@@ -112,7 +112,7 @@ pub(crate) struct Problem<E: Element> {
 
 impl<E: Element> Problem<E> {
     /// The problem of `robot` under the known loads `known`.
-    pub fn new(robot: Robot<E>, known: Loads, settings: EstimatorSettings) -> Result<Self> {
+    pub(crate) fn new(robot: Robot<E>, known: Loads, settings: EstimatorSettings) -> Result<Self> {
         settings.validate()?;
         if let LoadModel::Concentrated { node } = settings.load_model {
             if node == 0 || node >= robot.n_nodes() {
@@ -161,37 +161,37 @@ impl<E: Element> Problem<E> {
     }
 
     /// The robot.
-    pub fn robot(&self) -> &Robot<E> {
+    pub(crate) fn robot(&self) -> &Robot<E> {
         self.tracker.robot()
     }
 
     /// The equilibrium tracker.
-    pub fn tracker(&mut self) -> &mut EquilibriumTracker<E> {
+    pub(crate) fn tracker(&mut self) -> &mut EquilibriumTracker<E> {
         &mut self.tracker
     }
 
     /// The known loads.
-    pub fn known(&self) -> &Loads {
+    pub(crate) fn known(&self) -> &Loads {
         self.tracker.known()
     }
 
     /// The settings.
-    pub fn settings(&self) -> &EstimatorSettings {
+    pub(crate) fn settings(&self) -> &EstimatorSettings {
         &self.settings
     }
 
     /// Number of load parameters `n_F`.
-    pub fn n_f(&self) -> usize {
+    pub(crate) fn n_f(&self) -> usize {
         self.n_f
     }
 
     /// The load model.
-    pub fn load(&self) -> LoadModel {
+    pub(crate) fn load(&self) -> LoadModel {
         self.settings.load_model
     }
 
     /// The observation operator of `obs` with the settings' noise.
-    pub fn operator(&self, obs: &Observation) -> Result<ObservationOperator> {
+    pub(crate) fn operator(&self, obs: &Observation) -> Result<ObservationOperator> {
         ObservationOperator::new(
             self.robot(),
             obs,
@@ -201,13 +201,13 @@ impl<E: Element> Problem<E> {
     }
 
     /// `G F` over all coordinates (N).
-    pub fn gen_force(&self, f: &[f64]) -> Result<Vec<f64>> {
+    pub(crate) fn gen_force(&self, f: &[f64]) -> Result<Vec<f64>> {
         self.load().force(self.robot(), f)
     }
 
     /// `H F`: the penalty (26) is `α Fᵀ H F`, `H = B` for the distributed
     /// field (`α ∫ wᵀ w dX`), `H = I` for a concentrated force.
-    pub fn penalty_grad(&self, f: &[f64]) -> Result<Vec<f64>> {
+    pub(crate) fn penalty_grad(&self, f: &[f64]) -> Result<Vec<f64>> {
         match self.load() {
             LoadModel::Distributed => self.robot().apply_load_gram(f),
             LoadModel::Concentrated { .. } => Ok(f.to_vec()),
@@ -215,7 +215,7 @@ impl<E: Element> Problem<E> {
     }
 
     /// `Fᵀ H F`.
-    pub fn penalty(&self, f: &[f64]) -> Result<f64> {
+    pub(crate) fn penalty(&self, f: &[f64]) -> Result<f64> {
         Ok(self
             .penalty_grad(f)?
             .iter()
@@ -225,31 +225,31 @@ impl<E: Element> Problem<E> {
     }
 
     /// The dead force with the unknown load `F` (`n_q`).
-    pub fn dead_with(&self, f: &[f64]) -> Result<Vec<f64>> {
+    pub(crate) fn dead_with(&self, f: &[f64]) -> Result<Vec<f64>> {
         self.tracker.dead_with(&self.load(), f)
     }
 
     /// The residual `Q` over the free coordinates at `(q, F)`.
-    pub fn residual(&self, q: &[f64], f: &[f64]) -> Result<Vec<f64>> {
+    pub(crate) fn residual(&self, q: &[f64], f: &[f64]) -> Result<Vec<f64>> {
         self.tracker.residual(&self.load(), q, f)
     }
 
     /// The equilibrium `q(F)` from `q0` (warm; the globalized static solve
     /// if needed).
-    pub fn equilibrium(&mut self, f: &[f64], q0: &[f64]) -> Result<TrackedEquilibrium> {
+    pub(crate) fn equilibrium(&mut self, f: &[f64], q0: &[f64]) -> Result<TrackedEquilibrium> {
         let load = self.load();
         self.tracker.solve(&load, f, q0)
     }
 
     /// The tangent at `q` and its factors, with the tracker's linear
     /// solver (see [`EquilibriumTracker::factor_tangent`]).
-    pub fn factor_tangent(&mut self, q: &[f64]) -> Result<FactoredTangent> {
+    pub(crate) fn factor_tangent(&mut self, q: &[f64]) -> Result<FactoredTangent> {
         self.tracker.factor_tangent(q)
     }
 
     /// The equilibrium and the free start: zero load and the shape of the
     /// known loads alone.
-    pub fn unloaded_start(&self) -> Result<(Vec<f64>, Vec<f64>)> {
+    pub(crate) fn unloaded_start(&self) -> Result<(Vec<f64>, Vec<f64>)> {
         let f = vec![0.0; self.n_f];
         let solver = StaticSolver::new(self.settings.statics.clone())?;
         let eq = solver.solve(self.robot(), self.tracker.known(), None)?;
@@ -260,7 +260,7 @@ impl<E: Element> Problem<E> {
     /// the tangent's factors `lu`: row `i` of `∂(Aq)/∂F` is
     /// `Gᵀ M K⁻¹ Mᵀ a_iᵀ` (K symmetric), the `n_ob` adjoint systems in one
     /// sweep over the factors.
-    pub fn derivs(&self, lu: &AutoFactors, op: &ObservationOperator) -> Result<Derivs> {
+    pub(crate) fn derivs(&self, lu: &AutoFactors, op: &ObservationOperator) -> Result<Derivs> {
         let s = Sensitivity::new(self.robot(), lu)?;
         let adj = s.adjoints(op.rows().iter().map(|r| r.entries()))?;
         let jt = s.load_gradients(&self.load(), &adj)?;
@@ -268,7 +268,7 @@ impl<E: Element> Problem<E> {
     }
 
     /// The objective parts at `(q, F)`: `(eᵀWe, α FᵀHF, e)` (25).
-    pub fn objective(
+    pub(crate) fn objective(
         &self,
         op: &ObservationOperator,
         q: &[f64],
@@ -280,7 +280,7 @@ impl<E: Element> Problem<E> {
     }
 
     /// Reduced gradient (29): `2 (Jᵀ W e + α H F)`.
-    pub fn gradient(
+    pub(crate) fn gradient(
         &self,
         dv: &Derivs,
         op: &ObservationOperator,
@@ -302,7 +302,7 @@ impl<E: Element> Problem<E> {
 
     /// The Gauss–Newton step (30) for `F` and the covariance factor there:
     /// see [`Problem::gn_solve`] and [`super::covariance::cov_factor`].
-    pub fn gn_step(
+    pub(crate) fn gn_step(
         &self,
         dv: &Derivs,
         op: &ObservationOperator,
@@ -320,7 +320,7 @@ impl<E: Element> Problem<E> {
     /// representer form `F + dF = Σ_i z_i c_i`, `(α W⁻¹ + Zᵀ B Z) c = J F − e`
     /// (an `n_ob × n_ob` Cholesky, no `n_q³` work); concentrated loads solve
     /// the small `n_F × n_F` system.
-    pub fn gn_solve(
+    pub(crate) fn gn_solve(
         &self,
         dv: &Derivs,
         op: &ObservationOperator,
@@ -378,7 +378,11 @@ impl<E: Element> Problem<E> {
     /// `q`) of the load `F`, and the `DIM × n_F` map `F → ∫ w dX`
     /// (row-major).
     #[allow(clippy::type_complexity)]
-    pub fn resultants(&self, q: &[f64], f: &[f64]) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+    pub(crate) fn resultants(
+        &self,
+        q: &[f64],
+        f: &[f64],
+    ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
         let d = E::DIM;
         let nd = E::NODE_DOFS;
         let nf = self.n_f;
@@ -525,11 +529,15 @@ fn cross(a: &[f64], b: &[f64]) -> Vec<f64> {
 /// let robot = scene.robot()?;
 /// let loads = scene.loads()?;
 /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
-/// let f = direct_solution(&robot, &loads, &eq.q)?;
+/// let f: nalgebra::DVector<f64> = direct_solution(&robot, &loads, eq.q.as_slice())?;
 /// assert!(f.iter().all(|v| v.abs() < 1e-3));
 /// # Ok::<(), softrod::Error>(())
 /// ```
-pub fn direct_solution<E: Element>(robot: &Robot<E>, known: &Loads, q: &[f64]) -> Result<Vec<f64>> {
+pub fn direct_solution<E: Element>(
+    robot: &Robot<E>,
+    known: &Loads,
+    q: &[f64],
+) -> Result<DVector<f64>> {
     let dead = robot.dead_force(known)?;
     let r = robot.residual(q, &dead, known)?; // Q without F
     let nq = robot.n_q();
@@ -550,5 +558,5 @@ pub fn direct_solution<E: Element>(robot: &Robot<E>, known: &Loads, q: &[f64]) -
     let f = svd.solve(&rhs, 1e-12).map_err(|m| Error::NonFinite {
         context: format!("direct solution (24): {m}"),
     })?;
-    Ok(f.iter().copied().collect())
+    Ok(f)
 }

@@ -60,7 +60,7 @@ use crate::contact::{Obstacle, Obstacles};
 use crate::control::VirtualPayload;
 use crate::element::PlanarCable;
 use crate::error::{Error, Result};
-use crate::estimate::{Backend, Estimator, EstimatorSettings};
+use crate::estimate::{Estimator, EstimatorSettings};
 use crate::grasp::friction::{hold_check, FrictionContact, HoldCheck};
 use crate::grasp::gripper::{GripperSpec, Side, FINGER_PRESSURES};
 use crate::grasp::object::{GraspObject, Pose};

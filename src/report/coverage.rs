@@ -317,11 +317,8 @@ pub fn run_trial(
         noise_sigma_m: spec.noise_sigma_m,
         ..EstimatorSettings::default()
     };
-    let est = measure(fine, known, spec).and_then(|obs| {
-        backend
-            .build(coarse.clone(), known.clone(), settings)?
-            .step(&obs)
-    });
+    let est =
+        measure(fine, known, spec).and_then(|obs| settings.build_for(coarse, known)?.step(&obs));
     let e = match est {
         Ok(e) => e,
         Err(err) => {

@@ -501,7 +501,7 @@ pub fn case_errors(
     let mut sum = 0.0;
     for i in 0..BACKBONE_POINTS {
         let s = l * i as f64 / (BACKBONE_POINTS - 1) as f64;
-        let p = robot.position_at(&e.q, s)?;
+        let p = robot.position_at(e.q.as_slice(), s)?;
         let t = reference.position_at(s);
         sum += (p[0] - t[0]).powi(2) + (p[1] - t[1]).powi(2);
     }
@@ -569,10 +569,7 @@ pub fn run_case(spec: &CaseSpec) -> Outcome {
         statistical_tolerance: 0.0,
         ..EstimatorSettings::default()
     };
-    let mut est = match spec
-        .backend
-        .build(robot.clone(), Loads::default(), settings)
-    {
+    let mut est = match settings.build_for(&robot, &Loads::default()) {
         Ok(e) => e,
         Err(e) => return fail(StepFailure::of_error(&e), Stage::Setup),
     };

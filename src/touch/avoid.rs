@@ -29,7 +29,7 @@ use serde::{Deserialize, Serialize};
 use crate::contact::Obstacles;
 use crate::control::{IkSettings, IkStatus, InverseKinematics};
 use crate::error::{check_len, check_positive, Error, Result};
-use crate::estimate::{AlphaRule, Backend, Estimator, EstimatorSettings};
+use crate::estimate::{AlphaRule, Estimator, EstimatorSettings};
 use crate::plant::{Plant, PlantSettings, SimulatedPlant};
 use crate::scene::Scene;
 
@@ -319,7 +319,7 @@ pub fn run_avoidance(
     };
     let mut known = base_loads.clone();
     known.pressures_pa.clone_from(&p);
-    let mut est: Box<dyn Estimator> = Backend::Newton.build(model.clone(), known, es)?;
+    let mut est: Box<dyn Estimator> = es.build_for(&model, &known)?;
     let search = PointSearchSettings {
         grid_step_m: 1e-3,
         passes: 1,
@@ -362,7 +362,7 @@ pub fn run_avoidance(
             let f = c.force_n[0].hypot(c.force_n[1]);
             chi2_now = chi2;
             if chi2 > settings.detection_chi2 && f > settings.min_force_n {
-                let r = model.position_at(&q_hat, c.s_m)?;
+                let r = model.position_at(q_hat.as_slice(), c.s_m)?;
                 let rho = super::ROD_RADIUS_M;
                 let point = [r[0] - rho * c.force_n[0] / f, r[1] - rho * c.force_n[1] / f];
                 let cand = TouchedPoint {
@@ -389,9 +389,9 @@ pub fn run_avoidance(
         // 4. the field's gradient in the pressures, frozen at the bounds, β (44)
         let mut loads = base_loads.clone();
         loads.pressures_pa.clone_from(&p);
-        loads.distributed_f = f_hat;
-        let (_, g_q) = field_gradient(&model, &q_hat, &settings.field, goal_m, &points)?;
-        let jac = dq_dp(&model, &loads, &q_hat)?;
+        loads.distributed_f = f_hat.as_slice().to_vec();
+        let (_, g_q) = field_gradient(&model, q_hat.as_slice(), &settings.field, goal_m, &points)?;
+        let jac = dq_dp(&model, &loads, q_hat.as_slice())?;
         let np = p.len();
         let mut g_p: Vec<f64> = (0..np)
             .map(|j| (0..nq).map(|i| g_q[i] * jac[(i, j)]).sum())
@@ -414,7 +414,7 @@ pub fn run_avoidance(
             }
         }
         let tip = plant.true_tip_m()?;
-        let tip_hat = model.position_at(&q_hat, tip_s)?;
+        let tip_hat = model.position_at(q_hat.as_slice(), tip_s)?;
         run.samples.push(AvoidSample {
             time_s: t,
             tip_true_m: [tip[0], tip[1]],

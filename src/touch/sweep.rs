@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::contact::{Obstacle, Obstacles};
 use crate::error::{Error, Result};
-use crate::estimate::{AlphaRule, Backend, Estimator, EstimatorSettings};
+use crate::estimate::{AlphaRule, Estimator, EstimatorSettings};
 use crate::plant::{MarkerFrame, Plant, PlantSettings, SimulatedPlant};
 
 use super::{
@@ -219,19 +219,19 @@ pub fn run_localization(
     let nominal = scene.robot()?;
     let mut known = scene.loads()?;
     known.pressures_pa.clone_from(&case.pressures_pa);
-    let mut est: Box<dyn Estimator> = Backend::Newton.build(nominal.clone(), known, es.clone())?;
+    let mut est: Box<dyn Estimator> = es.build_for(&nominal, &known)?;
     let vp = est.step(&frame_free.observation(&arcs)?)?.converged()?;
     let e = est.step(&frame.observation(&arcs)?)?.converged()?;
-    let peak = peak_contact(&nominal, &e.f, &vp.f)?;
+    let peak = peak_contact(&nominal, e.f.as_slice(), vp.f.as_slice())?;
     // the point search on the calibrated model, with its own virtual payload
     let model_scene = calib.apply(&scene);
     let model = model_scene.robot()?;
     let mut known = model_scene.loads()?;
     known.pressures_pa.clone_from(&case.pressures_pa);
-    let mut est: Box<dyn Estimator> = Backend::Newton.build(model.clone(), known.clone(), es)?;
+    let mut est: Box<dyn Estimator> = es.build_for(&model, &known)?;
     let vp = est.step(&frame_free.observation(&arcs)?)?.converged()?;
     let mut with_vp = known;
-    with_vp.distributed_f.clone_from(&vp.f);
+    with_vp.distributed_f = vp.f.as_slice().to_vec();
     let offset = marker_offset(&model, &with_vp, &arcs, &frame_free.positions_m)?;
     let point = locate_point_force(
         &model,

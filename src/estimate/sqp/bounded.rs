@@ -496,7 +496,9 @@ mod tests {
             width_m: 0.01,
         });
         let eq = StaticSolver::default().solve(&robot, &truth, None).unwrap();
-        let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]).with_noise(1e-5, 3);
+        let obs = Observation::of_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20])
+            .unwrap()
+            .with_noise(1e-5, 3);
         let bounds = (0..=24)
             .map(|i| LoadBound {
                 s_m: 0.01 * f64::from(i),
@@ -508,11 +510,12 @@ mod tests {
             .collect();
         let alpha = 10.0;
         let settings = EstimatorSettings {
+            backend: crate::estimate::Backend::Sqp,
             alpha: Some(alpha),
             bounds,
             ..EstimatorSettings::default()
         };
-        let mut est = SqpEstimator::new(robot, known, settings).unwrap();
+        let mut est = SqpEstimator::new(&robot, &known, &settings).unwrap();
         let (f, q) = est.stream.start().unwrap();
         let t = est.stream.problem.factor_tangent(&q).unwrap();
         let (k, lu) = (&t.matrix, &t.factors);
@@ -526,7 +529,9 @@ mod tests {
         let mut w0 = r.clone();
         lu.solve_in_place(&mut w0).unwrap();
         let dq0 = problem.robot().expand_step(&w0).unwrap();
-        let e1: Vec<f64> = (0..op.len()).map(|i| e[i] + op.value(i, &dq0)).collect();
+        let e1: Vec<f64> = (0..op.len())
+            .map(|i| e[i] + op.rows()[i].apply(&dq0))
+            .collect();
         let reduced_objective = |df: &[f64]| {
             let wr: f64 = (0..op.len())
                 .map(|i| op.weights()[i] * (e1[i] + dot(un.dv.jt.column(i).as_slice(), df)).powi(2))

@@ -126,14 +126,14 @@ impl QpError {
 ///
 /// # Example
 /// ```
-/// use softrod::estimate::{Estimator, EstimatorSettings, SqpEstimator, Observation};
+/// use softrod::estimate::{Backend, Estimator, EstimatorSettings, SqpEstimator, Observation};
 /// use softrod::{scene::Scene, statics::StaticSolver};
 /// let scene = Scene::two_section();
 /// let (robot, loads) = (scene.robot()?, scene.loads()?);
 /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
-/// let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]);
-/// let settings = EstimatorSettings { alpha: Some(1.0), ..EstimatorSettings::default() };
-/// let mut est = SqpEstimator::new(robot, loads, settings)?;
+/// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20])?;
+/// let settings = EstimatorSettings { backend: Backend::Sqp, alpha: Some(1.0), ..Default::default() };
+/// let mut est = SqpEstimator::new(&robot, &loads, &settings)?;
 /// let e = est.step(&obs)?;
 /// assert!(e.report.status.is_converged());
 /// # Ok::<(), softrod::Error>(())
@@ -168,13 +168,27 @@ struct WarmQp {
 }
 
 impl<E: Element> SqpEstimator<E> {
-    /// An estimator for `robot` under the known loads `known`.
+    /// An estimator for `robot` under the known loads `known` (both
+    /// borrowed; the estimator keeps copies). `settings.backend` must be
+    /// [`super::Backend::Sqp`]: the backend is chosen once, by the settings
+    /// ([`EstimatorSettings::build_for`] builds the one they name).
     ///
     /// # Errors
-    /// [`crate::Error::InvalidParameter`] for invalid settings or bounds; the
-    /// errors of [`Robot::validate_loads`].
-    pub fn new(robot: Robot<E>, known: Loads, settings: EstimatorSettings) -> Result<Self> {
-        let problem = Problem::new(robot, known, settings)?;
+    /// [`crate::Error::InvalidParameter`] for invalid settings or bounds, or
+    /// another backend (`estimator.backend`); the errors of
+    /// [`Robot::validate_loads`].
+    ///
+    /// # Example
+    /// See [`SqpEstimator`].
+    pub fn new(robot: &Robot<E>, known: &Loads, settings: &EstimatorSettings) -> Result<Self> {
+        if settings.backend != super::Backend::Sqp {
+            return Err(crate::Error::invalid(
+                "estimator.backend",
+                settings.backend.name(),
+                "SqpEstimator runs the sqp backend (build the one the settings name with EstimatorSettings::build_for)",
+            ));
+        }
+        let problem = Problem::new(robot.clone(), known.clone(), settings.clone())?;
         let nf = problem.n_f();
         let mut g_free = Vec::new();
         let mut h_upper = Vec::new();

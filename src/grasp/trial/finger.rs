@@ -43,7 +43,7 @@ impl FingerController {
             pressures_pa: vec![0.0; FINGER_PRESSURES],
             ..Loads::default()
         };
-        let estimator = Backend::Newton.build(model.clone(), known, settings)?;
+        let estimator = settings.build_for(&model, &known)?;
         Ok(FingerController {
             side,
             model,
@@ -107,7 +107,7 @@ impl FingerController {
         let r: Vec<f64> = if self.vp.is_empty() {
             vec![0.0; est.f.len()]
         } else {
-            self.vp.subtract(&self.pressures, &est.f)?
+            self.vp.subtract(&self.pressures, est.f.as_slice())?
         };
         self.recent.push(r);
         if self.recent.len() > AVERAGED_ESTIMATES {
@@ -122,7 +122,7 @@ impl FingerController {
         let (res, peak) = self.resultant_and_peak(&r)?;
         let s_c = match self.phase {
             Phase::Approach if self.calibrating => {
-                self.vp.record(&self.pressures, &est.f)?;
+                self.vp.record(&self.pressures, est.f.as_slice())?;
                 self.length
             }
             Phase::Approach if res > s.contact_threshold_n => {
@@ -134,10 +134,10 @@ impl FingerController {
         };
         let loads = Loads {
             pressures_pa: self.pressures.clone(),
-            distributed_f: est.f.clone(),
+            distributed_f: est.f.as_slice().to_vec(),
             ..Loads::default()
         };
-        let pose = contact_pose(&self.model, &est.q, s_c)?;
+        let pose = contact_pose(&self.model, est.q.as_slice(), s_c)?;
         self.pose = Some(pose);
         let inward = self.side.inward();
         let near_bound = self
@@ -167,7 +167,7 @@ impl FingerController {
         } else {
             [inward * s.u1_m_per_s, 0.0, turn]
         };
-        let j = contact_jacobian(&self.model, &est.q, &loads, s_c)?;
+        let j = contact_jacobian(&self.model, est.q.as_slice(), &loads, s_c)?;
         let dp = bounded_step(
             &j,
             &xdot,
