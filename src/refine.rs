@@ -93,6 +93,7 @@
 
 use std::time::Instant;
 
+use nalgebra::SVector;
 use serde::Serialize;
 
 use crate::element::{NodeKinematics, PlanarCable};
@@ -161,6 +162,47 @@ pub struct Refinement {
     /// dropped): build the robot, solve or estimate with it.
     #[serde(skip)]
     pub scene: Scene,
+}
+
+impl Refinement {
+    /// [`Refinement::value`] as a `D`-vector (m or N).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `value` if it does not have `D`
+    /// components.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{refine::auto_elements, scene::Scene};
+    /// let scene = Scene::from_json(r#"{
+    ///     "robot": {"sections": [{"length_m": 0.24, "ea_n": 300, "ei_nm2": 0.025, "elements": "auto"}]},
+    ///     "gravity_m_per_s2": [0, 0],
+    ///     "loads": [{"type": "tip_moment", "moment_nm": 0.1636}],
+    ///     "refinement": {"quantity": "tip_position", "tolerance_m": 1e-4}}"#)?;
+    /// let r = auto_elements(&scene, None)?;
+    /// let tip: nalgebra::Vector2<f64> = r.value_vector::<2>()?;
+    /// assert!((tip - r.extrapolated_vector::<2>()?).norm() <= r.estimated_error + r.error_margin);
+    /// assert_eq!(r.history.last().map(|t| t.value_vector::<2>().is_ok()), Some(true));
+    /// assert!(r.value_vector::<3>().is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn value_vector<const D: usize>(&self) -> Result<SVector<f64, D>> {
+        crate::error::check_len("value", D, self.value.len())?;
+        Ok(SVector::from_column_slice(&self.value))
+    }
+
+    /// [`Refinement::extrapolated`] as a `D`-vector (m or N).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `extrapolated` if it does not
+    /// have `D` components.
+    ///
+    /// # Example
+    /// See [`Refinement::value_vector`].
+    pub fn extrapolated_vector<const D: usize>(&self) -> Result<SVector<f64, D>> {
+        crate::error::check_len("extrapolated", D, self.extrapolated.len())?;
+        Ok(SVector::from_column_slice(&self.extrapolated))
+    }
 }
 
 /// Chooses the element counts of a scene's `"elements": "auto"` sections:

@@ -69,7 +69,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 use crate::assembly::Robot;
 use crate::element::Element;
@@ -128,10 +128,28 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] if `g` is not `n_q` long.
-    pub fn response(&self, g: &[f64]) -> Result<Vec<f64>> {
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{estimate::LoadModel, scene::Scene, sensitivity::Sensitivity, statics::EquilibriumTracker};
+    /// let scene = Scene::two_section();
+    /// let robot = scene.robot()?;
+    /// let n = robot.n_q();
+    /// let mut tracker = EquilibriumTracker::new(robot, scene.loads()?, Default::default())?;
+    /// let load = LoadModel::Concentrated { node: 20 };
+    /// let q0 = tracker.robot().arc_configuration(&scene.pressures_pa);
+    /// let eq = tracker.solve(&load, &[0.0, 0.0], &q0)?;
+    /// let mut g = nalgebra::DVector::zeros(n);
+    /// g[n - 3] = -1e-3; // 1 mN down at the tip
+    /// let dq: nalgebra::DVector<f64> =
+    ///     Sensitivity::new(tracker.robot(), &eq.factors)?.response(g.as_slice())?;
+    /// assert!(dq[n - 3] < 0.0); // the tip moves down
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn response(&self, g: &[f64]) -> Result<DVector<f64>> {
         let mut du = self.robot.restrict(g)?;
         self.factors.solve_in_place(&mut du)?;
-        self.robot.expand_step(&du)
+        Ok(DVector::from_vec(self.robot.expand_step(&du)?))
     }
 
     /// (28) `∂q/∂F = M K⁻¹ Mᵀ G` (`n_q × n_F`) for the load `load`: one

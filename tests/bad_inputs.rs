@@ -23,9 +23,10 @@ use softrod::linsolve::{
     AutoSolver, BandedMatrix, FactorOptions, Factorization, SymmetricMatrix, SymmetricPattern,
     TangentSolver,
 };
+use softrod::loads::Load;
 use softrod::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use softrod::quadrature::GaussRule;
-use softrod::scene::{Marker, RefinementTarget, Scene, SceneLoad};
+use softrod::scene::{Marker, RefinementTarget, Scene};
 use softrod::statics::{StaticSettings, StaticSolver, StaticStatus};
 use softrod::structure::{
     BodyLoad, EndSupport, JointSpec, RigidBodySpec, RodEnd, StructureLoads, StructureSpec,
@@ -92,7 +93,7 @@ fn scene(f: impl FnOnce(&mut Scene)) -> Result<(), Error> {
 }
 
 /// Validates the two-section scene with one load.
-fn scene_load(load: SceneLoad) -> Result<(), Error> {
+fn scene_load(load: Load) -> Result<(), Error> {
     scene(|s| s.loads = vec![load])
 }
 
@@ -288,7 +289,7 @@ fn cases() -> Vec<Case> {
         case(
             "NaN tip force",
             move || {
-                scene_load(SceneLoad::TipForce {
+                scene_load(Load::TipForce {
                     force_n: vec![nan, 0.0],
                 })
             },
@@ -298,7 +299,7 @@ fn cases() -> Vec<Case> {
         case(
             "NaN point-force position",
             move || {
-                scene_load(SceneLoad::PointForce {
+                scene_load(Load::PointForce {
                     s_m: nan,
                     force_n: vec![0.0, 1.0],
                 })
@@ -308,14 +309,14 @@ fn cases() -> Vec<Case> {
         ),
         case(
             "infinite tip moment",
-            move || scene_load(SceneLoad::TipMoment { moment_nm: inf.into() }),
+            move || scene_load(Load::TipMoment { moment_nm: inf.into() }),
             Invalid,
             "loads[0].moment_nm",
         ),
         case(
             "infinite node moment",
             move || {
-                scene_load(SceneLoad::NodeMoment {
+                scene_load(Load::NodeMoment {
                     node: 3,
                     moment_nm: (-inf).into(),
                 })
@@ -326,7 +327,7 @@ fn cases() -> Vec<Case> {
         case(
             "NaN Gaussian centre",
             move || {
-                scene_load(SceneLoad::Distributed(LineLoad::Gaussian {
+                scene_load(Load::Distributed(LineLoad::Gaussian {
                     amplitude_n_per_m: vec![0.0, 1.0],
                     center_m: nan,
                     width_m: 0.01,
@@ -338,7 +339,7 @@ fn cases() -> Vec<Case> {
         case(
             "infinite uniform load",
             move || {
-                scene_load(SceneLoad::Distributed(LineLoad::Uniform {
+                scene_load(Load::Distributed(LineLoad::Uniform {
                     w_n_per_m: vec![0.0, inf],
                 }))
             },
@@ -348,7 +349,7 @@ fn cases() -> Vec<Case> {
         case(
             "NaN linear load",
             move || {
-                scene_load(SceneLoad::Distributed(LineLoad::Linear {
+                scene_load(Load::Distributed(LineLoad::Linear {
                     w_start_n_per_m: vec![nan, 0.0],
                     w_end_n_per_m: vec![0.0, 0.0],
                 }))
@@ -359,7 +360,7 @@ fn cases() -> Vec<Case> {
         case(
             "infinite moment at an arc position",
             move || {
-                scene_load(SceneLoad::Moment {
+                scene_load(Load::Moment {
                     s_m: 0.1,
                     moment_nm: inf.into(),
                 })
@@ -370,7 +371,7 @@ fn cases() -> Vec<Case> {
         case(
             "moment at the clamped base",
             move || {
-                scene_load(SceneLoad::Moment {
+                scene_load(Load::Moment {
                     s_m: 0.0,
                     moment_nm: 0.01.into(),
                 })
@@ -381,7 +382,7 @@ fn cases() -> Vec<Case> {
         case(
             "moment off the robot",
             move || {
-                scene_load(SceneLoad::Moment {
+                scene_load(Load::Moment {
                     s_m: 0.25,
                     moment_nm: 0.01.into(),
                 })
@@ -392,7 +393,7 @@ fn cases() -> Vec<Case> {
         case(
             "table with arc positions out of order",
             move || {
-                scene_load(SceneLoad::Distributed(LineLoad::Tabulated {
+                scene_load(Load::Distributed(LineLoad::Tabulated {
                     s_m: vec![0.0, 0.2, 0.1],
                     w_n_per_m: vec![vec![0.0, 1.0]; 3],
                 }))
@@ -403,7 +404,7 @@ fn cases() -> Vec<Case> {
         case(
             "table reaching beyond the tip",
             move || {
-                scene_load(SceneLoad::Distributed(LineLoad::Tabulated {
+                scene_load(Load::Distributed(LineLoad::Tabulated {
                     s_m: vec![0.0, 0.1, 0.3],
                     w_n_per_m: vec![vec![0.0, 1.0]; 3],
                 }))
@@ -414,7 +415,7 @@ fn cases() -> Vec<Case> {
         case(
             "NaN table value",
             move || {
-                scene_load(SceneLoad::Distributed(LineLoad::Tabulated {
+                scene_load(Load::Distributed(LineLoad::Tabulated {
                     s_m: vec![0.0, 0.1],
                     w_n_per_m: vec![vec![0.0, 1.0], vec![nan, 0.0]],
                 }))
@@ -425,7 +426,7 @@ fn cases() -> Vec<Case> {
         case(
             "table of one entry",
             move || {
-                scene_load(SceneLoad::Distributed(LineLoad::Tabulated {
+                scene_load(Load::Distributed(LineLoad::Tabulated {
                     s_m: vec![0.1],
                     w_n_per_m: vec![vec![0.0, 1.0]],
                 }))
@@ -436,7 +437,7 @@ fn cases() -> Vec<Case> {
         case(
             "table value of the wrong size",
             move || {
-                scene_load(SceneLoad::Distributed(LineLoad::Tabulated {
+                scene_load(Load::Distributed(LineLoad::Tabulated {
                     s_m: vec![0.0, 0.1],
                     w_n_per_m: vec![vec![0.0, 1.0], vec![0.0, 1.0, 2.0]],
                 }))
@@ -447,7 +448,7 @@ fn cases() -> Vec<Case> {
         case(
             "NaN extra-weight gravity",
             move || {
-                scene_load(SceneLoad::SelfWeight {
+                scene_load(Load::SelfWeight {
                     mass_per_length_kg_per_m: 0.1,
                     gravity_m_per_s2: vec![0.0, nan],
                 })
@@ -458,7 +459,7 @@ fn cases() -> Vec<Case> {
         case(
             "NaN extra weight",
             move || {
-                scene_load(SceneLoad::SelfWeight {
+                scene_load(Load::SelfWeight {
                     mass_per_length_kg_per_m: nan,
                     gravity_m_per_s2: vec![0.0, -9.81],
                 })
@@ -468,7 +469,7 @@ fn cases() -> Vec<Case> {
         ),
         case(
             "NaN tip mass",
-            move || scene_load(SceneLoad::TipMass { mass_kg: nan }),
+            move || scene_load(Load::TipMass { mass_kg: nan }),
             Invalid,
             "loads[0].mass_kg",
         ),
@@ -610,7 +611,7 @@ fn cases() -> Vec<Case> {
         case(
             "negative extra weight",
             move || {
-                scene_load(SceneLoad::SelfWeight {
+                scene_load(Load::SelfWeight {
                     mass_per_length_kg_per_m: -1.0,
                     gravity_m_per_s2: vec![0.0, -9.81],
                 })
@@ -620,14 +621,14 @@ fn cases() -> Vec<Case> {
         ),
         case(
             "zero tip mass",
-            move || scene_load(SceneLoad::TipMass { mass_kg: 0.0 }),
+            move || scene_load(Load::TipMass { mass_kg: 0.0 }),
             Invalid,
             "loads[0].mass_kg",
         ),
         case(
             "zero Gaussian width",
             move || {
-                scene_load(SceneLoad::Distributed(LineLoad::Gaussian {
+                scene_load(Load::Distributed(LineLoad::Gaussian {
                     amplitude_n_per_m: vec![0.0, 1.0],
                     center_m: 0.1,
                     width_m: 0.0,
@@ -788,7 +789,7 @@ fn cases() -> Vec<Case> {
         case(
             "3-entry tip force",
             move || {
-                scene_load(SceneLoad::TipForce {
+                scene_load(Load::TipForce {
                     force_n: vec![0.0, 1.0, 0.0],
                 })
             },
@@ -798,7 +799,7 @@ fn cases() -> Vec<Case> {
         case(
             "1-entry linear load",
             move || {
-                scene_load(SceneLoad::Distributed(LineLoad::Linear {
+                scene_load(Load::Distributed(LineLoad::Linear {
                     w_start_n_per_m: vec![0.0, 0.0],
                     w_end_n_per_m: vec![1.0],
                 }))
@@ -809,7 +810,7 @@ fn cases() -> Vec<Case> {
         case(
             "3-entry extra-weight gravity",
             move || {
-                scene_load(SceneLoad::SelfWeight {
+                scene_load(Load::SelfWeight {
                     mass_per_length_kg_per_m: 0.1,
                     gravity_m_per_s2: vec![0.0, -9.81, 0.0],
                 })
@@ -863,7 +864,7 @@ fn cases() -> Vec<Case> {
         case(
             "node moment at the clamped base",
             move || {
-                scene_load(SceneLoad::NodeMoment {
+                scene_load(Load::NodeMoment {
                     node: 0,
                     moment_nm: 0.1.into(),
                 })
@@ -874,7 +875,7 @@ fn cases() -> Vec<Case> {
         case(
             "node moment beyond the tip",
             move || {
-                scene_load(SceneLoad::NodeMoment {
+                scene_load(Load::NodeMoment {
                     node: 99,
                     moment_nm: 0.1.into(),
                 })
@@ -902,7 +903,7 @@ fn cases() -> Vec<Case> {
         case(
             "point force beyond the tip",
             move || {
-                scene_load(SceneLoad::PointForce {
+                scene_load(Load::PointForce {
                     s_m: 0.25,
                     force_n: vec![0.0, 1.0],
                 })

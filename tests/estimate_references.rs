@@ -15,8 +15,9 @@ use common::reference;
 
 use softrod::element::hermite;
 use softrod::estimate::{AlphaRule, Backend, EstimatorSettings, MarkerObservation, Observation};
+use softrod::loads::Load;
 use softrod::loads::{LineLoad, Loads};
-use softrod::scene::{Scene, SceneLoad};
+use softrod::scene::Scene;
 
 const L: f64 = 0.24;
 
@@ -98,7 +99,7 @@ fn run(name: &str, markers: usize, backend: Backend, seed: u64, sigma_model_m: f
         .unwrap()
         .iter()
         .map(|l| match serde_json::from_value(l.clone()).unwrap() {
-            SceneLoad::Distributed(d) => d,
+            Load::Distributed(d) => d,
             other => panic!("{name}: not a distributed load: {other:?}"),
         })
         .collect();

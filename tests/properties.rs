@@ -10,8 +10,9 @@ use proptest::prelude::*;
 use softrod::assembly::Robot;
 use softrod::element::PlanarCable;
 use softrod::linsolve::BandedMatrix;
+use softrod::loads::Load;
 use softrod::loads::{LineLoad, Loads, NodeMoment, PointForce};
-use softrod::scene::{Marker, Scene, SceneLoad};
+use softrod::scene::{Marker, Scene};
 use softrod::statics::StaticSolver;
 use softrod::Error;
 
@@ -327,34 +328,34 @@ fn scene_strategy() -> impl Strategy<Value = Scene> {
                 let total = l1 + l2;
                 let nodes = n1 + n2;
                 s.loads = vec![
-                    SceneLoad::TipForce {
+                    Load::TipForce {
                         force_n: vec![a, b],
                     },
-                    SceneLoad::PointForce {
+                    Load::PointForce {
                         s_m: s_frac / 0.24 * total,
                         force_n: vec![c, m],
                     },
-                    SceneLoad::TipMoment {
+                    Load::TipMoment {
                         moment_nm: m.into(),
                     },
-                    SceneLoad::NodeMoment {
+                    Load::NodeMoment {
                         node: 1 + node % nodes,
                         moment_nm: (-m).into(),
                     },
-                    SceneLoad::SelfWeight {
+                    Load::SelfWeight {
                         mass_per_length_kg_per_m: mass,
                         gravity_m_per_s2: vec![a, c],
                     },
-                    SceneLoad::TipMass {
+                    Load::TipMass {
                         mass_kg: mass_kg as f64 * 0.01,
                     },
-                    SceneLoad::Distributed(LineLoad::Gaussian {
+                    Load::Distributed(LineLoad::Gaussian {
                         amplitude_n_per_m: vec![a, b],
                         // on the robot (a bump centred off it is refused)
                         center_m: s_frac / 0.24 * total,
                         width_m: tol,
                     }),
-                    SceneLoad::Distributed(LineLoad::Linear {
+                    Load::Distributed(LineLoad::Linear {
                         w_start_n_per_m: vec![m, a],
                         w_end_n_per_m: vec![b, c],
                     }),

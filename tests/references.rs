@@ -13,7 +13,8 @@ use statics_cases::EXUDYN as CASES;
 
 use serde_json::Value;
 use softrod::assembly::Clamp;
-use softrod::scene::{Scene, SceneLoad};
+use softrod::loads::Load;
+use softrod::scene::Scene;
 use softrod::statics::StaticSolver;
 
 const L: f64 = 0.24;
@@ -36,7 +37,7 @@ fn scene(r: &Value, elements: usize, bending_gauss: usize, clamp: Clamp) -> Scen
     text["loads"] = p["loads"].clone();
     let mut s: Scene = serde_json::from_value(text).unwrap();
     s.base.clamp = clamp;
-    let _: Vec<SceneLoad> = serde_json::from_value(p["loads"].clone()).unwrap();
+    let _: Vec<Load> = serde_json::from_value(p["loads"].clone()).unwrap();
     s.validate().unwrap();
     s
 }

@@ -289,7 +289,10 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
             // trust region (after the convergence tests: a converged
             // iterate takes no step): the predicted motion of every node,
             // M K⁻¹ Mᵀ G dF (one more solve), within max_observation_jump_m
-            let mut dq = Sensitivity::new(core.robot(), &lu)?.response(&core.gen_force(&step)?)?;
+            let mut dq: Vec<f64> = Sensitivity::new(core.robot(), &lu)?
+                .response(&core.gen_force(&step)?)?
+                .data
+                .into();
             let nd = E::NODE_DOFS;
             let moved = dq
                 .iter()

@@ -2,6 +2,15 @@
 //! moments, the pressures of the actuation, and the unknown distributed load
 //! field `w(X) = S(X) F` (8), (16).
 //!
+//! [`Load`] is one known load as a scene file states it (`tip_force`,
+//! `tip_mass`, `self_weight`, `tip_moment`, `moment` at an arc position, a
+//! `distributed` profile including a table, a `follower` pressure, …): a
+//! scene's `loads` deserialize into it, and code adds the same values to
+//! the [`Loads`] of a solve with [`Loads::add`]. [`Loads`] holds them as
+//! the solver uses them (a tip load at the tip's arc position, a mass as its
+//! weight). Rest curvature is a property of a section, not a load
+//! ([`crate::assembly::Section`]).
+//!
 //! Every load here is dead (fixed in world axes) except the
 //! [`FollowerLoad`], a pressure normal to the deformed backbone. Self-weight comes from
 //! the sections' mass per length and the scene's gravity, not from here.
@@ -11,11 +20,13 @@
 
 pub mod follower;
 pub mod force_field;
+mod load;
 pub(crate) mod point_moment;
 
 use serde::{Deserialize, Serialize};
 
 pub use follower::FollowerLoad;
+pub use load::{Load, MomentNm};
 
 use crate::error::{check_all_finite, check_finite, check_positive, Error, Result};
 

@@ -28,7 +28,7 @@ use crate::scene::Scene;
 pub const AUTO_FORCE_FRACTION: f64 = 0.01;
 
 /// The largest model the auto refinement may choose (elements).
-pub const AUTO_MAX_ELEMENTS: usize = 256;
+pub(crate) const AUTO_MAX_ELEMENTS: usize = 256;
 
 /// The scene of `reference`'s estimator model with `"elements": "auto"`,
 /// the unknown load distributed, and a `load_resultant` refinement of

@@ -42,7 +42,7 @@ use crate::statics::StaticSolver;
 use super::{plot, progress, write_json, Machine, ReportOptions};
 
 /// `χ²` with two degrees of freedom at 0.95: `−2 ln 0.05`.
-pub const CHI2_2_95: f64 = 5.991_464_547_107_979;
+pub(crate) const CHI2_2_95: f64 = 5.991_464_547_107_979;
 
 /// A family of true loads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -190,7 +190,7 @@ fn robot(scene: &Scene, elements: usize) -> Result<Robot<PlanarCable>> {
 }
 
 /// What trial `seed` of `family` draws, on a robot of length `length_m`.
-pub fn trial_spec(family: Family, seed: u64, length_m: f64) -> TrialSpec {
+pub(crate) fn trial_spec(family: Family, seed: u64, length_m: f64) -> TrialSpec {
     let mut rng = Rng(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ family as u64);
     let l = length_m;
     let n = 3 + (rng.next() * 9.0) as usize; // 3..=11
@@ -346,7 +346,7 @@ pub fn run_trial(
 }
 
 /// The rows of `outcomes`, one per family and backend present.
-pub fn summarize(outcomes: &[TrialOutcome]) -> Vec<CoverageRow> {
+pub(crate) fn summarize(outcomes: &[TrialOutcome]) -> Vec<CoverageRow> {
     let mut keys: Vec<(Family, Backend)> = outcomes.iter().map(|o| (o.family, o.backend)).collect();
     keys.sort_by_key(|(f, b)| (*f, b.name()));
     keys.dedup();

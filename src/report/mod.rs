@@ -155,7 +155,7 @@ pub struct Machine {
 
 impl Machine {
     /// Reads what it can about this machine.
-    pub fn detect() -> Machine {
+    pub(crate) fn detect() -> Machine {
         let cpu = std::fs::read_to_string("/proc/cpuinfo")
             .ok()
             .and_then(|t| {

@@ -202,7 +202,7 @@ pub fn pareto_front_tol(points: &[(f64, f64)], rel_tol: f64) -> Vec<bool> {
 /// Errors within this relative tolerance count as equal on the fronts of
 /// the chart (the two backends solve the same problem and agree at
 /// convergence to about 1e-9).
-pub const FRONT_TOLERANCE: f64 = 1e-3;
+pub(crate) const FRONT_TOLERANCE: f64 = 1e-3;
 
 /// Runs the sweep.
 ///
@@ -310,7 +310,7 @@ pub fn run(opts: &ReportOptions) -> Result<ParetoReport> {
 }
 
 /// Sets the `front_*` flags of the converged points.
-pub fn mark_fronts(points: &mut [ParetoPoint]) {
+pub(crate) fn mark_fronts(points: &mut [ParetoPoint]) {
     let pick = |f: fn(&ParetoPoint) -> f64, points: &[ParetoPoint]| -> Vec<bool> {
         let xy: Vec<(f64, f64)> = points
             .iter()

@@ -24,7 +24,7 @@ const FONT: &str = "sans-serif";
 ///
 /// # Errors
 /// [`Error::Io`] if the bundled font cannot be parsed (it can).
-pub fn register_font() -> Result<()> {
+pub(crate) fn register_font() -> Result<()> {
     static DONE: OnceLock<bool> = OnceLock::new();
     let ok = *DONE.get_or_init(|| {
         plotters::style::register_font(FONT, FontStyle::Normal, include_bytes!("DejaVuSans.ttf"))
@@ -360,7 +360,7 @@ fn fmt_tick(v: f64) -> String {
 ///
 /// # Errors
 /// [`Error::Io`] when a file cannot be written.
-pub fn pareto_chart(
+pub(crate) fn pareto_chart(
     report: &ParetoReport,
     extra: &[LabelledPoint],
     dir: &Path,
@@ -375,7 +375,7 @@ pub fn pareto_chart(
 }
 
 /// A perceptually ordered colour map (viridis anchors, linear between), `t` in [0, 1].
-pub fn viridis(t: f64) -> RGBColor {
+pub(crate) fn viridis(t: f64) -> RGBColor {
     const A: [(u8, u8, u8); 6] = [
         (68, 1, 84),
         (65, 68, 135),
@@ -579,7 +579,11 @@ fn fmt_mm(v: f64) -> String {
 ///
 /// # Errors
 /// [`Error::Io`] when a file cannot be written.
-pub fn stability_map(report: &StabilityReport, map: &MapSpec, dir: &Path) -> Result<Vec<PathBuf>> {
+pub(crate) fn stability_map(
+    report: &StabilityReport,
+    map: &MapSpec,
+    dir: &Path,
+) -> Result<Vec<PathBuf>> {
     let nx = map.x_values.len() as u32;
     let width = (2 * (70 + 95 * nx.max(2)) + 200).max(1100);
     both(

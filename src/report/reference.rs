@@ -14,7 +14,7 @@ use serde_json::Value;
 use crate::element::ArcPoint;
 use crate::error::{Error, Result};
 use crate::loads::LineLoad;
-use crate::scene::SceneLoad;
+use crate::loads::Load;
 
 /// The references compiled into the binary: `(name, JSON text)`.
 const EMBEDDED: [(&str, &str); 8] = [
@@ -149,8 +149,8 @@ impl Reference {
             .as_array()
             .ok_or_else(|| bad(name, "params.loads missing"))?
             .iter()
-            .map(|l| match serde_json::from_value::<SceneLoad>(l.clone()) {
-                Ok(SceneLoad::Distributed(d)) => Ok(d),
+            .map(|l| match serde_json::from_value::<Load>(l.clone()) {
+                Ok(Load::Distributed(d)) => Ok(d),
                 Ok(other) => Err(bad(name, &format!("not a distributed load: {other:?}"))),
                 Err(e) => Err(bad(name, &format!("params.loads: {e}"))),
             })

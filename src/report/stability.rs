@@ -40,7 +40,7 @@ pub enum Param {
 
 impl Param {
     /// Axis title with units.
-    pub fn title(self) -> &'static str {
+    pub(crate) fn title(self) -> &'static str {
         match self {
             Param::Noise => "marker noise σ (mm)",
             Param::Load => "load (× self-weight)",
@@ -85,7 +85,7 @@ impl Params {
     /// The defaults of the parameters not swept by a map: 0.1 mm noise, 3×
     /// self-weight (tip deflection 68 mm), 5 markers, no jump, α by the
     /// discrepancy principle.
-    pub const DEFAULT: Params = Params {
+    pub(crate) const DEFAULT: Params = Params {
         noise_m: 1e-4,
         load_factor: 3.0,
         markers: 5,
@@ -322,7 +322,7 @@ pub fn run(opts: &ReportOptions) -> Result<StabilityReport> {
 
 impl StabilityReport {
     /// The cells of one map for one backend.
-    pub fn cells_of(&self, map: &str, backend: Backend) -> Vec<&Cell> {
+    pub(crate) fn cells_of(&self, map: &str, backend: Backend) -> Vec<&Cell> {
         self.cells
             .iter()
             .filter(|c| c.map == map && c.outcome.spec.backend == backend)

@@ -63,7 +63,7 @@ pub enum FailureCause {
 
 impl FailureCause {
     /// All categories, in table order.
-    pub const ALL: [FailureCause; 10] = [
+    pub(crate) const ALL: [FailureCause; 10] = [
         FailureCause::Divergence,
         FailureCause::SingularTangent,
         FailureCause::IllConditioning,
@@ -230,9 +230,9 @@ pub struct CaseErrors {
 }
 
 /// Arc points of the backbone RMS.
-pub const BACKBONE_POINTS: usize = 241;
+pub(crate) const BACKBONE_POINTS: usize = 241;
 /// Arc points of the load error.
-pub const LOAD_POINTS: usize = 481;
+pub(crate) const LOAD_POINTS: usize = 481;
 
 /// The step of a case at which it failed.
 ///
@@ -461,7 +461,7 @@ pub fn observe(reference: &Reference, arcs: &[f64], sigma: f64, seed: u64) -> Ob
 /// `(s, 0)` on the straight robot (or beyond it), so that the largest marker
 /// displacement from `current` is `jump_m`. Blends the measured markers with
 /// the unloaded robot's, `y_prev = y + λ (y_rest − y)`.
-pub fn previous_frame(current: &Observation, jump_m: f64) -> Observation {
+pub(crate) fn previous_frame(current: &Observation, jump_m: f64) -> Observation {
     let rest = |m: &MarkerObservation| [m.s_m.unwrap_or(0.0), 0.0];
     let dmax = current
         .markers
@@ -492,7 +492,7 @@ pub fn previous_frame(current: &Observation, jump_m: f64) -> Observation {
 ///
 /// # Errors
 /// [`Error::NonFinite`] when the estimate is not finite.
-pub fn case_errors(
+pub(crate) fn case_errors(
     robot: &Robot<PlanarCable>,
     e: &Estimate,
     reference: &Reference,

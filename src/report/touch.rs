@@ -26,9 +26,9 @@ use crate::touch::{
 };
 
 /// The avoidance run's disk (centre, radius; m) and goal (m).
-pub const AVOID_DISK: ([f64; 2], f64) = ([0.08, -0.465], 0.01);
+pub(crate) const AVOID_DISK: ([f64; 2], f64) = ([0.08, -0.465], 0.01);
 /// The avoidance run's goal (m).
-pub const AVOID_GOAL: [f64; 2] = [0.15, -0.40];
+pub(crate) const AVOID_GOAL: [f64; 2] = [0.15, -0.40];
 
 /// What the part measured.
 #[derive(Debug, Clone, Serialize)]

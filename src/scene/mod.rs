@@ -17,11 +17,10 @@ use crate::assembly::{Base, Chamber, Robot, RobotSpec, Section};
 use crate::element::{Element, NodeKinematics, PlanarCable, SpatialCable, DEFAULT_GAUSS_POINTS};
 use crate::error::{check_at_most, check_index, check_len, check_positive, Error, Result};
 use crate::estimate::{EstimatorSettings, LoadModel};
-use crate::loads::Loads;
+use crate::loads::{Load, Loads};
 use crate::params;
 
 pub use ladder::Ladder;
-pub use load::{MomentNm, SceneLoad};
 pub use robot::{SceneElement, SceneRobot};
 pub use settings::{RefinementTarget, SolverSettings, UnknownLoad, DEFAULT_MAX_REFINED_ELEMENTS};
 
@@ -162,7 +161,7 @@ pub struct Scene {
     /// Gravity (m/s², default `[0, -9.81]` in 2-D, `[0, 0, -9.81]` in 3-D).
     pub gravity_m_per_s2: Vec<f64>,
     /// Known loads.
-    pub loads: Vec<SceneLoad>,
+    pub loads: Vec<Load>,
     /// Chamber pressures (Pa), one per chamber in section order; default all zero.
     pub pressures_pa: Vec<f64>,
     /// Markers.
@@ -194,7 +193,7 @@ struct SceneFile {
     #[serde(default, deserialize_with = "present")]
     gravity_m_per_s2: Option<Vec<f64>>,
     #[serde(default)]
-    loads: Vec<SceneLoad>,
+    loads: Vec<Load>,
     #[serde(default)]
     pressures_pa: Vec<f64>,
     #[serde(default)]
@@ -345,7 +344,7 @@ impl Scene {
         };
         let robot = mesh.robot_as::<E>()?;
         for (i, load) in self.loads.iter().enumerate() {
-            if let (true, SceneLoad::NodeMoment { node, .. }) = (auto, load) {
+            if let (true, Load::NodeMoment { node, .. }) = (auto, load) {
                 return Err(Error::invalid(
                     format!("loads[{i}].node"),
                     node,
@@ -671,7 +670,12 @@ impl Scene {
             .iter()
             .fold(1usize, |a, s| a.saturating_add(s.elements));
         for (i, l) in self.loads.iter().enumerate() {
-            l.resolve_into(i, d, total, n_nodes, &self.gravity_m_per_s2, &mut loads)?;
+            l.resolve_into(d, total, n_nodes, &self.gravity_m_per_s2, &mut loads)
+                .map_err(|e| match e.field() {
+                    // the scene's own gravity is a top-level field
+                    Some("gravity_m_per_s2") if matches!(l, Load::TipMass { .. }) => e,
+                    _ => e.with_prefix(&format!("loads[{i}].")),
+                })?;
         }
         Ok(loads)
     }
