@@ -625,6 +625,6 @@ pub trait Estimator {
     /// loads, instead of from scratch.
     ///
     /// # Errors
-    /// As [`Robot::validate_loads`]; on an error the estimator is unchanged.
+    /// As [`crate::assembly::Robot::validate_loads`]; on an error the estimator is unchanged.
     fn set_known_loads(&mut self, known: Loads) -> Result<()>;
 }

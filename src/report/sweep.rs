@@ -220,10 +220,10 @@ fn ser_reference_name<S: serde::Serializer>(
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CaseErrors {
     /// RMS distance between the estimated and the reference backbone over
-    /// [`BACKBONE_POINTS`] evenly spaced arc coordinates (m).
+    /// `BACKBONE_POINTS` evenly spaced arc coordinates (m).
     pub backbone_rms_m: f64,
     /// Relative L2 error of the load field, `‖w − w_ref‖ / ‖w_ref‖` over
-    /// [`LOAD_POINTS`] arc coordinates.
+    /// `LOAD_POINTS` arc coordinates.
     pub load_rel_l2: f64,
     /// Relative error of the resultant force, `|R − R_ref| / |R_ref|`.
     pub force_rel: f64,
@@ -540,7 +540,7 @@ pub(crate) fn case_errors(
 /// The estimator first takes a noisy measurement of the shape (cold start;
 /// `α` is chosen there when not fixed, so that α comes from a physical
 /// frame), then, for a jump, the previous frame: the markers moved back by
-/// `jump_m` ([`previous_frame`]). Then the measured frame (seed `seed`),
+/// `jump_m` (`previous_frame`). Then the measured frame (seed `seed`),
 /// reached from the previous one: its outcome and errors are recorded. Then
 /// `warm_frames` more noisy re-measurements, timed.
 pub fn run_case(spec: &CaseSpec) -> Outcome {
