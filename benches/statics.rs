@@ -51,7 +51,13 @@ fn newton_step(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
             b.iter(|| {
                 robot
-                    .residual_and_tangent_into(black_box(&q), &dead, &loads, &mut r, &mut k)
+                    .residual_and_tangent_into(
+                        black_box(&q),
+                        dead.as_slice(),
+                        &loads,
+                        &mut r,
+                        &mut k,
+                    )
                     .unwrap();
                 let f = solver.factor(&k, FactorOptions::default()).unwrap();
                 f.solve_in_place(&mut r).unwrap();

@@ -26,3 +26,13 @@ mod tests {
         assert_eq!(dot(&v, &[1.0, 1.0, 7.0]), -1.0);
     }
 }
+
+/// A fixed-size vector from a serde field `v` named `name`: its length
+/// must be `D`.
+pub(crate) fn fixed<const D: usize>(
+    name: &str,
+    v: &[f64],
+) -> crate::Result<nalgebra::SVector<f64, D>> {
+    crate::error::check_len(name, D, v.len())?;
+    Ok(nalgebra::SVector::from_column_slice(v))
+}

@@ -116,7 +116,7 @@ impl Observation {
     /// ```
     /// use softrod::{observe::Observation, scene::Scene};
     /// let robot = Scene::two_section().robot()?;
-    /// let q = robot.reference_configuration();
+    /// let q = robot.reference_configuration().as_slice().to_vec();
     /// let o = Observation::at_nodes(&robot, &q, &[10, 20]);
     /// assert_eq!(o.markers[1].position_m, q[80..82].to_vec());
     /// # Ok::<(), softrod::Error>(())
@@ -146,7 +146,7 @@ impl Observation {
     /// ```
     /// use softrod::{observe::Observation, scene::Scene};
     /// let robot = Scene::two_section().robot()?;
-    /// let q = robot.reference_configuration();
+    /// let q = robot.reference_configuration().as_slice().to_vec();
     /// let o = Observation::of_nodes(&robot, &q, &[10, 20])?;
     /// assert_eq!(o.markers[1].position_m, q[80..82].to_vec());
     /// assert!(Observation::of_nodes(&robot, &q, &[10, 21]).is_err());
@@ -239,7 +239,7 @@ impl Gaussian {
 /// ```
 /// use softrod::{observe::{Observation, ObservationOperator}, scene::Scene};
 /// let robot = Scene::two_section().robot()?;
-/// let q = robot.reference_configuration();
+/// let q = robot.reference_configuration().as_slice().to_vec();
 /// let op = ObservationOperator::new(&robot, &Observation::at_nodes(&robot, &q, &[20]), 1e-5, 1e-3)?;
 /// // the tip's y coordinate: one entry of weight 1 at node 20's y
 /// let tip_y = &op.rows()[1];
@@ -277,7 +277,7 @@ impl ObsRow {
 /// ```
 /// use softrod::{observe::{Observation, ObservationOperator}, scene::Scene};
 /// let robot = Scene::two_section().robot()?;
-/// let q = robot.reference_configuration();
+/// let q = robot.reference_configuration().as_slice().to_vec();
 /// let obs = Observation::at_nodes(&robot, &q, &[4, 20]);
 /// let op = ObservationOperator::new(&robot, &obs, 1e-5, 1e-3)?;
 /// assert_eq!(op.len(), 4);

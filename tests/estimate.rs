@@ -97,7 +97,7 @@ fn gradient_matches_finite_differences() {
     let eq = StaticSolver::default()
         .solve(&robot, &known(), None)
         .unwrap();
-    let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]).with_noise(1e-4, 11);
+    let obs = Observation::at_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20]).with_noise(1e-4, 11);
     for model in [LoadModel::Distributed, LoadModel::Concentrated { node: 20 }] {
         let settings = EstimatorSettings {
             load_model: model,
@@ -226,7 +226,7 @@ fn estimate_truth(
             .iter()
             .map(|&n| {
                 let s = coarse.node_arc()[n];
-                MarkerObservation::at_node(n, fine.position_at(&eq.q, s).unwrap())
+                MarkerObservation::at_node(n, fine.position_at(eq.q.as_slice(), s).unwrap().data.into())
             })
             .collect(),
     }
@@ -234,8 +234,8 @@ fn estimate_truth(
     let settings = EstimatorSettings::default();
     let mut est = backend.build(coarse.clone(), known(), settings).unwrap();
     let e = est.step(&obs).unwrap();
-    let rms = backbone_rms(&coarse, &e.q, &fine, &eq.q);
-    let (f_true, m_true) = true_resultant(&fine, &eq.q, &truth.load);
+    let rms = backbone_rms(&coarse, &e.q, &fine, eq.q.as_slice());
+    let (f_true, m_true) = true_resultant(&fine, eq.q.as_slice(), &truth.load);
     let df = ((e.resultant_force_n[0] - f_true[0]).powi(2)
         + (e.resultant_force_n[1] - f_true[1]).powi(2))
     .sqrt();
@@ -262,7 +262,7 @@ fn synthetic_truth_is_recovered() {
             let mut loads = known();
             loads.line_loads.push(truth.load.clone());
             let eq = StaticSolver::default().solve(&fine, &loads, None).unwrap();
-            let (f_true, m_true) = true_resultant(&fine, &eq.q, &truth.load);
+            let (f_true, m_true) = true_resultant(&fine, eq.q.as_slice(), &truth.load);
             let fnorm = (f_true[0].powi(2) + f_true[1].powi(2)).sqrt();
             let peak = e
                 .sample_load(241)
@@ -310,7 +310,7 @@ proptest! {
         truth.point_forces.push(PointForce { s_m: 0.24, force_n: vec![0.05 * u[2], -0.1 - 0.05 * u[3]] });
         truth.line_loads.push(LineLoad::Uniform { w_n_per_m: vec![0.0, -0.5 + 0.3 * u[4]] });
         let eq = StaticSolver::default().solve(&robot, &truth, None).unwrap();
-        let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]).with_noise(1e-5, seed);
+        let obs = Observation::at_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20]).with_noise(1e-5, seed);
         let alpha = 10f64.powf(1.0 + u[5]);
         let model = if concentrated { LoadModel::Concentrated { node: 20 } } else { LoadModel::Distributed };
         // both at the tight tolerance only (the statistical test would stop
@@ -343,8 +343,8 @@ fn warm_steps_and_incremental_observations() {
     let eq1 = StaticSolver::default().solve(&robot, &truth, None).unwrap();
     truth.point_forces[0].force_n = vec![0.0, -1.0];
     let eq2 = StaticSolver::default().solve(&robot, &truth, None).unwrap();
-    let o1 = Observation::at_nodes(&robot, &eq1.q, &[4, 8, 12, 16, 20]);
-    let o2 = Observation::at_nodes(&robot, &eq2.q, &[4, 8, 12, 16, 20]);
+    let o1 = Observation::at_nodes(&robot, eq1.q.as_slice(), &[4, 8, 12, 16, 20]);
+    let o2 = Observation::at_nodes(&robot, eq2.q.as_slice(), &[4, 8, 12, 16, 20]);
     let settings = EstimatorSettings {
         alpha: Some(10.0),
         max_observation_jump_m: 0.01,
@@ -388,7 +388,7 @@ fn bump_observation(robot: &Robot<PlanarCable>, known: &Loads) -> Observation {
         width_m: 0.01,
     });
     let eq = StaticSolver::default().solve(robot, &truth, None).unwrap();
-    Observation::at_nodes(robot, &eq.q, &[4, 8, 12, 16, 20]).with_noise(1e-5, 3)
+    Observation::at_nodes(robot, eq.q.as_slice(), &[4, 8, 12, 16, 20]).with_noise(1e-5, 3)
 }
 
 /// Bounds on the component of `w` along (0, 1) in `frame` at every
@@ -548,7 +548,7 @@ fn both_backends_estimate_on_the_spatial_cable() {
         ..Loads::default()
     };
     let eq = StaticSolver::default().solve(&robot, &truth, None).unwrap();
-    let obs = Observation::at_nodes(&robot, &eq.q, &[3, 6, 9, 12]).with_noise(1e-6, 1);
+    let obs = Observation::at_nodes(&robot, eq.q.as_slice(), &[3, 6, 9, 12]).with_noise(1e-6, 1);
     assert_eq!(obs.n_components(), 12);
     for model in [LoadModel::Distributed, LoadModel::Concentrated { node: 12 }] {
         let estimates: Vec<Estimate> = [Backend::Newton, Backend::Sqp]

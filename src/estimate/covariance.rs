@@ -346,7 +346,7 @@ impl Estimate {
     /// let scene = Scene::two_section();
     /// let (robot, loads) = (scene.robot()?, scene.loads()?);
     /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
-    /// let obs = Observation::at_nodes(&robot, &eq.q, &[10, 20]);
+    /// let obs = Observation::at_nodes(&robot, eq.q.as_slice(), &[10, 20]);
     /// let settings = EstimatorSettings {
     ///     load_model: LoadModel::Concentrated { node: 20 }, alpha: Some(1.0), ..Default::default()
     /// };

@@ -72,7 +72,7 @@
 //! let loads = scene.loads()?;
 //! // the "measurement": the solved shape at the five marker nodes
 //! let eq = StaticSolver::default().solve(&robot, &loads, None)?;
-//! let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]);
+//! let obs = Observation::at_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20]);
 //! let settings = EstimatorSettings { alpha: Some(1.0), ..EstimatorSettings::default() };
 //! let mut est = Backend::Newton.build(robot, loads, settings)?;
 //! let e = est.step(&obs)?;
@@ -562,7 +562,7 @@ impl Estimate {
     /// let scene = Scene::two_section();
     /// let (robot, loads) = (scene.robot()?, scene.loads()?);
     /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
-    /// let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]);
+    /// let obs = Observation::at_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20]);
     /// // one Gauss-Newton step is not enough at a small alpha
     /// let settings = EstimatorSettings { alpha: Some(1e-2), max_iterations: 1, ..Default::default() };
     /// let mut est = Backend::Newton.build(robot, loads, settings)?;

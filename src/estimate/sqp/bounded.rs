@@ -496,7 +496,8 @@ mod tests {
             width_m: 0.01,
         });
         let eq = StaticSolver::default().solve(&robot, &truth, None).unwrap();
-        let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]).with_noise(1e-5, 3);
+        let obs =
+            Observation::at_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20]).with_noise(1e-5, 3);
         let bounds = (0..=24)
             .map(|i| LoadBound {
                 s_m: 0.01 * f64::from(i),
@@ -526,7 +527,9 @@ mod tests {
         let mut w0 = r.clone();
         lu.solve_in_place(&mut w0).unwrap();
         let dq0 = problem.robot().expand_step(&w0).unwrap();
-        let e1: Vec<f64> = (0..op.len()).map(|i| e[i] + op.value(i, &dq0)).collect();
+        let e1: Vec<f64> = (0..op.len())
+            .map(|i| e[i] + op.value(i, dq0.as_slice()))
+            .collect();
         let reduced_objective = |df: &[f64]| {
             let wr: f64 = (0..op.len())
                 .map(|i| op.weights()[i] * (e1[i] + dot(un.dv.jt.column(i).as_slice(), df)).powi(2))

@@ -131,7 +131,7 @@ impl QpError {
 /// let scene = Scene::two_section();
 /// let (robot, loads) = (scene.robot()?, scene.loads()?);
 /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
-/// let obs = Observation::at_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20]);
+/// let obs = Observation::at_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20]);
 /// let settings = EstimatorSettings { alpha: Some(1.0), ..EstimatorSettings::default() };
 /// let mut est = SqpEstimator::new(robot, loads, settings)?;
 /// let e = est.step(&obs)?;
@@ -275,7 +275,7 @@ impl<E: Element> SqpEstimator<E> {
                 wa[j] += 2.0 * w * ei * v;
             }
         }
-        let mut c = problem.robot().restrict(&wa)?;
+        let mut c: Vec<f64> = problem.robot().restrict(&wa)?.data.into();
         c.extend(problem.penalty_grad(f)?.iter().map(|v| 2.0 * alpha * v));
         Ok(c)
     }
@@ -345,7 +345,7 @@ impl<E: Element> SqpEstimator<E> {
         let e1: Vec<f64> = e
             .iter()
             .zip(op.rows())
-            .map(|(ei, row)| ei + row.apply(&dq0))
+            .map(|(ei, row)| ei + row.apply(dq0.as_slice()))
             .collect();
         let dv = match cached {
             Some(dv) => dv,
@@ -380,7 +380,7 @@ impl<E: Element> SqpEstimator<E> {
         let dq = robot.expand_step(du)?;
         let mut lam = vec![0.0; robot.n_q()];
         for (((zi, row), w), ei) in columns(&dv.z).zip(op.rows()).zip(op.weights()).zip(e) {
-            let s = 2.0 * w * (ei + row.apply(&dq));
+            let s = 2.0 * w * (ei + row.apply(dq.as_slice()));
             lam.iter_mut().zip(zi).for_each(|(a, b)| *a += s * b);
         }
         Ok(max_abs(&lam))
@@ -425,7 +425,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
         let mut last: Option<FactoredTangent> = None;
         loop {
             let obj = wr + pen;
-            let load = norm2(&self.stream.problem.robot().restrict(&dead)?).max(1e-12);
+            let load = norm2(self.stream.problem.robot().restrict(&dead)?.as_slice()).max(1e-12);
             let rn = norm2(&r);
             if iterations >= settings.max_iterations {
                 status = EstimateStatus::IterationLimit { iterations };
@@ -464,7 +464,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
             let moved = op
                 .rows()
                 .iter()
-                .map(|row| row.apply(&dq).abs())
+                .map(|row| row.apply(dq.as_slice()).abs())
                 .fold(0.0f64, f64::max);
             if moved > settings.max_observation_jump_m && moved.is_finite() {
                 let s = settings.max_observation_jump_m / moved;
@@ -521,20 +521,28 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 let ft: Vec<f64> = f.iter().zip(&df).map(|(a, b)| a + t * b).collect();
                 let problem = &self.stream.problem;
                 let dead_t = problem.dead_with(&ft)?;
-                let mut rt = problem.robot().residual(&qt, &dead_t, problem.known())?;
+                let mut rt: Vec<f64> = problem
+                    .robot()
+                    .residual(&qt, &dead_t, problem.known())?
+                    .data
+                    .into();
                 {
                     // up to four chord steps while the residual shrinks
-                    let mut rn_t = norm2(&rt);
+                    let mut rn_t = norm2(rt.as_slice());
                     for _ in 0..4 {
                         let mut du_c = rt.clone();
                         lu.solve_in_place(&mut du_c)?;
                         if !du_c.iter().all(|v| v.is_finite()) {
                             break;
                         }
-                        let corr = problem.robot().expand_step(&du_c)?;
+                        let corr = problem.robot().expand_step(du_c.as_slice())?;
                         let qc: Vec<f64> = qt.iter().zip(&corr).map(|(a, b)| a + b).collect();
-                        let rc = problem.robot().residual(&qc, &dead_t, problem.known())?;
-                        let rn_c = norm2(&rc);
+                        let rc: Vec<f64> = problem
+                            .robot()
+                            .residual(&qc, &dead_t, problem.known())?
+                            .data
+                            .into();
+                        let rn_c = norm2(rc.as_slice());
                         if rn_c.is_nan() || rn_c >= rn_t {
                             break;
                         }
@@ -551,7 +559,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 let small = dec <= 1e-8 * scale && rn <= 1e-6 * load;
                 // near the round-off floor μ|Q|₁ is noise: a trial that stays
                 // feasible to 10× the tolerance and decreases J is accepted
-                let feasible_t = norm2(&rt) <= 10.0 * (1e-9 * load).max(floor);
+                let feasible_t = norm2(rt.as_slice()) <= 10.0 * (1e-9 * load).max(floor);
                 let descends = wr_t + pen_t <= obj + 1e-4 * t * lin.min(0.0);
                 if phi_t <= phi + 1e-4 * t * slope.min(0.0) || small || (feasible_t && descends) {
                     q = qt;
@@ -604,7 +612,11 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 }
                 let dq = problem.robot().expand_step(&w)?;
                 qc.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
-                rc = problem.robot().residual(&qc, &dead, problem.known())?;
+                rc = problem
+                    .robot()
+                    .residual(&qc, &dead, problem.known())?
+                    .data
+                    .into();
                 if step <= 1e-10 * len {
                     done = true;
                     break;
@@ -630,9 +642,9 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 let problem = &mut self.stream.problem;
                 let eq = problem.equilibrium(&f, &q)?;
                 let dv = problem.derivs(&eq.factors, op)?;
-                let e = op.residual(&eq.q);
+                let e = op.residual(eq.q.as_slice());
                 let (_, l) = problem.gn_step(&dv, op, &e, &f, alpha)?;
-                (eq.q, dv, l, eq.residual_n)
+                (eq.q.data.into(), dv, l, eq.residual_n)
             }
         };
         let problem = &self.stream.problem;
