@@ -98,11 +98,16 @@ fn case(n: usize, m: usize) -> Case {
             .unwrap()
             .q;
     }
-    let eq = solver.solve(&robot, &truth_at(1.0), Some(q.as_slice())).unwrap();
+    let eq = solver
+        .solve(&robot, &truth_at(1.0), Some(q.as_slice()))
+        .unwrap();
     let markers: Vec<MarkerObservation> = (1..=m)
         .map(|k| {
             let s = robot.length() * k as f64 / m as f64;
-            MarkerObservation::at_arc(s, robot.position_at(eq.q.as_slice(), s).unwrap().data.into())
+            MarkerObservation::at_arc(
+                s,
+                robot.position_at(eq.q.as_slice(), s).unwrap().data.into(),
+            )
         })
         .collect();
     let frames = (0..64)
@@ -474,7 +479,10 @@ fn first_estimate(c: &mut Criterion) {
                     let markers = (1..=5)
                         .map(|k| {
                             let s = robot.length() * f64::from(k) / 5.0;
-                            MarkerObservation::at_arc(s, robot.position_at(q.as_slice(), s).unwrap().data.into())
+                            MarkerObservation::at_arc(
+                                s,
+                                robot.position_at(q.as_slice(), s).unwrap().data.into(),
+                            )
                         })
                         .collect();
                     let obs = Observation { markers }.with_noise(1e-5, 7);

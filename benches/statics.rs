@@ -36,7 +36,7 @@ fn robot(n: usize) -> (Robot<PlanarCable>, Loads, Vec<f64>) {
     let mut loads = scene.loads().unwrap();
     loads.pressures_pa = params::DEFAULT_PRESSURES_PA.to_vec();
     let eq = StaticSolver::default().solve(&robot, &loads, None).unwrap();
-    (robot, loads, eq.q)
+    (robot, loads, eq.q.data.into())
 }
 
 fn newton_step(c: &mut Criterion) {

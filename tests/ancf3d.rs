@@ -46,7 +46,7 @@ fn robot(n: usize, mass_kg_per_m: f64) -> Robot<Ancf3d> {
 fn solve(robot: &Robot<Ancf3d>, loads: &Loads) -> Vec<f64> {
     let eq = StaticSolver::default().solve(robot, loads, None).unwrap();
     assert!(eq.report.status.is_converged());
-    eq.q
+    eq.q.data.into()
 }
 
 fn tip(q: &[f64]) -> &[f64] {

@@ -97,7 +97,8 @@ fn gradient_matches_finite_differences() {
     let eq = StaticSolver::default()
         .solve(&robot, &known(), None)
         .unwrap();
-    let obs = Observation::at_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20]).with_noise(1e-4, 11);
+    let obs =
+        Observation::at_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20]).with_noise(1e-4, 11);
     for model in [LoadModel::Distributed, LoadModel::Concentrated { node: 20 }] {
         let settings = EstimatorSettings {
             load_model: model,
@@ -226,7 +227,10 @@ fn estimate_truth(
             .iter()
             .map(|&n| {
                 let s = coarse.node_arc()[n];
-                MarkerObservation::at_node(n, fine.position_at(eq.q.as_slice(), s).unwrap().data.into())
+                MarkerObservation::at_node(
+                    n,
+                    fine.position_at(eq.q.as_slice(), s).unwrap().data.into(),
+                )
             })
             .collect(),
     }

@@ -126,7 +126,13 @@ fn observe(
         markers: nodes
             .iter()
             .map(|&n| {
-                MarkerObservation::at_node(n, fine.position_at(q, coarse.node_arc()[n]).unwrap())
+                MarkerObservation::at_node(
+                    n,
+                    fine.position_at(q, coarse.node_arc()[n])
+                        .unwrap()
+                        .data
+                        .into(),
+                )
             })
             .collect(),
     }

@@ -35,7 +35,11 @@ fn each_leg_carries_a_third_of_an_axial_load() {
     let eq = robot.solve(&loads, None).unwrap();
     let s = robot.structure();
     let reactions = s
-        .joint_reactions(eq.u.as_slice(), s.dead_force(&loads).unwrap().as_slice(), &loads)
+        .joint_reactions(
+            eq.u.as_slice(),
+            s.dead_force(&loads).unwrap().as_slice(),
+            &loads,
+        )
         .unwrap();
     assert_eq!(reactions.len(), 3);
     for r in &reactions {

@@ -83,7 +83,9 @@ fn plant_differs_from_the_controller_model_in_every_respect() {
         .solve(&model, &scene.loads().unwrap(), None)
         .unwrap()
         .q;
-    let ctrl_tip = model.position_at(ctrl_tip.as_slice(), model.length()).unwrap();
+    let ctrl_tip = model
+        .position_at(ctrl_tip.as_slice(), model.length())
+        .unwrap();
     let plant0 =
         SimulatedPlant::new(&scene, &marker_arcs(&scene), PlantSettings::default()).unwrap();
     let plant_tip = plant0.true_tip_m().unwrap();

@@ -487,8 +487,8 @@ fn spatial_tangent_is_the_finite_difference_jacobian_of_the_residual() {
         let dq = robot.expand_step(&du).unwrap();
         let qp: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
         let qm: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a - b).collect();
-        let rp = robot.residual(&qp, &dead, &l).unwrap();
-        let rm = robot.residual(&qm, &dead, &l).unwrap();
+        let rp = robot.residual(&qp, dead.as_slice(), &l).unwrap();
+        let rm = robot.residual(&qm, dead.as_slice(), &l).unwrap();
         for i in 0..robot.n_free() {
             let fd = -(rp[i] - rm[i]) / (2.0 * h);
             assert!(

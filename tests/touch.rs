@@ -150,7 +150,7 @@ fn marker_response_matches_finite_differences() {
     let resp = MarkerResponse::new(&robot, &loads, q.as_slice(), &arcs).unwrap();
     let markers = |q: &[f64]| -> Vec<f64> {
         arcs.iter()
-            .flat_map(|&s| robot.position_at(q, s).unwrap())
+            .flat_map(|&s| robot.position_at(q, s).unwrap().data.as_vec().clone())
             .collect()
     };
     let y0 = markers(q.as_slice());
