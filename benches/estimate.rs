@@ -94,15 +94,20 @@ fn case(n: usize, m: usize) -> Case {
     let mut q = solver.solve(&robot, &known, None).unwrap().q;
     for k in 1..=8 {
         q = solver
-            .solve(&robot, &truth_at(k as f64 / 8.0), Some(&q))
+            .solve(&robot, &truth_at(k as f64 / 8.0), Some(q.as_slice()))
             .unwrap()
             .q;
     }
-    let eq = solver.solve(&robot, &truth_at(1.0), Some(&q)).unwrap();
+    let eq = solver
+        .solve(&robot, &truth_at(1.0), Some(q.as_slice()))
+        .unwrap();
     let markers: Vec<MarkerObservation> = (1..=m)
         .map(|k| {
             let s = robot.length() * k as f64 / m as f64;
-            MarkerObservation::at_arc(s, robot.position_at(&eq.q, s).unwrap())
+            MarkerObservation::at_arc(
+                s,
+                robot.position_at(eq.q.as_slice(), s).unwrap().data.into(),
+            )
         })
         .collect();
     let frames = (0..64)
@@ -155,7 +160,7 @@ fn warm(c: &Case, backend: Backend, settings: EstimatorSettings) -> Warm {
             .iter()
             .map(|mk| {
                 let s = mk.s_m.unwrap();
-                let p0 = c.robot.position_at(&q0, s).unwrap();
+                let p0 = c.robot.position_at(q0.as_slice(), s).unwrap();
                 let p = p0
                     .iter()
                     .zip(&mk.position_m)
@@ -423,7 +428,7 @@ fn vs_linearization(c: &mut Criterion) {
         let mut bm = b0.clone();
         b.iter(|| {
             robot
-                .residual_into(black_box(q), &dead, &c.known, &mut r)
+                .residual_into(black_box(q), dead.as_slice(), &c.known, &mut r)
                 .unwrap();
             robot.tangent_into(black_box(q), &c.known, &mut k).unwrap();
             let f = solver.factor(&k, FactorOptions::default()).unwrap();
@@ -491,7 +496,10 @@ fn first_estimate(c: &mut Criterion) {
                     let markers = (1..=5)
                         .map(|k| {
                             let s = robot.length() * f64::from(k) / 5.0;
-                            MarkerObservation::at_arc(s, robot.position_at(&q, s).unwrap())
+                            MarkerObservation::at_arc(
+                                s,
+                                robot.position_at(q.as_slice(), s).unwrap().data.into(),
+                            )
                         })
                         .collect();
                     let obs = Observation { markers }.with_noise(1e-5, 7);

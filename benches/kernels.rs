@@ -44,7 +44,7 @@ fn setup(n: usize) -> (Robot<PlanarCable>, Loads, Vec<f64>) {
     let robot = scene.robot().unwrap();
     let loads = scene.loads().unwrap();
     let eq = StaticSolver::default().solve(&robot, &loads, None).unwrap();
-    (robot, loads, eq.q)
+    (robot, loads, eq.q.data.into())
 }
 
 fn kernels(c: &mut Criterion) {
@@ -70,7 +70,7 @@ fn kernels(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("residual", n), &n, |b, _| {
             b.iter(|| {
                 robot
-                    .residual_into(black_box(&q), &dead, &loads, &mut r)
+                    .residual_into(black_box(&q), dead.as_slice(), &loads, &mut r)
                     .unwrap()
             })
         });
@@ -80,7 +80,13 @@ fn kernels(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("residual_and_tangent", n), &n, |b, _| {
             b.iter(|| {
                 robot
-                    .residual_and_tangent_into(black_box(&q), &dead, &loads, &mut r, &mut k)
+                    .residual_and_tangent_into(
+                        black_box(&q),
+                        dead.as_slice(),
+                        &loads,
+                        &mut r,
+                        &mut k,
+                    )
                     .unwrap()
             })
         });

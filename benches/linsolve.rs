@@ -49,7 +49,7 @@ fn setup(n: usize) -> (BandedMatrix, SymmetricMatrix) {
     let eq = StaticSolver::default().solve(&robot, &loads, None).unwrap();
     let nf = robot.n_free();
     let mut k = BandedMatrix::zeros(nf, 7, 7);
-    robot.tangent_into(&eq.q, &loads, &mut k).unwrap();
+    robot.tangent_into(eq.q.as_slice(), &loads, &mut k).unwrap();
     // the connectivity in free coordinates: element 0 couples the base's
     // free directions with node 1, element e >= 1 nodes e and e + 1
     let nb = robot.n_base_free();

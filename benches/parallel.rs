@@ -42,8 +42,8 @@ fn bench(c: &mut Criterion) {
     let free = full
         .solve(&full.loads(&p, [0.0; 3], [0.0; 3]).unwrap(), None)
         .unwrap();
-    let loaded = full.solve(&loads, Some(&free.q)).unwrap();
-    let x = full.platform_pose(&loaded.q).unwrap();
+    let loaded = full.solve(&loads, Some(free.q.as_slice())).unwrap();
+    let x = full.platform_pose(loaded.q.as_slice()).unwrap();
     let mut g = c.benchmark_group("parallel");
     g.sample_size(10).measurement_time(Duration::from_secs(5));
     g.bench_function("static_solve/actuated", |b| {
@@ -61,13 +61,16 @@ fn bench(c: &mut Criterion) {
         })
     });
     let mut warm = softrod::parallel::warm::WarmStatics::new(full.clone()).unwrap();
-    warm.factor_at(&free.u, &full.loads(&p, [0.0; 3], [0.0; 3]).unwrap())
-        .unwrap();
+    warm.factor_at(
+        free.u.as_slice(),
+        &full.loads(&p, [0.0; 3], [0.0; 3]).unwrap(),
+    )
+    .unwrap();
     let mut p1 = p.clone();
     p1[0] += 1e3;
     let nudged = full.loads(&p1, [0.0; 3], [0.0; 3]).unwrap();
     g.bench_function("warm_solve/actuated", |b| {
-        b.iter(|| black_box(warm.clone().solve(&nudged, &free.u).unwrap()))
+        b.iter(|| black_box(warm.clone().solve(&nudged, free.u.as_slice()).unwrap()))
     });
     let model = ParallelSpec {
         elements_per_section: 2,
@@ -81,7 +84,7 @@ fn bench(c: &mut Criterion) {
             None,
         )
         .unwrap();
-    let x = model.platform_pose(&eq.q).unwrap();
+    let x = model.platform_pose(eq.q.as_slice()).unwrap();
     let mut ctl = ParallelController::new(
         model,
         ControllerKind::FfUpdater,

@@ -36,7 +36,7 @@ fn robot(n: usize) -> (Robot<PlanarCable>, Loads, Vec<f64>) {
     let mut loads = scene.loads().unwrap();
     loads.pressures_pa = params::DEFAULT_PRESSURES_PA.to_vec();
     let eq = StaticSolver::default().solve(&robot, &loads, None).unwrap();
-    (robot, loads, eq.q)
+    (robot, loads, eq.q.data.into())
 }
 
 fn newton_step(c: &mut Criterion) {
@@ -51,7 +51,13 @@ fn newton_step(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
             b.iter(|| {
                 robot
-                    .residual_and_tangent_into(black_box(&q), &dead, &loads, &mut r, &mut k)
+                    .residual_and_tangent_into(
+                        black_box(&q),
+                        dead.as_slice(),
+                        &loads,
+                        &mut r,
+                        &mut k,
+                    )
                     .unwrap();
                 let f = solver.factor(&k, FactorOptions::default()).unwrap();
                 f.solve_in_place(&mut r).unwrap();

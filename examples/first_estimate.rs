@@ -71,11 +71,13 @@ fn scene_case(name: &str, lines: Vec<LineLoad>, points: Vec<PointForce>) -> Case
                     force_n: p.force_n.iter().map(|v| v * t).collect(),
                 }),
         );
-        q = solver.solve(&fine, &l, Some(&q)).unwrap().q;
+        q = solver.solve(&fine, &l, Some(q.as_slice())).unwrap().q;
     }
     let markers = sweep::marker_arcs(robot.length(), 5)
         .into_iter()
-        .map(|s| MarkerObservation::at_arc(s, fine.position_at(&q, s).unwrap()))
+        .map(|s| {
+            MarkerObservation::at_arc(s, fine.position_at(q.as_slice(), s).unwrap().data.into())
+        })
         .collect();
     Case {
         name: name.into(),

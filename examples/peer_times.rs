@@ -94,7 +94,7 @@ fn forward(root: &str) -> Vec<Value> {
                 Ok(eq) => (
                     eq.report.status.is_converged(),
                     eq.report.iterations,
-                    eq.q[eq.q.len() - 4..eq.q.len() - 2].to_vec(),
+                    eq.q.as_slice()[eq.q.len() - 4..eq.q.len() - 2].to_vec(),
                 ),
                 Err(_) => (false, 0, vec![]),
             };

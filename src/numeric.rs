@@ -14,6 +14,16 @@ pub(crate) fn max_abs(v: &[f64]) -> f64 {
     v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
 }
 
+/// A fixed-size vector from a serde field `v` named `name`: its length
+/// must be `D`.
+pub(crate) fn fixed<const D: usize>(
+    name: &str,
+    v: &[f64],
+) -> crate::Result<nalgebra::SVector<f64, D>> {
+    crate::error::check_len(name, D, v.len())?;
+    Ok(nalgebra::SVector::from_column_slice(v))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

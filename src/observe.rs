@@ -163,7 +163,7 @@ impl Observation {
     /// ```
     /// use softrod::{observe::Observation, scene::Scene};
     /// let robot = Scene::two_section().robot()?;
-    /// let q = robot.reference_configuration();
+    /// let q = robot.reference_configuration().as_slice().to_vec();
     /// let o = Observation::of_nodes(&robot, &q, &[10, 20])?;
     /// assert_eq!(o.markers[1].position_m, q[80..82].to_vec());
     /// assert!(Observation::of_nodes(&robot, &q, &[10, 21]).is_err());

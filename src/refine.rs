@@ -472,7 +472,7 @@ fn tip_position(scene: &Scene) -> Result<std::result::Result<Vec<f64>, TrialFail
     let eq = StaticSolver::new(scene.solver.statics.clone())?.solve(&robot, &loads, None)?;
     let nd = PlanarCable::NODE_DOFS;
     let tip = eq.q.len().saturating_sub(nd);
-    Ok(Ok(eq.q[tip..tip + PlanarCable::DIM].to_vec()))
+    Ok(Ok(eq.q.as_slice()[tip..tip + PlanarCable::DIM].to_vec()))
 }
 
 /// The resultant force of the unknown load estimated from `observation`

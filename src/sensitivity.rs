@@ -37,7 +37,7 @@
 //! let mut tracker = EquilibriumTracker::new(robot, scene.loads()?, Default::default())?;
 //! let load = LoadModel::Concentrated { node: 20 };
 //! let q0 = tracker.robot().arc_configuration(&scene.pressures_pa);
-//! let eq = tracker.solve(&load, &[0.0, 0.0], &q0)?;
+//! let eq = tracker.solve(&load, &[0.0, 0.0], q0.as_slice())?;
 //! let s = Sensitivity::new(tracker.robot(), &eq.factors)?;
 //! // (28): an upward tip force moves the tip up
 //! let dq_df = s.dq_df(&load)?;
@@ -58,12 +58,12 @@
 //! let (robot, loads) = (scene.robot()?, scene.loads()?);
 //! let eq = StaticSolver::default().solve(&robot, &loads, None)?;
 //! let mut k = SymmetricMatrix::zeros(robot.tangent_pattern().clone());
-//! robot.tangent_into(&eq.q, &loads, &mut k)?;
+//! robot.tangent_into(eq.q.as_slice(), &loads, &mut k)?;
 //! let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), SolverKind::Sparse)?;
 //! let factors = solver.factor(&k, FactorOptions::default())?;
 //! let s = Sensitivity::new(&robot, &factors)?;
 //! // (43): raising a chamber's pressure moves the shape
-//! let dq_dp = s.dq_dp(&eq.q)?;
+//! let dq_dp = s.dq_dp(eq.q.as_slice())?;
 //! assert_eq!(dq_dp.shape(), (robot.n_q(), robot.n_pressures()));
 //! assert!(dq_dp.amax() > 0.0);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -147,9 +147,9 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn response(&self, g: &[f64]) -> Result<DVector<f64>> {
-        let mut du = self.robot.restrict(g)?;
+        let mut du: Vec<f64> = self.robot.restrict(g)?.data.into();
         self.factors.solve_in_place(&mut du)?;
-        Ok(DVector::from_vec(self.robot.expand_step(&du)?))
+        self.robot.expand_step(&du)
     }
 
     /// (28) `∂q/∂F = M K⁻¹ Mᵀ G` (`n_q × n_F`) for the load `load`: one
@@ -167,7 +167,7 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
                 .enumerate()
                 .for_each(|(k, v)| *v = f64::from(u8::from(k == j)));
             self.robot
-                .restrict_into(&load.force(self.robot, &ej)?, col)?;
+                .restrict_into(load.force(self.robot, &ej)?.as_slice(), col)?;
         }
         self.expand_columns(b, nf)
     }
@@ -179,15 +179,8 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
     /// [`Error::DimensionMismatch`] if `q` is not `n_q` long.
     pub fn dq_dp(&self, q: &[f64]) -> Result<DMatrix<f64>> {
         let np = self.robot.n_pressures();
-        let nfree = self.robot.n_free();
-        // row-major n_free × n_p, to columns
-        let jac = self.robot.pressure_jacobian(q)?;
-        let mut b = vec![0.0; jac.len()];
-        for (k, row) in jac.chunks_exact(np.max(1)).enumerate() {
-            for (j, v) in row.iter().enumerate() {
-                b[j * nfree + k] = *v;
-            }
-        }
+        // n_free × n_p, its columns one after the other
+        let b = self.robot.pressure_jacobian(q)?.data.into();
         self.expand_columns(b, np)
     }
 
@@ -255,7 +248,7 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
         {
             let g = load.force_transpose(self.robot, zi.as_slice())?;
             check_len("G^T z", nf, g.len())?;
-            gi.copy_from_slice(&g);
+            gi.copy_from_slice(g.as_slice());
         }
         Ok(out)
     }
@@ -270,8 +263,7 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
     pub fn pressure_gradients(&self, q: &[f64], adjoints: &Adjoints) -> Result<DMatrix<f64>> {
         let nfree = self.robot.n_free();
         check_len("adjoints", nfree, adjoints.free.nrows())?;
-        let np = self.robot.n_pressures();
-        let jac = DMatrix::from_row_slice(nfree, np, &self.robot.pressure_jacobian(q)?);
+        let jac = self.robot.pressure_jacobian(q)?;
         Ok(jac.tr_mul(&adjoints.free))
     }
 

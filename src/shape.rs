@@ -116,7 +116,7 @@ impl<'a> Shape<'a> {
     /// ```
     /// use softrod::{assembly::{RobotSpec, Section}, shape::Shape};
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.025, 4)]).build_planar()?;
-    /// let q = robot.reference_configuration();
+    /// let q = robot.reference_configuration().as_slice().to_vec();
     /// let shape = Shape::new(&robot, &q)?;
     /// assert_eq!(shape.node_positions().len(), 5);
     /// assert!(Shape::new(&robot, &q[1..]).is_err());
@@ -133,7 +133,7 @@ impl<'a> Shape<'a> {
     /// ```
     /// use softrod::{assembly::{RobotSpec, Section}, shape::Shape};
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.025, 4)]).build_planar()?;
-    /// let q = robot.reference_configuration();
+    /// let q = robot.reference_configuration().as_slice().to_vec();
     /// assert_eq!(Shape::new(&robot, &q)?.coordinates().len(), robot.n_q());
     /// # Ok::<(), softrod::Error>(())
     /// ```
@@ -147,7 +147,7 @@ impl<'a> Shape<'a> {
     /// ```
     /// use softrod::{assembly::{RobotSpec, Section}, shape::Shape};
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.025, 4)]).build_planar()?;
-    /// let q = robot.reference_configuration();
+    /// let q = robot.reference_configuration().as_slice().to_vec();
     /// let p = Shape::new(&robot, &q)?.node_positions();
     /// assert!((p[4].x - 0.2).abs() < 1e-15 && p[4].y == 0.0);
     /// # Ok::<(), softrod::Error>(())
@@ -169,12 +169,12 @@ impl<'a> Shape<'a> {
     /// ```
     /// use softrod::{assembly::{RobotSpec, Section}, shape::Shape};
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.025, 4)]).build_planar()?;
-    /// let q = robot.reference_configuration();
+    /// let q = robot.reference_configuration().as_slice().to_vec();
     /// assert_eq!(Shape::new(&robot, &q)?.node_angles()?.len(), 5);
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn node_angles(&self) -> Result<DVector<f64>> {
-        Ok(DVector::from_vec(self.robot.node_angles(self.q)?))
+        self.robot.node_angles(self.q)
     }
 
     /// The position `r(s)` at arc position `s_m` (m, undeformed), by the
@@ -187,7 +187,7 @@ impl<'a> Shape<'a> {
     /// ```
     /// use softrod::{assembly::{RobotSpec, Section}, shape::Shape};
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.025, 4)]).build_planar()?;
-    /// let q = robot.reference_configuration();
+    /// let q = robot.reference_configuration().as_slice().to_vec();
     /// let shape = Shape::new(&robot, &q)?;
     /// assert!((shape.position_at(0.13)?.x - 0.13).abs() < 1e-15);
     /// assert!(shape.position_at(0.3).is_err());
@@ -210,7 +210,7 @@ impl<'a> Shape<'a> {
     /// ```
     /// use softrod::{assembly::{RobotSpec, Section}, shape::Shape};
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.025, 4)]).build_planar()?;
-    /// let q = robot.reference_configuration();
+    /// let q = robot.reference_configuration().as_slice().to_vec();
     /// assert_eq!(Shape::new(&robot, &q)?.angle_at(0.07)?, 0.0);
     /// # Ok::<(), softrod::Error>(())
     /// ```
@@ -228,7 +228,7 @@ impl<'a> Shape<'a> {
     /// ```
     /// use softrod::{assembly::{RobotSpec, Section}, shape::Shape};
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.025, 4)]).build_planar()?;
-    /// let q = robot.reference_configuration();
+    /// let q = robot.reference_configuration().as_slice().to_vec();
     /// let p = Shape::new(&robot, &q)?.pose_at(0.1)?;
     /// assert!((p.position_m.x - 0.1).abs() < 1e-15 && p.angle_rad == 0.0);
     /// # Ok::<(), softrod::Error>(())
@@ -250,7 +250,7 @@ impl<'a> Shape<'a> {
     pub fn tip_pose(&self) -> Result<Pose2> {
         let angles = self.robot.node_angles(self.q)?;
         let tip = self.node_positions().last().copied();
-        match (tip, angles.last()) {
+        match (tip, angles.as_slice().last()) {
             (Some(position_m), Some(&angle_rad)) => Ok(Pose2 {
                 position_m,
                 angle_rad,
@@ -307,7 +307,7 @@ impl<'a> Shape<'a> {
             })?;
         let r0 = Vector2::new(q[0], q[1]);
         let (mut force, mut moment) = (Vector2::zeros(), 0.0);
-        for (qi, gi) in q.chunks_exact(nd).zip(g.chunks_exact(nd)) {
+        for (qi, gi) in q.chunks_exact(nd).zip(g.as_slice().chunks_exact(nd)) {
             let (fr, fs) = (Vector2::new(gi[0], gi[1]), Vector2::new(gi[2], gi[3]));
             let (r, t) = (Vector2::new(qi[0], qi[1]) - r0, Vector2::new(qi[2], qi[3]));
             force += fr;

@@ -151,7 +151,7 @@ fn solve(r: &Value, n: usize) -> ([f64; 3], Vec<f64>) {
             "step {k}/{steps}: {}",
             eq.report
         );
-        q = eq.q;
+        q = eq.q.data.into();
     }
     let node = &q[tip];
     let reference = Ancf3d::straight_node(&[0.0; 3], &[1.0, 0.0, 0.0]);

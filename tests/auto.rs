@@ -39,7 +39,7 @@ fn tip(scene: &Scene) -> Vec<f64> {
         .solve(&robot, &scene.loads().unwrap(), None)
         .unwrap();
     let n = eq.q.len();
-    eq.q[n - 4..n - 2].to_vec()
+    eq.q.as_slice()[n - 4..n - 2].to_vec()
 }
 
 /// The checks every refinement case shares, against the true error

@@ -73,7 +73,7 @@ fn estimate(
     let mut obs = Observation {
         markers: [4usize, 8, 12, 16, 20]
             .iter()
-            .map(|&n| MarkerObservation::at_node(n, q[4 * n..4 * n + 2].to_vec()))
+            .map(|&n| MarkerObservation::at_node(n, q.as_slice()[4 * n..4 * n + 2].to_vec()))
             .collect(),
     };
     fo(&mut obs);
@@ -141,7 +141,7 @@ fn estimate_spatial(
     let mut obs = Observation {
         markers: [4usize, 8, 12, 16]
             .iter()
-            .map(|&n| MarkerObservation::at_node(n, q[6 * n..6 * n + 3].to_vec()))
+            .map(|&n| MarkerObservation::at_node(n, q.as_slice()[6 * n..6 * n + 3].to_vec()))
             .collect(),
     };
     fo(&mut obs);
@@ -503,10 +503,12 @@ fn cases() -> Vec<Case> {
         case(
             "NaN in q0",
             move || {
-                let mut q = Scene::two_section()
+                let mut q: Vec<f64> = Scene::two_section()
                     .robot()
                     .unwrap()
-                    .reference_configuration();
+                    .reference_configuration()
+                    .data
+                    .into();
                 q[5] = nan;
                 solve(default_loads(), Some(q))
             },
@@ -951,7 +953,7 @@ fn cases() -> Vec<Case> {
             "position_at off the robot",
             || {
                 let r = Scene::two_section().robot()?;
-                r.position_at(&r.reference_configuration(), 1.0).map(|_| ())
+                r.position_at(r.reference_configuration().as_slice(), 1.0).map(|_| ())
             },
             Invalid,
             "s_m",
@@ -961,7 +963,7 @@ fn cases() -> Vec<Case> {
             || {
                 let r = Scene::two_section().robot()?;
                 let q = r.reference_configuration();
-                r.residual_into(&q, &vec![0.0; r.n_q()], &default_loads(), &mut [0.0; 3])
+                r.residual_into(q.as_slice(), &vec![0.0; r.n_q()], &default_loads(), &mut [0.0; 3])
             },
             Dim,
             "residual",
@@ -978,7 +980,7 @@ fn cases() -> Vec<Case> {
                     }],
                     ..default_loads()
                 };
-                r.residual(&q, &vec![0.0; r.n_q()], &l).map(|_| ())
+                r.residual(q.as_slice(), &vec![0.0; r.n_q()], &l).map(|_| ())
             },
             Index,
             "node_moments[0].node",
@@ -995,7 +997,7 @@ fn cases() -> Vec<Case> {
                     }],
                     ..default_loads()
                 };
-                r.tangent_into(&q, &l, &mut BandedMatrix::zeros(1, 0, 0))
+                r.tangent_into(q.as_slice(), &l, &mut BandedMatrix::zeros(1, 0, 0))
             },
             Dim,
             "node_moments[0].moment_nm",
@@ -2124,7 +2126,7 @@ fn divergent_and_ill_posed_solves_end_with_a_report_in_bounded_time() {
             Ok(eq) => {
                 let r = &eq.report;
                 println!("{what:45} -> converged: {r}");
-                assert!(all_finite(&eq.q, r), "{what}: non-finite result");
+                assert!(all_finite(eq.q.as_slice(), r), "{what}: non-finite result");
                 assert!(r.iterations <= budget, "{what}: {r}");
                 assert!(
                     r.residual_norm_n <= 1.0001 * r.residual_tolerance_n.max(r.residual_floor_n)

@@ -246,9 +246,11 @@ fn contact_forces_balance(
         });
     }
     let dead = robot.dead_force(&with).unwrap();
-    let r = robot.residual(&sol.q, &dead, &with).unwrap();
+    let r = robot
+        .residual(sol.q.as_slice(), dead.as_slice(), &with)
+        .unwrap();
     let scale = robot
-        .restrict(&dead)
+        .restrict(dead.as_slice())
         .unwrap()
         .iter()
         .map(|v| v * v)
@@ -300,7 +302,7 @@ fn a_robot_sagging_onto_a_capsule_and_a_polygon_balances_its_contact_forces() {
     // sampling independent of the gap search
     for k in 0..=2400 {
         let s = 0.24 * k as f64 / 2400.0;
-        let r = robot.position_at(&sol.q, s).unwrap();
+        let r = robot.position_at(sol.q.as_slice(), s).unwrap();
         for o in obstacles.obstacles() {
             let d = o.signed_distance(&[r[0], r[1]]).distance_m - 0.008;
             assert!(d >= -1e-9, "penetration {d:e} at s = {s}");
@@ -363,7 +365,7 @@ fn an_actuated_robot_bending_into_a_disk_stops_on_it() {
         .unwrap();
     let l = robot.length();
     let s = 0.8 * l;
-    let r = robot.position_at(&free.q, s).unwrap();
+    let r = robot.position_at(free.q.as_slice(), s).unwrap();
     // 1 cm radius, its centre 5 mm inside the free shape's side, off the x axis
     let base_y = robot.base_node()[1];
     assert!((r[1] - base_y).abs() > 0.03, "{r:?}");
@@ -416,7 +418,7 @@ fn a_solve_from_afar_with_a_far_obstacle_equals_the_free_solve() {
     )
     .unwrap();
     let min = obstacles
-        .gaps(&robot, &free.q)
+        .gaps(&robot, free.q.as_slice())
         .unwrap()
         .iter()
         .map(|g| g.gap_m)
@@ -427,7 +429,7 @@ fn a_solve_from_afar_with_a_far_obstacle_equals_the_free_solve() {
             &robot,
             &loads,
             &obstacles,
-            Some(&robot.reference_configuration()),
+            Some(robot.reference_configuration().as_slice()),
         )
         .unwrap();
     println!("{}", sol.report);

@@ -228,7 +228,10 @@ fn estimate_truth(
             .iter()
             .map(|&n| {
                 let s = coarse.node_arc()[n];
-                MarkerObservation::at_node(n, fine.position_at(&eq.q, s).unwrap())
+                MarkerObservation::at_node(
+                    n,
+                    fine.position_at(eq.q.as_slice(), s).unwrap().data.into(),
+                )
             })
             .collect(),
     }
@@ -241,8 +244,8 @@ fn estimate_truth(
     .build_for(&coarse, &known())
     .unwrap();
     let e = est.step(&obs).unwrap();
-    let rms = backbone_rms(&coarse, e.q.as_slice(), &fine, &eq.q);
-    let (f_true, m_true) = true_resultant(&fine, &eq.q, &truth.load);
+    let rms = backbone_rms(&coarse, e.q.as_slice(), &fine, eq.q.as_slice());
+    let (f_true, m_true) = true_resultant(&fine, eq.q.as_slice(), &truth.load);
     let df = ((e.resultant_force_n[0] - f_true[0]).powi(2)
         + (e.resultant_force_n[1] - f_true[1]).powi(2))
     .sqrt();
@@ -269,7 +272,7 @@ fn synthetic_truth_is_recovered() {
             let mut loads = known();
             loads.line_loads.push(truth.load.clone());
             let eq = StaticSolver::default().solve(&fine, &loads, None).unwrap();
-            let (f_true, m_true) = true_resultant(&fine, &eq.q, &truth.load);
+            let (f_true, m_true) = true_resultant(&fine, eq.q.as_slice(), &truth.load);
             let fnorm = (f_true[0].powi(2) + f_true[1].powi(2)).sqrt();
             let peak = e
                 .sample_load(241)

@@ -63,13 +63,14 @@ fn fig3_direct_solution_amplifies_a_marker_error() {
             })
             .fold(0.0, f64::max)
     };
-    let f_direct = direct_solution(&robot, &known, &q_obs).unwrap();
-    let f_clean = direct_solution(&robot, &known, &eq.q).unwrap();
+    let f_direct = direct_solution(&robot, &known, q_obs.as_slice()).unwrap();
+    let f_clean = direct_solution(&robot, &known, eq.q.as_slice()).unwrap();
     let obs = Observation {
         markers: (1..n)
             .map(|i| {
-                let mut m = MarkerObservation::at_node(i, q_obs[4 * i..4 * i + 2].to_vec());
-                m.tangent = Some(q_obs[4 * i + 2..4 * i + 4].to_vec());
+                let mut m =
+                    MarkerObservation::at_node(i, q_obs.as_slice()[4 * i..4 * i + 2].to_vec());
+                m.tangent = Some(q_obs.as_slice()[4 * i + 2..4 * i + 4].to_vec());
                 m
             })
             .collect(),
@@ -128,7 +129,13 @@ fn observe(
         markers: nodes
             .iter()
             .map(|&n| {
-                MarkerObservation::at_node(n, fine.position_at(q, coarse.node_arc()[n]).unwrap())
+                MarkerObservation::at_node(
+                    n,
+                    fine.position_at(q, coarse.node_arc()[n])
+                        .unwrap()
+                        .data
+                        .into(),
+                )
             })
             .collect(),
     }
@@ -165,7 +172,7 @@ fn fig4_error_against_feature_points() {
     let mut table = String::from("| points | backend | backbone RMS (mm) | resultant error (N) | alpha |\n|---|---|---|---|---|\n");
     for &k in &[2usize, 3, 4, 5, 7, 10, 20] {
         let nodes: Vec<usize> = (1..=k).map(|j| j * 20 / k).collect();
-        let obs = observe(&coarse, &fine, &eq.q, &nodes, 7 + k as u64);
+        let obs = observe(&coarse, &fine, eq.q.as_slice(), &nodes, 7 + k as u64);
         let mut per_backend = Vec::new();
         for backend in [Backend::Newton, Backend::Sqp] {
             let e = softrod::estimate::EstimatorSettings {
@@ -176,7 +183,7 @@ fn fig4_error_against_feature_points() {
             .unwrap()
             .step(&obs)
             .unwrap();
-            let rms = rms_backbone(&coarse, e.q.as_slice(), &fine, &eq.q);
+            let rms = rms_backbone(&coarse, e.q.as_slice(), &fine, eq.q.as_slice());
             let df = resultant_error(&e, truth);
             eprintln!(
                 "Fig. 4: {k:2} points {:<6} rms {:.3e} m, resultant error {:.3e} N, alpha {:.2e}",
@@ -265,7 +272,7 @@ fn fig5_virtual_payload_from_model_error() {
         let nodes = [4usize, 8, 12, 16, 20];
         let est = |loads: &Loads, seed: u64| {
             let eq = StaticSolver::default().solve(&fine, loads, None).unwrap();
-            let obs = observe(&coarse, &fine, &eq.q, &nodes, seed);
+            let obs = observe(&coarse, &fine, eq.q.as_slice(), &nodes, seed);
             let e = softrod::estimate::EstimatorSettings {
                 backend: Backend::Newton,
                 ..EstimatorSettings::default()
@@ -274,7 +281,10 @@ fn fig5_virtual_payload_from_model_error() {
             .unwrap()
             .step(&obs)
             .unwrap();
-            (rms_backbone(&coarse, e.q.as_slice(), &fine, &eq.q), e)
+            (
+                rms_backbone(&coarse, e.q.as_slice(), &fine, eq.q.as_slice()),
+                e,
+            )
         };
         let (rms0, virt) = est(&plant.loads().unwrap(), 5);
         let mut payload = plant.loads().unwrap();

@@ -47,15 +47,15 @@ fn the_follower_force_and_its_non_symmetric_stiffness_are_the_derivatives() {
         s_start_m: None,
         s_end_m: None,
     });
-    let mut q = robot.reference_configuration();
+    let mut q: Vec<f64> = robot.reference_configuration().data.into();
     for (i, v) in q.iter_mut().enumerate().skip(4) {
         *v += 0.05 * ((i as f64) * 0.7).sin() + 0.02 * ((i * i) as f64 * 0.13).cos();
     }
-    let dead = robot.dead_force(&loads).unwrap();
+    let dead: Vec<f64> = robot.dead_force(&loads).unwrap().data.into();
     let r = robot.residual(&q, &dead, &loads).unwrap();
     let n = robot.n_free();
     let mut ks = BandedMatrix::zeros(n, 1, 1);
-    robot.tangent_into(&q, &loads, &mut ks).unwrap();
+    robot.tangent_into(q.as_slice(), &loads, &mut ks).unwrap();
     let kf = robot.follower_stiffness(&loads).unwrap();
     // the full tangent: the symmetric one plus the follower's skew part
     let skew = (&kf - kf.transpose()) * 0.5;
@@ -71,10 +71,13 @@ fn the_follower_force_and_its_non_symmetric_stiffness_are_the_derivatives() {
         let qp: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
         let qm: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a - b).collect();
         // the work along the straight path (exact for a force linear in q)
-        let fd = -robot.potential_change(&qm, &qp, &dead, &loads).unwrap() / (2.0 * h);
+        let fd = -robot
+            .potential_change(&qm, &qp, dead.as_slice(), &loads)
+            .unwrap()
+            / (2.0 * h);
         worst_r = worst_r.max((fd - r[j]).abs());
-        let rp = robot.residual(&qp, &dead, &loads).unwrap();
-        let rm = robot.residual(&qm, &dead, &loads).unwrap();
+        let rp = robot.residual(&qp, dead.as_slice(), &loads).unwrap();
+        let rm = robot.residual(&qm, dead.as_slice(), &loads).unwrap();
         for i in 0..n {
             let fd = -(rp[i] - rm[i]) / (2.0 * h);
             worst_k = worst_k.max((fd - full(i, j)).abs());
@@ -110,7 +113,9 @@ fn compare(name: &str, elements: usize) -> (f64, usize) {
     let s = r["values"]["s_m"].as_array().unwrap();
     let p = r["values"]["positions_m"].as_array().unwrap();
     for (s, p) in s.iter().zip(p) {
-        let x = robot.position_at(&eq.q, s.as_f64().unwrap()).unwrap();
+        let x = robot
+            .position_at(eq.q.as_slice(), s.as_f64().unwrap())
+            .unwrap();
         err = err
             .max((x[0] - p[0].as_f64().unwrap()).abs())
             .max((x[1] - p[1].as_f64().unwrap()).abs());

@@ -32,7 +32,7 @@ fn spatial(elements: usize) -> Robot<softrod::element::SpatialCable> {
 fn solve<E: Element>(robot: &Robot<E>, loads: &Loads) -> Vec<f64> {
     let eq = StaticSolver::default().solve(robot, loads, None).unwrap();
     assert!(eq.report.status.is_converged(), "{:?}", eq.report.status);
-    eq.q
+    eq.q.data.into()
 }
 
 /// A bent and stretched configuration: the reference plus a smooth
@@ -43,7 +43,7 @@ fn bent<E: Element>(robot: &Robot<E>) -> Vec<f64> {
     for (i, v) in q.iter_mut().enumerate().skip(nd) {
         *v += 0.05 * ((i as f64) * 0.7).sin() + 0.02 * ((i * i) as f64 * 0.13).cos();
     }
-    q
+    q.data.into()
 }
 
 /// Residual `R = −∂Π/∂u` against central differences of the potential
@@ -53,7 +53,7 @@ fn bent<E: Element>(robot: &Robot<E>) -> Vec<f64> {
 fn check_derivatives<E: Element>(robot: &Robot<E>, loads: &Loads) {
     let q = bent(robot);
     let dead = robot.dead_force(loads).unwrap();
-    let r = robot.residual(&q, &dead, loads).unwrap();
+    let r = robot.residual(&q, dead.as_slice(), loads).unwrap();
     let n = robot.n_free();
     let mut k = BandedMatrix::zeros(n, 1, 1);
     robot.tangent_into(&q, loads, &mut k).unwrap();
@@ -63,7 +63,7 @@ fn check_derivatives<E: Element>(robot: &Robot<E>, loads: &Loads) {
         point_moments: vec![],
         ..loads.clone()
     };
-    let r0 = robot.residual(&q, &dead, &none).unwrap();
+    let r0 = robot.residual(&q, dead.as_slice(), &none).unwrap();
     let moment_part = r
         .iter()
         .zip(&r0)
@@ -88,10 +88,13 @@ fn check_derivatives<E: Element>(robot: &Robot<E>, loads: &Loads) {
         let dq = robot.expand_step(&du).unwrap();
         let qp: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
         let qm: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a - b).collect();
-        let fd = -robot.potential_change(&qm, &qp, &dead, loads).unwrap() / (2.0 * h);
+        let fd = -robot
+            .potential_change(&qm, &qp, dead.as_slice(), loads)
+            .unwrap()
+            / (2.0 * h);
         worst_r = worst_r.max((fd - r[j]).abs());
-        let rp = robot.residual(&qp, &dead, loads).unwrap();
-        let rm = robot.residual(&qm, &dead, loads).unwrap();
+        let rp = robot.residual(&qp, dead.as_slice(), loads).unwrap();
+        let rm = robot.residual(&qm, dead.as_slice(), loads).unwrap();
         for i in 0..n {
             let fd = -(rp[i] - rm[i]) / (2.0 * h);
             worst_k = worst_k.max((fd - k.get(i, j)).abs());

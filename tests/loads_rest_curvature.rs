@@ -36,7 +36,7 @@ fn robot(
 fn solve(robot: &Robot<PlanarCable>, loads: &Loads) -> Vec<f64> {
     let eq = StaticSolver::default().solve(robot, loads, None).unwrap();
     assert!(eq.report.status.is_converged(), "{:?}", eq.report.status);
-    eq.q
+    eq.q.data.into()
 }
 
 #[test]

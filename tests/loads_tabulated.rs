@@ -23,7 +23,7 @@ fn cantilever(elements: usize) -> Robot<PlanarCable> {
 fn solve(robot: &Robot<PlanarCable>, loads: &Loads) -> Vec<f64> {
     let eq = StaticSolver::default().solve(robot, loads, None).unwrap();
     assert!(eq.report.status.is_converged(), "{:?}", eq.report.status);
-    eq.q
+    eq.q.data.into()
 }
 
 fn table(s: &[f64], wy: &[f64]) -> Loads {

@@ -20,7 +20,7 @@ fn vertical() -> ParallelSpec {
 fn twist<E: softrod::element::Element>(robot: &ParallelRobot<E>, torque_nm: f64) -> [f64; 6] {
     let loads = robot.loads(&[], [0.0; 3], [0.0, 0.0, torque_nm]).unwrap();
     let eq = robot.solve(&loads, None).unwrap();
-    robot.platform_pose(&eq.q).unwrap()
+    robot.platform_pose(eq.q.as_slice()).unwrap()
 }
 
 /// An axial load W on the platform's centre: each of the three identical
@@ -35,7 +35,11 @@ fn each_leg_carries_a_third_of_an_axial_load() {
     let eq = robot.solve(&loads, None).unwrap();
     let s = robot.structure();
     let reactions = s
-        .joint_reactions(&eq.u, &s.dead_force(&loads).unwrap(), &loads)
+        .joint_reactions(
+            eq.u.as_slice(),
+            s.dead_force(&loads).unwrap().as_slice(),
+            &loads,
+        )
         .unwrap();
     assert_eq!(reactions.len(), 3);
     for r in &reactions {
@@ -50,7 +54,8 @@ fn each_leg_carries_a_third_of_an_axial_load() {
         assert!(rel < 1e-9, "leg {}: {rel:e}", r.joint);
         assert!(r.force_n[0].abs() < 1e-9 * w && r.force_n[1].abs() < 1e-9 * w);
     }
-    let dz = robot.platform_pose(&eq.q).unwrap()[2] - spec.platform_reference_m().unwrap()[2];
+    let dz =
+        robot.platform_pose(eq.q.as_slice()).unwrap()[2] - spec.platform_reference_m().unwrap()[2];
     let closed = -w * spec.leg_length_m / (3.0 * spec.ea_n);
     let rel = (dz / closed - 1.0).abs();
     println!("platform drop {dz:.9e} m, W L/(3 EA) = {closed:.9e} m, rel {rel:.1e}");
@@ -131,8 +136,8 @@ fn the_actuated_robot_needs_section_frames() {
         let ef = full.solve(&full.loads(pr, f, m).unwrap(), None).unwrap();
         let ec = cable.solve(&cable.loads(pr, f, m).unwrap(), None).unwrap();
         let (a, b) = (
-            full.platform_pose(&ef.q).unwrap(),
-            cable.platform_pose(&ec.q).unwrap(),
+            full.platform_pose(ef.q.as_slice()).unwrap(),
+            cable.platform_pose(ec.q.as_slice()).unwrap(),
         );
         let dx = (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt();
         println!(

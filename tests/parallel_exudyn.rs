@@ -47,7 +47,7 @@ fn platform_matches_exudyn_under_axial_lateral_and_torque_loads() {
         let robot = spec.build_full().unwrap();
         let (f, m) = (vec3(&p["load"]["force_n"]), vec3(&p["load"]["moment_nm"]));
         let eq = robot.solve(&robot.loads(&[], f, m).unwrap(), None).unwrap();
-        let pose = robot.platform_pose(&eq.q).unwrap();
+        let pose = robot.platform_pose(eq.q.as_slice()).unwrap();
         let x_ref = vec3(&v["platform_position_extrapolated_m"]);
         let psi_ref = vec3(&v["platform_rotation_vector_extrapolated_rad"]);
         let x0 = vec3(&p["platform_reference_m"]);

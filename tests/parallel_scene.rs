@@ -96,7 +96,7 @@ fn ancf3d_scene_twists_by_tl_over_gj_and_refuses_a_singular_frame() {
     let eq = StaticSolver::default()
         .solve(&robot, &scene.loads().unwrap(), None)
         .unwrap();
-    let tip = &eq.q[eq.q.len() - 12..];
+    let tip = &eq.q.as_slice()[eq.q.len() - 12..];
     let phi = Ancf3d::node_rotation(robot.base_node(), tip);
     let closed = 1e-3 * 0.12 / (0.025 / 1.5);
     let rel = (phi[2].abs() / closed - 1.0).abs();

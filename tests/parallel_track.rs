@@ -96,13 +96,13 @@ fn platform_sensitivities_match_finite_differences() {
     let loads = robot.loads(&p, f, [0.0; 3]).unwrap();
     let eq = robot.solve(&loads, None).unwrap();
     let mut warm = WarmStatics::new(robot.clone()).unwrap();
-    warm.factor_at(&eq.u, &loads).unwrap();
-    let s = warm.sensitivities(&eq.u).unwrap();
+    warm.factor_at(eq.u.as_slice(), &loads).unwrap();
+    let s = warm.sensitivities(eq.u.as_slice()).unwrap();
     let x = |p: &[f64], f: [f64; 3]| {
         let e = robot
-            .solve(&robot.loads(p, f, [0.0; 3]).unwrap(), Some(&eq.q))
+            .solve(&robot.loads(p, f, [0.0; 3]).unwrap(), Some(eq.q.as_slice()))
             .unwrap();
-        robot.platform_pose(&e.q).unwrap()
+        robot.platform_pose(e.q.as_slice()).unwrap()
     };
     let mut worst = 0.0f64;
     for j in 0..3 {

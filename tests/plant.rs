@@ -83,7 +83,9 @@ fn plant_differs_from_the_controller_model_in_every_respect() {
         .solve(&model, &scene.loads().unwrap(), None)
         .unwrap()
         .q;
-    let ctrl_tip = model.position_at(&ctrl_tip, model.length()).unwrap();
+    let ctrl_tip = model
+        .position_at(ctrl_tip.as_slice(), model.length())
+        .unwrap();
     let plant0 =
         SimulatedPlant::new(&scene, &marker_arcs(&scene), PlantSettings::default()).unwrap();
     let plant_tip = plant0.true_tip_m().unwrap();
@@ -111,7 +113,7 @@ fn identical_settings_reproduce_the_model_only_when_every_difference_is_removed(
         .solve(&model, &scene.loads().unwrap(), None)
         .unwrap()
         .q;
-    let tip = model.position_at(&q, model.length()).unwrap();
+    let tip = model.position_at(q.as_slice(), model.length()).unwrap();
     let pt = plant.true_tip_m().unwrap();
     assert!(
         (tip[0] - pt[0]).abs() < 1e-5 && (tip[1] - pt[1]).abs() < 1e-5,

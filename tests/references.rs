@@ -48,7 +48,7 @@ fn solve(s: &Scene) -> Vec<f64> {
         .solve(&robot, &s.loads().unwrap(), None)
         .unwrap();
     assert!(eq.report.status.is_converged());
-    eq.q
+    eq.q.data.into()
 }
 
 fn tip(q: &[f64]) -> [f64; 2] {

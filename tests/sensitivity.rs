@@ -43,6 +43,8 @@ fn solve(
         .solve(robot, &loads, Some(q0))
         .unwrap()
         .q
+        .data
+        .into()
 }
 
 /// Largest entry difference relative to the largest entry of `exact`.
@@ -65,7 +67,7 @@ fn dq_df_matches_finite_differences_of_resolved_equilibria() {
             EquilibriumTracker::new(robot.clone(), known.clone(), StaticSettings::default())
                 .unwrap();
         let start = robot.arc_configuration(&known.pressures_pa);
-        let eq = tracker.solve(&model, &f0, &start).unwrap();
+        let eq = tracker.solve(&model, &f0, start.as_slice()).unwrap();
         let exact = Sensitivity::new(&robot, &eq.factors)
             .unwrap()
             .dq_df(&model)
@@ -77,8 +79,8 @@ fn dq_df_matches_finite_differences_of_resolved_equilibria() {
             let (mut fp, mut fm) = (f0.clone(), f0.clone());
             fp[j] += h;
             fm[j] -= h;
-            let qp = solve(&robot, &known, model, &fp, &eq.q);
-            let qm = solve(&robot, &known, model, &fm, &eq.q);
+            let qp = solve(&robot, &known, model, &fp, eq.q.as_slice());
+            let qm = solve(&robot, &known, model, &fm, eq.q.as_slice());
             for i in 0..robot.n_q() {
                 fd[(i, j)] = (qp[i] - qm[i]) / (2.0 * h);
             }
@@ -100,11 +102,15 @@ fn dq_dp_matches_finite_differences_of_resolved_equilibria() {
     let mut tracker =
         EquilibriumTracker::new(robot.clone(), known.clone(), StaticSettings::default()).unwrap();
     let eq = tracker
-        .solve(&model, &f0, &robot.arc_configuration(&known.pressures_pa))
+        .solve(
+            &model,
+            &f0,
+            robot.arc_configuration(&known.pressures_pa).as_slice(),
+        )
         .unwrap();
     let exact = Sensitivity::new(&robot, &eq.factors)
         .unwrap()
-        .dq_dp(&eq.q)
+        .dq_dp(eq.q.as_slice())
         .unwrap();
     let np = robot.n_pressures();
     assert_eq!(exact.shape(), (robot.n_q(), np));
@@ -114,7 +120,7 @@ fn dq_dp_matches_finite_differences_of_resolved_equilibria() {
         let shifted = |d: f64| {
             let mut k = known.clone();
             k.pressures_pa[c] += d;
-            solve(&robot, &k, model, &f0, &eq.q)
+            solve(&robot, &k, model, &f0, eq.q.as_slice())
         };
         let (qp, qm) = (shifted(h), shifted(-h));
         for i in 0..robot.n_q() {
@@ -140,7 +146,7 @@ fn adjoint_gradients_equal_the_forward_sensitivities() {
         .solve(
             &model,
             &vec![0.0; n_f],
-            &robot.arc_configuration(&known.pressures_pa),
+            robot.arc_configuration(&known.pressures_pa).as_slice(),
         )
         .unwrap();
     let s = Sensitivity::new(&robot, &eq.factors).unwrap();
@@ -162,8 +168,8 @@ fn adjoint_gradients_equal_the_forward_sensitivities() {
     let forward = s.dq_df(&model).unwrap().tr_mul(&c);
     let err = rel_err(&forward, &by_adjoint);
     assert!(err < 1e-10, "load gradients: {err:e}");
-    let by_adjoint = s.pressure_gradients(&eq.q, &adj).unwrap();
-    let forward = s.dq_dp(&eq.q).unwrap().tr_mul(&c);
+    let by_adjoint = s.pressure_gradients(eq.q.as_slice(), &adj).unwrap();
+    let forward = s.dq_dp(eq.q.as_slice()).unwrap().tr_mul(&c);
     let err = rel_err(&forward, &by_adjoint);
     assert!(err < 1e-10, "pressure gradients: {err:e}");
 }

@@ -70,7 +70,12 @@ fn loads(r: &Value) -> Loads {
 }
 
 fn solve(robot: &Robot<SpatialCable>, loads: &Loads) -> Vec<f64> {
-    StaticSolver::default().solve(robot, loads, None).unwrap().q
+    StaticSolver::default()
+        .solve(robot, loads, None)
+        .unwrap()
+        .q
+        .data
+        .into()
 }
 
 fn dist(a: &[f64], b: &[f64]) -> f64 {
@@ -304,13 +309,16 @@ fn planar_load_cases_reproduce_the_planar_robot() {
     let q3 = embed(&q2);
     let (d2, d3) = (r2.dead_force(&l2).unwrap(), r3.dead_force(&l3).unwrap());
     let (res2, res3) = (
-        r2.residual(&q2, &d2, &l2).unwrap(),
-        r3.residual(&q3, &d3, &l3).unwrap(),
+        r2.residual(&q2, d2.as_slice(), &l2).unwrap(),
+        r3.residual(&q3, d3.as_slice(), &l3).unwrap(),
     );
     // free coordinates: base stretch, then nodes 1..: [4 per node] vs [6 per node]
     let scale = res2.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     assert!((res2[0] - res3[0]).abs() <= 1e-12 * scale);
-    for (a, b) in res2[1..].chunks(4).zip(res3[1..].chunks(6)) {
+    for (a, b) in res2.as_slice()[1..]
+        .chunks(4)
+        .zip(res3.as_slice()[1..].chunks(6))
+    {
         for (i, j) in [(0, 0), (1, 1), (2, 3), (3, 4)] {
             assert!((a[i] - b[j]).abs() <= 1e-12 * scale, "{a:?} {b:?}");
         }
@@ -345,8 +353,9 @@ fn planar_load_cases_reproduce_the_planar_robot() {
         tight.solve(&r3, &l3, None).unwrap().q,
     );
     let worst = e2
+        .as_slice()
         .chunks(4)
-        .zip(e3.chunks(6))
+        .zip(e3.as_slice().chunks(6))
         .map(|(a, b)| dist(&a[..2], &b[..2]).max(b[2].abs()))
         .fold(0.0f64, f64::max);
     println!("planar robot vs spatial robot, planar loads: max node distance {worst:.2e} m");
@@ -478,8 +487,8 @@ fn spatial_tangent_is_the_finite_difference_jacobian_of_the_residual() {
         let dq = robot.expand_step(&du).unwrap();
         let qp: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
         let qm: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a - b).collect();
-        let rp = robot.residual(&qp, &dead, &l).unwrap();
-        let rm = robot.residual(&qm, &dead, &l).unwrap();
+        let rp = robot.residual(&qp, dead.as_slice(), &l).unwrap();
+        let rm = robot.residual(&qm, dead.as_slice(), &l).unwrap();
         for i in 0..robot.n_free() {
             let fd = -(rp[i] - rm[i]) / (2.0 * h);
             assert!(

@@ -59,11 +59,13 @@ fn warm_start_is_cheap() {
     let loads = s.loads().unwrap();
     let solver = StaticSolver::default();
     let eq = solver.solve(&robot, &loads, None).unwrap();
-    let again = solver.solve(&robot, &loads, Some(&eq.q)).unwrap();
+    let again = solver.solve(&robot, &loads, Some(eq.q.as_slice())).unwrap();
     assert_eq!(again.report.iterations, 0);
     let mut nudged = loads.clone();
     nudged.pressures_pa[0] += 500.0;
-    let warm = solver.solve(&robot, &nudged, Some(&eq.q)).unwrap();
+    let warm = solver
+        .solve(&robot, &nudged, Some(eq.q.as_slice()))
+        .unwrap();
     assert!(warm.report.iterations <= 3, "{}", warm.report);
 }
 

@@ -73,7 +73,7 @@ fn a_fine_mesh_starts_from_the_coarse_equilibrium() {
     let (coarse, coarse_loads) = robot.coarsened(&loads).unwrap().unwrap();
     assert_eq!(coarse.n_elements(), 16);
     let c = solver.solve(&coarse, &coarse_loads, None).unwrap();
-    let u = robot.prolong_from(&coarse, &c.q).unwrap();
+    let u = robot.prolong_from(&coarse, c.q.as_slice()).unwrap();
     let gap = u
         .iter()
         .zip(&fine.u)
@@ -135,7 +135,7 @@ fn the_full_circle_closes() {
         assert!(
             q[k + 2] > 0.99 && q[k + 3].abs() < 1e-2,
             "{n}: tip slope {:?}",
-            &q[k + 2..]
+            &q.as_slice()[k + 2..]
         );
     }
 }

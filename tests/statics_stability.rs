@@ -52,7 +52,7 @@ fn the_column_buckles() {
         assert!(r.status.is_converged(), "{n}: {r}");
         assert_eq!(r.negative_eigenvalues, Some(0), "{n}: {r}");
         assert!(r.is_stable());
-        let lowest = smallest_relative_eigenvalue(&robot, &eq.q, &loads);
+        let lowest = smallest_relative_eigenvalue(&robot, eq.q.as_slice(), &loads);
         assert!(
             lowest > 0.0,
             "{n}: the tangent's smallest eigenvalue {lowest:e}"
@@ -84,7 +84,7 @@ fn below_buckling_the_column_stands() {
     let k = eq.q.len() - 4;
     // leaning towards the tilt, but far less than the buckled column
     assert!(eq.q[k] > 0.0 && eq.q[k] < 0.05, "tip x {}", eq.q[k]);
-    assert!(smallest_relative_eigenvalue(&robot, &eq.q, &loads) > 0.0);
+    assert!(smallest_relative_eigenvalue(&robot, eq.q.as_slice(), &loads) > 0.0);
 }
 
 /// A perfect column (no tilt) beyond its buckling load: the load path
@@ -97,7 +97,7 @@ fn a_perfect_column_leaves_the_saddle() {
     let (robot, loads) = (scene.robot().unwrap(), scene.loads().unwrap());
     let eq = StaticSolver::default().solve(&robot, &loads, None).unwrap();
     assert!(eq.report.is_stable(), "{}", eq.report);
-    assert!(smallest_relative_eigenvalue(&robot, &eq.q, &loads) > 0.0);
+    assert!(smallest_relative_eigenvalue(&robot, eq.q.as_slice(), &loads) > 0.0);
     let k = eq.q.len() - 4;
     // the tilted column's tip is 0.204 m to the side; without the tilt the
     // bent column is nearly as far (the 0.01 rad tilt moves it little)

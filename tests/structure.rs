@@ -51,7 +51,7 @@ fn platform_load(force: [f64; 2], moment: f64) -> StructureLoads {
 fn solve(s: &Structure<PlanarCable>, loads: &StructureLoads) -> Vec<f64> {
     let eq = StaticSolver::default().solve(s, loads, None).unwrap();
     assert!(eq.report.status.is_converged(), "{}", eq.report);
-    eq.u
+    eq.u.data.into()
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -99,7 +99,7 @@ fn one_clamped_rod_is_the_single_chain() {
     u.iter_mut()
         .enumerate()
         .for_each(|(i, v)| *v += 2e-3 * ((i as f64) * 0.77).sin());
-    let q = structure.configuration(&u).unwrap();
+    let q: Vec<f64> = structure.configuration(&u).unwrap().data.into();
     let q_robot = robot.dof_map().configuration(&u).unwrap();
     let dq = q
         .iter()
@@ -107,12 +107,12 @@ fn one_clamped_rod_is_the_single_chain() {
         .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
     assert!(dq < 1e-15, "{dq}");
     let dead_r = robot.dead_force(&loads).unwrap();
-    let dead_s = structure.dead_force(&sloads).unwrap();
-    assert_eq!(dead_r, dead_s);
+    let dead_s: Vec<f64> = structure.dead_force(&sloads).unwrap().data.into();
+    assert_eq!(dead_r.as_slice(), dead_s);
     let mut r_robot = vec![0.0; robot.n_free()];
     let mut k_robot = BandedMatrix::zeros(1, 0, 0);
     robot
-        .residual_and_tangent_into(&q, &dead_r, &loads, &mut r_robot, &mut k_robot)
+        .residual_and_tangent_into(&q, dead_r.as_slice(), &loads, &mut r_robot, &mut k_robot)
         .unwrap();
     let (r_s, k_s) = structure
         .residual_and_tangent(&u, &dead_s, &sloads)
@@ -213,7 +213,7 @@ fn loaded_platform() -> (Structure<PlanarCable>, StructureLoads, Vec<f64>) {
 #[test]
 fn residual_and_tangent_are_the_derivatives_of_the_potential() {
     let (s, loads, u) = loaded_platform();
-    let dead = s.dead_force(&loads).unwrap();
+    let dead: Vec<f64> = s.dead_force(&loads).unwrap().data.into();
     let (r, k) = s.residual_and_tangent(&u, &dead, &loads).unwrap();
     let k = k.to_dense();
     let n = s.n_free();
@@ -234,7 +234,7 @@ fn residual_and_tangent_are_the_derivatives_of_the_potential() {
         }
     }
     // the geometric term Σ g_i ∂²φ_i/∂u² (g = −Q) is present at this state
-    let mut g = s.generalized_force(&u, &dead, &loads).unwrap();
+    let mut g: Vec<f64> = s.generalized_force(&u, &dead, &loads).unwrap().data.into();
     g.iter_mut().for_each(|v| *v = -*v);
     let mut kg = nalgebra::DMatrix::zeros(n, n);
     s.dof_map()
@@ -379,8 +379,8 @@ fn joint_reactions_balance_the_platform_and_the_legs() {
     let (h, t) = (0.5, 0.02);
     let loads = platform_load([h, 0.0], t);
     let u = solve(&s, &loads);
-    let q = s.configuration(&u).unwrap();
-    let dead = s.dead_force(&loads).unwrap();
+    let q: Vec<f64> = s.configuration(&u).unwrap().data.into();
+    let dead: Vec<f64> = s.dead_force(&loads).unwrap().data.into();
     let weight = -0.05 * 9.81;
     let w: Vec<[f64; 3]> = (0..2).map(|rod| tip_wrench(&s, &q, rod)).collect();
     let sum = [
@@ -417,7 +417,7 @@ fn joint_reactions_balance_the_platform_and_the_legs() {
     }
     // each leg: what it pushes on its clamp is minus what it pushes on the
     // platform (no load between)
-    let qgen = s.generalized_force(&u, &dead, &loads).unwrap();
+    let qgen: Vec<f64> = s.generalized_force(&u, &dead, &loads).unwrap().data.into();
     for (rod, w) in w.iter().enumerate() {
         let base = s.node_coordinates(rod, 0).unwrap();
         let d = (qgen[base.start] + w[0]).abs() + (qgen[base.start + 1] + w[1]).abs();
@@ -490,7 +490,7 @@ fn a_gripper_on_a_fixed_palm_holds_each_finger_like_a_clamp() {
         ..StructureLoads::default()
     };
     let u = solve(&s, &loads);
-    let q = s.configuration(&u).unwrap();
+    let q: Vec<f64> = s.configuration(&u).unwrap().data.into();
     for (rod, x) in [(0usize, -0.02), (1, 0.02)] {
         let mut rs = softrod::assembly::RobotSpec::new(finger_sections());
         rs.base.position_m = root(x).to_vec();
@@ -506,7 +506,7 @@ fn a_gripper_on_a_fixed_palm_holds_each_finger_like_a_clamp() {
                 .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
         println!(
             "gripper finger {rod}: tip {:?}, differs from the clamped robot by {d:.1e}",
-            &eq.q[robot.n_q() - 4..robot.n_q() - 2]
+            &eq.q.as_slice()[robot.n_q() - 4..robot.n_q() - 2]
         );
         assert!(d < 1e-10, "finger {rod}: {d}");
     }

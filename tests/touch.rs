@@ -147,13 +147,13 @@ fn marker_response_matches_finite_differences() {
     let solver = StaticSolver::default();
     let q = solver.solve(&robot, &loads, None).unwrap().q;
     let arcs = marker_arcs(6);
-    let resp = MarkerResponse::new(&robot, &loads, &q, &arcs).unwrap();
+    let resp = MarkerResponse::new(&robot, &loads, q.as_slice(), &arcs).unwrap();
     let markers = |q: &[f64]| -> Vec<f64> {
         arcs.iter()
-            .flat_map(|&s| robot.position_at(q, s).unwrap())
+            .flat_map(|&s| robot.position_at(q, s).unwrap().data.as_vec().clone())
             .collect()
     };
-    let y0 = markers(&q);
+    let y0 = markers(q.as_slice());
     let h = 1e-5;
     for s in [0.05, 0.2171, 0.3, 0.465] {
         let g = resp.at(s).unwrap();
@@ -166,7 +166,13 @@ fn marker_response_matches_finite_differences() {
                     s_m: s,
                     force_n: f.to_vec(),
                 });
-                markers(&solver.solve(&robot, &l, Some(&q)).unwrap().q)
+                markers(
+                    solver
+                        .solve(&robot, &l, Some(q.as_slice()))
+                        .unwrap()
+                        .q
+                        .as_slice(),
+                )
             };
             let (a, b) = (side(1.0), side(-1.0));
             let scale = g.column(d).amax();
@@ -283,7 +289,7 @@ fn field_gradient_in_the_shape_matches_finite_differences() {
     let goal = [0.15, -0.40];
     // two obstacle points within Q0 of several elements
     let obs = [[0.09, -0.33], [0.02, -0.2]];
-    let (_, g) = field_gradient(&robot, &q, &p, goal, &obs).unwrap();
+    let (_, g) = field_gradient(&robot, q.as_slice(), &p, goal, &obs).unwrap();
     let h = 1e-7;
     let scale = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     assert!(scale > 1.0);
@@ -292,8 +298,12 @@ fn field_gradient_in_the_shape_matches_finite_differences() {
         let (mut a, mut b) = (q.clone(), q.clone());
         a[i] += h;
         b[i] -= h;
-        let fd = (field_gradient(&robot, &a, &p, goal, &obs).unwrap().0
-            - field_gradient(&robot, &b, &p, goal, &obs).unwrap().0)
+        let fd = (field_gradient(&robot, a.as_slice(), &p, goal, &obs)
+            .unwrap()
+            .0
+            - field_gradient(&robot, b.as_slice(), &p, goal, &obs)
+                .unwrap()
+                .0)
             / (2.0 * h);
         assert!((fd - g[i]).abs() < 1e-5 * scale, "q[{i}]: {fd} vs {}", g[i]);
     }

@@ -39,11 +39,12 @@ impl Robot<PlanarCable> {
     /// let m = std::f64::consts::TAU * 0.025 / 0.24;
     /// let loads = Loads { node_moments: vec![NodeMoment { node: 32, moment_nm: vec![m] }], ..Loads::default() };
     /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
-    /// let tip = *robot.node_angles(&eq.q)?.last().unwrap();
+    /// let angles = robot.node_angles(eq.q.as_slice())?;
+    /// let tip = angles[angles.len() - 1];
     /// assert!((tip - std::f64::consts::TAU).abs() < 1e-4); // atan2 alone: about 0
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    pub fn node_angles(&self, q: &[f64]) -> Result<Vec<f64>> {
+    pub fn node_angles(&self, q: &[f64]) -> Result<nalgebra::DVector<f64>> {
         check_len("q", self.n_q(), q.len())?;
         let slope_angle = |e: usize, xi: f64| -> Result<f64> {
             let arc = self.node_arc();
@@ -62,7 +63,7 @@ impl Robot<PlanarCable> {
             }
             out.push(angle);
         }
-        Ok(out)
+        Ok(nalgebra::DVector::from_vec(out))
     }
 
     /// The unwrapped tangent angle (rad) at arc coordinate `s_m` (m), as
@@ -77,7 +78,7 @@ impl Robot<PlanarCable> {
     /// use softrod::assembly::{RobotSpec, Section};
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.025, 4)]).build_planar()?;
     /// let q = robot.reference_configuration();
-    /// assert_eq!(robot.angle_at(&q, 0.13)?, 0.0);
+    /// assert_eq!(robot.angle_at(q.as_slice(), 0.13)?, 0.0);
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn angle_at(&self, q: &[f64], s_m: f64) -> Result<f64> {

@@ -10,6 +10,8 @@
 
 use std::sync::Arc;
 
+use nalgebra::DVector;
+
 use super::Robot;
 use crate::element::{ArcPoint, Element};
 use crate::error::{check_len, Error, Result};
@@ -125,13 +127,13 @@ impl<E: Element> Robot<E> {
     /// use softrod::structure::Assembled;
     /// let fine = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 64)]).build_planar()?;
     /// let coarse = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 16)]).build_planar()?;
-    /// let u = fine.prolong_from(&coarse, &coarse.reference_configuration())?;
+    /// let u = fine.prolong_from(&coarse, coarse.reference_configuration().as_slice())?;
     /// let straight = fine.reference_free_coordinates();
     /// // a straight line is a cubic: interpolated to round-off
     /// assert!(u.iter().zip(&straight).all(|(a, b)| (a - b).abs() < 1e-14));
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    pub fn prolong_from(&self, coarse: &Robot<E>, q_coarse: &[f64]) -> Result<Vec<f64>> {
+    pub fn prolong_from(&self, coarse: &Robot<E>, q_coarse: &[f64]) -> Result<DVector<f64>> {
         check_len("q_coarse", coarse.n_q(), q_coarse.len())?;
         if (coarse.length() - self.length()).abs() > 1e-12 * self.length() {
             return Err(Error::invalid(
@@ -141,7 +143,7 @@ impl<E: Element> Robot<E> {
             ));
         }
         let q = coarse.interpolate_to(q_coarse, self.node_arc())?;
-        crate::structure::Assembled::free_coordinates_of(self, &q)
+        crate::structure::Assembled::free_coordinates_of(self, &q).map(DVector::from_vec)
     }
 
     /// A cable field (`[v, v']` per node, node-major) of this mesh at the

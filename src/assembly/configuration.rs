@@ -1,16 +1,32 @@
 //! The robot's configurations without a solve: the straight reference and
 //! the arcs of its actuation (where a cold static solve starts).
 
+use nalgebra::DVector;
+
 use super::Robot;
 use crate::element::Element;
 
 impl<E: Element> Robot<E> {
     /// The stress-free straight configuration along the base direction
-    /// (exact equilibrium without loads, actuation and rest curvature).
-    pub fn reference_configuration(&self) -> Vec<f64> {
+    /// (exact equilibrium without loads, actuation and rest curvature), all
+    /// `n_q` coordinates.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 4)]).build_planar()?;
+    /// let q = robot.reference_configuration();
+    /// assert_eq!(q.len(), robot.n_q());
+    /// // tip node: at (0.24, 0), tangent (1, 0)
+    /// assert_eq!(q.rows(robot.n_q() - 4, 4).as_slice(), &[0.24, 0.0, 1.0, 0.0]);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn reference_configuration(&self) -> DVector<f64> {
         let d = E::DIM;
-        self.rod
-            .straight_configuration(&self.base_node[..d], &self.base_node[d..2 * d])
+        DVector::from_vec(
+            self.rod
+                .straight_configuration(&self.base_node[..d], &self.base_node[d..2 * d]),
+        )
     }
 
     /// The configuration the section torques of `pressures` (plus rest
@@ -19,7 +35,23 @@ impl<E: Element> Robot<E> {
     /// robots; a spatial robot gets the straight configuration). The static
     /// solver starts cold solves here: it is exact for pure actuation and
     /// much closer to equilibrium than the straight line.
-    pub fn arc_configuration(&self, pressures: &[f64]) -> Vec<f64> {
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{Chamber, RobotSpec, Section};
+    /// use softrod::loads::Loads;
+    /// use softrod::statics::StaticSolver;
+    /// let mut section = Section::uniform(0.24, 300.0, 0.025, 8);
+    /// section.chambers = vec![Chamber { gain_nm_per_pa: vec![1e-6], pressure_min_pa: -1e5, pressure_max_pa: 1e5 }];
+    /// let robot = RobotSpec::new(vec![section]).build_planar()?;
+    /// let q = robot.arc_configuration(&[2e4]);
+    /// // pure actuation: the arc is the equilibrium
+    /// let loads = Loads { pressures_pa: vec![2e4], ..Loads::default() };
+    /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+    /// assert!((q - &eq.q).amax() < 1e-6);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn arc_configuration(&self, pressures: &[f64]) -> DVector<f64> {
         if E::DIM != 2 || E::MOMENT_DIM != 1 {
             return self.reference_configuration();
         }
@@ -38,7 +70,7 @@ impl<E: Element> Robot<E> {
                 let spec = &self.rod.sections()[sec];
                 let ds = s - s_prev;
                 let start = self.rod.node_arc()[self.section_nodes()[sec].0];
-                let k = torques[sec].first().copied().unwrap_or(0.0) / spec.ei_nm2
+                let k = torques.get((0, sec)).copied().unwrap_or(0.0) / spec.ei_nm2
                     + spec.rest_curvature_at(s_prev + 0.5 * ds - start);
                 let dth = k * ds;
                 if dth.abs() < 1e-9 {
@@ -54,6 +86,6 @@ impl<E: Element> Robot<E> {
             let node = E::straight_node(&[x, y], &[th.cos(), th.sin()]);
             q.extend(node.iter().take(nd));
         }
-        q
+        DVector::from_vec(q)
     }
 }

@@ -22,7 +22,7 @@ impl<E: Element> Assembled for Robot<E> {
     }
 
     fn prolong(&self, coarse: &Self, q_coarse: &[f64]) -> Result<Vec<f64>> {
-        self.prolong_from(coarse, q_coarse)
+        self.prolong_from(coarse, q_coarse).map(|u| u.data.into())
     }
 
     fn n_free(&self) -> usize {
@@ -41,7 +41,7 @@ impl<E: Element> Assembled for Robot<E> {
         // the clamp's free directions at zero, the nodes where they lie
         let q = self.reference_configuration();
         let mut u = vec![0.0; self.n_base_free()];
-        u.extend_from_slice(q.get(E::NODE_DOFS..).unwrap_or(&[]));
+        u.extend_from_slice(q.as_slice().get(E::NODE_DOFS..).unwrap_or(&[]));
         u
     }
 
@@ -50,7 +50,7 @@ impl<E: Element> Assembled for Robot<E> {
     }
 
     fn dead_force(&self, loads: &Loads) -> Result<Vec<f64>> {
-        Robot::dead_force(self, loads)
+        Robot::dead_force(self, loads).map(|f| f.data.into())
     }
 
     fn scaled_loads(&self, loads: &Loads, factor: f64) -> Loads {
@@ -113,7 +113,7 @@ impl<E: Element> Assembled for Robot<E> {
         let stretch = self.restrict(&d)?;
         let nb = self.n_base_free();
         let mut u = Vec::with_capacity(self.n_free());
-        u.extend_from_slice(&stretch[..nb]);
+        u.extend_from_slice(&stretch.as_slice()[..nb]);
         u.extend_from_slice(&q[nd..]);
         Ok(u)
     }
@@ -121,7 +121,7 @@ impl<E: Element> Assembled for Robot<E> {
     /// The arcs of the actuation ([`Robot::arc_configuration`]).
     fn start_free_coordinates(&self, loads: &Loads) -> Result<Vec<f64>> {
         self.validate_loads(loads)?;
-        self.free_coordinates_of(&self.arc_configuration(&loads.pressures_pa))
+        self.free_coordinates_of(self.arc_configuration(&loads.pressures_pa).as_slice())
     }
 
     fn applied_force_into(

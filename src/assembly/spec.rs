@@ -1,6 +1,7 @@
 //! What defines a robot: its sections, the pose of its clamped base,
 //! gravity and the Gauss rules.
 
+use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
 
 use super::{Clamp, Robot, Section};
@@ -38,6 +39,46 @@ pub struct Base {
     /// What the clamp prescribes (default `position_and_direction`).
     #[serde(default)]
     pub clamp: Clamp,
+}
+
+impl Base {
+    /// The base position as a point of dimension `D` (m).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `base.position_m` if it does not
+    /// have `D` entries.
+    ///
+    /// # Example
+    /// ```
+    /// let b = softrod::assembly::Base::default();
+    /// assert_eq!(b.position::<2>()?, nalgebra::Vector2::zeros());
+    /// assert!(b.position::<3>().is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn position<const D: usize>(&self) -> Result<SVector<f64, D>> {
+        crate::numeric::fixed("base.position_m", &self.position_m)
+    }
+
+    /// The unit base tangent in `D` dimensions: `direction` normalized, or
+    /// `(cos, sin)` of `angle_rad` (with `z = 0` in 3-D) without one.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `base.direction` if it does not
+    /// have `D` entries; [`Error::InvalidParameter`] if it is zero or not
+    /// finite.
+    ///
+    /// # Example
+    /// ```
+    /// let mut b = softrod::assembly::Base::default();
+    /// b.angle_rad = std::f64::consts::FRAC_PI_2;
+    /// assert!((b.unit_direction::<2>()? - nalgebra::Vector2::y()).norm() < 1e-15);
+    /// b.direction = Some(vec![0.0, 0.0, -2.0]);
+    /// assert_eq!(b.unit_direction::<3>()?, -nalgebra::Vector3::z());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn unit_direction<const D: usize>(&self) -> Result<SVector<f64, D>> {
+        crate::numeric::fixed("base.direction", &base_direction(self, D)?)
+    }
 }
 
 impl Default for Base {
@@ -148,6 +189,24 @@ impl RobotSpec {
             }
             SpatialCable::with_rules(le, s.ea_n, s.ei_nm2, ax, be)
         })
+    }
+
+    /// Gravity as a vector of dimension `D` (m/s²).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `gravity_m_per_s2` if it does not
+    /// have `D` entries.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section};
+    /// let spec = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 8)]);
+    /// assert_eq!(spec.gravity::<2>()?, nalgebra::Vector2::new(0.0, -9.81));
+    /// assert!(spec.gravity::<3>().is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn gravity<const D: usize>(&self) -> Result<SVector<f64, D>> {
+        crate::numeric::fixed("gravity_m_per_s2", &self.gravity_m_per_s2)
     }
 
     /// Total number of elements (saturating).

@@ -27,7 +27,7 @@ const STRAIN_SAMPLES: usize = 5;
 /// ```
 /// use softrod::assembly::{RobotSpec, Section, ValidityWarning};
 /// let robot = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 4)]).build_planar()?;
-/// let mut q = robot.reference_configuration();
+/// let mut q = robot.reference_configuration().as_slice().to_vec();
 /// for node in q.chunks_mut(4) {
 ///     node[0] *= 1.5; // stretch by 50 %
 ///     node[2] *= 1.5;
@@ -133,7 +133,7 @@ impl<E: Element> Robot<E> {
         let norm = t.iter().map(|x| x * x).sum::<f64>().sqrt();
         let tol = 1e-9 * self.length();
         let (mut behind, mut far) = (0, (0, 0.0));
-        for (i, r) in self.node_positions(q).iter().enumerate().skip(1) {
+        for (i, r) in self.node_positions(q).column_iter().enumerate().skip(1) {
             let ahead = r
                 .iter()
                 .zip(base)
@@ -169,21 +169,21 @@ mod tests {
             .build_planar()
             .unwrap();
         let q = robot.reference_configuration();
-        assert!(robot.validity(&q).unwrap().is_empty());
+        assert!(robot.validity(q.as_slice()).unwrap().is_empty());
         // 5 % stretch: inside the bound
         let mut q5 = q.clone();
-        for node in q5.chunks_mut(4) {
+        for node in q5.as_mut_slice().chunks_mut(4) {
             node[0] *= 1.05;
             node[2] *= 1.05;
         }
-        assert!(robot.validity(&q5).unwrap().is_empty());
+        assert!(robot.validity(q5.as_slice()).unwrap().is_empty());
         // flipped back through the base and stretched 2×: nodes behind it
         let mut qb = q.clone();
-        for node in qb.chunks_mut(4) {
+        for node in qb.as_mut_slice().chunks_mut(4) {
             node[0] *= -2.0;
             node[2] *= -2.0;
         }
-        let w = robot.validity(&qb).unwrap();
+        let w = robot.validity(qb.as_slice()).unwrap();
         assert!(
             matches!(w[0], ValidityWarning::AxialStrain { strain, .. } if (strain - 1.0).abs() < 1e-6),
             "{w:?}"
@@ -199,6 +199,6 @@ mod tests {
             ),
             "{w:?}"
         );
-        assert!(robot.validity(&q[1..]).is_err());
+        assert!(robot.validity(&q.as_slice()[1..]).is_err());
     }
 }

@@ -41,13 +41,13 @@ fn estimation_demo() -> Result<()> {
     let eq = StaticSolver::default().solve(&robot, &truth, None)?;
     let nodes: Vec<usize> = scene.markers.iter().filter_map(|m| m.node).collect();
     let sigma = 1e-5;
-    let obs = Observation::of_nodes(&robot, &eq.q, &nodes)?.with_noise(sigma, 1);
+    let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &nodes)?.with_noise(sigma, 1);
     let true_force = [
         uniform[0] * robot.length(),
         uniform[1] * robot.length() - 9.81 * tip_mass_kg,
     ];
     let tip = |q: &[f64]| (q[q.len() - 4], q[q.len() - 3]);
-    let (tx, ty) = tip(&eq.q);
+    let (tx, ty) = tip(eq.q.as_slice());
     outln!("Estimation (Sec. III): unknown payload = {:.0} g tip mass + uniform {:.2} N/m, not known to the estimator", tip_mass_kg * 1e3, uniform[1]);
     outln!(
         "  {} markers at nodes {:?}, seeded noise {:.2} mm; alpha by the discrepancy principle",
@@ -79,7 +79,10 @@ fn estimation_demo() -> Result<()> {
         );
         // streaming: 50 new noisy frames of the same scene, warm-started
         let frames: Vec<Observation> = (0..50)
-            .map(|k| Ok(Observation::of_nodes(&robot, &eq.q, &nodes)?.with_noise(sigma, 100 + k)))
+            .map(|k| {
+                Ok(Observation::of_nodes(&robot, eq.q.as_slice(), &nodes)?
+                    .with_noise(sigma, 100 + k))
+            })
             .collect::<softrod::Result<_>>()?;
         let t = median_warm_step(est.as_mut(), &frames)?;
         outln!(

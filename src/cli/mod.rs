@@ -236,7 +236,7 @@ fn fill_angles(
     for (n, a) in nodes.iter_mut().zip(&angles) {
         n.angle_rad = Some(*a);
     }
-    Ok(angles.last().copied())
+    Ok(angles.as_slice().last().copied())
 }
 
 /// The result of `softrod solve`.
@@ -321,7 +321,7 @@ fn solve_with<E: Element>(
         scene,
         robot,
         loads.pressures_pa.clone(),
-        &eq.q,
+        eq.q.as_slice(),
         eq.report,
     ))
 }
@@ -494,7 +494,7 @@ fn observe<E: Element>(scene: &Scene, robot: &Robot<E>, q: &[f64]) -> Result<Obs
             _ => anyhow::bail!("a marker needs `node` or `s_m`"),
         };
         let point = robot.arc_point("marker", s)?;
-        let p = robot.position_at(q, s)?;
+        let p: Vec<f64> = robot.position_at(q, s)?.data.into();
         let mut mo = match m.node {
             Some(n) => MarkerObservation::at_node(n, p),
             None => MarkerObservation::at_arc(s, p),
@@ -545,7 +545,7 @@ fn estimate_with<E: Element + 'static>(
         None => {
             let solver = StaticSolver::new(scene.solver.statics.clone())?;
             let eq = solver.solve(&robot, &known, None)?;
-            let obs = observe(scene, &robot, &eq.q)?.with_noise(1e-5, 1);
+            let obs = observe(scene, &robot, eq.q.as_slice())?.with_noise(1e-5, 1);
             (obs, "synthesized: the scene solved forward with its own loads, seeded 0.01 mm noise added to the marker positions (seed 1); the estimated load should be near zero".to_string())
         }
     };

@@ -30,7 +30,7 @@ use crate::element::hermite;
 /// use softrod::contact::{Obstacle, Obstacles};
 /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
 /// let obstacles = Obstacles::new(vec![Obstacle::Circle { center_m: [0.12, -0.05], radius_m: 0.02 }], 0.005)?;
-/// let gaps = obstacles.gaps(&robot, &robot.reference_configuration())?;
+/// let gaps = obstacles.gaps(&robot, robot.reference_configuration().as_slice())?;
 /// assert_eq!(gaps.len(), 1);
 /// // the straight rod's closest point is above the centre: 0.05 − 0.02 − 0.005
 /// assert!((gaps[0].s_m - 0.12).abs() < 1e-12 && (gaps[0].gap_m - 0.025).abs() < 1e-12);

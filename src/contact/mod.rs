@@ -142,7 +142,7 @@ impl Obstacles {
             }
         }
         let q = robot.reference_configuration();
-        for g in self.gaps(robot, &q)? {
+        for g in self.gaps(robot, q.as_slice())? {
             if g.gap_m.is_nan() || g.gap_m < -tol {
                 return Err(Error::invalid(
                     format!("obstacles[{}]", g.obstacle),

@@ -77,7 +77,7 @@ pub struct ContactForce {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ContactSolution {
     /// All coordinates, base node included.
-    pub q: Vec<f64>,
+    pub q: DVector<f64>,
     /// Every contact with a force, base to tip.
     pub contacts: Vec<ContactForce>,
     /// What the solver did.
@@ -144,7 +144,7 @@ impl ElementMap {
         for j in 0..nbf {
             let mut u = vec![0.0; robot.n_free()];
             u[j] = 1.0;
-            base_cols.push(robot.expand_step(&u)?[..4].to_vec());
+            base_cols.push(robot.expand_step(&u)?.as_slice()[..4].to_vec());
         }
         Ok(ElementMap { base_cols, nbf })
     }
@@ -217,7 +217,7 @@ struct Ctx<'a> {
 
 impl Ctx<'_> {
     fn residual(&self, q: &[f64]) -> Result<Vec<f64>> {
-        self.robot.residual(q, &self.dead, self.loads)
+        Ok(self.robot.residual(q, &self.dead, self.loads)?.data.into())
     }
     fn tangent(&self, q: &[f64]) -> Result<DMatrix<f64>> {
         let hb = 7;
@@ -232,7 +232,7 @@ impl Ctx<'_> {
         Ok(k)
     }
     fn expand(&self, du: &[f64]) -> Result<Vec<f64>> {
-        self.robot.expand_step(du)
+        Ok(self.robot.expand_step(du)?.data.into())
     }
     /// The tolerance of the KKT residual at `q` with tangent `k` (N).
     fn tolerance(&self, q: &[f64], k: &DMatrix<f64>, rel: f64) -> f64 {
@@ -308,11 +308,11 @@ impl ContactSolver {
         let start = Instant::now();
         self.settings.validate()?;
         obstacles.check_robot(robot)?;
-        let dead = robot.dead_force(loads)?;
+        let dead: Vec<f64> = robot.dead_force(loads)?.data.into();
         let n = robot.n_free();
-        let mut applied = robot.restrict(&dead)?;
+        let mut applied: Vec<f64> = robot.restrict(&dead)?.data.into();
         let mut m = vec![0.0; n];
-        robot.moment_force_into(&robot.reference_configuration(), loads, &mut m)?;
+        robot.moment_force_into(robot.reference_configuration().as_slice(), loads, &mut m)?;
         applied.iter_mut().zip(&m).for_each(|(a, b)| *a += b);
         let ctx = Ctx {
             robot,
@@ -333,11 +333,11 @@ impl ContactSolver {
             None => {
                 // not the free equilibrium, even if it does not penetrate: it
                 // may lie beyond an obstacle the loading path meets
-                let arc = robot.arc_configuration(&loads.pressures_pa);
+                let arc: Vec<f64> = robot.arc_configuration(&loads.pressures_pa).data.into();
                 if ctx.penetration(&arc)?.0 == 0.0 {
                     arc
                 } else {
-                    robot.reference_configuration()
+                    robot.reference_configuration().data.into()
                 }
             }
         };
@@ -373,7 +373,7 @@ impl ContactSolver {
         contacts.sort_by(|a, b| a.s_m.total_cmp(&b.s_m));
         report.wall_time_s = start.elapsed().as_secs_f64();
         Ok(ContactSolution {
-            q,
+            q: DVector::from_vec(q),
             contacts,
             report,
         })

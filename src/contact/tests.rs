@@ -266,7 +266,7 @@ fn the_tip_gap_is_a_fixed_material_point() {
         0.0,
     )
     .unwrap();
-    let gaps = obstacles.gaps(&robot, &q).unwrap();
+    let gaps = obstacles.gaps(&robot, q.as_slice()).unwrap();
     assert_eq!(gaps.len(), 1);
     let g = &gaps[0];
     assert!(!g.stationary && g.xi == 1.0 && (g.gap_m - 0.05).abs() < 1e-15);
@@ -287,7 +287,7 @@ fn a_node_shared_by_two_elements_is_one_gap() {
         0.0,
     )
     .unwrap();
-    let gaps = obstacles.gaps(&robot, &q).unwrap();
+    let gaps = obstacles.gaps(&robot, q.as_slice()).unwrap();
     assert_eq!(gaps.len(), 1, "{gaps:?}");
     assert!((gaps[0].s_m - 0.15).abs() < 1e-12);
 }

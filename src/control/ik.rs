@@ -384,8 +384,8 @@ impl<E: Element> InverseKinematics<E> {
             .solve_with(&self.robot, &loads, q0, &mut self.linear);
         self.spent += spent(&eq);
         let eq = eq?;
-        let x = self.robot.position_at(&eq.q, self.effector_s_m)?;
-        Ok((eq.q, x))
+        let x = self.robot.position_at(eq.q.as_slice(), self.effector_s_m)?;
+        Ok((eq.q.data.into(), x.data.into()))
     }
 
     /// As [`InverseKinematics::forward`] from `q0`, with the line-search
@@ -402,8 +402,8 @@ impl<E: Element> InverseKinematics<E> {
             .solve_with(&self.robot, &loads, Some(q0), &mut self.linear);
         self.spent += spent(&eq);
         let eq = eq?;
-        let x = self.robot.position_at(&eq.q, self.effector_s_m)?;
-        Ok((eq.q, x))
+        let x = self.robot.position_at(eq.q.as_slice(), self.effector_s_m)?;
+        Ok((eq.q.data.into(), x.data.into()))
     }
 
     /// (43) `∂q/∂P = −(∂Q/∂q)⁻¹ ∂Q/∂P` (`n_q × n_pressures`, m/Pa) at the

@@ -184,10 +184,10 @@ pub struct MassEstimate {
 /// let scene = Scene::two_section();
 /// let (robot, loads) = (scene.robot()?, scene.loads()?);
 /// let mut est = MassEstimator::new(robot.clone(), loads.clone(), 0.24, &scene.gravity_m_per_s2, MassSettings::default())?;
-/// let unloaded = robot.position_at(&StaticSolver::default().solve(&robot, &loads, None)?.q, 0.24)?;
+/// let unloaded = robot.position_at(StaticSolver::default().solve(&robot, &loads, None)?.q.as_slice(), 0.24)?;
 /// let mut heavy = loads.clone();
 /// heavy.point_forces.push(PointForce { s_m: 0.24, force_n: vec![0.0, -0.05 * 9.81] });
-/// let loaded = robot.position_at(&StaticSolver::default().solve(&robot, &heavy, None)?.q, 0.24)?;
+/// let loaded = robot.position_at(StaticSolver::default().solve(&robot, &heavy, None)?.q.as_slice(), 0.24)?;
 /// let m = est.estimate(&loads.pressures_pa, &unloaded, &loaded)?;
 /// assert!((m.mass_kg - 0.05).abs() < 1e-6, "{}", m.mass_kg);
 /// # Ok::<(), softrod::Error>(())
@@ -302,12 +302,20 @@ impl<E: Element> MassEstimator<E> {
         self.set_pressures(pressures_pa)?;
         let q0 = match &self.warm {
             Some(q) => q.clone(),
-            None => self.tracker.robot().arc_configuration(pressures_pa),
+            None => self
+                .tracker
+                .robot()
+                .arc_configuration(pressures_pa)
+                .data
+                .into(),
         };
         let eq = self.tracker.solve(&self.load, force_n, &q0)?;
-        let x = self.tracker.robot().position_at(&eq.q, self.effector_s_m)?;
-        self.warm = Some(eq.q.clone());
-        Ok((eq.q, x))
+        let x = self
+            .tracker
+            .robot()
+            .position_at(eq.q.as_slice(), self.effector_s_m)?;
+        self.warm = Some(eq.q.as_slice().to_vec());
+        Ok((eq.q.data.into(), x.data.into()))
     }
 
     /// `∂x/∂F` (`DIM × DIM`, m/N): how the end effector moves with the force

@@ -262,7 +262,10 @@ impl<E: Element> ParallelController<E> {
         check_len("chambers", np, range.len())?;
         let eq = model.solve(&model.loads(p0_pa, [0.0; 3], [0.0; 3])?, None)?;
         let mut warm = WarmStatics::new(model)?;
-        warm.factor_at(&eq.u, &warm.robot().loads(p0_pa, [0.0; 3], [0.0; 3])?)?;
+        warm.factor_at(
+            eq.u.as_slice(),
+            &warm.robot().loads(p0_pa, [0.0; 3], [0.0; 3])?,
+        )?;
         Ok(ParallelController {
             warm,
             kind,
@@ -272,9 +275,9 @@ impl<E: Element> ParallelController<E> {
             range,
             tolerance_m,
             p: p0_pa.to_vec(),
-            u_ik: eq.u.clone(),
+            u_ik: eq.u.as_slice().to_vec(),
             f_bar: [0.0; 3],
-            u_est: eq.u,
+            u_est: eq.u.data.into(),
         })
     }
 
@@ -288,7 +291,7 @@ impl<E: Element> ParallelController<E> {
     /// The model's equilibrium at pressures `p` and platform force `f`.
     fn forward(&mut self, p: &[f64], f: [f64; 3], u0: &[f64]) -> Result<(Vec<f64>, [f64; 3])> {
         let loads = self.warm.robot().loads(p, f, [0.0; 3])?;
-        let u = self.warm.solve(&loads, u0)?;
+        let u: Vec<f64> = self.warm.solve(&loads, u0)?.data.into();
         let x = self.platform(&u)?;
         Ok((u, x))
     }
@@ -545,7 +548,7 @@ pub fn run_track(
         centre_pa.to_vec()
     };
     let centre_eq = model.solve(&model.loads(&p_c, [0.0; 3], [0.0; 3])?, None)?;
-    let c = model.platform_pose(&centre_eq.q)?;
+    let c = model.platform_pose(centre_eq.q.as_slice())?;
     let trajectory = circle([c[0], c[1], c[2]], settings)?;
     let x_at = |t: f64| -> [f64; 3] {
         let v = trajectory.at(t);
@@ -581,7 +584,7 @@ pub fn run_track(
         let loads = plant_warm
             .robot()
             .loads(&control.pressures_pa, weight, [0.0; 3])?;
-        u_plant = plant_warm.solve(&loads, &u_plant)?;
+        u_plant = plant_warm.solve(&loads, u_plant.as_slice())?;
         let error_m = (0..3)
             .map(|i| (actual[i] - desired[i]).powi(2))
             .sum::<f64>()

@@ -402,14 +402,14 @@ fn check_positive(field: &str, v: f64) -> Result<()> {
 pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajectory> {
     let robot = scene.robot()?;
     let loads = scene.loads()?;
-    let base = robot.position_at(&robot.reference_configuration(), 0.0)?;
+    let base = robot.position_at(robot.reference_configuration().as_slice(), 0.0)?;
     let length = robot.length();
     let mut ik = InverseKinematics::new(robot.clone(), loads.clone(), IkSettings::default())?;
     let zeros = vec![0.0; robot.n_q()];
     let center = |c: &Option<Vec<f64>>, ik: &mut InverseKinematics<_>| -> Result<Vec<f64>> {
         match c {
             Some(c) => {
-                check_point("trajectory.center_m", c, &base, length)?;
+                check_point("trajectory.center_m", c, base.as_slice(), length)?;
                 Ok(c.clone())
             }
             None => Ok(ik.forward(&loads.pressures_pa, &zeros, None)?.1),
@@ -453,8 +453,8 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
             duration_s,
             hold_s,
         }) => {
-            check_point("trajectory.from_m", from_m, &base, length)?;
-            check_point("trajectory.to_m", to_m, &base, length)?;
+            check_point("trajectory.from_m", from_m, base.as_slice(), length)?;
+            check_point("trajectory.to_m", to_m, base.as_slice(), length)?;
             (
                 Trajectory::line(arr(from_m), arr(to_m), *period_s, *duration_s, *hold_s)?,
                 "trajectory.to_m".to_string(),
@@ -463,7 +463,12 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
         TrajectorySpec::Samples(SamplesSpec { times_s, points_m }) => {
             let t = Trajectory::new(times_s.clone(), points_m.clone())?;
             for (i, p) in points_m.iter().enumerate() {
-                check_point(&format!("trajectory.points_m[{i}]"), p, &base, length)?;
+                check_point(
+                    &format!("trajectory.points_m[{i}]"),
+                    p,
+                    base.as_slice(),
+                    length,
+                )?;
             }
             (t, "trajectory.points_m".to_string())
         }
@@ -506,7 +511,7 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
     // reach: the distance from the base at every sample, the inverse
     // kinematics at 8 points
     for (i, p) in traj.points_m.iter().enumerate() {
-        check_point(&blame, p, &base, length).map_err(|e| match e {
+        check_point(&blame, p, base.as_slice(), length).map_err(|e| match e {
             Error::InvalidParameter {
                 name,
                 value,

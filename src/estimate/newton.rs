@@ -184,8 +184,8 @@ impl<E: Element> NewtonEstimator<E> {
         let (_, q0) = self.stream.start()?;
         let problem = &mut self.stream.problem;
         let eq = problem.equilibrium(f, &q0)?;
-        let lu = problem.factor_tangent(&eq.q)?.factors;
-        Ok((eq.q, lu, op))
+        let lu = problem.factor_tangent(eq.q.as_slice())?.factors;
+        Ok((eq.q.data.into(), lu, op))
     }
 }
 
@@ -207,13 +207,14 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
         let settings = core.settings().clone();
         let mut f = f0;
         let eq = core.equilibrium(&f, &q0)?;
-        let (mut q, mut lu, mut res_n) = (eq.q, eq.factors, eq.residual_n);
+        let (mut q, mut lu, mut res_n): (Vec<f64>, _, _) =
+            (eq.q.data.into(), eq.factors, eq.residual_n);
         let n_ob = op.len() as f64;
         let kappa2 = settings.statistical_tolerance.powi(2);
         let mut iterations = 0;
         let mut prev_dec = f64::INFINITY;
         loop {
-            let (wr, pen, e) = core.objective(op, &q, &f, alpha)?;
+            let (wr, pen, e) = core.objective(op, q.as_slice(), &f, alpha)?;
             let obj = wr + pen;
             // (a warm step starts where the last one converged: the
             // derivatives there are cached)
@@ -323,8 +324,8 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
             if last {
                 let ft: Vec<f64> = f.iter().zip(&step).map(|(a, b)| a + b).collect();
                 let load = core.load();
-                if let Some((qt, res_t)) = core.tracker().solve_chord(&load, &ft, &q)? {
-                    let (wr_t, pen_t, e_t) = core.objective(op, &qt, &ft, alpha)?;
+                if let Some((qt, res_t)) = core.tracker().solve_chord(&load, &ft, q.as_slice())? {
+                    let (wr_t, pen_t, e_t) = core.objective(op, qt.as_slice(), &ft, alpha)?;
                     let l = cov_factor(core, &dv, op, &fac);
                     let mut rep = report(
                         EstimateStatus::Converged(EstimateCriterion::UnconfirmedLastStep),
@@ -335,7 +336,7 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
                     rep.equilibrium_residual_n = res_t;
                     return Ok(Solved {
                         f: ft,
-                        q: qt,
+                        q: qt.data.into(),
                         derivs: dv,
                         cov_factor: l,
                         e: e_t,
@@ -366,7 +367,7 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
                     core.tracker().try_solve(&load, &ft, &qp).ok().flatten()
                 };
                 if let Some(eq) = trial {
-                    let (wr_t, pen_t, _) = core.objective(op, &eq.q, &ft, alpha)?;
+                    let (wr_t, pen_t, _) = core.objective(op, eq.q.as_slice(), &ft, alpha)?;
                     if wr_t + pen_t <= obj + 1e-4 * t * slope || dec <= 1e-8 * scale {
                         accepted = Some((ft, eq));
                         break;
@@ -377,7 +378,7 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
             match accepted {
                 Some((ft, eq)) => {
                     f = ft;
-                    q = eq.q;
+                    q = eq.q.data.into();
                     lu = eq.factors;
                     res_n = eq.residual_n;
                 }

@@ -37,7 +37,7 @@ impl<E: Element> LinearLoad<E> for LoadModel {
         }
     }
 
-    fn force(&self, robot: &Robot<E>, f: &[f64]) -> Result<Vec<f64>> {
+    fn force(&self, robot: &Robot<E>, f: &[f64]) -> Result<DVector<f64>> {
         match *self {
             LoadModel::Distributed => robot.apply_load_gram(f),
             LoadModel::Concentrated { node } => {
@@ -46,19 +46,21 @@ impl<E: Element> LinearLoad<E> for LoadModel {
                 let mut g = vec![0.0; robot.n_q()];
                 crate::error::check_index("load_model.node", node, robot.n_nodes())?;
                 g[node * nd..node * nd + E::DIM].copy_from_slice(f);
-                Ok(g)
+                Ok(DVector::from_vec(g))
             }
         }
     }
 
-    fn force_transpose(&self, robot: &Robot<E>, v: &[f64]) -> Result<Vec<f64>> {
+    fn force_transpose(&self, robot: &Robot<E>, v: &[f64]) -> Result<DVector<f64>> {
         match *self {
             LoadModel::Distributed => robot.apply_load_gram(v),
             LoadModel::Concentrated { node } => {
                 check_len("v", robot.n_q(), v.len())?;
                 crate::error::check_index("load_model.node", node, robot.n_nodes())?;
                 let nd = E::NODE_DOFS;
-                Ok(v[node * nd..node * nd + E::DIM].to_vec())
+                Ok(DVector::from_column_slice(
+                    &v[node * nd..node * nd + E::DIM],
+                ))
             }
         }
     }
@@ -202,14 +204,14 @@ impl<E: Element> Problem<E> {
 
     /// `G F` over all coordinates (N).
     pub(crate) fn gen_force(&self, f: &[f64]) -> Result<Vec<f64>> {
-        self.load().force(self.robot(), f)
+        Ok(self.load().force(self.robot(), f)?.data.into())
     }
 
     /// `H F`: the penalty (26) is `α Fᵀ H F`, `H = B` for the distributed
     /// field (`α ∫ wᵀ w dX`), `H = I` for a concentrated force.
     pub(crate) fn penalty_grad(&self, f: &[f64]) -> Result<Vec<f64>> {
         match self.load() {
-            LoadModel::Distributed => self.robot().apply_load_gram(f),
+            LoadModel::Distributed => Ok(self.robot().apply_load_gram(f)?.data.into()),
             LoadModel::Concentrated { .. } => Ok(f.to_vec()),
         }
     }
@@ -226,12 +228,12 @@ impl<E: Element> Problem<E> {
 
     /// The dead force with the unknown load `F` (`n_q`).
     pub(crate) fn dead_with(&self, f: &[f64]) -> Result<Vec<f64>> {
-        self.tracker.dead_with(&self.load(), f)
+        Ok(self.tracker.dead_with(&self.load(), f)?.data.into())
     }
 
     /// The residual `Q` over the free coordinates at `(q, F)`.
     pub(crate) fn residual(&self, q: &[f64], f: &[f64]) -> Result<Vec<f64>> {
-        self.tracker.residual(&self.load(), q, f)
+        Ok(self.tracker.residual(&self.load(), q, f)?.data.into())
     }
 
     /// The equilibrium `q(F)` from `q0` (warm; the globalized static solve
@@ -253,7 +255,7 @@ impl<E: Element> Problem<E> {
         let f = vec![0.0; self.n_f];
         let solver = StaticSolver::new(self.settings.statics.clone())?;
         let eq = solver.solve(self.robot(), self.tracker.known(), None)?;
-        Ok((f, eq.q))
+        Ok((f, eq.q.data.into()))
     }
 
     /// Adjoint fields and the marker Jacobian (28) at an equilibrium with
@@ -539,7 +541,7 @@ pub fn direct_solution<E: Element>(
     q: &[f64],
 ) -> Result<DVector<f64>> {
     let dead = robot.dead_force(known)?;
-    let r = robot.residual(q, &dead, known)?; // Q without F
+    let r = robot.residual(q, dead.as_slice(), known)?; // Q without F
     let nq = robot.n_q();
     let nfree = robot.n_free();
     let b = robot.load_gram();

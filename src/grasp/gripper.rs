@@ -288,7 +288,9 @@ mod tests {
             assert!((a - sign * b).abs() < 1e-9, "{k}: {a} {b}");
         }
         // inward: the left tip moves to +x, and the free-bending angle is M L / EI per segment
-        let tip = left.position_at(&ql, g.finger_length_m()).unwrap();
+        let tip = left
+            .position_at(ql.as_slice(), g.finger_length_m())
+            .unwrap();
         assert!(tip[0] > g.base_m(Side::Left)[0] + 0.02, "{tip:?}");
     }
 
@@ -309,7 +311,7 @@ mod tests {
         };
         let q = StaticSolver::default().solve(&f, &loads, None).unwrap().q;
         let phi = g.gain_nm_per_pa * p * g.segment_length_m / g.ei_nm2;
-        let angles = f.node_angles(&q).unwrap();
+        let angles = f.node_angles(q.as_slice()).unwrap();
         let mid = g.elements_per_segment;
         // right finger: inward is clockwise, from −π/2
         let turned = -(angles[mid] + std::f64::consts::FRAC_PI_2);

@@ -259,7 +259,10 @@ impl GripperPlant {
                     self.solver
                         .solve(robot, &loads, &free_obstacles, self.warm[k].as_deref())?;
                 if sol.is_converged()
-                    && obstacles.gaps(robot, &sol.q)?.iter().all(|g| g.gap_m > 0.0)
+                    && obstacles
+                        .gaps(robot, sol.q.as_slice())?
+                        .iter()
+                        .all(|g| g.gap_m > 0.0)
                 {
                     free = Some(sol);
                 }
@@ -283,7 +286,10 @@ impl GripperPlant {
             }
             let mut markers = Vec::with_capacity(self.markers_s_m.len());
             for &s in &self.markers_s_m {
-                markers.push(MarkerObservation::at_arc(s, robot.position_at(&sol.q, s)?));
+                markers.push(MarkerObservation::at_arc(
+                    s,
+                    robot.position_at(sol.q.as_slice(), s)?.data.into(),
+                ));
             }
             let seed = self
                 .seed
@@ -291,8 +297,8 @@ impl GripperPlant {
                 .wrapping_add(2 * self.step + k as u64);
             let markers = Observation { markers }.with_noise(self.noise_m, seed);
             let centreline_m = robot
-                .node_positions(&sol.q)
-                .iter()
+                .node_positions(sol.q.as_slice())
+                .column_iter()
                 .map(|p| [p[0], p[1]])
                 .collect();
             let (object_contacts, table_contacts) = sol
@@ -300,10 +306,10 @@ impl GripperPlant {
                 .iter()
                 .cloned()
                 .partition(|c| c.obstacle < n_obj);
-            self.warm[k] = Some(sol.q.clone());
+            self.warm[k] = Some(sol.q.as_slice().to_vec());
             self.touching[k] = !sol.contacts.is_empty();
             out.push(FingerState {
-                q: sol.q,
+                q: sol.q.data.into(),
                 object_contacts,
                 table_contacts,
                 markers,

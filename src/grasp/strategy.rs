@@ -37,7 +37,7 @@ use crate::loads::Loads;
 /// use softrod::grasp::gripper::{GripperSpec, Side};
 /// use softrod::grasp::strategy::contact_pose;
 /// let f = GripperSpec::default().finger(Side::Left)?;
-/// let x = contact_pose(&f, &f.reference_configuration(), 0.1)?;
+/// let x = contact_pose(&f, f.reference_configuration().as_slice(), 0.1)?;
 /// // the straight finger hangs down: tip at (−0.055, −0.1), θ = 0
 /// assert!((x[0] + 0.055).abs() < 1e-12 && (x[1] + 0.1).abs() < 1e-12 && x[2].abs() < 1e-12);
 /// # Ok::<(), softrod::Error>(())
@@ -230,18 +230,32 @@ mod tests {
             let solver = StaticSolver::default();
             let q = solver.solve(&f, &loads(&p), None).unwrap().q;
             for s in [0.07, 0.1] {
-                let j = contact_jacobian(&f, &q, &loads(&p), s).unwrap();
+                let j = contact_jacobian(&f, q.as_slice(), &loads(&p), s).unwrap();
                 for c in 0..4 {
                     let h = 50.0;
                     let mut pp = p.clone();
                     pp[c] += h;
-                    let xp =
-                        contact_pose(&f, &solver.solve(&f, &loads(&pp), Some(&q)).unwrap().q, s)
-                            .unwrap();
+                    let xp = contact_pose(
+                        &f,
+                        solver
+                            .solve(&f, &loads(&pp), Some(q.as_slice()))
+                            .unwrap()
+                            .q
+                            .as_slice(),
+                        s,
+                    )
+                    .unwrap();
                     pp[c] -= 2.0 * h;
-                    let xm =
-                        contact_pose(&f, &solver.solve(&f, &loads(&pp), Some(&q)).unwrap().q, s)
-                            .unwrap();
+                    let xm = contact_pose(
+                        &f,
+                        solver
+                            .solve(&f, &loads(&pp), Some(q.as_slice()))
+                            .unwrap()
+                            .q
+                            .as_slice(),
+                        s,
+                    )
+                    .unwrap();
                     for r in 0..3 {
                         let fd = (xp[r] - xm[r]) / (2.0 * h);
                         let scale = j.column(c).amax();
@@ -267,11 +281,11 @@ mod tests {
                 ..Loads::default()
             };
             let q = solver.solve(&f, &loads, None).unwrap().q;
-            let th = contact_pose(&f, &q, 0.1).unwrap()[2];
+            let th = contact_pose(&f, q.as_slice(), 0.1).unwrap()[2];
             // inward bending: counter-clockwise for the left finger
             assert!(th * sign > 0.3, "{side:?} {th}");
             // the paper's unsigned (48) gives |θ| for a unit η
-            let a = f.angle_at(&q, 0.1).unwrap() + std::f64::consts::FRAC_PI_2;
+            let a = f.angle_at(q.as_slice(), 0.1).unwrap() + std::f64::consts::FRAC_PI_2;
             assert!((th - a).abs() < 1e-9);
         }
     }

@@ -410,8 +410,8 @@ pub fn meeting_pressure_pa(gripper: &GripperSpec) -> Result<f64> {
             pressures_pa: vec![p, 0.0, 0.0, 0.0],
             ..Loads::default()
         };
-        let q = solver.solve(&f, &loads, q0)?.q;
-        let tip = f.position_at(&q, gripper.finger_length_m())?;
+        let q: Vec<f64> = solver.solve(&f, &loads, q0)?.q.data.into();
+        let tip = f.position_at(q.as_slice(), gripper.finger_length_m())?;
         Ok((-(tip[0] + gripper.finger_radius_m), q))
     };
     let (mut lo, mut hi) = (0.0, gripper.pressure_max_pa);
@@ -498,7 +498,7 @@ pub fn run_trial(
     for side in [Side::Left, Side::Right] {
         let f = gripper.finger(side)?;
         let overlap = obstacles
-            .gaps(&f, &f.reference_configuration())?
+            .gaps(&f, f.reference_configuration().as_slice())?
             .iter()
             .any(|g| g.gap_m < 0.0);
         if overlap {

@@ -559,7 +559,9 @@ fn the_robot_tangent_on_its_connectivity_pattern_solves_as_the_band_does() {
         .unwrap();
     let nf = robot.n_free();
     let mut kb = BandedMatrix::zeros(nf, 7, 7);
-    robot.tangent_into(&eq.q, &loads, &mut kb).unwrap();
+    robot
+        .tangent_into(eq.q.as_slice(), &loads, &mut kb)
+        .unwrap();
     let nb = robot.n_base_free();
     let elements: Vec<Vec<usize>> = (0..robot.elements().len())
         .map(|e| match e {

@@ -236,6 +236,22 @@ impl ParallelSpec {
         std::f64::consts::FRAC_PI_2 + std::f64::consts::TAU * i as f64 / self.legs.max(1) as f64
     }
 
+    /// Gravity as a 3-D vector (m/s²).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `parallel.gravity_m_per_s2` if it
+    /// does not have three entries.
+    ///
+    /// # Example
+    /// ```
+    /// let spec = softrod::parallel::ParallelSpec::default();
+    /// assert_eq!(spec.gravity()?, nalgebra::Vector3::new(0.0, 0.0, -9.81));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn gravity(&self) -> Result<nalgebra::Vector3<f64>> {
+        crate::numeric::fixed("parallel.gravity_m_per_s2", &self.gravity_m_per_s2)
+    }
+
     /// The platform's reference position (m): the centre of its circle.
     ///
     /// # Errors
@@ -373,7 +389,7 @@ impl ParallelSpec {
 /// let loads = robot.loads(&[], [0.0, 0.0, -0.5], [0.0; 3])?;
 /// let eq = robot.solve(&loads, None)?;
 /// // the platform sinks under its weight and the 0.5 N load
-/// assert!(robot.platform_pose(&eq.q)?[2] < robot.spec().platform_reference_m()?[2]);
+/// assert!(robot.platform_pose(eq.q.as_slice())?[2] < robot.spec().platform_reference_m()?[2]);
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone)]
@@ -399,24 +415,36 @@ impl<E: Element> ParallelRobot<E> {
 
     /// Loads: the chamber pressures (Pa; [`ParallelSpec::n_pressures`] or
     /// none), a force (N) and a moment (N·m) on the platform at its centre
-    /// (world axes).
+    /// (world axes; `Vector3`s, or `[f64; 3]` arrays).
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] (`pressures_pa`) for a wrong count,
     /// [`Error::InvalidParameter`] for non-finite numbers.
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector3;
+    /// let robot = softrod::parallel::ParallelSpec::default().build_cable()?;
+    /// let a = robot.loads(&[], Vector3::new(0.0, 0.0, -0.1), Vector3::zeros())?;
+    /// assert_eq!(a, robot.loads(&[], [0.0, 0.0, -0.1], [0.0; 3])?);
+    /// assert_eq!(a.bodies[0].force::<3>()?.z, -0.1);
+    /// assert!(robot.loads(&[1.0], [0.0; 3], [0.0; 3]).is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn loads(
         &self,
         pressures_pa: &[f64],
-        force_n: [f64; 3],
-        moment_nm: [f64; 3],
+        force_n: impl Into<nalgebra::Vector3<f64>>,
+        moment_nm: impl Into<nalgebra::Vector3<f64>>,
     ) -> Result<StructureLoads> {
+        let (force_n, moment_nm) = (force_n.into(), moment_nm.into());
         let n = self.spec.n_pressures();
         if !pressures_pa.is_empty() {
             check_len("pressures_pa", n, pressures_pa.len())?;
         }
         check_all_finite("pressures_pa", pressures_pa)?;
-        check_all_finite("force_n", &force_n)?;
-        check_all_finite("moment_nm", &moment_nm)?;
+        check_all_finite("force_n", force_n.as_slice())?;
+        check_all_finite("moment_nm", moment_nm.as_slice())?;
         let per_leg = n / self.spec.legs.max(1);
         let rods = if pressures_pa.is_empty() {
             Vec::new()
@@ -433,8 +461,8 @@ impl<E: Element> ParallelRobot<E> {
             rods,
             bodies: vec![BodyLoad {
                 body: 0,
-                force_n: force_n.to_vec(),
-                moment_nm: moment_nm.to_vec(),
+                force_n: force_n.as_slice().to_vec(),
+                moment_nm: moment_nm.as_slice().to_vec(),
             }],
         })
     }

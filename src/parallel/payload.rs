@@ -72,8 +72,8 @@ impl<E: Element> ParallelRobot<E> {
         loads: &crate::structure::StructureLoads,
     ) -> Result<[[f64; 3]; 3]> {
         let s = &self.structure;
-        let dead = s.dead_force(loads)?;
-        let (_, k) = s.residual_and_tangent(&eq.u, &dead, loads)?;
+        let dead: Vec<f64> = s.dead_force(loads)?.data.into();
+        let (_, k) = s.residual_and_tangent(eq.u.as_slice(), &dead, loads)?;
         let k = k.to_dense();
         let n = k.nrows();
         let x0 = self.platform_free_start()?;
@@ -110,7 +110,7 @@ impl<E: Element> ParallelRobot<E> {
     /// let robot = softrod::parallel::ParallelSpec::default().build_full()?;
     /// // the platform where a 100 g payload puts it
     /// let loaded = robot.solve(&robot.loads(&[], [0.0, 0.0, -0.0981], [0.0; 3])?, None)?;
-    /// let x = robot.platform_pose(&loaded.q)?;
+    /// let x = robot.platform_pose(loaded.q.as_slice())?;
     /// let start = robot.solve(&robot.loads(&[], [0.0; 3], [0.0; 3])?, None)?;
     /// let e = robot.estimate_payload(&[], [x[0], x[1], x[2]], &start)?;
     /// // to the position tolerance (1.2e-10 m) over the compliance (1.4e-4 m/N): 1e-7 kg
@@ -120,9 +120,10 @@ impl<E: Element> ParallelRobot<E> {
     pub fn estimate_payload(
         &self,
         pressures_pa: &[f64],
-        target_m: [f64; 3],
+        target_m: impl Into<nalgebra::Vector3<f64>>,
         start: &Equilibrium,
     ) -> Result<PayloadEstimate> {
+        let target_m: [f64; 3] = target_m.into().into();
         check_all_finite("target_m", &target_m)?;
         let tol = 1e-12 * self.spec.leg_length_m.max(1e-3) * 1e3;
         let mut f = [0.0; 3];
@@ -131,8 +132,8 @@ impl<E: Element> ParallelRobot<E> {
         let g2: f64 = g.iter().map(|v| v * v).sum();
         for it in 0..=MAX_ITERATIONS {
             let loads = self.loads(pressures_pa, f, [0.0; 3])?;
-            eq = self.solve(&loads, Some(&eq.q))?;
-            let x = self.platform_pose(&eq.q)?;
+            eq = self.solve(&loads, Some(eq.q.as_slice()))?;
+            let x = self.platform_pose(eq.q.as_slice())?;
             let r = [0, 1, 2].map(|i| target_m[i] - x[i]);
             let rn = r.iter().map(|v| v * v).sum::<f64>().sqrt();
             if rn <= tol {
@@ -268,12 +269,15 @@ pub fn mass_experiment<E: Element, P: Element>(
     for (c, p) in configurations.iter().enumerate() {
         let plant_free = plant.solve(&plant.loads(p, [0.0; 3], [0.0; 3])?, None)?;
         let model_free = model.solve(&model.loads(p, [0.0; 3], [0.0; 3])?, None)?;
-        let x_model = model.platform_pose(&model_free.q)?;
+        let x_model = model.platform_pose(model_free.q.as_slice())?;
         for &m in masses_kg {
             let weight = [0, 1, 2].map(|i| m * g[i]);
-            let loaded = plant.solve(&plant.loads(p, weight, [0.0; 3])?, Some(&plant_free.q))?;
-            let before = measure(plant.platform_pose(&plant_free.q)?);
-            let after = measure(plant.platform_pose(&loaded.q)?);
+            let loaded = plant.solve(
+                &plant.loads(p, weight, [0.0; 3])?,
+                Some(plant_free.q.as_slice()),
+            )?;
+            let before = measure(plant.platform_pose(plant_free.q.as_slice())?);
+            let after = measure(plant.platform_pose(loaded.q.as_slice())?);
             let target = [0, 1, 2].map(|i| x_model[i] + after[i] - before[i]);
             let e = model.estimate_payload(p, target, &model_free)?;
             trials.push(MassTrial {

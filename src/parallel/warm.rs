@@ -23,7 +23,7 @@
 //! symmetric), at the tangent of the last factorization (a quasi-Newton
 //! Jacobian for the controller's iterations, whose residuals are exact).
 
-use nalgebra::{DMatrix, SMatrix};
+use nalgebra::{DMatrix, DVector, SMatrix};
 
 use super::ParallelRobot;
 use crate::element::Element;
@@ -83,8 +83,8 @@ pub struct WarmCounts {
 /// let eq = robot.solve(&loads, None)?;
 /// // from the equilibrium, a little more load: chord steps, the same answer
 /// let more = robot.loads(&[], [0.0, 0.0, -0.51], [0.0; 3])?;
-/// let u = warm.solve(&more, &eq.u)?;
-/// let exact = robot.solve(&more, Some(&eq.q))?;
+/// let u = warm.solve(&more, eq.u.as_slice())?;
+/// let exact = robot.solve(&more, Some(eq.q.as_slice()))?;
 /// let d = u.iter().zip(&exact.u).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
 /// assert!(d < 1e-9, "{d}");
 /// # Ok::<(), softrod::Error>(())
@@ -137,8 +137,8 @@ impl<E: Element> WarmStatics<E> {
     /// cannot be factored.
     pub fn factor_at(&mut self, u: &[f64], loads: &StructureLoads) -> Result<()> {
         let s = self.robot.structure();
-        let dead = s.dead_force(loads)?;
-        let q = s.configuration(u)?;
+        let dead: Vec<f64> = s.dead_force(loads)?.data.into();
+        let q: Vec<f64> = s.configuration(u)?.data.into();
         s.tangent_into(u, &q, &dead, loads, &mut self.k)?;
         self.factors = Some(self.solver.factor(&self.k, FactorOptions::default())?);
         self.counts.factorizations += 1;
@@ -151,14 +151,14 @@ impl<E: Element> WarmStatics<E> {
     /// # Errors
     /// Sizes as [`crate::structure::Structure::residual`]; the errors of
     /// [`StaticSolver::solve`] when the fallback fails too.
-    pub fn solve(&mut self, loads: &StructureLoads, u0: &[f64]) -> Result<Vec<f64>> {
+    pub fn solve(&mut self, loads: &StructureLoads, u0: &[f64]) -> Result<DVector<f64>> {
         let s = self.robot.structure();
         check_len("u0", s.n_free(), u0.len())?;
         self.counts.solves += 1;
-        let dead = s.dead_force(loads)?;
+        let dead: Vec<f64> = s.dead_force(loads)?.data.into();
         let (n, nq) = (s.n_free(), s.n_q());
         let mut u = u0.to_vec();
-        let mut q = s.configuration(&u)?;
+        let mut q: Vec<f64> = s.configuration(&u)?.data.into();
         let (mut r, mut du, mut dq) = (vec![0.0; n], vec![0.0; n], vec![0.0; nq]);
         let (mut u1, mut q1) = (u.clone(), q.clone());
         let mut last = f64::INFINITY;
@@ -194,15 +194,15 @@ impl<E: Element> WarmStatics<E> {
             std::mem::swap(&mut u, &mut u1);
             std::mem::swap(&mut q, &mut q1);
             if step <= self.step_tolerance {
-                return Ok(u);
+                return Ok(DVector::from_vec(u));
             }
             last = step;
         }
         self.counts.fallbacks += 1;
         let s = self.robot.structure();
-        let q0 = s.configuration(u0)?;
+        let q0: Vec<f64> = s.configuration(u0)?.data.into();
         let eq = StaticSolver::default().solve_with(s, loads, Some(&q0), &mut self.solver)?;
-        self.factor_at(&eq.u, loads)?;
+        self.factor_at(eq.u.as_slice(), loads)?;
         Ok(eq.u)
     }
 
@@ -253,8 +253,8 @@ impl<E: Element> WarmStatics<E> {
     /// let loads = robot.loads(&[], [0.0; 3], [0.0; 3])?;
     /// let eq = robot.solve(&loads, None)?;
     /// let mut warm = WarmStatics::new(robot.clone())?;
-    /// warm.factor_at(&eq.u, &loads)?;
-    /// let s = warm.sensitivities(&eq.u)?;
+    /// warm.factor_at(eq.u.as_slice(), &loads)?;
+    /// let s = warm.sensitivities(eq.u.as_slice())?;
     /// assert_eq!(s.jacobian_m_per_pa.shape(), (3, 18));
     /// // the same compliance as the payload estimation's dense one
     /// let c = robot.platform_compliance(&eq, &loads)?;
@@ -268,7 +268,7 @@ impl<E: Element> WarmStatics<E> {
         let (w, c) = self.compliance_columns()?;
         // ∂R/∂P_k: the pressures' generalized force is linear in P
         let np = self.robot.spec().n_pressures();
-        let q = s.configuration(u)?;
+        let q: Vec<f64> = s.configuration(u)?.data.into();
         let zero_dead = vec![0.0; s.n_q()];
         let mut jac = DMatrix::zeros(3, np);
         let mut p = vec![0.0; np];

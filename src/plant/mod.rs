@@ -263,7 +263,11 @@ impl SimulatedPlant {
         let loads0 = settings
             .payloads
             .loads_at(0.0, &scene.gravity_m_per_s2, &base_loads);
-        let q = solver.solve_with(&robot, &loads0, None, &mut linear)?.q;
+        let q = solver
+            .solve_with(&robot, &loads0, None, &mut linear)?
+            .q
+            .data
+            .into();
         Ok(SimulatedPlant {
             scene,
             robot,
@@ -310,7 +314,7 @@ impl SimulatedPlant {
     pub fn true_markers_m(&self) -> Result<Vec<Vec<f64>>> {
         self.marker_s_m
             .iter()
-            .map(|&s| self.robot.position_at(&self.q, s))
+            .map(|&s| Ok(self.robot.position_at(&self.q, s)?.data.into()))
             .collect()
     }
 
@@ -319,7 +323,11 @@ impl SimulatedPlant {
     /// # Errors
     /// As [`Robot::position_at`].
     pub fn true_tip_m(&self) -> Result<Vec<f64>> {
-        self.robot.position_at(&self.q, self.robot.length())
+        Ok(self
+            .robot
+            .position_at(&self.q, self.robot.length())?
+            .data
+            .into())
     }
 }
 
@@ -367,11 +375,12 @@ impl Plant for SimulatedPlant {
                 .loads_at(self.time_s, &self.scene.gravity_m_per_s2, &base);
         self.q = match self.contact.as_mut() {
             Some(c) => c.solve(&self.robot, &loads, &self.q)?,
-            None => {
-                self.solver
-                    .solve_with(&self.robot, &loads, Some(&self.q), &mut self.linear)?
-                    .q
-            }
+            None => self
+                .solver
+                .solve_with(&self.robot, &loads, Some(&self.q), &mut self.linear)?
+                .q
+                .data
+                .into(),
         };
         let truth = self.true_markers_m()?;
         let obs = Observation {

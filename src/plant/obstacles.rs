@@ -97,13 +97,14 @@ impl PlantContact {
         // of the step plus 1 mm (nothing can have been passed through).
         if let Ok(eq) = StaticSolver::default().solve(robot, loads, Some(q)) {
             let moved =
-                eq.q.chunks(4)
+                eq.q.as_slice()
+                    .chunks(4)
                     .zip(q.chunks(4))
                     .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
                     .fold(0.0, f64::max);
             let min_gap = self
                 .obstacles
-                .gaps(robot, &eq.q)?
+                .gaps(robot, eq.q.as_slice())?
                 .iter()
                 .map(|g| g.gap_m)
                 .fold(f64::INFINITY, f64::min);
@@ -120,7 +121,7 @@ impl PlantContact {
                     ..ContactReport::default()
                 });
                 self.contacts.clear();
-                return Ok(eq.q);
+                return Ok(eq.q.data.into());
             }
         }
         let sol = self.solver.solve(robot, loads, &self.obstacles, Some(q))?;
@@ -132,7 +133,7 @@ impl PlantContact {
             });
         }
         self.contacts = sol.contacts;
-        Ok(sol.q)
+        Ok(sol.q.data.into())
     }
 }
 
@@ -164,7 +165,7 @@ impl SimulatedPlant {
                 .payloads
                 .loads_at(self.time_s, &self.scene.gravity_m_per_s2, &base);
         let start = self.robot.reference_configuration();
-        self.q = contact.solve(&self.robot, &loads, &start)?;
+        self.q = contact.solve(&self.robot, &loads, start.as_slice())?;
         self.contact = Some(contact);
         Ok(self)
     }

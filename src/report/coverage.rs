@@ -279,7 +279,12 @@ pub fn measure(fine: &Robot<PlanarCable>, known: &Loads, spec: &TrialSpec) -> Re
     let markers = spec
         .marker_s_m
         .iter()
-        .map(|&s| Ok(MarkerObservation::at_arc(s, fine.position_at(&eq.q, s)?)))
+        .map(|&s| {
+            Ok(MarkerObservation::at_arc(
+                s,
+                fine.position_at(eq.q.as_slice(), s)?.data.into(),
+            ))
+        })
         .collect::<Result<Vec<_>>>()?;
     Ok(Observation { markers }.with_noise(spec.noise_sigma_m, spec.seed ^ 0x5EED))
 }

@@ -77,6 +77,46 @@ pub struct ParallelSolution {
 }
 
 impl ParallelScene {
+    /// The known force on the platform's centre as a 3-D vector (N, world
+    /// axes; zero if none is given).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `platform_force_n` if it has
+    /// neither 0 nor 3 entries.
+    ///
+    /// # Example
+    /// ```
+    /// let s: softrod::scene::parallel::ParallelScene = serde_json::from_str(r#"{"parallel": {"base_radius_m": 0.05,
+    ///   "platform_radius_m": 0.03, "leg_length_m": 0.12, "sections_per_leg": 2, "elements_per_section": 2,
+    ///   "ea_n": 300, "ei_nm2": 0.025, "gj_nm2": 0.0167, "platform_mass_kg": 0.05, "gain_nm_per_pa": 3e-6},
+    ///   "platform_force_n": [0, 0, -0.1]}"#)?;
+    /// assert_eq!(s.platform_force()?.z, -0.1);
+    /// assert_eq!(s.platform_moment()?, nalgebra::Vector3::zeros());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn platform_force(&self) -> Result<nalgebra::Vector3<f64>> {
+        if self.platform_force_n.is_empty() {
+            return Ok(nalgebra::Vector3::zeros());
+        }
+        crate::numeric::fixed("platform_force_n", &self.platform_force_n)
+    }
+
+    /// The known moment on the platform as a 3-D vector (N·m, world axes;
+    /// zero if none is given).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `platform_moment_nm` if it has
+    /// neither 0 nor 3 entries.
+    ///
+    /// # Example
+    /// See [`ParallelScene::platform_force`].
+    pub fn platform_moment(&self) -> Result<nalgebra::Vector3<f64>> {
+        if self.platform_moment_nm.is_empty() {
+            return Ok(nalgebra::Vector3::zeros());
+        }
+        crate::numeric::fixed("platform_moment_nm", &self.platform_moment_nm)
+    }
+
     /// Whether a scene text is a parallel-robot scene (its top-level object
     /// has a `parallel` key); malformed JSON is not.
     ///
@@ -226,7 +266,7 @@ impl ParallelScene {
             ));
         }
         let free = robot.solve(&self.loads_of(robot, [0.0; 3])?, None)?;
-        let x = robot.platform_pose(&free.q)?;
+        let x = robot.platform_pose(free.q.as_slice())?;
         let target = [0, 1, 2].map(|i| x[i] + loaded_m[i] - unloaded_m[i]);
         robot.estimate_payload(&self.pressures_pa, target, &free)
     }
@@ -244,7 +284,7 @@ fn solution<E: Element>(robot: &ParallelRobot<E>, eq: &Equilibrium) -> Result<Pa
         legs.push(nodes);
     }
     Ok(ParallelSolution {
-        platform_pose: robot.platform_pose(&eq.q)?,
+        platform_pose: robot.platform_pose(eq.q.as_slice())?,
         legs_m: legs,
         iterations: eq.report.iterations,
     })

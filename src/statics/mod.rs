@@ -36,6 +36,7 @@
 
 use std::sync::Arc;
 
+use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_len, Error, Result};
@@ -156,16 +157,17 @@ pub const MAX_ITERATIONS: usize = 100_000;
 /// let eq = StaticSolver::default().solve(&robot, &scene.loads()?, None)?;
 /// // q = φ(u): the clamped base node, then the free nodes as they are
 /// assert_eq!((eq.q.len(), eq.u.len()), (robot.n_q(), Assembled::n_free(&robot)));
-/// assert_eq!(eq.q[4..], eq.u[robot.n_base_free()..]);
+/// assert_eq!(eq.q.rows(4, robot.n_q() - 4), eq.u.rows(robot.n_base_free(), robot.n_q() - 4));
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct Equilibrium {
-    /// All coordinates, base node included (`φ(u)`).
-    pub q: Vec<f64>,
+    /// All coordinates, base node included (`φ(u)`); a function taking
+    /// coordinates borrows them as `eq.q.as_slice()`.
+    pub q: DVector<f64>,
     /// The free coordinates (a robot: its base stretch, then nodes 1 … N;
     /// a structure: block by block, see [`crate::structure::DofMap`]).
-    pub u: Vec<f64>,
+    pub u: DVector<f64>,
     /// What the solver did.
     pub report: StaticReport,
 }
@@ -245,7 +247,7 @@ impl StaticSolver {
     /// assert!(eq.u[x] > 0.0);
     /// // warm: from the equilibrium, a little more force
     /// let more = StructureLoads { bodies: vec![BodyLoad { body: 0, force_n: vec![0.11, 0.0], moment_nm: vec![0.0] }], ..loads };
-    /// let warm = StaticSolver::default().solve(&s, &more, Some(&eq.q))?;
+    /// let warm = StaticSolver::default().solve(&s, &more, Some(eq.q.as_slice()))?;
     /// assert!(warm.u[x] > eq.u[x]);
     /// # Ok::<(), softrod::Error>(())
     /// ```

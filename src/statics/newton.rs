@@ -11,6 +11,8 @@
 
 use std::time::Instant;
 
+use nalgebra::DVector;
+
 use super::{finite_or_max, residual_floor, Equilibrium, StaticSolver};
 use crate::error::{Error, Result};
 use crate::linsolve::{
@@ -302,7 +304,11 @@ impl StaticSolver {
             wall_time_s: start.elapsed().as_secs_f64(),
         };
         if status.is_converged() {
-            Ok(Equilibrium { q: w.q, u, report })
+            Ok(Equilibrium {
+                q: DVector::from_vec(w.q),
+                u: DVector::from_vec(u),
+                report,
+            })
         } else {
             Err(Error::NotConverged {
                 report: Box::new(report),

@@ -61,7 +61,7 @@ impl StaticSolver {
         };
         match inner.run(&coarse, &coarse_loads, u0, true, &mut solver) {
             Ok(eq) => Ok(Some(CoarseStart {
-                u: Some(model.prolong(&coarse, &eq.q)?),
+                u: Some(model.prolong(&coarse, eq.q.as_slice())?),
                 iterations: eq.report.iterations,
                 load_steps: eq.report.load_steps,
             })),

@@ -116,24 +116,24 @@ fn statuses_are_the_same_for_robots_and_structures() {
 fn a_structure_restarts_from_its_configuration() {
     let (s, loads) = leg_and_body();
     let eq = StaticSolver::default().solve(&s, &loads, None).unwrap();
-    let u = s.dof_map().free_coordinates_of(&eq.q).unwrap();
+    let u = s.dof_map().free_coordinates_of(eq.q.as_slice()).unwrap();
     let du = u
         .iter()
         .zip(&eq.u)
         .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
     assert!(du < 1e-15, "{du}");
     let warm = StaticSolver::default()
-        .solve(&s, &loads, Some(&eq.q))
+        .solve(&s, &loads, Some(eq.q.as_slice()))
         .unwrap();
     assert!(warm.report.iterations <= 1, "{}", warm.report);
     // a start of the wrong size or not finite is refused, naming `q0`
-    match StaticSolver::default().solve(&s, &loads, Some(&eq.u)) {
+    match StaticSolver::default().solve(&s, &loads, Some(eq.u.as_slice())) {
         Err(Error::DimensionMismatch { name, .. }) => assert_eq!(name, "q0"),
         other => panic!("{other:?}"),
     }
     let mut bad = eq.q.clone();
     bad[3] = f64::NAN;
-    match StaticSolver::default().solve(&s, &loads, Some(&bad)) {
+    match StaticSolver::default().solve(&s, &loads, Some(bad.as_slice())) {
         Err(e) => assert_eq!(e.field(), Some("q0[3]"), "{e:?}"),
         Ok(_) => panic!("a NaN start was accepted"),
     }

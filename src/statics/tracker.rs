@@ -24,6 +24,8 @@
 //! factorization (chord, Newton, fallback, [`EquilibriumTracker::factor_tangent`])
 //! reuses that analysis.
 
+use nalgebra::DVector;
+
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::{check_len, Result};
@@ -44,16 +46,17 @@ use super::{StaticSettings, StaticSolver};
 /// ```
 /// use softrod::{assembly::Robot, element::Element, loads::{Loads, PointForce}};
 /// use softrod::statics::LinearLoad;
+/// use nalgebra::DVector;
 /// struct TipY;
 /// impl<E: Element> LinearLoad<E> for TipY {
 ///     fn n_params(&self, _: &Robot<E>) -> usize { 1 }
-///     fn force(&self, robot: &Robot<E>, f: &[f64]) -> softrod::Result<Vec<f64>> {
-///         let mut g = vec![0.0; robot.n_q()];
+///     fn force(&self, robot: &Robot<E>, f: &[f64]) -> softrod::Result<DVector<f64>> {
+///         let mut g = DVector::zeros(robot.n_q());
 ///         g[20 * E::NODE_DOFS + 1] = f[0];
 ///         Ok(g)
 ///     }
-///     fn force_transpose(&self, _: &Robot<E>, v: &[f64]) -> softrod::Result<Vec<f64>> {
-///         Ok(vec![v[20 * E::NODE_DOFS + 1]])
+///     fn force_transpose(&self, _: &Robot<E>, v: &[f64]) -> softrod::Result<DVector<f64>> {
+///         Ok(DVector::from_element(1, v[20 * E::NODE_DOFS + 1]))
 ///     }
 ///     fn add_to(&self, robot: &Robot<E>, known: &Loads, f: &[f64]) -> Loads {
 ///         let mut loads = known.clone();
@@ -72,12 +75,12 @@ pub trait LinearLoad<E: Element> {
     ///
     /// # Errors
     /// [`crate::Error::DimensionMismatch`] if `f` has the wrong length.
-    fn force(&self, robot: &Robot<E>, f: &[f64]) -> Result<Vec<f64>>;
+    fn force(&self, robot: &Robot<E>, f: &[f64]) -> Result<DVector<f64>>;
     /// `Gᵀ v` for `v` over all `n_q` coordinates.
     ///
     /// # Errors
     /// [`crate::Error::DimensionMismatch`] if `v` has the wrong length.
-    fn force_transpose(&self, robot: &Robot<E>, v: &[f64]) -> Result<Vec<f64>>;
+    fn force_transpose(&self, robot: &Robot<E>, v: &[f64]) -> Result<DVector<f64>>;
     /// The loads `known` with `F` added, for the globalized static solver.
     fn add_to(&self, robot: &Robot<E>, known: &Loads, f: &[f64]) -> Loads;
 }
@@ -90,7 +93,7 @@ pub trait LinearLoad<E: Element> {
 #[derive(Debug, Clone)]
 pub struct TrackedEquilibrium {
     /// All coordinates (m, dimensionless slopes).
-    pub q: Vec<f64>,
+    pub q: DVector<f64>,
     /// The factors of the tangent `K` at `q` (see the [module
     /// documentation](self) for the one exception).
     pub factors: AutoFactors,
@@ -110,7 +113,7 @@ pub struct TrackedEquilibrium {
 /// use softrod::{scene::Scene, statics::EquilibriumTracker};
 /// let scene = Scene::two_section();
 /// let mut tracker = EquilibriumTracker::new(scene.robot()?, scene.loads()?, Default::default())?;
-/// let q = tracker.robot().reference_configuration();
+/// let q = tracker.robot().reference_configuration().as_slice().to_vec();
 /// let t = tracker.factor_tangent(&q)?;
 /// assert!(t.factors.is_positive_definite()); // the straight robot is stable
 /// assert_eq!(t.matrix.n(), t.factors.n());
@@ -144,11 +147,11 @@ struct State {
 /// let n = robot.n_q();
 /// let mut tracker = EquilibriumTracker::new(robot, scene.loads()?, StaticSettings::default())?;
 /// let load = LoadModel::Distributed;
-/// let q0 = tracker.solve(&load, &vec![0.0; n], &tracker.robot().arc_configuration(&[]))?.q;
+/// let q0 = tracker.solve(&load, &vec![0.0; n], tracker.robot().arc_configuration(&[]).as_slice())?.q;
 /// // a small uniform downward load: a warm solve from q0
 /// let mut f = vec![0.0; n];
 /// f.iter_mut().skip(1).step_by(4).for_each(|w| *w = -0.1);
-/// let eq = tracker.solve(&load, &f, &q0)?;
+/// let eq = tracker.solve(&load, &f, q0.as_slice())?;
 /// assert!(eq.q[n - 3] < q0[n - 3] && eq.residual_n < 1e-8);
 /// # Ok::<(), softrod::Error>(())
 /// ```
@@ -157,7 +160,7 @@ pub struct EquilibriumTracker<E: Element> {
     robot: Robot<E>,
     known: Loads,
     /// Dead force of the known loads (`n_q`).
-    dead_known: Vec<f64>,
+    dead_known: DVector<f64>,
     solver: StaticSolver,
     /// The linear solver, analyzed once on the robot's tangent pattern.
     linear: AutoSolver,
@@ -232,12 +235,29 @@ impl<E: Element> EquilibriumTracker<E> {
     /// The dead force of the known loads plus `G F` (`n_q`, N).
     ///
     /// # Errors
-    /// As [`LinearLoad::force`].
-    pub fn dead_with<L: LinearLoad<E>>(&self, load: &L, f: &[f64]) -> Result<Vec<f64>> {
+    /// As [`LinearLoad::force`]; [`crate::Error::DimensionMismatch`] if
+    /// the load's force does not have `n_q` entries.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::estimate::LoadModel;
+    /// use softrod::{scene::Scene, statics::{EquilibriumTracker, StaticSettings}};
+    /// let scene = Scene::two_section();
+    /// let (robot, known) = (scene.robot()?, scene.loads()?);
+    /// let dead_known = robot.dead_force(&known)?;
+    /// let tracker = EquilibriumTracker::new(robot, known, StaticSettings::default())?;
+    /// let f = vec![0.0; tracker.robot().n_q()];
+    /// // F = 0: the known loads' dead force alone
+    /// assert_eq!(tracker.dead_with(&LoadModel::Distributed, &f)?, dead_known);
+    /// let q = tracker.robot().reference_configuration().as_slice().to_vec();
+    /// let r = tracker.residual(&LoadModel::Distributed, q.as_slice(), &f)?;
+    /// assert_eq!(r.len(), tracker.robot().n_free());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn dead_with<L: LinearLoad<E>>(&self, load: &L, f: &[f64]) -> Result<DVector<f64>> {
         let mut dead = load.force(&self.robot, f)?;
-        dead.iter_mut()
-            .zip(&self.dead_known)
-            .for_each(|(a, b)| *a += b);
+        check_len("G F", self.dead_known.len(), dead.len())?;
+        dead += &self.dead_known;
         Ok(dead)
     }
 
@@ -245,9 +265,17 @@ impl<E: Element> EquilibriumTracker<E> {
     ///
     /// # Errors
     /// As [`LinearLoad::force`] and [`Robot::residual`].
-    pub fn residual<L: LinearLoad<E>>(&self, load: &L, q: &[f64], f: &[f64]) -> Result<Vec<f64>> {
+    ///
+    /// # Example
+    /// See [`EquilibriumTracker::dead_with`].
+    pub fn residual<L: LinearLoad<E>>(
+        &self,
+        load: &L,
+        q: &[f64],
+        f: &[f64],
+    ) -> Result<DVector<f64>> {
         let dead = self.dead_with(load, f)?;
-        self.robot.residual(q, &dead, &self.known)
+        self.robot.residual(q, dead.as_slice(), &self.known)
     }
 
     /// The tangent `K = −∂Q/∂q` at `q` over the free coordinates and its
@@ -364,7 +392,7 @@ impl<E: Element> EquilibriumTracker<E> {
         load: &L,
         f: &[f64],
         q0: &[f64],
-    ) -> Result<Option<(Vec<f64>, f64)>> {
+    ) -> Result<Option<(DVector<f64>, f64)>> {
         let Some((q_lu, lu)) = self.factors.take() else {
             return Ok(None);
         };
@@ -380,7 +408,8 @@ impl<E: Element> EquilibriumTracker<E> {
         let mut done = false;
         for it in 0..12 {
             if it > 0 || !known_residual {
-                self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+                self.robot
+                    .residual_into(&q, dead.as_slice(), &self.known, &mut r)?;
             }
             let Some(step) = self.plain_step(&mut q, &lu, &r, &mut du, &mut dq, 0.5 * prev)? else {
                 break;
@@ -395,7 +424,8 @@ impl<E: Element> EquilibriumTracker<E> {
         if !done {
             return Ok(None);
         }
-        self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+        self.robot
+            .residual_into(&q, dead.as_slice(), &self.known, &mut r)?;
         let residual_n = norm2(&r);
         self.state = Some(State {
             f: f.to_vec(),
@@ -403,7 +433,7 @@ impl<E: Element> EquilibriumTracker<E> {
             r,
             residual_n,
         });
-        Ok(Some((q, residual_n)))
+        Ok(Some((DVector::from_vec(q), residual_n)))
     }
 
     /// One plain Newton (or, with old factors, chord) step at `q` with the
@@ -456,7 +486,7 @@ impl<E: Element> EquilibriumTracker<E> {
                 .all(|(a, b)| (a - b).abs() <= 1e-8 * self.robot.length());
             if st.f == f && st.q == q0 && near {
                 return Ok(Some(TrackedEquilibrium {
-                    q: q0.to_vec(),
+                    q: DVector::from_column_slice(q0),
                     factors: lu.clone(),
                     residual_n: st.residual_n,
                 }));
@@ -477,7 +507,8 @@ impl<E: Element> EquilibriumTracker<E> {
             let mut moved = false;
             for it in 0..12 {
                 if it > 0 || !known_residual {
-                    self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+                    self.robot
+                        .residual_into(&q, dead.as_slice(), &self.known, &mut r)?;
                 }
                 let Some(step) = self.plain_step(&mut q, &lu, &r, &mut du, &mut dq, 0.5 * prev)?
                 else {
@@ -494,13 +525,14 @@ impl<E: Element> EquilibriumTracker<E> {
                 // the kept factors are exact if q has not left their point
                 let same = !moved && q_lu.iter().zip(q0).all(|(a, b)| a == b);
                 let lu = if same {
-                    self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+                    self.robot
+                        .residual_into(&q, dead.as_slice(), &self.known, &mut r)?;
                     lu
                 } else {
                     // fresh factors at the solution, with its residual
                     self.robot.residual_and_tangent_into(
                         &q,
-                        &dead,
+                        dead.as_slice(),
                         &self.known,
                         &mut r,
                         &mut self.kmat,
@@ -515,8 +547,13 @@ impl<E: Element> EquilibriumTracker<E> {
         let mut prev = f64::INFINITY;
         for _ in 0..12 {
             // Newton: residual and tangent at q in one pass
-            self.robot
-                .residual_and_tangent_into(&q, &dead, &self.known, &mut r, &mut self.kmat)?;
+            self.robot.residual_and_tangent_into(
+                &q,
+                dead.as_slice(),
+                &self.known,
+                &mut r,
+                &mut self.kmat,
+            )?;
             let lu = match self.linear.factor(&self.kmat, FactorOptions::default()) {
                 Ok(lu) => lu,
                 Err(_) => break,
@@ -526,7 +563,8 @@ impl<E: Element> EquilibriumTracker<E> {
             };
             prev = step;
             if step <= 1e-10 * len {
-                self.robot.residual_into(&q, &dead, &self.known, &mut r)?;
+                self.robot
+                    .residual_into(&q, dead.as_slice(), &self.known, &mut r)?;
                 return Ok(Some(self.solved(f, q, lu, r)));
             }
         }
@@ -550,10 +588,15 @@ impl<E: Element> EquilibriumTracker<E> {
         let eq = self
             .solver
             .solve_with(&self.robot, &loads, Some(q0), &mut self.linear)?;
-        self.robot
-            .residual_and_tangent_into(&eq.q, &dead, &self.known, &mut r, &mut self.kmat)?;
+        self.robot.residual_and_tangent_into(
+            eq.q.as_slice(),
+            dead.as_slice(),
+            &self.known,
+            &mut r,
+            &mut self.kmat,
+        )?;
         let lu = self.linear.factor(&self.kmat, FactorOptions::default())?;
-        let mut out = self.solved(f, eq.q, lu, r);
+        let mut out = self.solved(f, eq.q.data.into(), lu, r);
         out.residual_n = eq.report.residual_norm_n;
         Ok(out)
     }
@@ -571,7 +614,7 @@ impl<E: Element> EquilibriumTracker<E> {
             Some(st) if st.q == q0 && st.f.len() == f.len() => {
                 let df: Vec<f64> = f.iter().zip(&st.f).map(|(a, b)| a - b).collect();
                 let gdf = load.force(&self.robot, &df)?;
-                self.robot.restrict_into(&gdf, r)?;
+                self.robot.restrict_into(gdf.as_slice(), r)?;
                 r.iter_mut().zip(&st.r).for_each(|(a, b)| *a += b);
                 Ok(true)
             }
@@ -597,7 +640,7 @@ impl<E: Element> EquilibriumTracker<E> {
             residual_n,
         });
         TrackedEquilibrium {
-            q,
+            q: DVector::from_vec(q),
             factors: lu,
             residual_n,
         }

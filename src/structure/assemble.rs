@@ -12,6 +12,8 @@
 //! second term of the tangent comes from the blocks of the map that are
 //! nonlinear (rod ends on rigid bodies), once `g` is complete.
 
+use nalgebra::DVector;
+
 use super::rigid::Attachment;
 use super::{BlockRule, Structure, StructureLoads, Triplets};
 use crate::element::Element;
@@ -31,8 +33,13 @@ use crate::structure::rod::MAX_EDOF;
 ///
 /// # Example
 /// ```
-/// let r = softrod::structure::JointReaction { joint: 0, body: 0, force_n: vec![0.0, 0.1], moment_nm: vec![0.0] };
+/// use nalgebra::dvector;
+/// let r = softrod::structure::JointReaction { joint: 0, body: 0, force_n: dvector![0.0, 0.1], moment_nm: dvector![0.0] };
 /// assert_eq!(r.force_n.len(), 2);
+/// assert_eq!(r.force::<2>()?, nalgebra::Vector2::new(0.0, 0.1));
+/// assert_eq!(r.moment::<1>()?[0], 0.0);
+/// assert!(r.force::<3>().is_err());
+/// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointReaction {
@@ -40,10 +47,39 @@ pub struct JointReaction {
     pub joint: usize,
     /// The rigid body.
     pub body: usize,
-    /// Force on the body (N).
-    pub force_n: Vec<f64>,
-    /// Moment on the body about its reference point (N·m; one number in 2-D).
-    pub moment_nm: Vec<f64>,
+    /// Force on the body (N; 2 or 3 components, the structure's
+    /// dimension: a dynamic vector because a structure is generic over its
+    /// element; [`JointReaction::force`] gives a fixed-size one).
+    pub force_n: DVector<f64>,
+    /// Moment on the body about its reference point (N·m; one number in 2-D,
+    /// three in 3-D; [`JointReaction::moment`]).
+    pub moment_nm: DVector<f64>,
+}
+
+impl JointReaction {
+    /// The force as a fixed-size vector of dimension `D` (N).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `force_n` if the structure has
+    /// another dimension.
+    ///
+    /// # Example
+    /// See [`JointReaction`].
+    pub fn force<const D: usize>(&self) -> Result<nalgebra::SVector<f64, D>> {
+        crate::numeric::fixed("force_n", self.force_n.as_slice())
+    }
+
+    /// The moment as a fixed-size vector of `M` components (N·m; 1 in 2-D,
+    /// 3 in 3-D).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `moment_nm` for another count.
+    ///
+    /// # Example
+    /// See [`JointReaction`].
+    pub fn moment<const M: usize>(&self) -> Result<nalgebra::SVector<f64, M>> {
+        crate::numeric::fixed("moment_nm", self.moment_nm.as_slice())
+    }
 }
 
 /// A sink that maps entries over all coordinates to the free coordinates.
@@ -146,17 +182,20 @@ impl<E: Element> Structure<E> {
     /// # Errors
     /// As [`Structure::validate_loads`]; [`Error::NonFinite`] if the forces
     /// overflow.
-    pub fn dead_force(&self, loads: &StructureLoads) -> Result<Vec<f64>> {
+    pub fn dead_force(&self, loads: &StructureLoads) -> Result<DVector<f64>> {
         self.validate_loads(loads)?;
         let nd = E::NODE_DOFS;
-        let mut f = vec![0.0; self.n_q()];
+        let mut f = DVector::zeros(self.n_q());
         for (i, rod) in self.rods.iter().enumerate() {
             let local = match self.rod_loads(loads, i) {
                 Some(l) => rod.dead_force(l)?,
                 None => rod.gravity_force().to_vec(),
             };
             let q0 = self.rod_node0[i] * nd;
-            for (a, b) in f[q0..q0 + local.len()].iter_mut().zip(&local) {
+            for (a, b) in f.as_mut_slice()[q0..q0 + local.len()]
+                .iter_mut()
+                .zip(&local)
+            {
                 *a += b;
             }
         }
@@ -175,7 +214,7 @@ impl<E: Element> Structure<E> {
                 f[r.start + E::DIM + k] += v;
             }
         }
-        if f.iter().any(|v| !v.is_finite()) {
+        if f.iter().any(|v: &f64| !v.is_finite()) {
             return Err(Error::NonFinite {
                 context: "dead forces of the structure (loads too large or too narrow)".into(),
             });
@@ -342,14 +381,18 @@ impl<E: Element> Structure<E> {
     /// let y = s.body_free_coordinates(0).unwrap().start + 1;
     /// assert!((r[y] + 0.1 * 9.81).abs() < 1e-12);
     /// ```
-    pub fn residual(&self, u: &[f64], dead: &[f64], loads: &StructureLoads) -> Result<Vec<f64>> {
+    pub fn residual(
+        &self,
+        u: &[f64],
+        dead: &[f64],
+        loads: &StructureLoads,
+    ) -> Result<DVector<f64>> {
         self.check_sizes(u, dead, loads)?;
         let q = self.dofs.configuration(u)?;
         let g = self.gradient(u, &q, dead, loads, None)?;
-        let mut r = vec![0.0; self.n_free()];
-        self.dofs.restrict_into(u, &g, &mut r)?;
-        r.iter_mut().for_each(|v| *v = -*v);
-        Ok(r)
+        let mut r = DVector::zeros(self.n_free());
+        self.dofs.restrict_into(u, &g, r.as_mut_slice())?;
+        Ok(-r)
     }
 
     /// The residual and the tangent `K_u = −∂R/∂u = Tᵀ K T + Σ_i g_i
@@ -406,10 +449,10 @@ impl<E: Element> Structure<E> {
         u: &[f64],
         dead: &[f64],
         loads: &StructureLoads,
-    ) -> Result<(Vec<f64>, Triplets)> {
-        let mut r = vec![0.0; self.n_free()];
+    ) -> Result<(DVector<f64>, Triplets)> {
+        let mut r = DVector::zeros(self.n_free());
         let mut k = Triplets::new(self.n_free());
-        self.residual_and_tangent_into(u, dead, loads, &mut r, &mut k)?;
+        self.residual_and_tangent_into(u, dead, loads, r.as_mut_slice(), &mut k)?;
         Ok((r, k))
     }
 
@@ -582,12 +625,11 @@ impl<E: Element> Structure<E> {
         u: &[f64],
         dead: &[f64],
         loads: &StructureLoads,
-    ) -> Result<Vec<f64>> {
+    ) -> Result<DVector<f64>> {
         self.check_sizes(u, dead, loads)?;
         let q = self.dofs.configuration(u)?;
-        let mut g = self.gradient(u, &q, dead, loads, None)?;
-        g.iter_mut().for_each(|v| *v = -*v);
-        Ok(g)
+        let g = self.gradient(u, &q, dead, loads, None)?;
+        Ok(-DVector::from_vec(g))
     }
 
     /// The wrench every rod end exerts on the rigid body it is joined to
@@ -611,7 +653,7 @@ impl<E: Element> Structure<E> {
     /// let dead = s.dead_force(&loads).unwrap();
     /// let u = s.reference_free_coordinates();
     /// let eq = StaticSolver::default().solve(&s, &loads, None).unwrap();
-    /// let r = s.joint_reactions(&eq.u, &dead, &loads).unwrap();
+    /// let r = s.joint_reactions(eq.u.as_slice(), &dead, &loads).unwrap();
     /// // the rod holds the body up: its reaction carries the weight
     /// assert!((r[0].force_n[1] - 0.1 * 9.81).abs() < 1e-9);
     /// ```
@@ -657,8 +699,8 @@ impl<E: Element> Structure<E> {
             out.push(JointReaction {
                 joint: j.joint,
                 body: j.body,
-                force_n,
-                moment_nm,
+                force_n: DVector::from_vec(force_n),
+                moment_nm: DVector::from_vec(moment_nm),
             });
         }
         Ok(out)

@@ -400,8 +400,8 @@ impl<E: Element> Structure<E> {
     ///
     /// # Errors
     /// [`crate::Error::DimensionMismatch`] if `u` has the wrong size.
-    pub fn configuration(&self, u: &[f64]) -> Result<Vec<f64>> {
-        self.dofs.configuration(u)
+    pub fn configuration(&self, u: &[f64]) -> Result<nalgebra::DVector<f64>> {
+        self.dofs.configuration(u).map(nalgebra::DVector::from_vec)
     }
 
     /// Adds a configuration-dependent force (a spring, a contact) over the

@@ -196,7 +196,7 @@ pub trait Assembled {
     /// use softrod::structure::Assembled;
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
     /// let loads = softrod::loads::Loads::default();
-    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration());
+    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration().as_slice().to_vec());
     /// let dead = robot.dead_force(&loads)?;
     /// let mut f = vec![0.0; robot.n_free()];
     /// robot.applied_force_into(&u, &q, &dead, &loads, &mut f)?;
@@ -225,7 +225,7 @@ pub trait Assembled {
     /// use softrod::structure::Assembled;
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
     /// let loads = softrod::loads::Loads::default();
-    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration());
+    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration().as_slice().to_vec());
     /// let dead = robot.dead_force(&loads)?;
     /// let mut k = softrod::linsolve::SymmetricMatrix::zeros(Assembled::tangent_pattern(&robot)?);
     /// Assembled::tangent_into(&robot, &u, &q, &dead, &loads, &mut k)?;
@@ -280,7 +280,7 @@ pub trait Assembled {
     /// use softrod::assembly::{RobotSpec, Section};
     /// use softrod::structure::Assembled;
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
-    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration());
+    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration().as_slice().to_vec());
     /// let mut du = vec![0.0; robot.n_free()];
     /// du[2] = 0.01; // node 1's y
     /// let mut dq = vec![0.0; robot.n_q()];
@@ -355,7 +355,7 @@ pub trait Assembled {
     /// use softrod::structure::Assembled;
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
     /// let mut e = Vec::new();
-    /// robot.energies_into(&robot.reference_configuration(), &mut e)?;
+    /// robot.energies_into(robot.reference_configuration().as_slice(), &mut e)?;
     /// // one per element, nothing stored at rest (up to round-off)
     /// assert!(e.len() == 4 && e.iter().all(|v| v.abs() < 1e-20));
     /// # Ok::<(), softrod::Error>(())
@@ -426,7 +426,7 @@ pub trait Assembled {
     /// use softrod::structure::Assembled;
     /// let robot = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 64)]).build_planar()?;
     /// let (coarse, _) = robot.coarse_model(&softrod::loads::Loads::default())?.unwrap();
-    /// let u = robot.prolong(&coarse, &coarse.reference_configuration())?;
+    /// let u = robot.prolong(&coarse, coarse.reference_configuration().as_slice())?;
     /// let straight = robot.reference_free_coordinates();
     /// assert!(u.iter().zip(&straight).all(|(a, b)| (a - b).abs() < 1e-14));
     /// # Ok::<(), softrod::Error>(())
@@ -456,7 +456,7 @@ pub trait Assembled {
     /// use softrod::structure::Assembled;
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
     /// let loads = softrod::loads::Loads::default();
-    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration());
+    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration().as_slice().to_vec());
     /// let dead = robot.dead_force(&loads)?;
     /// let (mut u1, mut q1) = (u.clone(), q.clone());
     /// u1[2] += 1e-3;
@@ -507,7 +507,7 @@ impl<E: Element> Assembled for Structure<E> {
     }
 
     fn dead_force(&self, loads: &StructureLoads) -> Result<Vec<f64>> {
-        Structure::dead_force(self, loads)
+        Structure::dead_force(self, loads).map(|f| f.data.into())
     }
 
     fn scaled_loads(&self, loads: &StructureLoads, factor: f64) -> StructureLoads {
@@ -527,7 +527,7 @@ impl<E: Element> Assembled for Structure<E> {
         out: &mut [f64],
     ) -> Result<()> {
         check_len("residual", Structure::n_free(self), out.len())?;
-        out.copy_from_slice(&Structure::residual(self, u, dead, loads)?);
+        out.copy_from_slice(Structure::residual(self, u, dead, loads)?.as_slice());
         Ok(())
     }
 

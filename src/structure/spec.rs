@@ -4,6 +4,7 @@
 //! The checks here run before anything that grows with an element count is
 //! allocated; every error names its field (`structure.joints[1].body`).
 
+use nalgebra::{SVector, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::rigid::{resolve_spatial, rotate, rotate_back, Attachment, PlanarAttachment};
@@ -96,6 +97,47 @@ impl RodSpec {
     pub fn length(&self) -> f64 {
         self.sections.iter().map(|s| s.length_m).sum()
     }
+
+    /// The start point of the straight reference as a point of dimension
+    /// `D` (m).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `start_m` if it does not have `D`
+    /// entries.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{assembly::Section, structure::RodSpec};
+    /// let leg = RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.05, 0.0], vec![0.0, 2.0]);
+    /// assert_eq!(leg.start_point::<2>()?, nalgebra::Vector2::new(0.05, 0.0));
+    /// assert_eq!(leg.unit_direction::<2>()?, nalgebra::Vector2::y());
+    /// assert!(leg.start_point::<3>().is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn start_point<const D: usize>(&self) -> Result<SVector<f64, D>> {
+        crate::numeric::fixed("start_m", &self.start_m)
+    }
+
+    /// The unit direction of the straight reference in `D` dimensions.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `direction` if it does not have
+    /// `D` entries; [`Error::InvalidParameter`] if it is zero or not finite.
+    ///
+    /// # Example
+    /// See [`RodSpec::start_point`].
+    pub fn unit_direction<const D: usize>(&self) -> Result<SVector<f64, D>> {
+        let d: SVector<f64, D> = crate::numeric::fixed("direction", &self.direction)?;
+        let n = d.norm();
+        if !(n > 0.0 && n.is_finite()) {
+            return Err(Error::invalid(
+                "direction",
+                format!("{:?}", self.direction),
+                "must be a non-zero vector of finite length",
+            ));
+        }
+        Ok(d / n)
+    }
 }
 
 /// A rigid body: its mass and its pose in the reference configuration. The
@@ -115,6 +157,40 @@ pub struct RigidBodySpec {
     /// Orientation (rad): the angle from the world axes in 2-D (one
     /// number); a rotation vector in 3-D (three).
     pub orientation_rad: Vec<f64>,
+}
+
+impl RigidBodySpec {
+    /// The reference point as a point of dimension `D` (m).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `position_m` if it does not have
+    /// `D` entries.
+    ///
+    /// # Example
+    /// ```
+    /// let platform = softrod::structure::RigidBodySpec { mass_kg: 0.05, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] };
+    /// assert_eq!(platform.position::<2>()?, nalgebra::Vector2::new(0.0, 0.2));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn position<const D: usize>(&self) -> Result<SVector<f64, D>> {
+        crate::numeric::fixed("position_m", &self.position_m)
+    }
+
+    /// The orientation of a spatial body as a rotation vector (rad).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `orientation_rad` if it does not
+    /// have three entries (a planar body has one angle: read the field).
+    ///
+    /// # Example
+    /// ```
+    /// let b = softrod::structure::RigidBodySpec { mass_kg: 0.05, position_m: vec![0.0; 3], orientation_rad: vec![0.0, 0.0, 0.1] };
+    /// assert!((b.rotation_vector()?.z - 0.1).abs() < 1e-15);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn rotation_vector(&self) -> Result<Vector3<f64>> {
+        crate::numeric::fixed("orientation_rad", &self.orientation_rad)
+    }
 }
 
 /// Which end of a rod.
@@ -182,6 +258,44 @@ pub struct BodyLoad {
     /// Moment (N·m; one number in 2-D); empty for none.
     #[serde(default)]
     pub moment_nm: Vec<f64>,
+}
+
+impl BodyLoad {
+    /// The force as a vector of dimension `D` (N; zero if none is given).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `force_n` if it has neither 0 nor
+    /// `D` entries.
+    ///
+    /// # Example
+    /// ```
+    /// let push = softrod::structure::BodyLoad { body: 0, force_n: vec![1e-3, 0.0], moment_nm: vec![] };
+    /// assert_eq!(push.force::<2>()?, nalgebra::Vector2::new(1e-3, 0.0));
+    /// assert_eq!(push.moment::<1>()?[0], 0.0);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn force<const D: usize>(&self) -> Result<SVector<f64, D>> {
+        if self.force_n.is_empty() {
+            return Ok(SVector::zeros());
+        }
+        crate::numeric::fixed("force_n", &self.force_n)
+    }
+
+    /// The moment with `M` components (N·m; 1 in 2-D, 3 in 3-D; zero if
+    /// none is given).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `moment_nm` if it has neither 0
+    /// nor `M` entries.
+    ///
+    /// # Example
+    /// See [`BodyLoad::force`].
+    pub fn moment<const M: usize>(&self) -> Result<SVector<f64, M>> {
+        if self.moment_nm.is_empty() {
+            return Ok(SVector::zeros());
+        }
+        crate::numeric::fixed("moment_nm", &self.moment_nm)
+    }
 }
 
 /// Everything that loads a structure in one static solve besides weight.
@@ -311,6 +425,22 @@ impl StructureSpec {
             axial_gauss_points: DEFAULT_GAUSS_POINTS,
             bending_gauss_points: DEFAULT_GAUSS_POINTS,
         }
+    }
+
+    /// Gravity as a vector of dimension `D` (m/s²).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `gravity_m_per_s2` if it does not
+    /// have `D` entries.
+    ///
+    /// # Example
+    /// ```
+    /// let spec = softrod::structure::StructureSpec::new(vec![], vec![], vec![]);
+    /// assert_eq!(spec.gravity::<2>()?, nalgebra::Vector2::new(0.0, -9.81));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn gravity<const D: usize>(&self) -> Result<SVector<f64, D>> {
+        crate::numeric::fixed("gravity_m_per_s2", &self.gravity_m_per_s2)
     }
 
     /// Builds the planar structure.

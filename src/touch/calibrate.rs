@@ -82,7 +82,7 @@ fn residuals(
         loads.pressures_pa.clone_from(&f.pressures_pa);
         let q = solver.solve(&robot, &loads, None)?.q;
         for (&s, y) in marker_s_m.iter().zip(&f.markers_m) {
-            let p = robot.position_at(&q, s)?;
+            let p = robot.position_at(q.as_slice(), s)?;
             check_len(&format!("frames[{k}].markers_m"), p.len(), y.len())?;
             out.extend(y.iter().zip(&p).map(|(a, b)| a - b));
         }

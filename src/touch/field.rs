@@ -162,7 +162,7 @@ pub(crate) fn closest_on_element(
 /// ```
 /// use softrod::touch::{field_gradient, five_section_scene, FieldParams};
 /// let robot = five_section_scene(4).robot()?;
-/// let q = robot.reference_configuration();
+/// let q = robot.reference_configuration().as_slice().to_vec();
 /// let tip = robot.position_at(&q, robot.length())?;
 /// let (u, g) = field_gradient(&robot, &q, &FieldParams::default(), [tip[0], tip[1] + 0.01], &[])?;
 /// assert!((u - 200.0 * 0.01).abs() < 1e-9 && g.len() == robot.n_q());

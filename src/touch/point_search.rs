@@ -117,11 +117,11 @@ pub fn locate_point_force(
         s_m: 0.0,
         force_n: [0.0; 2],
         misfit_m2: 0.0,
-        misfit_free_m2: misfit(robot, &q_free, marker_s_m, &y)?,
+        misfit_free_m2: misfit(robot, q_free.as_slice(), marker_s_m, &y)?,
     };
     for _ in 0..settings.passes {
-        let resp = MarkerResponse::new(robot, &loads, &q, marker_s_m)?;
-        let mut d = DVector::from_vec(residual(robot, &q, marker_s_m, &y)?);
+        let resp = MarkerResponse::new(robot, &loads, q.as_slice(), marker_s_m)?;
+        let mut d = DVector::from_vec(residual(robot, q.as_slice(), marker_s_m, &y)?);
         // the linearization holds the present force: d = y − A q + G(s0) f0
         if let Some((s0, f0)) = current {
             d += resp.at(s0)? * DVector::from_row_slice(&f0);
@@ -129,7 +129,12 @@ pub fn locate_point_force(
         let mut pick: Option<(f64, f64, [f64; 2])> = None;
         for &s in &grid {
             let g = resp.at(s)?;
-            let (f, r) = fit(&g, &d, normal(robot, &q, s)?, settings.normal_only);
+            let (f, r) = fit(
+                &g,
+                &d,
+                normal(robot, q.as_slice(), s)?,
+                settings.normal_only,
+            );
             if pick.is_none_or(|(r0, _, _)| r < r0) {
                 pick = Some((r, s, f));
             }
@@ -144,7 +149,7 @@ pub fn locate_point_force(
             s_m: s,
             force_n: f.to_vec(),
         });
-        q = statics.solve(robot, &loads, Some(&q))?.q;
+        q = statics.solve(robot, &loads, Some(q.as_slice()))?.q;
     }
     Ok(best)
 }
@@ -167,7 +172,7 @@ pub fn marker_offset(
         .iter()
         .zip(free_markers_m)
         .map(|(&s, y)| {
-            let p = robot.position_at(&q, s)?;
+            let p = robot.position_at(q.as_slice(), s)?;
             check_len("free_markers_m", p.len(), y.len())?;
             Ok(y.iter().zip(&p).map(|(a, b)| a - b).collect())
         })
@@ -178,7 +183,7 @@ pub fn marker_offset(
 fn residual(robot: &Robot<PlanarCable>, q: &[f64], s_m: &[f64], y: &[f64]) -> Result<Vec<f64>> {
     let mut out = Vec::with_capacity(y.len());
     for &s in s_m {
-        out.extend(robot.position_at(q, s)?);
+        out.extend(robot.position_at(q, s)?.iter());
     }
     out.iter_mut().zip(y).for_each(|(a, b)| *a = b - *a);
     Ok(out)

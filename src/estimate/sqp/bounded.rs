@@ -496,7 +496,7 @@ mod tests {
             width_m: 0.01,
         });
         let eq = StaticSolver::default().solve(&robot, &truth, None).unwrap();
-        let obs = Observation::of_nodes(&robot, &eq.q, &[4, 8, 12, 16, 20])
+        let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20])
             .unwrap()
             .with_noise(1e-5, 3);
         let bounds = (0..=24)
@@ -530,7 +530,7 @@ mod tests {
         lu.solve_in_place(&mut w0).unwrap();
         let dq0 = problem.robot().expand_step(&w0).unwrap();
         let e1: Vec<f64> = (0..op.len())
-            .map(|i| e[i] + op.rows()[i].apply(&dq0))
+            .map(|i| e[i] + op.rows()[i].apply(dq0.as_slice()))
             .collect();
         let reduced_objective = |df: &[f64]| {
             let wr: f64 = (0..op.len())

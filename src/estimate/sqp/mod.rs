@@ -289,7 +289,7 @@ impl<E: Element> SqpEstimator<E> {
                 wa[j] += 2.0 * w * ei * v;
             }
         }
-        let mut c = problem.robot().restrict(&wa)?;
+        let mut c: Vec<f64> = problem.robot().restrict(&wa)?.data.into();
         c.extend(problem.penalty_grad(f)?.iter().map(|v| 2.0 * alpha * v));
         Ok(c)
     }
@@ -359,7 +359,7 @@ impl<E: Element> SqpEstimator<E> {
         let e1: Vec<f64> = e
             .iter()
             .zip(op.rows())
-            .map(|(ei, row)| ei + row.apply(&dq0))
+            .map(|(ei, row)| ei + row.apply(dq0.as_slice()))
             .collect();
         let dv = match cached {
             Some(dv) => dv,
@@ -394,7 +394,7 @@ impl<E: Element> SqpEstimator<E> {
         let dq = robot.expand_step(du)?;
         let mut lam = vec![0.0; robot.n_q()];
         for (((zi, row), w), ei) in columns(&dv.z).zip(op.rows()).zip(op.weights()).zip(e) {
-            let s = 2.0 * w * (ei + row.apply(&dq));
+            let s = 2.0 * w * (ei + row.apply(dq.as_slice()));
             lam.iter_mut().zip(zi).for_each(|(a, b)| *a += s * b);
         }
         Ok(max_abs(&lam))
@@ -439,7 +439,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
         let mut last: Option<FactoredTangent> = None;
         loop {
             let obj = wr + pen;
-            let load = norm2(&self.stream.problem.robot().restrict(&dead)?).max(1e-12);
+            let load = norm2(self.stream.problem.robot().restrict(&dead)?.as_slice()).max(1e-12);
             let rn = norm2(&r);
             if iterations >= settings.max_iterations {
                 status = EstimateStatus::IterationLimit { iterations };
@@ -478,7 +478,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
             let moved = op
                 .rows()
                 .iter()
-                .map(|row| row.apply(&dq).abs())
+                .map(|row| row.apply(dq.as_slice()).abs())
                 .fold(0.0f64, f64::max);
             if moved > settings.max_observation_jump_m && moved.is_finite() {
                 let s = settings.max_observation_jump_m / moved;
@@ -535,20 +535,28 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 let ft: Vec<f64> = f.iter().zip(&df).map(|(a, b)| a + t * b).collect();
                 let problem = &self.stream.problem;
                 let dead_t = problem.dead_with(&ft)?;
-                let mut rt = problem.robot().residual(&qt, &dead_t, problem.known())?;
+                let mut rt: Vec<f64> = problem
+                    .robot()
+                    .residual(&qt, &dead_t, problem.known())?
+                    .data
+                    .into();
                 {
                     // up to four chord steps while the residual shrinks
-                    let mut rn_t = norm2(&rt);
+                    let mut rn_t = norm2(rt.as_slice());
                     for _ in 0..4 {
                         let mut du_c = rt.clone();
                         lu.solve_in_place(&mut du_c)?;
                         if !du_c.iter().all(|v| v.is_finite()) {
                             break;
                         }
-                        let corr = problem.robot().expand_step(&du_c)?;
+                        let corr = problem.robot().expand_step(du_c.as_slice())?;
                         let qc: Vec<f64> = qt.iter().zip(&corr).map(|(a, b)| a + b).collect();
-                        let rc = problem.robot().residual(&qc, &dead_t, problem.known())?;
-                        let rn_c = norm2(&rc);
+                        let rc: Vec<f64> = problem
+                            .robot()
+                            .residual(&qc, &dead_t, problem.known())?
+                            .data
+                            .into();
+                        let rn_c = norm2(rc.as_slice());
                         if rn_c.is_nan() || rn_c >= rn_t {
                             break;
                         }
@@ -565,7 +573,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 let small = dec <= 1e-8 * scale && rn <= 1e-6 * load;
                 // near the round-off floor μ|Q|₁ is noise: a trial that stays
                 // feasible to 10× the tolerance and decreases J is accepted
-                let feasible_t = norm2(&rt) <= 10.0 * (1e-9 * load).max(floor);
+                let feasible_t = norm2(rt.as_slice()) <= 10.0 * (1e-9 * load).max(floor);
                 let descends = wr_t + pen_t <= obj + 1e-4 * t * lin.min(0.0);
                 if phi_t <= phi + 1e-4 * t * slope.min(0.0) || small || (feasible_t && descends) {
                     q = qt;
@@ -618,7 +626,11 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 }
                 let dq = problem.robot().expand_step(&w)?;
                 qc.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
-                rc = problem.robot().residual(&qc, &dead, problem.known())?;
+                rc = problem
+                    .robot()
+                    .residual(&qc, &dead, problem.known())?
+                    .data
+                    .into();
                 if step <= 1e-10 * len {
                     done = true;
                     break;
@@ -644,9 +656,9 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 let problem = &mut self.stream.problem;
                 let eq = problem.equilibrium(&f, &q)?;
                 let dv = problem.derivs(&eq.factors, op)?;
-                let e = op.residual(&eq.q);
+                let e = op.residual(eq.q.as_slice());
                 let (_, l) = problem.gn_step(&dv, op, &e, &f, alpha)?;
-                (eq.q, dv, l, eq.residual_n)
+                (eq.q.data.into(), dv, l, eq.residual_n)
             }
         };
         let problem = &self.stream.problem;
