@@ -20,8 +20,8 @@ pub(crate) enum Side {
 /// The solution of [`solve`].
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct BoxQpSolution {
-    pub x: Vec<f64>,
-    pub sides: Vec<Side>,
+    pub(crate) x: Vec<f64>,
+    pub(crate) sides: Vec<Side>,
 }
 
 /// Solves the box QP; `h` symmetric positive definite (`n × n`), `l ≤ u`.

@@ -17,6 +17,21 @@
 //! exactly, by an active-set method (a pressure on its bound sits *on* it),
 //! then backtracks on the same merit.
 //!
+//! # Cost of a step
+//! The equilibria of the Newton loop are warm: a line-search trial starts
+//! from the last equilibrium moved to first order, `q + ∂q/∂P ΔP`, and the
+//! first equilibrium of a solve whose load field changed from the last
+//! solve's starts from the last one moved by its response to the change
+//! (the load field the last solution holds for is kept with it: when it
+//! is the same, that equilibrium is used as it is). A plain Newton
+//! corrector takes them to the static solver's residual tolerance, and the
+//! positive definite factors of the tangent at its answer (the static
+//! solver's stability test) give the next Jacobian (43) by solves only;
+//! the static solver, from the unpredicted start, takes over wherever the
+//! corrector gives up. The closing iteration at a reached target (the
+//! check that no null-space step lowers `Σ P̂²`) therefore costs solves,
+//! not another factorization.
+//!
 //! # Redundancy rule: minimum Σ P̂²
 //! The two-section robot has four chambers and two task coordinates: the
 //! end effector depends on the section torques `M_s = G P` only, so the
@@ -42,162 +57,18 @@
 //! and a loop following an unreachable path then costs one warm solve per
 //! step instead of `2ⁿ + 1` cold ones.
 
-use nalgebra::DMatrix;
-use serde::{Deserialize, Serialize};
+use nalgebra::{DMatrix, DVector};
 
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::{check_all_finite, check_len, Error, Result};
-use crate::linsolve::AutoSolver;
+use crate::linsolve::{AutoFactors, AutoSolver};
 use crate::loads::Loads;
+use crate::sensitivity::Sensitivity;
 use crate::statics::{StaticSettings, StaticSolver};
 
-use super::{adapter, boxqp};
-
-/// Settings of [`InverseKinematics`]; every field has a documented default.
-///
-/// # Example
-/// ```
-/// softrod::control::IkSettings::default().validate()?;
-/// # Ok::<(), softrod::Error>(())
-/// ```
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct IkSettings {
-    /// Newton iterations per solve (default 40).
-    pub max_iterations: usize,
-    /// The end effector counts as reached within this distance (m, default 1e-7).
-    pub tolerance_m: f64,
-    /// Largest change of a scaled pressure `P / range` in one step (default 0.25).
-    pub max_step: f64,
-    /// Static solver of the equilibria `q(P)`.
-    pub statics: StaticSettings,
-    /// Newton iterations in all (over every load step) of the static solve
-    /// of one line-search trial (default 150; at most
-    /// `statics.max_total_iterations` is used). A trial the warm solver
-    /// does not reach within it is rejected, as one that does not lower
-    /// the merit is, and the step is halved: a trial that needs a long
-    /// homotopy crosses a fold of the equilibria (a heavily loaded robot
-    /// snapping over) or is too long. Measured on the failure sweep's
-    /// cases: converging trials take at most 135 iterations (2 × the
-    /// robot's weight at the tip), failing ones 550–990 (5 ×), which made
-    /// one control step cost up to 10 s.
-    pub trial_max_total_iterations: usize,
-    /// Static Newton iterations one [`InverseKinematics::solve`] may spend
-    /// in all: its equilibria, line-search trials and restarts (default
-    /// 20 000). When they are spent the solve ends with the closest pose
-    /// found so far and [`IkStatus::IterationLimit`], so one control step
-    /// has a bounded cost whatever the load.
-    pub max_static_iterations: usize,
-}
-
-impl Default for IkSettings {
-    fn default() -> Self {
-        IkSettings {
-            max_iterations: 40,
-            tolerance_m: 1e-7,
-            max_step: 0.25,
-            statics: StaticSettings::default(),
-            trial_max_total_iterations: 150,
-            max_static_iterations: 20_000,
-        }
-    }
-}
-
-impl IkSettings {
-    /// Checks every field.
-    ///
-    /// # Errors
-    /// [`Error::InvalidParameter`] naming the field (`ik.tolerance_m`, …).
-    pub fn validate(&self) -> Result<()> {
-        if self.max_iterations == 0 {
-            return Err(Error::invalid("ik.max_iterations", 0, "must be >= 1"));
-        }
-        if self.max_static_iterations == 0 {
-            return Err(Error::invalid(
-                "ik.max_static_iterations",
-                0,
-                "must be >= 1",
-            ));
-        }
-        if self.trial_max_total_iterations == 0 {
-            return Err(Error::invalid(
-                "ik.trial_max_total_iterations",
-                0,
-                "must be >= 1",
-            ));
-        }
-        for (name, v) in [
-            ("ik.tolerance_m", self.tolerance_m),
-            ("ik.max_step", self.max_step),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(Error::invalid(name, v, "must be finite and > 0"));
-            }
-        }
-        self.statics.validate()
-    }
-}
-
-/// How an inverse-kinematics solve ended.
-///
-/// # Example
-/// ```
-/// let s = softrod::control::IkStatus::Reached { error_m: 1e-9 };
-/// assert!(s.is_reached());
-/// ```
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "status", rename_all = "snake_case")]
-pub enum IkStatus {
-    /// The end effector is at the target within the tolerance.
-    Reached {
-        /// Remaining distance (m).
-        error_m: f64,
-    },
-    /// The target cannot be reached within the pressure bounds: the solution
-    /// is the closest reachable pose found.
-    Unreachable {
-        /// Distance from the closest pose to the target (m).
-        distance_m: f64,
-    },
-    /// The iteration limit came first.
-    IterationLimit {
-        /// Remaining distance (m).
-        error_m: f64,
-    },
-    /// Not solved: in a closed loop, the inverse kinematics found no
-    /// equilibrium this instant or the plant failed before it ran (the
-    /// sample's status says which); the last command is held.
-    NotSolved,
-}
-
-impl IkStatus {
-    /// Whether the target was reached.
-    pub fn is_reached(&self) -> bool {
-        matches!(self, IkStatus::Reached { .. })
-    }
-
-    /// The remaining distance to the target (m; infinite when not solved).
-    pub fn error_m(&self) -> f64 {
-        match *self {
-            IkStatus::Reached { error_m } | IkStatus::IterationLimit { error_m } => error_m,
-            IkStatus::Unreachable { distance_m } => distance_m,
-            IkStatus::NotSolved => f64::INFINITY,
-        }
-    }
-}
-
-/// Which bound a chamber's pressure sits on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum PressureBound {
-    /// Strictly inside its bounds.
-    Inside,
-    /// Exactly at `P_min`.
-    Min,
-    /// Exactly at `P_max`.
-    Max,
-}
+use super::ik_settings::{IkSettings, IkStatus, PressureBound};
+use super::{adapter, boxqp, corrector};
 
 /// The result of [`InverseKinematics::solve`].
 #[derive(Debug, Clone, PartialEq)]
@@ -247,13 +118,42 @@ pub struct InverseKinematics<E: Element> {
     lo: Vec<f64>,
     hi: Vec<f64>,
     range: Vec<f64>,
-    warm: Option<(Vec<f64>, Vec<f64>)>,
+    warm: Option<Held>,
     /// The target of the last solve, if it ended unreachable after its
     /// restarts.
     unreached_target: Option<Vec<f64>>,
     /// Static Newton iterations spent by the current solve.
     spent: usize,
 }
+
+/// An equilibrium the inverse kinematics holds: the last solution, the
+/// warm start of the next solve.
+#[derive(Debug, Clone)]
+struct Held {
+    /// Pressures (Pa).
+    p: Vec<f64>,
+    /// The equilibrium shape at `p` under `f_hat`.
+    q: Vec<f64>,
+    /// The load field `q` is the equilibrium of.
+    f_hat: Vec<f64>,
+    /// End-effector position at `q` (m).
+    x: Vec<f64>,
+    /// The factors of the tangent at `q` when the corrector made it.
+    factors: Option<AutoFactors>,
+}
+
+/// Where a Newton run starts.
+#[derive(Debug)]
+enum Start {
+    /// From the held equilibrium.
+    Warm(Box<Held>),
+    /// From these pressures (Pa), the equilibrium solved cold.
+    Cold(Vec<f64>),
+}
+
+/// An equilibrium of the Newton loop: shape, end effector, and the factors
+/// of its tangent when the corrector made it (`None`: the static solver).
+type Eq = (Vec<f64>, Vec<f64>, Option<AutoFactors>);
 
 /// A solve that does not reach its target skips the cold restarts when the
 /// last solve ended unreachable at a target at most this far (m): 1 mm, what
@@ -388,22 +288,71 @@ impl<E: Element> InverseKinematics<E> {
         Ok((eq.q.data.into(), x.data.into()))
     }
 
-    /// As [`InverseKinematics::forward`] from `q0`, with the line-search
-    /// trials' budget ([`IkSettings::trial_max_total_iterations`]).
-    fn forward_trial(
+    /// The equilibrium at pressures `p` and load field `f_hat` near a
+    /// known one: the corrector from `start` (a prediction), else the static
+    /// solver from `fallback` (a line-search trial with the trials' budget,
+    /// [`IkSettings::trial_max_total_iterations`]).
+    fn equilibrium(
         &mut self,
         p: &[f64],
         f_hat: &[f64],
-        q0: &[f64],
-    ) -> Result<(Vec<f64>, Vec<f64>)> {
+        start: &[f64],
+        fallback: &[f64],
+        trial: bool,
+    ) -> Result<Eq> {
         let loads = self.loads(p, f_hat);
-        let eq = self
-            .trial_solver
-            .solve_with(&self.robot, &loads, Some(q0), &mut self.linear);
+        let (corrected, steps) = corrector::correct(
+            &self.robot,
+            &loads,
+            start,
+            &self.settings.statics,
+            &mut self.linear,
+        );
+        self.spent += steps;
+        if let Some(c) = corrected {
+            let x = self.robot.position_at(&c.q, self.effector_s_m)?;
+            return Ok((c.q, x.data.into(), Some(c.factors)));
+        }
+        let solver = if trial {
+            &self.trial_solver
+        } else {
+            &self.solver
+        };
+        let eq = solver.solve_with(&self.robot, &loads, Some(fallback), &mut self.linear);
         self.spent += spent(&eq);
         let eq = eq?;
         let x = self.robot.position_at(eq.q.as_slice(), self.effector_s_m)?;
-        Ok((eq.q.data.into(), x.data.into()))
+        Ok((eq.q.data.into(), x.data.into(), None))
+    }
+
+    /// The first equilibrium of a Newton run: the held one as it is when
+    /// its load field is `f_hat`, else corrected from it moved along its
+    /// response to the change of load field, `M K⁻¹ Mᵀ J_QF ΔF̂` (the
+    /// equilibrium's shift to first order); cold by the static solver.
+    fn first_equilibrium(&mut self, f_hat: &[f64], start: Start) -> Result<(Vec<f64>, Eq)> {
+        match start {
+            Start::Cold(p) => {
+                let (q, x) = self.forward(&p, f_hat, None)?;
+                Ok((p, (q, x, None)))
+            }
+            Start::Warm(h) if h.f_hat == f_hat => {
+                let h = *h;
+                Ok((h.p, (h.q, h.x, h.factors)))
+            }
+            Start::Warm(h) => {
+                let predicted = match &h.factors {
+                    Some(f) => {
+                        let df: Vec<f64> = f_hat.iter().zip(&h.f_hat).map(|(a, b)| a - b).collect();
+                        let g = self.robot.apply_load_gram(&df)?;
+                        let dq = Sensitivity::new(&self.robot, f)?.response(g.as_slice())?;
+                        h.q.iter().zip(dq.iter()).map(|(a, b)| a + b).collect()
+                    }
+                    None => h.q.clone(),
+                };
+                let eq = self.equilibrium(&h.p, f_hat, &predicted, &h.q, false)?;
+                Ok((h.p, eq))
+            }
+        }
     }
 
     /// (43) `∂q/∂P = −(∂Q/∂q)⁻¹ ∂Q/∂P` (`n_q × n_pressures`, m/Pa) at the
@@ -426,13 +375,25 @@ impl<E: Element> InverseKinematics<E> {
         self.effector_columns(&dqdp)
     }
 
-    /// As [`InverseKinematics::jacobian`], factoring with the solver's own
-    /// linear solver, analyzed once at construction (the Newton loop's: a
-    /// fresh solver would analyze the tangent's pattern at every iteration).
-    fn jacobian_warm(&mut self, q: &[f64], p: &[f64], f_hat: &[f64]) -> Result<DMatrix<f64>> {
-        let loads = self.loads(p, f_hat);
-        let dqdp = adapter::dq_dp_with(&self.robot, &loads, q, &mut self.linear)?;
-        self.effector_columns(&dqdp)
+    /// The Newton loop's `(∂x/∂P, ∂q/∂P)` at the equilibrium `q`: with the
+    /// factors of its tangent when the corrector made it (solves only),
+    /// else factoring with the inverse kinematics' own linear solver,
+    /// analyzed once at construction.
+    fn jacobian_warm(
+        &mut self,
+        q: &[f64],
+        p: &[f64],
+        f_hat: &[f64],
+        factors: Option<&AutoFactors>,
+    ) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
+        let dqdp = match factors {
+            Some(f) => Sensitivity::new(&self.robot, f)?.dq_dp(q)?,
+            None => {
+                let loads = self.loads(p, f_hat);
+                adapter::dq_dp_with(&self.robot, &loads, q, &mut self.linear)?
+            }
+        };
+        Ok((self.effector_columns(&dqdp)?, dqdp))
     }
 
     /// `S(X_e) ∂q/∂P`: the end effector's rows of the columns of `dqdp`.
@@ -469,17 +430,14 @@ impl<E: Element> InverseKinematics<E> {
         let np = self.range.len();
         let bounds = self.robot.pressure_bounds();
         self.spent = 0;
-        let (p0, q0) = match self.warm.take() {
-            Some((p, q)) => (p, Some(q)),
-            None => {
-                let p = if self.known.pressures_pa.len() == np {
-                    // the known pressures are checked against the bounds
-                    self.known.pressures_pa.clone()
-                } else {
-                    bounds.iter().map(|(lo, _)| *lo).collect()
-                };
-                (p, None)
-            }
+        let start = match self.warm.take() {
+            Some(h) => Start::Warm(Box::new(h)),
+            None => Start::Cold(if self.known.pressures_pa.len() == np {
+                // the known pressures are checked against the bounds
+                self.known.pressures_pa.clone()
+            } else {
+                bounds.iter().map(|(lo, _)| *lo).collect()
+            }),
         };
         // the warm start; a static solve that fails from it is not the end:
         // the starts below are cold
@@ -491,13 +449,13 @@ impl<E: Element> InverseKinematics<E> {
                 .sqrt()
                 <= RESTART_RADIUS_M
         });
-        let (mut best, first_err) = match self.solve_from(x_d, f_hat, p0, q0) {
-            Ok(s) if s.status.is_reached() => {
-                self.warm = Some((s.pressures_pa.clone(), s.q.clone()));
+        let (mut best, first_err) = match self.solve_from(x_d, f_hat, start) {
+            Ok((s, factors)) if s.status.is_reached() => {
+                self.hold(&s, f_hat, factors);
                 return Ok(s);
             }
-            Ok(s) if near_unreached => {
-                self.warm = Some((s.pressures_pa.clone(), s.q.clone()));
+            Ok((s, factors)) if near_unreached => {
+                self.hold(&s, f_hat, factors);
                 self.unreached_target = Some(x_d.to_vec());
                 return Ok(s);
             }
@@ -508,7 +466,7 @@ impl<E: Element> InverseKinematics<E> {
         // is possible (the workspace folds), so try every chamber at its
         // minimum or mid-range (2^n starts, n ≤ 6) and keep the closest
         let n_starts = if np <= 6 { 1usize << np } else { 2 };
-        let mut iterations = best.as_ref().map_or(0, |b| b.iterations);
+        let mut iterations = best.as_ref().map_or(0, |b| b.0.iterations);
         for code in 0..n_starts {
             if self.spent >= self.settings.max_static_iterations {
                 break;
@@ -524,22 +482,22 @@ impl<E: Element> InverseKinematics<E> {
                     }
                 })
                 .collect();
-            let Ok(s) = self.solve_from(x_d, f_hat, p, None) else {
+            let Ok(s) = self.solve_from(x_d, f_hat, Start::Cold(p)) else {
                 continue;
             };
-            iterations += s.iterations;
+            iterations += s.0.iterations;
             if best
                 .as_ref()
-                .is_none_or(|b| s.status.error_m() < b.status.error_m())
+                .is_none_or(|b| s.0.status.error_m() < b.0.status.error_m())
             {
-                let reached = s.status.is_reached();
+                let reached = s.0.status.is_reached();
                 best = Some(s);
                 if reached {
                     break;
                 }
             }
         }
-        let Some(mut best) = best else {
+        let Some((mut best, factors)) = best else {
             return Err(first_err.unwrap_or_else(|| {
                 Error::invalid(
                     "x_d",
@@ -549,7 +507,7 @@ impl<E: Element> InverseKinematics<E> {
             }));
         };
         best.iterations = iterations;
-        self.warm = Some((best.pressures_pa.clone(), best.q.clone()));
+        self.hold(&best, f_hat, factors);
         if !best.status.is_reached() {
             self.unreached_target = Some(x_d.to_vec());
         }
@@ -574,25 +532,43 @@ impl<E: Element> InverseKinematics<E> {
         self.robot.validate_loads(&loads)?;
         check_len("f_hat", self.robot.n_q(), f_hat.len())?;
         check_all_finite("f_hat", f_hat)?;
-        let (q0, _) = self.forward(p0_pa, f_hat, None)?;
-        self.warm = Some((p0_pa.to_vec(), q0));
+        let (q, x) = self.forward(p0_pa, f_hat, None)?;
+        self.warm = Some(Held {
+            p: p0_pa.to_vec(),
+            q,
+            f_hat: f_hat.to_vec(),
+            x,
+            factors: None,
+        });
         self.unreached_target = None;
         self.solve(x_d, f_hat)
     }
 
-    /// Newton from the pressures `p0` (and the shape `q0`, or cold).
+    /// Keeps the solution `s` under the load field `f_hat` (and the factors
+    /// of its tangent) as the next solve's warm start.
+    fn hold(&mut self, s: &IkSolution, f_hat: &[f64], factors: Option<AutoFactors>) {
+        self.warm = Some(Held {
+            p: s.pressures_pa.clone(),
+            q: s.q.clone(),
+            f_hat: f_hat.to_vec(),
+            x: s.effector_m.clone(),
+            factors,
+        });
+    }
+
+    /// Newton from `start` (the held equilibrium, or cold at pressures);
+    /// the solution and the factors of the tangent at its shape when the
+    /// corrector made it.
     #[allow(non_snake_case)]
     fn solve_from(
         &mut self,
         x_d: &[f64],
         f_hat: &[f64],
-        p0: Vec<f64>,
-        q0: Option<Vec<f64>>,
-    ) -> Result<IkSolution> {
+        start: Start,
+    ) -> Result<(IkSolution, Option<AutoFactors>)> {
         let d = E::DIM;
         let np = self.range.len();
-        let mut P = p0;
-        let (mut q, mut x) = self.forward(&P, f_hat, q0.as_deref())?;
+        let (mut P, (mut q, mut x, mut factors)) = self.first_equilibrium(f_hat, start)?;
         let merit = |x: &[f64], p: &[f64], range: &[f64]| -> f64 {
             let r2: f64 = x.iter().zip(x_d).map(|(a, b)| (b - a).powi(2)).sum();
             let p2: f64 = p.iter().zip(range).map(|(p, r)| (p / r).powi(2)).sum();
@@ -608,7 +584,7 @@ impl<E: Element> InverseKinematics<E> {
             && self.spent < self.settings.max_static_iterations
         {
             iterations += 1;
-            let J = self.jacobian_warm(&q, &P, f_hat)?;
+            let (J, dqdp) = self.jacobian_warm(&q, &P, f_hat, factors.as_ref())?;
             // scaled Jacobian Ĵ = J diag(range), residual r = x_d − x
             let Jh = DMatrix::from_fn(d, np, |r, c| J[(r, c)] * self.range[c]);
             let r: Vec<f64> = x_d.iter().zip(&x).map(|(a, b)| a - b).collect();
@@ -649,11 +625,19 @@ impl<E: Element> InverseKinematics<E> {
                         }
                     })
                     .collect();
-                let ft = self.forward_trial(&trial, f_hat, &q);
+                // the trial's equilibrium predicted to first order,
+                // q + ∂q/∂P ΔP, corrected (the static solver from q if not)
+                let dp = DVector::from_iterator(np, trial.iter().zip(&P).map(|(a, b)| a - b));
+                let predicted: Vec<f64> = q
+                    .iter()
+                    .zip((&dqdp * dp).iter())
+                    .map(|(a, b)| a + b)
+                    .collect();
+                let ft = self.equilibrium(&trial, f_hat, &predicted, &q, true);
                 if ft.is_err() {
                     failed_trials += 1;
                 }
-                if let Ok((qt, xt)) = ft {
+                if let Ok((qt, xt, ft_factors)) = ft {
                     let phit = merit(&xt, &trial, &self.range);
                     if phit <= phi - 1e-4 * t * dec {
                         let ratio = (phi - phit) / dec.max(f64::MIN_POSITIVE);
@@ -671,6 +655,7 @@ impl<E: Element> InverseKinematics<E> {
                         P = trial;
                         q = qt;
                         x = xt;
+                        factors = ft_factors;
                         phi = phit;
                         accepted = true;
                         break;
@@ -722,13 +707,16 @@ impl<E: Element> InverseKinematics<E> {
                 }
             })
             .collect();
-        Ok(IkSolution {
-            pressures_pa: P,
-            q,
-            effector_m: x,
-            status,
-            iterations,
-            bounds,
-        })
+        Ok((
+            IkSolution {
+                pressures_pa: P,
+                q,
+                effector_m: x,
+                status,
+                iterations,
+                bounds,
+            },
+            factors,
+        ))
     }
 }

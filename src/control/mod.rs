@@ -24,8 +24,10 @@
 pub(crate) mod adapter;
 pub(crate) mod boxqp;
 mod closed_loop;
+mod corrector;
 mod failure;
 mod ik;
+mod ik_settings;
 mod mass;
 pub mod parallel;
 mod track;
@@ -41,9 +43,8 @@ pub use failure::{
     case_file, plant_reach_m, robot_mass_kg, run_case, FailureSettings, LoopCase, LoopCause,
     LoopOutcome, LoopVerdict,
 };
-pub use ik::{
-    IkSettings, IkSolution, IkStatus, InverseKinematics, PressureBound, RESTART_RADIUS_M,
-};
+pub use ik::{IkSolution, InverseKinematics, RESTART_RADIUS_M};
+pub use ik_settings::{IkSettings, IkStatus, PressureBound};
 pub use mass::{MassEstimate, MassEstimator, MassForce, MassReference, MassSettings};
 pub use track::{
     build_trajectory, payloads_from_json, run_track, CircleSpec, FigureEightSpec, LineSpec,
