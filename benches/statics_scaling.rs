@@ -85,7 +85,8 @@ fn main() {
             StaticSolver::default().solve(&scene.robot().unwrap(), &scene.loads().unwrap(), None);
         if let Ok(eq) = &out {
             let m: Vec<String> =
-                eq.q.chunks(4)
+                eq.q.as_slice()
+                    .chunks(4)
                     .enumerate()
                     .filter(|(i, _)| i % (n / 8).max(1) == 0 || *i == n)
                     .map(|(i, c)| format!("{i}:{:.4}", (c[2] * c[2] + c[3] * c[3]).sqrt()))

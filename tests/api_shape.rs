@@ -61,7 +61,7 @@ fn the_clamp_reaction_is_the_residual_at_the_base() {
     // the residual at the base node: dead load minus the elastic force of element 0
     let dead = robot.dead_force(&loads).unwrap();
     let mut g = vec![0.0; 8];
-    robot.elements()[0].add_energy_gradient(&eq.q[..8], &mut g);
+    robot.elements()[0].add_energy_gradient(&eq.q.as_slice()[..8], &mut g);
     let qb = Vector4::from_fn(|i, _| dead[i] - g[i]);
     let t0 = Vector2::new(eq.q[2], eq.q[3]);
     let force = -Vector2::new(qb[0], qb[1]);
@@ -145,7 +145,7 @@ fn the_estimate_views_are_its_fields() {
         ..loads.clone()
     };
     let eq = StaticSolver::default().solve(&robot, &truth, None).unwrap();
-    let obs = Observation::at_nodes(&robot, &eq.q, &[5, 10, 15, 20]).with_noise(1e-5, 4);
+    let obs = Observation::at_nodes(&robot, eq.q.as_slice(), &[5, 10, 15, 20]).with_noise(1e-5, 4);
     for backend in [Backend::Newton, Backend::Sqp] {
         let settings = EstimatorSettings {
             backend,

@@ -498,7 +498,7 @@ fn cases() -> Vec<Case> {
         case(
             "NaN in q0",
             move || {
-                let mut q = Scene::two_section()
+                let mut q: Vec<f64> = Scene::two_section()
                     .robot()
                     .unwrap()
                     .reference_configuration()

@@ -43,14 +43,14 @@ fn case(n: usize, m: usize, frames: u64) -> (Robot<PlanarCable>, Loads, Vec<Obse
     let mut q = solver.solve(&robot, &known, None).unwrap().q;
     for k in 1..=8 {
         q = solver
-            .solve(&robot, &truth_at(f64::from(k) / 8.0), Some(&q))
+            .solve(&robot, &truth_at(f64::from(k) / 8.0), Some(q.as_slice()))
             .unwrap()
             .q;
     }
     let markers: Vec<MarkerObservation> = (1..=m)
         .map(|k| {
             let s = robot.length() * k as f64 / m as f64;
-            MarkerObservation::at_arc(s, robot.position_at(&q, s).unwrap())
+            MarkerObservation::at_arc(s, robot.position_at(q.as_slice(), s).unwrap().data.into())
         })
         .collect();
     let frames = (0..frames)
