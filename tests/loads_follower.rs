@@ -52,7 +52,7 @@ fn the_follower_force_and_its_non_symmetric_stiffness_are_the_derivatives() {
         *v += 0.05 * ((i as f64) * 0.7).sin() + 0.02 * ((i * i) as f64 * 0.13).cos();
     }
     let dead = robot.dead_force(&loads).unwrap();
-    let r = robot.residual(&q, &dead, &loads).unwrap();
+    let r = robot.residual(&q, dead.as_slice(), &loads).unwrap();
     let n = robot.n_free();
     let mut ks = BandedMatrix::zeros(n, 1, 1);
     robot.tangent_into(q.as_slice(), &loads, &mut ks).unwrap();
