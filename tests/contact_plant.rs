@@ -89,7 +89,7 @@ fn plant_solves_released_from_the_object_converge_to_the_free_equilibrium() {
         assert!(free.is_converged(), "{}: {}", case.name, free.report);
         let open = case
             .obstacles
-            .gaps(&case.robot, &free.q)
+            .gaps(&case.robot, free.q.as_slice())
             .unwrap()
             .iter()
             .map(|g| g.gap_m)
