@@ -119,7 +119,9 @@ pub struct ContactSolver {
 /// Smallest force of an active contact in an SQP step, relative to the
 /// largest: above the QP's multipliers of open gaps (measured up to 2e-8 at
 /// a fingertip near several circles; taken as active they over-constrained
-/// the point and the polish's KKT system was singular).
+/// the point and the polish's KKT system was singular). A second test, in
+/// [`ContactSolver::qp`], drops the multiplier of every gap the step leaves
+/// open, which this ratio cannot do when no gap carries a force.
 const ACTIVE_FORCE_RATIO: f64 = 1e-6;
 
 /// One active contact during the solve: its obstacle, where it is, its force.
@@ -645,10 +647,18 @@ impl ContactSolver {
             return Err(sol.status);
         }
         let du: Vec<f64> = sol.x.iter().zip(&d).map(|(x, d)| x * d).collect();
+        // complementarity: the multiplier of a gap the step leaves open (its
+        // slack above its multiplier, both in the scaled problem's units) is
+        // the interior point's residue, not a force. Measured: a finger
+        // released from the object, every multiplier ~1e-14 N, all of them
+        // "active" under the ratio to the largest; the polish's KKT system
+        // with dozens of constraints at the fingertip diverged and the solve
+        // ended with LineSearchFailed (4 trials of the simulated Table I)
         let lambda: Vec<f64> = sol.z[..m]
             .iter()
+            .zip(&sol.s[..m])
             .zip(&rho)
-            .map(|(z, s)| (z / s).max(0.0))
+            .map(|((z, sl), s)| if z > sl { (z / s).max(0.0) } else { 0.0 })
             .collect();
         if !du.iter().chain(&lambda).all(|v| v.is_finite()) {
             return Err(SolverStatus::NumericalError);
