@@ -292,6 +292,7 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
                     q,
                     derivs: dv,
                     cov_factor: l,
+                    gn: Some(fac),
                     e,
                     report: report(EstimateStatus::Converged(criterion), iterations),
                 });
@@ -303,6 +304,7 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
                     q,
                     derivs: dv,
                     cov_factor: l,
+                    gn: Some(fac),
                     e,
                     report: report(EstimateStatus::IterationLimit { iterations }, iterations),
                 });
@@ -359,6 +361,7 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
                         q: qt,
                         derivs: dv,
                         cov_factor: l,
+                        gn: Some(fac),
                         e: e_t,
                         report: rep,
                     });
@@ -422,6 +425,7 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
                         q,
                         derivs: dv,
                         cov_factor: l,
+                        gn: Some(fac),
                         e,
                         report: report(
                             if dec <= 1e-6 * scale {
