@@ -203,7 +203,7 @@ fn main() {
         .map(|a| a.parse().unwrap())
         .unwrap_or(5);
     println!(
-        "{:<34} {:>10} {:>5} {:>6} {:>9} {:>10} {:>5} {:>6} {:>9} {:>7} {:>7}",
+        "{:<34} {:>10} {:>5} {:>6} {:>9} {:>10} {:>5} {:>6} {:>9} {:>7} {:>7} {:>7}",
         "load",
         "newton ms",
         "fact",
@@ -214,6 +214,7 @@ fn main() {
         "it",
         "alpha",
         "ratio",
+        "min-r",
         "f-ratio"
     );
     let backends = [Backend::Newton, Backend::Sqp];
