@@ -229,10 +229,9 @@ fn main() {
             .collect();
         for _ in 0..repeats {
             for (backend, r) in backends.iter().zip(runs.iter_mut()) {
-                let settings = EstimatorSettings::default();
-                let mut est = softrod::estimate::EstimatorSettings {
-                    backend,
-                    ..settings
+                let mut est = EstimatorSettings {
+                    backend: *backend,
+                    ..EstimatorSettings::default()
                 }
                 .build_for(&c.robot, &c.known)
                 .unwrap();
