@@ -1,8 +1,10 @@
-//! The first estimate (a fresh estimator, `α` by the discrepancy principle)
-//! of both backends on every load of the estimator tests and of the
-//! report's sweep, at 20 elements and 5 markers: wall time (median of
-//! `REPEATS` runs), iterations, the `α` found and the ratio of the two
-//! backends' times.
+//! The first estimate (a fresh estimator, `α` chosen by the default rule,
+//! the evidence) of both backends on every load of the estimator tests and
+//! of the report's sweep, at 20 elements and 5 markers: wall time (median
+//! of `REPEATS` runs; the two backends' runs alternate, so a shared
+//! machine's load falls on both alike), the tangent factorizations counted
+//! ([`softrod::linsolve::LinearWork`], independent of the load), iterations,
+//! the `α` found and the ratio of the two backends' times.
 //!
 //! `cargo run --release --features report --example first_estimate [REPEATS]`
 //!
@@ -182,62 +184,111 @@ fn cases() -> Vec<Case> {
     v
 }
 
+/// One backend's runs on a case: the wall times (s) and the last run's
+/// estimate.
+struct Runs {
+    times: Vec<f64>,
+    last: Option<softrod::Result<softrod::estimate::Estimate>>,
+}
+
+impl Runs {
+    /// The median and the fastest run (s).
+    fn median_min(&mut self) -> (f64, f64) {
+        self.times.sort_by(f64::total_cmp);
+        (self.times[self.times.len() / 2], self.times[0])
+    }
+}
+
 fn main() {
     let repeats: usize = std::env::args()
         .nth(1)
         .map(|a| a.parse().unwrap())
         .unwrap_or(5);
     println!(
-        "{:<34} {:>10} {:>6} {:>9} {:>10} {:>6} {:>9} {:>7}",
-        "load", "newton ms", "it", "alpha", "sqp ms", "it", "alpha", "ratio"
+        "{:<34} {:>10} {:>5} {:>6} {:>9} {:>10} {:>5} {:>6} {:>9} {:>7} {:>7} {:>7}",
+        "load",
+        "newton ms",
+        "fact",
+        "it",
+        "alpha",
+        "sqp ms",
+        "fact",
+        "it",
+        "alpha",
+        "ratio",
+        "min-r",
+        "f-ratio"
     );
-    let mut worst = 0.0f64;
+    let backends = [Backend::Newton, Backend::Sqp];
+    let (mut worst, mut worst_min, mut worst_work) = (0.0f64, 0.0f64, 0.0f64);
     for c in cases() {
-        let mut row = Vec::new();
-        for backend in [Backend::Newton, Backend::Sqp] {
-            let mut times = Vec::new();
-            let mut last = None;
-            for _ in 0..repeats {
-                let settings = EstimatorSettings::default();
-                let mut est = softrod::estimate::EstimatorSettings {
-                    backend,
-                    ..settings
+        let mut runs: Vec<Runs> = backends
+            .iter()
+            .map(|_| Runs {
+                times: Vec::new(),
+                last: None,
+            })
+            .collect();
+        for _ in 0..repeats {
+            for (backend, r) in backends.iter().zip(runs.iter_mut()) {
+                let mut est = EstimatorSettings {
+                    backend: *backend,
+                    ..EstimatorSettings::default()
                 }
                 .build_for(&c.robot, &c.known)
                 .unwrap();
                 let t = Instant::now();
                 let e = est.step(&c.obs);
-                times.push(t.elapsed().as_secs_f64());
-                last = Some(e);
+                r.times.push(t.elapsed().as_secs_f64());
+                r.last = Some(e);
             }
-            times.sort_by(f64::total_cmp);
-            let med = times[times.len() / 2];
-            let (it, alpha, ok) = match last.unwrap() {
-                Ok(e) => (
-                    e.report.iterations,
-                    e.report.alpha,
-                    e.report.status.is_converged(),
-                ),
-                Err(_) => (0, f64::NAN, false),
-            };
-            row.push((med, it, alpha, ok));
         }
-        let ratio = (row[0].0 / row[1].0).max(row[1].0 / row[0].0);
-        worst = worst.max(ratio);
+        let mut fastest = [0.0; 2];
+        let row: Vec<(f64, usize, usize, f64, bool)> = runs
+            .iter_mut()
+            .zip(fastest.iter_mut())
+            .map(|(r, fast)| {
+                let (med, min) = r.median_min();
+                *fast = min;
+                match r.last.take().unwrap() {
+                    Ok(e) => (
+                        med,
+                        e.report.linear_work.factorizations,
+                        e.report.iterations,
+                        e.report.alpha,
+                        e.report.status.is_converged(),
+                    ),
+                    Err(_) => (med, 0, 0, f64::NAN, false),
+                }
+            })
+            .collect();
+        let ratio = row[0].0 / row[1].0;
+        let ratio_min = fastest[0] / fastest[1];
+        worst_min = worst_min.max(ratio_min.max(1.0 / ratio_min));
+        let work = row[0].1 as f64 / row[1].1.max(1) as f64;
+        worst = worst.max(ratio.max(1.0 / ratio));
+        worst_work = worst_work.max(work.max(1.0 / work));
         let mark = |ok: bool| if ok { "" } else { "!" };
         println!(
-            "{:<34} {:>9.3}{} {:>6} {:>9.3e} {:>9.3}{} {:>6} {:>9.3e} {:>7.2}",
+            "{:<34} {:>9.3}{} {:>5} {:>6} {:>9.3e} {:>9.3}{} {:>5} {:>6} {:>9.3e} {:>7.2} {:>7.2} {:>7.2}",
             c.name,
             row[0].0 * 1e3,
-            mark(row[0].3),
+            mark(row[0].4),
             row[0].1,
             row[0].2,
+            row[0].3,
             row[1].0 * 1e3,
-            mark(row[1].3),
+            mark(row[1].4),
             row[1].1,
             row[1].2,
-            row[0].0 / row[1].0,
+            row[1].3,
+            ratio,
+            ratio_min,
+            work,
         );
     }
-    println!("largest ratio either way: {worst:.2}");
+    println!(
+        "largest ratio either way: median time {worst:.2}, fastest run {worst_min:.2}, \
+         factorizations {worst_work:.2}"
+    );
 }

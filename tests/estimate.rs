@@ -80,7 +80,7 @@ fn marker_jacobian_matches_finite_differences() {
             let (ym, _) = est.markers_and_jacobian(&obs, &fm).unwrap();
             for i in 0..m {
                 let fd = (yp[i] - ym[i]) / (2.0 * h);
-                worst = worst.max((fd - jac[i * n_f + j]).abs() / scale);
+                worst = worst.max((fd - jac[(i, j)]).abs() / scale);
             }
         }
         eprintln!("{model:?}: max |J_fd - J| / max|J| = {worst:.2e}");

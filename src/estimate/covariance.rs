@@ -10,7 +10,7 @@
 //!   the linearized estimator `F̂ ≈ (JᵀWJ + αH)⁻¹ JᵀW y` with `Cov(y) =
 //!   σ² I`, `Cov(F̂) = L Lᵀ`, is the noise spread alone (no bias).
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use crate::element::Element;
 use crate::observe::ObservationOperator;
@@ -31,9 +31,9 @@ pub(crate) fn cov_factor<E: Element>(
     let sigma = problem.settings().noise_sigma_m;
     let l = match problem.load() {
         // σ Z S⁻¹: the small inverse, then one product
-        LoadModel::Distributed => &dv.z * (fac.0.inverse() * sigma),
+        LoadModel::Distributed => &dv.z * (fac.chol.inverse() * sigma),
         LoadModel::Concentrated { .. } => {
-            fac.0.solve(&weighted_columns(&dv.jt, op.weights())) * sigma
+            fac.chol.solve(&weighted_columns(&dv.jt, op.weights())) * sigma
         }
     };
     row_major(&l)
@@ -54,15 +54,78 @@ pub(crate) fn cov_factor<E: Element>(
 /// - concentrated (`H = I`): `Cov(F | y) = N⁻¹`, `N = JᵀWJ + αI`,
 ///   `Cov(A q) = J N⁻¹ Jᵀ`.
 ///
-/// `None` if the Gauss–Newton matrix is not positive definite.
+/// `None` if the Gauss–Newton matrix is not positive definite. `gn`: the
+/// factor of the Gauss–Newton system at the same derivatives, if at hand
+/// (used when formed at this `α`).
 pub(crate) fn posterior_cov<E: Element>(
     problem: &Problem<E>,
     fw: &[f64],
     dv: &Derivs,
     op: &ObservationOperator,
     alpha: f64,
+    gn: Option<&GnFactor>,
 ) -> Option<(Vec<f64>, Vec<f64>)> {
-    posterior(problem.load(), E::NODE_DOFS, fw, dv, op.weights(), alpha)
+    posterior(
+        problem.load(),
+        E::NODE_DOFS,
+        fw,
+        dv,
+        op.weights(),
+        alpha,
+        gn,
+    )
+}
+
+/// `Zᵀ B Z` (symmetric) and the factor of `S = Zᵀ B Z + α W⁻¹` for the
+/// distributed load: from `gn` when it was formed at `alpha`, else anew.
+fn representer_system(
+    dv: &Derivs,
+    w: &[f64],
+    alpha: f64,
+    gn: Option<&GnFactor>,
+) -> Option<(DMatrix<f64>, Cholesky<f64, Dyn>)> {
+    if let Some(GnFactor {
+        chol,
+        gram: Some(k),
+        alpha: a,
+    }) = gn
+    {
+        if *a == alpha && k.nrows() == w.len() {
+            return Some((k.clone(), chol.clone()));
+        }
+    }
+    let k = dv.z.tr_mul(&dv.jt);
+    let k = (&k + k.transpose()) * 0.5;
+    let mut s = k.clone();
+    for (i, wi) in w.iter().enumerate() {
+        s[(i, i)] += alpha / wi;
+    }
+    Some((k, jittered_cholesky(s)?))
+}
+
+/// The factor of `N = Jᵀ W J + α I` for a concentrated load: from `gn`
+/// when it was formed at `alpha`, else anew.
+fn concentrated_system(
+    dv: &Derivs,
+    w: &[f64],
+    alpha: f64,
+    gn: Option<&GnFactor>,
+) -> Option<Cholesky<f64, Dyn>> {
+    if let Some(GnFactor {
+        chol,
+        gram: None,
+        alpha: a,
+    }) = gn
+    {
+        if *a == alpha && chol.l_dirty().nrows() == dv.jt.nrows() {
+            return Some(chol.clone());
+        }
+    }
+    let mut n = weighted_columns(&dv.jt, w) * dv.jt.transpose();
+    for i in 0..n.nrows() {
+        n[(i, i)] += alpha;
+    }
+    jittered_cholesky(n)
 }
 
 /// [`posterior_cov`] for the load model `load`, `nd` coordinates per node
@@ -74,6 +137,7 @@ fn posterior(
     dv: &Derivs,
     w: &[f64],
     alpha: f64,
+    gn: Option<&GnFactor>,
 ) -> Option<(Vec<f64>, Vec<f64>)> {
     let m = w.len();
     let nf = dv.jt.nrows();
@@ -81,13 +145,7 @@ fn posterior(
     let c = DMatrix::from_row_slice(d, nf, fw);
     match load {
         LoadModel::Distributed => {
-            let k = dv.z.tr_mul(&dv.jt);
-            let k = (&k + k.transpose()) * 0.5;
-            let mut s = k.clone();
-            for i in 0..m {
-                s[(i, i)] += alpha / w[i];
-            }
-            let chol = jittered_cholesky(s)?;
+            let (k, chol) = representer_system(dv, w, alpha, gn)?;
             // C E_d: the columns of C at the position slots of component b
             let mut ce = DMatrix::zeros(d, d);
             for a in 0..d {
@@ -109,11 +167,7 @@ fn posterior(
             Some((row_major(&r), row_major(&mk)))
         }
         LoadModel::Concentrated { .. } => {
-            let mut n = weighted_columns(&dv.jt, w) * dv.jt.transpose();
-            for i in 0..n.nrows() {
-                n[(i, i)] += alpha;
-            }
-            let chol = jittered_cholesky(n)?;
+            let chol = concentrated_system(dv, w, alpha, gn)?;
             let ninv = chol.inverse();
             let r = &c * &ninv * c.transpose();
             let mk = dv.jt.transpose() * &ninv * &dv.jt;
@@ -189,6 +243,7 @@ pub(crate) fn alpha_spread(
     alpha: f64,
     f: &[f64],
     pen: f64,
+    gn: Option<&GnFactor>,
 ) -> Option<AlphaSpread> {
     let m = w.len();
     let nf = dv.jt.nrows();
@@ -201,23 +256,13 @@ pub(crate) fn alpha_spread(
     let u = dv.jt.tr_mul(&fv);
     let (k, df) = match load {
         LoadModel::Distributed => {
-            let k = dv.z.tr_mul(&dv.jt);
-            let k = (&k + k.transpose()) * 0.5;
-            let mut s = k.clone();
-            for i in 0..m {
-                s[(i, i)] += alpha / w[i];
-            }
-            let chol = jittered_cholesky(s)?;
+            let (k, chol) = representer_system(dv, w, alpha, gn)?;
             let df = -(&fv - &dv.z * chol.solve(&u));
             (k, df)
         }
         LoadModel::Concentrated { .. } => {
             let k = dv.jt.tr_mul(&dv.jt);
-            let mut n = weighted_columns(&dv.jt, w) * dv.jt.transpose();
-            for i in 0..n.nrows() {
-                n[(i, i)] += alpha;
-            }
-            let chol = jittered_cholesky(n)?;
+            let chol = concentrated_system(dv, w, alpha, gn)?;
             let df = -chol.solve(&fv) * alpha;
             (k, df)
         }
@@ -251,8 +296,9 @@ pub(crate) fn posterior_alpha_marginal(
     alpha: f64,
     f: &[f64],
     pen: f64,
+    gn: Option<&GnFactor>,
 ) -> Option<(Vec<f64>, Vec<f64>)> {
-    let sp = alpha_spread(load, fw, dv, w, alpha, f, pen)?;
+    let sp = alpha_spread(load, fw, dv, w, alpha, f, pen, gn)?;
     let h = 3f64.sqrt() * sp.sigma_ln;
     let mut r: Option<DMatrix<f64>> = None;
     let mut mk: Option<DMatrix<f64>> = None;
@@ -261,7 +307,7 @@ pub(crate) fn posterior_alpha_marginal(
         (alpha * h.exp(), 1.0 / 6.0),
         (alpha * (-h).exp(), 1.0 / 6.0),
     ] {
-        let (ri, mi) = posterior(load, nd, fw, dv, w, a)?;
+        let (ri, mi) = posterior(load, nd, fw, dv, w, a, gn)?;
         let d = sp.force.len();
         let m = sp.marker.len();
         let ri = DMatrix::from_row_slice(d, d, &ri) * wt;
@@ -279,7 +325,9 @@ pub(crate) fn posterior_alpha_marginal(
 /// `alpha`: the posterior's ([`posterior_cov`]), or, when its matrix cannot
 /// be factored, the spread the noise alone causes, from the covariance
 /// factor `L`: `(C L)(C L)ᵀ` and `(J L)(J L)ᵀ`. Also whether the markers
-/// see the load at all ([`super::evidence::informative`]).
+/// see the load at all ([`super::evidence::informative`]). `gn`: the
+/// Gauss–Newton system's factor at `dv`, if at hand.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn estimate_cov<E: Element>(
     problem: &Problem<E>,
     cov_factor: &[f64],
@@ -288,6 +336,7 @@ pub(crate) fn estimate_cov<E: Element>(
     op: &ObservationOperator,
     alpha: f64,
     f: &[f64],
+    gn: Option<&GnFactor>,
 ) -> (Vec<f64>, Vec<f64>, bool) {
     let informative = super::evidence::informative(dv);
     let settings = problem.settings();
@@ -296,13 +345,14 @@ pub(crate) fn estimate_cov<E: Element>(
         if let Ok(pen) = problem.penalty(f) {
             let load = problem.load();
             let w = op.weights();
-            if let Some(c) = posterior_alpha_marginal(load, E::NODE_DOFS, fw, dv, w, alpha, f, pen)
+            if let Some(c) =
+                posterior_alpha_marginal(load, E::NODE_DOFS, fw, dv, w, alpha, f, pen, gn)
             {
                 return (c.0, c.1, informative);
             }
         }
     }
-    if let Some((r, mk)) = posterior_cov(problem, fw, dv, op, alpha) {
+    if let Some((r, mk)) = posterior_cov(problem, fw, dv, op, alpha, gn) {
         return (r, mk, informative);
     }
     let (r, mk) = noise_cov(cov_factor, fw, dv);
@@ -427,7 +477,7 @@ mod tests {
             z: z.clone(),
             jt: jt.clone(),
         };
-        let (rc, mc) = posterior(LoadModel::Distributed, nd, &fw, &dv, &w, alpha).unwrap();
+        let (rc, mc) = posterior(LoadModel::Distributed, nd, &fw, &dv, &w, alpha, None).unwrap();
         let post = (&jt * &wm * jt.transpose() + &b * alpha)
             .try_inverse()
             .unwrap();
@@ -440,13 +490,99 @@ mod tests {
             jt: jt.clone(),
         };
         let fw = vec![1.0, 0.0, 0.0, 1.0];
-        let (rc, mc) =
-            posterior(LoadModel::Concentrated { node: 1 }, nd, &fw, &dv, &w, alpha).unwrap();
+        let (rc, mc) = posterior(
+            LoadModel::Concentrated { node: 1 },
+            nd,
+            &fw,
+            &dv,
+            &w,
+            alpha,
+            None,
+        )
+        .unwrap();
         let post = (&jt * &wm * jt.transpose() + DMatrix::identity(d, d) * alpha)
             .try_inverse()
             .unwrap();
         assert!(close(&rc, &post));
         assert!(close(&mc, &(jt.transpose() * &post * &jt)));
+    }
+
+    /// The posterior covariances from the Gauss–Newton system's factor at
+    /// hand ([`GnFactor`]) equal those formed anew, for both load models,
+    /// with and without the average over `α`; a factor formed at another
+    /// `α` is not used. Bound 1e-12 relative (a factor of the wrong system
+    /// is off by O(1)).
+    #[test]
+    fn posterior_from_the_factor_at_hand_equals_the_one_formed_anew() {
+        let (nd, nodes, m) = (4, 5, 3);
+        let nf = nd * nodes;
+        let r = DMatrix::from_vec(nf, nf, lcg(11, nf * nf));
+        let b = &r * r.transpose() + DMatrix::identity(nf, nf);
+        let z = DMatrix::from_vec(nf, m, lcg(12, nf * m));
+        let w: Vec<f64> = lcg(13, m).iter().map(|v| 2.0 + v).collect();
+        let fw = lcg(14, 2 * nf);
+        let f = lcg(15, nf);
+        let alpha = 0.7;
+        let close = |a: &[f64], b: &[f64]| {
+            let scale = b.iter().fold(0.0f64, |x, v| x.max(v.abs()));
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-12 * scale)
+        };
+        // distributed: S = Zᵀ B Z + α W⁻¹, as gn_solve forms it
+        let dv = Derivs {
+            jt: &b * &z,
+            z: z.clone(),
+        };
+        let k = z.transpose() * &b * &z;
+        let k = (&k + k.transpose()) * 0.5;
+        let fac = |k: &DMatrix<f64>, a: f64| {
+            let mut s = k.clone();
+            for i in 0..m {
+                s[(i, i)] += a / w[i];
+            }
+            GnFactor {
+                chol: jittered_cholesky(s).unwrap(),
+                gram: Some(k.clone()),
+                alpha: a,
+            }
+        };
+        let load = LoadModel::Distributed;
+        let gn = fac(&k, alpha);
+        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None).unwrap();
+        let reused = posterior(load, nd, &fw, &dv, &w, alpha, Some(&gn)).unwrap();
+        assert!(close(&reused.0, &fresh.0) && close(&reused.1, &fresh.1));
+        let fresh = posterior_alpha_marginal(load, nd, &fw, &dv, &w, alpha, &f, 0.3, None).unwrap();
+        let reused =
+            posterior_alpha_marginal(load, nd, &fw, &dv, &w, alpha, &f, 0.3, Some(&gn)).unwrap();
+        assert!(close(&reused.0, &fresh.0) && close(&reused.1, &fresh.1));
+        // a factor at another α is not used: a wrong gram there would show
+        let wrong = fac(&(&k * 2.0), 2.0 * alpha);
+        let other = posterior(load, nd, &fw, &dv, &w, alpha, Some(&wrong)).unwrap();
+        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None).unwrap();
+        assert!(close(&other.0, &fresh.0) && close(&other.1, &fresh.1));
+        // and a wrong factor at this α would: the test can fail
+        let wrong = fac(&(&k * 2.0), alpha);
+        let bad = posterior(load, nd, &fw, &dv, &w, alpha, Some(&wrong)).unwrap();
+        assert!(!close(&bad.1, &fresh.1));
+        // concentrated: N = Jᵀ W J + α I
+        let jt = DMatrix::from_vec(2, m, lcg(16, 2 * m));
+        let dv = Derivs {
+            z: DMatrix::zeros(nf, m),
+            jt: jt.clone(),
+        };
+        let mut n = weighted_columns(&jt, &w) * jt.transpose();
+        for i in 0..2 {
+            n[(i, i)] += alpha;
+        }
+        let gn = GnFactor {
+            chol: jittered_cholesky(n).unwrap(),
+            gram: None,
+            alpha,
+        };
+        let load = LoadModel::Concentrated { node: 1 };
+        let fw = vec![1.0, 0.0, 0.0, 1.0];
+        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None).unwrap();
+        let reused = posterior(load, nd, &fw, &dv, &w, alpha, Some(&gn)).unwrap();
+        assert!(close(&reused.0, &fresh.0) && close(&reused.1, &fresh.1));
     }
 
     /// A linear problem with the minimizer `F̂(α)` in closed form: `B`
@@ -546,7 +682,8 @@ mod tests {
                     jt: jt.clone(),
                 };
                 let pen = (f.transpose() * p.h(load) * &f)[(0, 0)];
-                let sp = alpha_spread(load, &fw, &dv, &p.w, alpha, f.as_slice(), pen).unwrap();
+                let sp =
+                    alpha_spread(load, &fw, &dv, &p.w, alpha, f.as_slice(), pen, None).unwrap();
                 let h: f64 = 1e-5;
                 let df =
                     (p.at(load, alpha * h.exp()).0 - p.at(load, alpha * (-h).exp()).0) / (2.0 * h);

@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::linsolve::LinearWork;
 use crate::observe::{Observation, ObservationOperator};
 
-use super::problem::{Derivs, Problem};
+use super::problem::{Derivs, GnFactor, Problem};
 use super::{AlphaRule, Backend, Estimate, EstimateReport};
 
 /// Where the cold start of the `newton` backend at a given small `α` begins
@@ -36,6 +36,9 @@ pub(crate) struct Solved {
     pub(crate) q: Vec<f64>,
     pub(crate) derivs: Derivs,
     pub(crate) cov_factor: Vec<f64>,
+    /// The Gauss–Newton system's factor at `derivs` (the posterior
+    /// covariances are formed from it), if at hand.
+    pub(crate) gn: Option<GnFactor>,
     pub(crate) e: Vec<f64>,
     pub(crate) report: EstimateReport,
 }
@@ -119,6 +122,7 @@ impl<E: Element> Stream<E> {
         op: &ObservationOperator,
         dv: &Derivs,
         cov_factor: Vec<f64>,
+        gn: Option<&GnFactor>,
         e: Vec<f64>,
         report: EstimateReport,
     ) -> Result<Estimate> {
@@ -126,8 +130,16 @@ impl<E: Element> Stream<E> {
         let (mut f, mut cov_factor) = (f, cov_factor);
         unused_load_slots_zeroed::<E>(problem.load(), &mut f, &mut cov_factor, op.len());
         let (resultant_force_n, resultant_moment_nm, fw) = problem.resultants(&q, &f)?;
-        let (resultant_force_cov, marker_cov, informative) =
-            super::covariance::estimate_cov(problem, &cov_factor, &fw, dv, op, report.alpha, &f);
+        let (resultant_force_cov, marker_cov, informative) = super::covariance::estimate_cov(
+            problem,
+            &cov_factor,
+            &fw,
+            dv,
+            op,
+            report.alpha,
+            &f,
+            gn,
+        );
         let mut report = report;
         if !informative {
             report.status = super::EstimateStatus::NoInformation;
@@ -372,7 +384,8 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
             report.weighted_residual = wr;
             report.wall_time_s = start.elapsed().as_secs_f64();
             report.linear_work = LinearWork::now().since(work);
-            return stream.finish(s.q, s.f, &op, &s.derivs, s.cov_factor, e, report);
+            let gn = s.gn.as_ref();
+            return stream.finish(s.q, s.f, &op, &s.derivs, s.cov_factor, gn, e, report);
         }
         last = Some(s);
     }
@@ -391,5 +404,14 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
     report.backend = backend;
     report.wall_time_s = start.elapsed().as_secs_f64();
     report.linear_work = LinearWork::now().since(work);
-    stream.finish(s.q, s.f, &op, &s.derivs, s.cov_factor, s.e, report)
+    stream.finish(
+        s.q,
+        s.f,
+        &op,
+        &s.derivs,
+        s.cov_factor,
+        s.gn.as_ref(),
+        s.e,
+        report,
+    )
 }

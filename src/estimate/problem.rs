@@ -100,8 +100,19 @@ pub(crate) struct Derivs {
 
 /// The Cholesky factor of a Gauss–Newton system ([`Problem::gn_solve`]):
 /// `S = α W⁻¹ + Zᵀ B Z` (`n_ob × n_ob`) for the distributed load, `N = Jᵀ W J
-/// + α I` (`n_F × n_F`) for a concentrated one.
-pub(crate) struct GnFactor(pub Cholesky<f64, Dyn>);
+/// + α I` (`n_F × n_F`) for a concentrated one; with the `α` it was formed
+/// at and, for the distributed load, `Zᵀ B Z` itself: the posterior
+/// covariances at that `α` are formed from them
+/// ([`super::covariance::posterior_cov`]) instead of again.
+#[derive(Debug, Clone)]
+pub(crate) struct GnFactor {
+    /// The factor of `S` or `N`.
+    pub chol: Cholesky<f64, Dyn>,
+    /// `Zᵀ B Z` (distributed load; `None` for a concentrated one).
+    pub gram: Option<DMatrix<f64>>,
+    /// The `α` of the system.
+    pub alpha: f64,
+}
 
 /// The estimation problem: the robot, its known loads and the load model,
 /// with the equilibrium tracker that solves `q(F)`.
@@ -302,8 +313,9 @@ impl<E: Element> Problem<E> {
         Ok(g)
     }
 
-    /// The Gauss–Newton step (30) for `F` and the covariance factor there:
-    /// see [`Problem::gn_solve`] and [`super::covariance::cov_factor`].
+    /// The Gauss–Newton step (30) for `F`, the covariance factor there
+    /// and the system's factor: see [`Problem::gn_solve`] and
+    /// [`super::covariance::cov_factor`].
     pub(crate) fn gn_step(
         &self,
         dv: &Derivs,
@@ -311,10 +323,10 @@ impl<E: Element> Problem<E> {
         e: &[f64],
         f: &[f64],
         alpha: f64,
-    ) -> Result<(Vec<f64>, Vec<f64>)> {
+    ) -> Result<(Vec<f64>, Vec<f64>, GnFactor)> {
         let (step, fac) = self.gn_solve(dv, op, e, f, alpha)?;
         let l = super::covariance::cov_factor(self, dv, op, &fac);
-        Ok((step, l))
+        Ok((step, l, fac))
     }
 
     /// The Gauss–Newton step (30): solves `(JᵀWJ + αH) dF = −(JᵀWe + αHF)`,
@@ -342,13 +354,16 @@ impl<E: Element> Problem<E> {
                 let m = w.len();
                 let z: Vec<&[f64]> = columns(&dv.z).collect();
                 let jt: Vec<&[f64]> = columns(&dv.jt).collect();
-                let mut s = DMatrix::zeros(m, m);
+                let mut k = DMatrix::zeros(m, m);
                 for i in 0..m {
                     for j in i..m {
                         let v = dot(z[i], jt[j]);
-                        s[(i, j)] = v;
-                        s[(j, i)] = v;
+                        k[(i, j)] = v;
+                        k[(j, i)] = v;
                     }
+                }
+                let mut s = k.clone();
+                for i in 0..m {
                     s[(i, i)] += alpha / w[i];
                 }
                 let chol = jittered_cholesky(s).ok_or_else(not_spd)?;
@@ -359,7 +374,14 @@ impl<E: Element> Problem<E> {
                 for (zi, ci) in z.iter().zip(c.iter()) {
                     step.iter_mut().zip(*zi).for_each(|(a, b)| *a += ci * b);
                 }
-                Ok((step, GnFactor(chol)))
+                Ok((
+                    step,
+                    GnFactor {
+                        chol,
+                        gram: Some(k),
+                        alpha,
+                    },
+                ))
             }
             LoadModel::Concentrated { .. } => {
                 let jw = weighted_columns(&dv.jt, w);
@@ -371,7 +393,14 @@ impl<E: Element> Problem<E> {
                 let (fv, ev) = (DVector::from_column_slice(f), DVector::from_column_slice(e));
                 let mut step = -(&jw * ev) - fv * alpha;
                 chol.solve_mut(&mut step);
-                Ok((step.as_slice().to_vec(), GnFactor(chol)))
+                Ok((
+                    step.as_slice().to_vec(),
+                    GnFactor {
+                        chol,
+                        gram: None,
+                        alpha,
+                    },
+                ))
             }
         }
     }

@@ -646,19 +646,19 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                     tangent,
                     dv: dv.clone(),
                 });
-                finish = Some((q.clone(), dv, l, residual_n));
+                finish = Some((q.clone(), dv, l, Some(fac), residual_n));
             }
         }
         self.warm_qp = warm_qp;
-        let (q, dv, l, residual_n) = match finish {
+        let (q, dv, l, gn, residual_n) = match finish {
             Some(x) => x,
             None => {
                 let problem = &mut self.stream.problem;
                 let eq = problem.equilibrium(&f, &q)?;
                 let dv = problem.derivs(&eq.factors, op)?;
                 let e = op.residual(eq.q.as_slice());
-                let (_, l) = problem.gn_step(&dv, op, &e, &f, alpha)?;
-                (eq.q.data.into(), dv, l, eq.residual_n)
+                let (_, l, gn) = problem.gn_step(&dv, op, &e, &f, alpha)?;
+                (eq.q.data.into(), dv, l, Some(gn), eq.residual_n)
             }
         };
         let problem = &self.stream.problem;
@@ -669,6 +669,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
             q,
             derivs: dv,
             cov_factor: l,
+            gn,
             e,
             report: EstimateReport {
                 backend: Backend::Sqp,
