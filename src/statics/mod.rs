@@ -4,7 +4,9 @@
 //! free coordinates `u` with `q = φ(u)` (the equilibrium is
 //! `R(u) = T(u)ᵀ Q(φ(u)) = 0`).
 //!
-//! Globalization: a quick plain Newton run from the start point; for a cold
+//! Globalization: a quick plain Newton run from the start point (for a cold
+//! solve of a fine mesh given up at the first tangent that is not positive
+//! definite, before any pivoted LU of it); for a cold
 //! solve of a fine mesh (64 elements or more), then a start from the
 //! equilibrium of a 16-element mesh of the same model interpolated onto the
 //! fine one (mesh sequencing, `sequence.rs`: the iteration count no longer
