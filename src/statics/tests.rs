@@ -167,7 +167,7 @@ fn a_definite_only_attempt_gives_up_at_an_indefinite_tangent() {
     .unwrap();
     let (robot, loads) = (scene.robot().unwrap(), scene.loads().unwrap());
     assert!(robot.coarse_model(&loads).unwrap().is_some());
-    let dead = robot.dead_force(&loads).unwrap();
+    let dead = Assembled::dead_force(&robot, &loads).unwrap();
     let zero = vec![0.0; robot.n_free()];
     let attempt = |definite_only: bool| {
         let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), SolverKind::Auto).unwrap();
