@@ -130,4 +130,4 @@ if __name__ == "__main__":
     bounded()
     scaling()
     grid("estimate_cold_step", "cold step (fresh estimator, α given)")
-    single("estimate_alpha_search", ["20el_5mk"], "first step with the α search (discrepancy principle)")
+    single("estimate_alpha_search", ["20el_5mk"], "first step with the α search (the default rule, the evidence)")

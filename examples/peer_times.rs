@@ -11,7 +11,7 @@
 //! - `estimate`: the problem (25) on three of the report's references (20
 //!   elements, 5 markers at `L k / 5` read off exudyn's 128-element shape
 //!   with 0.01 mm seeded noise, no known loads, the distributed unknown
-//!   load): `α` by the discrepancy principle (once), then the first
+//!   load): `α` by the estimator's default rule (once; the evidence), then the first
 //!   estimate at that `α` by both backends from a fresh estimator (the time
 //!   a peer is compared with), with the data a peer needs to pose the same
 //!   problem (markers, `σ`, `α`) and softrod's answer to compare with.

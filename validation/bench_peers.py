@@ -13,7 +13,7 @@ by automatic differentiation, IPOPT's default tolerance 1e-8), on the
 problems `peer_times` writes: the report's references at 20 elements, 5
 markers at L k / 5 with 0.01 mm seeded noise, the distributed unknown load
 w(X) = S(X) F with the penalty alpha F^T B F (B = int S^T S dX), the same
-alpha (softrod's discrepancy-principle value), from the same start (straight
+alpha (the value softrod's default alpha rule, the evidence, chose), from the same start (straight
 rod, F = 0). The unknowns are the free node coordinates and F; the
 equality constraints are the equilibrium grad U(q) - B F = 0 on the free
 coordinates, U the cable energy (axial 1/2 EA (|r'| - 1)^2 by 5 Gauss

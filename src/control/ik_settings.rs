@@ -87,7 +87,7 @@ impl IkSettings {
                 return Err(Error::invalid(name, v, "must be finite and > 0"));
             }
         }
-        self.statics.validate()
+        self.statics.validate("ik.statics")
     }
 }
 

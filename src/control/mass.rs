@@ -141,7 +141,7 @@ impl MassSettings {
                 return Err(Error::invalid(name, v, "must be finite and > 0"));
             }
         }
-        self.statics.validate()
+        self.statics.validate("mass.statics")
     }
 }
 

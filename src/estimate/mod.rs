@@ -360,7 +360,7 @@ impl EstimatorSettings {
                 }
             }
         }
-        self.statics.validate()
+        self.statics.validate("estimator.statics")
     }
 }
 

@@ -34,7 +34,7 @@ pub mod warm;
 use serde::{Deserialize, Serialize};
 
 use crate::element::{Ancf3d, Ancf3dStiffness, Element, SpatialCable, DEFAULT_GAUSS_POINTS};
-use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::error::{check_all_finite, check_at_most, check_len, Error, Result};
 use crate::params::parallel as p;
 use crate::statics::{Equilibrium, StaticSolver};
 use crate::structure::{
@@ -140,7 +140,11 @@ impl ParallelSpec {
     /// radius or stiffness, legs that cannot reach the platform
     /// (`|ρ_b − ρ_p| >= L`), legs joined off the platform (`ρ_p` beyond
     /// `platform_disc_radius_m`), no legs, no sections or
-    /// elements; [`Error::DimensionMismatch`] for a gravity not of 3.
+    /// elements; [`Error::TooLarge`] for more than
+    /// [`MAX_ELEMENTS`](crate::assembly::MAX_ELEMENTS) elements over all legs
+    /// (naming the first count that overflows the room the ones before it
+    /// leave: `legs`, `sections_per_leg`, `elements_per_section`);
+    /// [`Error::DimensionMismatch`] for a gravity not of 3.
     ///
     /// # Example
     /// ```
@@ -194,6 +198,21 @@ impl ParallelSpec {
                 return Err(Error::invalid(f(name), v, "must be >= 1"));
             }
         }
+        // the one element limit (`assembly::MAX_ELEMENTS`) over all legs,
+        // checked before the legs are laid out: each count against the room
+        // the counts before it leave
+        let max = crate::assembly::MAX_ELEMENTS;
+        check_at_most(&f("legs"), self.legs, max)?;
+        check_at_most(
+            &f("sections_per_leg"),
+            self.sections_per_leg,
+            max / self.legs,
+        )?;
+        check_at_most(
+            &f("elements_per_section"),
+            self.elements_per_section,
+            max / (self.legs * self.sections_per_leg),
+        )?;
         if self.platform_radius_m > self.platform_disc_radius_m {
             return Err(Error::invalid(
                 f("platform_radius_m"),

@@ -357,10 +357,7 @@ impl Scene {
         }
         self.check_pressure_bounds()?;
         robot.validate_loads(&mesh.loads()?)?;
-        self.solver
-            .statics
-            .validate()
-            .map_err(|e| e.with_prefix("solver.static."))?;
+        self.solver.statics.validate("solver.static")?;
         self.solver
             .estimator
             .validate()

@@ -191,6 +191,7 @@ impl StaticSolver {
                 offset: &off,
                 strict: false,
                 descent: false,
+                definite_only: false,
             };
             match self.corrector(model, &tgt, &mut u_try, &mut q_try, w)? {
                 // a step from a stable point to an unstable one stepped over

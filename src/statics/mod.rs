@@ -4,7 +4,9 @@
 //! free coordinates `u` with `q = φ(u)` (the equilibrium is
 //! `R(u) = T(u)ᵀ Q(φ(u)) = 0`).
 //!
-//! Globalization: a quick plain Newton run from the start point; for a cold
+//! Globalization: a quick plain Newton run from the start point (for a cold
+//! solve of a fine mesh given up at the first tangent that is not positive
+//! definite, before any pivoted LU of it); for a cold
 //! solve of a fine mesh (64 elements or more), then a start from the
 //! equilibrium of a 16-element mesh of the same model interpolated onto the
 //! fine one (mesh sequencing, `sequence.rs`: the iteration count no longer
@@ -57,7 +59,7 @@ pub use tracker::{EquilibriumTracker, FactoredTangent, LinearLoad, TrackedEquili
 /// # Example
 /// ```
 /// let s = softrod::statics::StaticSettings { residual_tolerance: 1e-12, ..Default::default() };
-/// s.validate().unwrap();
+/// s.validate("").unwrap();
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -100,25 +102,45 @@ impl StaticSettings {
     /// Checks every field: iteration counts in `1..=MAX_ITERATIONS`
     /// (`max_total_iterations >= max_iterations`), tolerances and the
     /// smallest load step in `(0, 1)`, `max_step_rotation` finite and positive.
+    /// `path` is where the caller keeps these settings (e.g.
+    /// `"solver.static"` in a scene, `"loop.ik.statics"` in the closed
+    /// loop's settings): the errors name `path.field`, or the bare field for
+    /// an empty `path`.
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] naming the field; [`Error::TooLarge`] for
     /// an iteration count above [`MAX_ITERATIONS`].
-    pub fn validate(&self) -> Result<()> {
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::statics::StaticSettings;
+    /// let s = StaticSettings { max_iterations: 0, ..Default::default() };
+    /// let e = s.validate("loop.ik.statics").unwrap_err();
+    /// assert!(e.to_string().contains("loop.ik.statics.max_iterations"));
+    /// assert!(s.validate("").unwrap_err().to_string().contains("max_iterations"));
+    /// ```
+    pub fn validate(&self, path: &str) -> Result<()> {
+        let f = |name: &str| {
+            if path.is_empty() {
+                name.to_string()
+            } else {
+                format!("{path}.{name}")
+            }
+        };
         if self.max_iterations == 0 {
-            return Err(Error::invalid("max_iterations", 0, "must be >= 1"));
+            return Err(Error::invalid(f("max_iterations"), 0, "must be >= 1"));
         }
-        crate::error::check_at_most("max_iterations", self.max_iterations, MAX_ITERATIONS)?;
+        crate::error::check_at_most(&f("max_iterations"), self.max_iterations, MAX_ITERATIONS)?;
         crate::error::check_at_most(
-            "max_total_iterations",
+            &f("max_total_iterations"),
             self.max_total_iterations,
             MAX_ITERATIONS,
         )?;
         if self.max_total_iterations < self.max_iterations {
             return Err(Error::invalid(
-                "max_total_iterations",
+                f("max_total_iterations"),
                 self.max_total_iterations,
-                "must be >= max_iterations",
+                format!("must be >= {}", f("max_iterations")),
             ));
         }
         for (name, v) in [
@@ -127,7 +149,7 @@ impl StaticSettings {
             ("max_step_rotation", self.max_step_rotation),
             ("min_load_step", self.min_load_step),
         ] {
-            crate::error::check_positive(name, v)?;
+            crate::error::check_positive(&f(name), v)?;
         }
         for (name, v) in [
             ("residual_tolerance", self.residual_tolerance),
@@ -136,7 +158,7 @@ impl StaticSettings {
         ] {
             // a relative tolerance of 1 or more accepts any configuration
             if v >= 1.0 {
-                return Err(Error::invalid(name, v, "must be < 1"));
+                return Err(Error::invalid(f(name), v, "must be < 1"));
             }
         }
         Ok(())
@@ -203,7 +225,7 @@ impl StaticSolver {
     /// assert!(StaticSolver::new(StaticSettings { max_iterations: 0, ..Default::default() }).is_err());
     /// ```
     pub fn new(settings: StaticSettings) -> Result<Self> {
-        settings.validate()?;
+        settings.validate("")?;
         Ok(StaticSolver { settings })
     }
 
@@ -257,7 +279,7 @@ impl StaticSolver {
         loads: &M::Loads,
         q0: Option<&[f64]>,
     ) -> Result<Equilibrium> {
-        self.settings.validate()?;
+        self.settings.validate("")?;
         let pattern = model.tangent_pattern()?;
         let mut solver = AutoSolver::with_kind(&pattern, self.settings.linear_solver)?;
         let u = self.start(model, loads, q0)?;
@@ -292,7 +314,7 @@ impl StaticSolver {
         q0: Option<&[f64]>,
         solver: &mut AutoSolver,
     ) -> Result<Equilibrium> {
-        self.settings.validate()?;
+        self.settings.validate("")?;
         let pattern = solver.pattern();
         let expected = model.tangent_pattern()?;
         if !(Arc::ptr_eq(pattern, &expected) || **pattern == *expected) {

@@ -66,6 +66,10 @@ pub(super) struct Target<'a, M: Assembled> {
     /// only when they lower the potential (leaving a saddle, see
     /// [`super::stability`]).
     pub descent: bool,
+    /// Give up at the first tangent that is not positive definite, before
+    /// any pivoted LU of it (the quick attempt of a cold solve with the
+    /// coarse mesh's start behind it, see [`StaticSolver::run`]).
+    pub definite_only: bool,
 }
 
 impl StaticSolver {
@@ -104,16 +108,31 @@ impl StaticSolver {
         let mut load_steps = 0;
         // loads so large that their norm overflows (or a start point where the
         // forces do): no tolerance can be stated, so no solve is attempted
+        // a cold solve of a fine mesh has a coarse mesh of the same model
+        // to start from (see `super::sequence`; `None` for a coarse mesh)
+        let coarse = if cold && scale.is_finite() {
+            model.coarse_model(loads).ok().flatten()
+        } else {
+            None
+        };
         let quick = if scale.is_finite() {
             // first plain Newton from the start point (a warm start, a
             // robot's arcs of its actuation), given up at the first step it
-            // would have to shorten
+            // would have to shorten; with the coarse start behind it, also
+            // at the first tangent that is not positive definite (measured,
+            // `benches/statics_scaling.rs`: such a quick attempt never
+            // converged on the scaling cases at 128 to 2000 elements, and
+            // its pivoted LU factorizations of the fine tangent, up to five
+            // in the first iteration with the diagonal shifts, cost more
+            // than the whole coarse solve; the tip moments and the mid-length
+            // force are indefinite at the straight start)
             let full = Target::<M> {
                 dead: &dead,
                 loads,
                 offset: &zero,
                 strict: true,
                 descent: false,
+                definite_only: coarse.is_some(),
             };
             let quick = StaticSolver {
                 settings: super::StaticSettings {
@@ -132,27 +151,25 @@ impl StaticSolver {
         // coarse mesh's equilibrium (see `super::sequence`), kept when plain
         // Newton reaches a stable equilibrium from it
         let mut sequenced = None;
-        if !quick_ok && cold && scale.is_finite() {
-            if let Some(start) =
-                self.coarse_start(model, loads, self.settings.max_total_iterations)?
-            {
-                w.iterations += start.iterations;
-                load_steps += start.load_steps;
-                if let Some(uc) = start.u {
-                    u.copy_from_slice(&uc);
-                    model.configuration_into(&u, &mut w.q)?;
-                    let full = Target::<M> {
-                        dead: &dead,
-                        loads,
-                        offset: &zero,
-                        strict: true,
-                        descent: false,
-                    };
-                    let before = w.iterations;
-                    let status = self.fine_newton(model, &full, &mut u, &mut w, scale)?;
-                    if status.is_converged() && (w.iterations == before || w.definite) {
-                        sequenced = Some(status);
-                    }
+        if let (false, Some(coarse)) = (quick_ok, coarse) {
+            let start = self.coarse_start(model, coarse, self.settings.max_total_iterations)?;
+            w.iterations += start.iterations;
+            load_steps += start.load_steps;
+            if let Some(uc) = start.u {
+                u.copy_from_slice(&uc);
+                model.configuration_into(&u, &mut w.q)?;
+                let full = Target::<M> {
+                    dead: &dead,
+                    loads,
+                    offset: &zero,
+                    strict: true,
+                    descent: false,
+                    definite_only: false,
+                };
+                let before = w.iterations;
+                let status = self.fine_newton(model, &full, &mut u, &mut w, scale)?;
+                if status.is_converged() && (w.iterations == before || w.definite) {
+                    sequenced = Some(status);
                 }
             }
         }
@@ -188,6 +205,7 @@ impl StaticSolver {
                         offset: &zero,
                         strict: false,
                         descent: false,
+                        definite_only: false,
                     };
                     self.newton(model, &full, &mut u, &mut w, scale)?
                 }
@@ -213,6 +231,7 @@ impl StaticSolver {
                 offset: &zero,
                 strict: false,
                 descent: false,
+                definite_only: false,
             };
             status = self.newton(model, &full, &mut u, &mut w, scale)?;
         }
@@ -239,6 +258,7 @@ impl StaticSolver {
                     offset: &off,
                     strict: false,
                     descent: false,
+                    definite_only: false,
                 };
                 let step_status = self.newton(model, &t, &mut u, &mut w, scale)?;
                 if step_status.is_converged() {
@@ -377,18 +397,23 @@ impl StaticSolver {
             let mut found = false;
             let shifts: &[f64] = if t.descent {
                 &DESCENT_SHIFTS
+            } else if t.definite_only {
+                &[0.0]
             } else {
                 &[0.0, 1e-8, 1e-6, 1e-4, 1e-2, 1.0]
             };
             for &mu in shifts {
                 let options = FactorOptions {
                     shift: mu,
-                    require_positive_definite: t.descent,
+                    require_positive_definite: t.descent || t.definite_only,
                 };
                 let lu = match w.solver.factor(&w.k, options) {
                     Ok(lu) => lu,
                     Err(LinsolveError::Singular { .. }) => continue,
                     Err(LinsolveError::NotPositiveDefinite { .. }) if t.descent => continue,
+                    Err(LinsolveError::NotPositiveDefinite { .. }) if t.definite_only => {
+                        return Ok(StaticStatus::LineSearchFailed);
+                    }
                     Err(LinsolveError::NonFinite { .. }) => {
                         return Ok(StaticStatus::NonFinite {
                             at: NonFiniteAt::Tangent,

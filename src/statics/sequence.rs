@@ -39,17 +39,15 @@ pub(super) struct CoarseStart {
 }
 
 impl StaticSolver {
-    /// Solves the coarse model of `model` cold (`None` when the model has
-    /// none) and interpolates its equilibrium onto `model`.
+    /// Solves `coarse`, the coarse model of `model` with its loads
+    /// ([`Assembled::coarse_model`]), cold and interpolates its equilibrium
+    /// onto `model`.
     pub(super) fn coarse_start<M: Assembled>(
         &self,
         model: &M,
-        loads: &M::Loads,
+        (coarse, coarse_loads): (M, M::Loads),
         budget: usize,
-    ) -> Result<Option<CoarseStart>> {
-        let Ok(Some((coarse, coarse_loads))) = model.coarse_model(loads) else {
-            return Ok(None);
-        };
+    ) -> Result<CoarseStart> {
         let pattern = coarse.tangent_pattern()?;
         let mut solver = AutoSolver::with_kind(&pattern, self.settings.linear_solver)?;
         let u0 = coarse.start_free_coordinates(&coarse_loads)?;
@@ -60,16 +58,16 @@ impl StaticSolver {
             },
         };
         match inner.run(&coarse, &coarse_loads, u0, true, &mut solver) {
-            Ok(eq) => Ok(Some(CoarseStart {
+            Ok(eq) => Ok(CoarseStart {
                 u: Some(model.prolong(&coarse, eq.q.as_slice())?),
                 iterations: eq.report.iterations,
                 load_steps: eq.report.load_steps,
-            })),
-            Err(Error::NotConverged { report }) => Ok(Some(CoarseStart {
+            }),
+            Err(Error::NotConverged { report }) => Ok(CoarseStart {
                 u: None,
                 iterations: report.iterations,
                 load_steps: report.load_steps,
-            })),
+            }),
             Err(e) => Err(e),
         }
     }

@@ -74,6 +74,7 @@ impl StaticSolver {
                 offset: &zero,
                 strict: false,
                 descent: true,
+                definite_only: false,
             };
             let next = self.newton(model, &descent, u, w, scale)?;
             if !next.is_converged() {

@@ -144,3 +144,73 @@ fn a_structure_restarts_from_its_configuration() {
         other => panic!("{other:?}"),
     }
 }
+
+/// The quick attempt of a cold solve that has the coarse mesh's start
+/// behind it gives up at the first tangent that is not positive definite,
+/// after one factorization and before any step (no shifted retries, no
+/// pivoted LU of the fine tangent): 2 N at mid-length against a 0.1 N·m
+/// tip moment on 128 elements, whose tangent at the straight start is
+/// indefinite. Without the flag the same iteration solves with the
+/// pivoted LU of that tangent.
+#[test]
+fn a_definite_only_attempt_gives_up_at_an_indefinite_tangent() {
+    use super::newton::{Target, Work};
+    use crate::linsolve::{AutoSolver, LinearWork, SymmetricMatrix};
+    let scene: crate::scene::Scene = serde_json::from_value(serde_json::json!({
+        "robot": {"sections": [
+            {"length_m": 0.12, "ea_n": 300.0, "ei_nm2": 0.025, "elements": 64},
+            {"length_m": 0.12, "ea_n": 300.0, "ei_nm2": 0.025, "elements": 64}]},
+        "gravity_m_per_s2": [0.0, 0.0],
+        "loads": [{"type": "point_force", "s_m": 0.12, "force_n": [0.0, -2.0]},
+                  {"type": "tip_moment", "moment_nm": 0.1}],
+    }))
+    .unwrap();
+    let (robot, loads) = (scene.robot().unwrap(), scene.loads().unwrap());
+    assert!(robot.coarse_model(&loads).unwrap().is_some());
+    let dead = Assembled::dead_force(&robot, &loads).unwrap();
+    let zero = vec![0.0; robot.n_free()];
+    let attempt = |definite_only: bool| {
+        let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), SolverKind::Auto).unwrap();
+        let mut u = robot.start_free_coordinates(&loads).unwrap();
+        let mut w = Work {
+            k: SymmetricMatrix::zeros(robot.tangent_pattern().clone()),
+            solver: &mut solver,
+            r: vec![0.0; robot.n_free()],
+            q: vec![0.0; robot.n_q()],
+            iterations: 0,
+            floor: 0.0,
+            last_step: 0.0,
+            definite: false,
+        };
+        robot.configuration_into(&u, &mut w.q).unwrap();
+        let target = Target::<crate::assembly::Robot<crate::element::PlanarCable>> {
+            dead: &dead,
+            loads: &loads,
+            offset: &zero,
+            strict: true,
+            descent: false,
+            definite_only,
+        };
+        let quick = StaticSolver {
+            settings: StaticSettings {
+                max_iterations: 1,
+                ..StaticSettings::default()
+            },
+        };
+        let before = LinearWork::now();
+        let status = quick.newton(&robot, &target, &mut u, &mut w, 2.0).unwrap();
+        let moved = u != robot.start_free_coordinates(&loads).unwrap();
+        let work = LinearWork::now().since(before);
+        (status, w.iterations, w.definite, moved, work)
+    };
+    // the tangent at the straight start is indefinite (the plain attempt
+    // factors it by LU and solves for a direction, then gives up at the
+    // shortened step)
+    let (_, iterations, definite, _, work) = attempt(false);
+    assert_eq!((iterations, definite), (1, false));
+    assert!(work.factorizations >= 1 && work.solves >= 1, "{work:?}");
+    let (status, iterations, definite, moved, work) = attempt(true);
+    assert_eq!(status, StaticStatus::LineSearchFailed);
+    assert_eq!((iterations, definite, moved), (1, false, false));
+    assert_eq!((work.factorizations, work.solves), (1, 0));
+}
