@@ -61,10 +61,11 @@ use crate::control::VirtualPayload;
 use crate::element::PlanarCable;
 use crate::error::{Error, Result};
 use crate::estimate::{Estimator, EstimatorSettings};
-use crate::grasp::friction::{hold_check, FrictionContact, HoldCheck};
+use crate::grasp::friction::{FrictionContact, HoldCheck};
 use crate::grasp::gripper::{GripperSpec, Side, FINGER_PRESSURES};
 use crate::grasp::object::{GraspObject, Pose};
 use crate::grasp::plant::{FingerState, GripperPlant, GripperPlantSettings, PlantStep};
+use crate::grasp::slip::{settle, Grip};
 use crate::grasp::strategy::{bounded_step, contact_jacobian, contact_pose};
 use crate::loads::Loads;
 use crate::statics::StaticSolver;
@@ -309,6 +310,8 @@ pub struct Frame {
     pub contact_pose: [Option<[f64; 3]>; 2],
     /// The object's centre of mass in the palm's frame (m).
     pub object_position_m: [f64; 2],
+    /// The object's rotation (rad, counter-clockwise; it turns after the lift).
+    pub object_angle_rad: f64,
 }
 
 /// Why a trial failed.
@@ -685,63 +688,56 @@ fn simulate(
         }
     }
     // the lift: the table no longer carries the object; while the contacts
-    // cannot carry it, it slides down (module docs)
+    // cannot carry it, it moves as a rigid body (module docs, [`slip`])
     let t_end = out.frames.last().map_or(0.0, |f| f.time_s) + dt;
-    let g = gripper.gravity_m_per_s2;
-    let glen = g[0].hypot(g[1]);
-    let down = [g[0] / glen, g[1] / glen];
-    let max_steps = (gripper.finger_length_m() / settings.slip_step_m).ceil() as usize;
-    let mut first: Option<HoldCheck> = None;
-    for k in 0..=max_steps {
-        let cover = object.contact_cover(&out.final_pose)?;
-        plant.set_workspace(cover, None);
-        let lifted = plant.solve([&pressures[0], &pressures[1]])?.states()?;
-        out.push_frame(t_end + k as f64 * dt, phases, &pressures, &lifted, r, poses);
-        let contacts: Vec<FrictionContact> = contact_records(&lifted, r)
-            .iter()
-            .map(|c| FrictionContact {
-                point_m: c.point_m,
-                normal: c.normal,
-                max_normal_force_n: c.force_n,
+    let max_steps = (2.0 * gripper.finger_length_m() / settings.slip_step_m).ceil() as usize;
+    let mut k = 0;
+    let settled = settle(
+        object,
+        out.final_pose,
+        gripper.gravity_m_per_s2,
+        settings.slip_step_m,
+        max_steps,
+        |pose: &Pose| -> std::result::Result<Grip, Stop> {
+            out.final_pose = *pose;
+            plant.set_workspace(object.contact_cover(pose)?, None);
+            let lifted = plant.solve([&pressures[0], &pressures[1]])?.states()?;
+            out.push_frame(t_end + k as f64 * dt, phases, &pressures, &lifted, r, poses);
+            k += 1;
+            // the friction cones about the object's own outline (not the cover's)
+            let contacts = contact_records(&lifted, r)
+                .iter()
+                .map(|c| {
+                    let n = object.surface_normal(pose, c.point_m);
+                    FrictionContact {
+                        point_m: c.point_m,
+                        normal: [-n[0], -n[1]],
+                        max_normal_force_n: c.force_n,
+                    }
+                })
+                .collect();
+            Ok(Grip {
+                contacts,
+                both_fingers: lifted.iter().all(|f| !f.object_contacts.is_empty()),
             })
-            .collect();
-        let both = lifted.iter().all(|f| !f.object_contacts.is_empty());
-        let hold = hold_check(
-            &contacts,
-            object.mass_kg,
-            out.final_pose.position_m,
-            object.mu,
-            g,
-        )?;
-        let w0 = first
-            .as_ref()
-            .map_or(hold.weight_factor, |h| h.weight_factor);
-        if first.is_none() {
-            out.holding_mass_kg = hold.holding_mass_kg(object.mass_kg);
-            first = Some(hold.clone());
-        }
-        if hold.holds {
-            out.success = out.slip_m <= settings.max_slip_m;
-            if !out.success {
-                out.failure = Some(Failure::Slips {
-                    weight_factor: w0,
-                    slip_m: out.slip_m,
-                });
-            }
-            break;
-        }
-        if !both || k == max_steps {
-            out.failure = Some(Failure::Dropped {
-                weight_factor: w0,
-                slip_m: out.slip_m,
-            });
-            break;
-        }
-        out.slip_m += settings.slip_step_m;
-        let p = &mut out.final_pose.position_m;
-        p[0] += settings.slip_step_m * down[0];
-        p[1] += settings.slip_step_m * down[1];
-    }
-    out.hold = first;
+        },
+    )?;
+    out.final_pose = settled.pose;
+    out.slip_m = settled.slip_m;
+    let w0 = settled.first.weight_factor;
+    out.holding_mass_kg = settled.first.holding_mass_kg(object.mass_kg);
+    out.success = settled.holds && out.slip_m <= settings.max_slip_m;
+    out.failure = match (settled.holds, out.success) {
+        (_, true) => None,
+        (true, false) => Some(Failure::Slips {
+            weight_factor: w0,
+            slip_m: out.slip_m,
+        }),
+        (false, _) => Some(Failure::Dropped {
+            weight_factor: w0,
+            slip_m: out.slip_m,
+        }),
+    };
+    out.hold = Some(settled.first);
     Ok(())
 }
