@@ -20,9 +20,13 @@
 //! thin object) leaves a couple the friction cannot balance: the object
 //! turns until the contact normals line up, as a ruler turns in a pinch.
 //!
-//! The slip is the sum over the steps of the largest displacement of those
-//! points: rotation counts where it moves a contact point or the centre of
-//! mass.
+//! The slip is the sliding at the contacts: per step, the tangential part
+//! of the relative displacement of the object's and the finger's material
+//! points that touched before the step (the object's move as a rigid body,
+//! the finger's from its new contact solve), the larger of the two
+//! fingers', summed over the steps. An object that slides down between
+//! fingers that stay slips by its descent; one that rolls on the fingertips
+//! while it turns does not slip.
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
@@ -166,15 +170,60 @@ pub(crate) struct Settled {
     pub(crate) slip_m: f64,
 }
 
+/// A finger's contact with the object, to follow its material points.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Touch {
+    /// Where the finger touches along it (its undeformed arc coordinate, m;
+    /// the caller's label of the finger's material point).
+    pub(crate) s_m: f64,
+    /// The side of the finger's centreline the point is on (`±1`; the caller's).
+    pub(crate) side: f64,
+    /// The contact point on the object's surface (m).
+    pub(crate) point_m: [f64; 2],
+    /// The finger's surface point there (m).
+    pub(crate) finger_point_m: [f64; 2],
+    /// The contact's unit normal into the object.
+    pub(crate) normal: [f64; 2],
+}
+
 /// What the caller's contact solve gives at a pose: the contacts (normals
-/// into the object) and whether both fingers still touch it.
+/// into the object), whether both fingers still touch it, each finger's
+/// main contact, and where the finger material points of the last solve's
+/// main contacts are now.
 pub(crate) struct Grip {
     pub(crate) contacts: Vec<FrictionContact>,
     pub(crate) both_fingers: bool,
+    pub(crate) touches: [Option<Touch>; 2],
+    pub(crate) followed_m: [Option<[f64; 2]>; 2],
+}
+
+/// The sliding between object and finger at a contact from one solve to
+/// the next: the tangential part of the relative displacement of the two
+/// material points that touched at `before` (the object's at its poses
+/// `from` → `to`, the finger's from `before.finger_point_m` to `followed`).
+fn sliding(before: &Touch, from: &Pose, to: &Pose, followed: [f64; 2]) -> f64 {
+    let (s0, c0) = from.angle_rad.sin_cos();
+    let (s1, c1) = to.angle_rad.sin_cos();
+    let d = [
+        before.point_m[0] - from.position_m[0],
+        before.point_m[1] - from.position_m[1],
+    ];
+    let local = [c0 * d[0] + s0 * d[1], -s0 * d[0] + c0 * d[1]];
+    let now = [
+        to.position_m[0] + c1 * local[0] - s1 * local[1],
+        to.position_m[1] + s1 * local[0] + c1 * local[1],
+    ];
+    let rel = [
+        now[0] - before.point_m[0] - (followed[0] - before.finger_point_m[0]),
+        now[1] - before.point_m[1] - (followed[1] - before.finger_point_m[1]),
+    ];
+    let t = [-before.normal[1], before.normal[0]];
+    (rel[0] * t[0] + rel[1] * t[1]).abs()
 }
 
 /// Lets `object` settle from `start` (module docs): `grip` solves the
-/// fingers against the object at a pose. Ends when it holds, when a finger
+/// fingers against the object at a pose, following the finger material
+/// points of the touches it is given. Ends when it holds, when a finger
 /// lost it, or after `max_steps` steps (lost). `step_m` is the step length.
 ///
 /// # Errors
@@ -186,20 +235,33 @@ pub(crate) fn settle<E: From<Error>>(
     gravity_m_per_s2: [f64; 2],
     step_m: f64,
     max_steps: usize,
-    mut grip: impl FnMut(&Pose) -> std::result::Result<Grip, E>,
+    mut grip: impl FnMut(&Pose, [Option<Touch>; 2]) -> std::result::Result<Grip, E>,
 ) -> std::result::Result<Settled, E> {
     let m = object.mass_kg;
     let inertia = object.moment_of_inertia_kg_m2();
     let mut pose = start;
+    let mut last: Option<(Pose, [Option<Touch>; 2])> = None;
     let mut slip = 0.0;
     let mut h = step_m;
     let mut first: Option<HoldCheck> = None;
     let mut previous: Option<[f64; 3]> = None;
     for k in 0..=max_steps {
+        let before = last.map_or([None, None], |(_, t)| t);
         let Grip {
             contacts,
             both_fingers,
-        } = grip(&pose)?;
+            touches,
+            followed_m,
+        } = grip(&pose, before)?;
+        if let Some((from, _)) = &last {
+            // the sliding of this step: the larger of the two fingers'
+            slip += before
+                .iter()
+                .zip(followed_m)
+                .filter_map(|(b, f)| Some(sliding(b.as_ref()?, from, &pose, f?)))
+                .fold(0.0, f64::max);
+        }
+        last = Some((pose, touches));
         let c = pose.position_m;
         let hold = hold_check(&contacts, m, c, object.mu, gravity_m_per_s2)?;
         let holds = hold.holds;
@@ -242,7 +304,6 @@ pub(crate) fn settle<E: From<Error>>(
         pose.position_m[0] += s * a[0];
         pose.position_m[1] += s * a[1];
         pose.angle_rad += s * a[2];
-        slip += s * reach;
     }
     // not reached: the loop returns at k == max_steps
     Err(Error::invalid("settle", max_steps, "no steps").into())
@@ -268,17 +329,19 @@ mod tests {
     }
 
     /// Two fingertip discs (radius `R`) at fixed centres pressing the object
-    /// with a linear spring `k` on their overlap with its outline.
+    /// with a linear spring `k` on their overlap with its outline; a
+    /// disc's material points are fixed (`s_m`: the angle on the disc).
     fn discs(
         object: &GraspObject,
         centres: [[f64; 2]; 2],
         radius: f64,
         k: f64,
-    ) -> impl FnMut(&Pose) -> Result<Grip> + '_ {
-        move |pose: &Pose| {
+    ) -> impl FnMut(&Pose, [Option<Touch>; 2]) -> Result<Grip> + '_ {
+        move |pose: &Pose, before: [Option<Touch>; 2]| {
             let outline = object.obstacle(pose);
             let mut contacts = Vec::new();
-            for c in centres {
+            let mut touches = [None, None];
+            for (i, c) in centres.into_iter().enumerate() {
                 let d = outline.signed_distance(&c);
                 let overlap = radius - d.distance_m;
                 if overlap > 0.0 {
@@ -290,12 +353,29 @@ mod tests {
                         normal: [-n[0], -n[1]],
                         max_normal_force_n: k * overlap,
                     });
+                    let a = (-n[1]).atan2(-n[0]);
+                    touches[i] = Some(Touch {
+                        s_m: a,
+                        side: 1.0,
+                        point_m: p,
+                        finger_point_m: [c[0] + radius * a.cos(), c[1] + radius * a.sin()],
+                        normal: [-n[0], -n[1]],
+                    });
                 }
             }
-            let both_fingers = contacts.len() == 2;
+            let followed_m = [0, 1].map(|i| {
+                before[i].map(|t| {
+                    [
+                        centres[i][0] + radius * t.s_m.cos(),
+                        centres[i][1] + radius * t.s_m.sin(),
+                    ]
+                })
+            });
             Ok(Grip {
+                both_fingers: contacts.len() == 2,
                 contacts,
-                both_fingers,
+                touches,
+                followed_m,
             })
         }
     }
@@ -384,7 +464,12 @@ mod tests {
         // it turned about the pinch: the centre of mass moved little
         let c = out.pose.position_m;
         assert!(c[0].hypot(c[1]) < 1e-3, "{out:?}");
-        assert!(out.slip_m < 0.005, "{}", out.slip_m);
+        // on fixed discs it slides by the turn at its faces (w/2 per radian)
+        // and by its centre's move, no more
+        assert!(
+            out.slip_m <= 0.5 * w * phi + c[0].hypot(c[1]) + 1e-6,
+            "{out:?}"
+        );
     }
 
     #[test]
@@ -411,9 +496,11 @@ mod tests {
         let expect = 2.0 * 0.04 * k * 0.001 / (weak.mass_kg * 9.81);
         assert!((out.first.weight_factor - expect).abs() < 1e-7, "{out:?}");
         // it slid straight down past the fingertips (the rod's top at 15 mm)
-        assert!(
-            out.pose.position_m[1] < -0.015 && out.pose.angle_rad.abs() < 1e-2,
-            "{out:?}"
-        );
+        let (c, phi) = (out.pose.position_m, out.pose.angle_rad.abs());
+        assert!(c[1] < -0.015 && phi < 0.02, "{out:?}");
+        // between fixed fingertips it slips by its descent (at the end its
+        // corner passes a fingertip and it rocks a little: 1.3 %, measured)
+        assert!(out.slip_m >= -c[1] - 1e-9, "{out:?}");
+        assert!(out.slip_m <= 1.02 * c[0].hypot(c[1]), "{out:?}");
     }
 }
