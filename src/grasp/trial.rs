@@ -42,16 +42,23 @@
 //! supports the object, the plant is solved again at the held pressures, and
 //! the friction check ([`crate::grasp::friction::hold_check`]) is run on
 //! the fingers' contact forces (normal forces as the bound of each contact's
-//! push). While the weight is not balanced inside the friction cones
-//! (weight factor `< 1`) the object slides: quasi-static, it moves down by
-//! `slip_step_m` along gravity (translation only), the fingers are solved
-//! against it again at the held pressures and the check is repeated, until
-//! it holds or a finger loses it (dropped). The trial succeeds iff the
-//! object is held after the lift with a total slip `<= max_slip_m`; with
-//! the pressures held and no creep in this quasi-static model, a held
-//! object stays through the hold time `hold_time_s`. A plant contact solve
-//! that does not converge ends the trial as a failure with the solver's
-//! status.
+//! push, friction cones about the object's own outline at each contact,
+//! [`GraspObject::surface_normal`]). While the weight is not balanced inside
+//! the friction cones (weight factor `< 1`) the object moves as a planar
+//! rigid body (position and rotation): quasi-static steps along the
+//! acceleration the contacts of least constraint leave it (at most
+//! `slip_step_m` for any contact point or its centre of mass, at most
+//! 0.02 rad), the fingers solved against it again at the held pressures
+//! after each, until it holds or a finger loses it (dropped). An unequal
+//! pinch turns a thin object until its contacts line up. The slip is the
+//! sliding at the contacts: the tangential relative displacement of the
+//! object's and the finger's material points that touched, summed over the
+//! steps (an object that rolls on the fingertips as it turns does not
+//! slip). The trial succeeds iff the object is held after the lift with a
+//! slip `<= max_slip_m`; with the pressures held and no creep in this
+//! quasi-static model, a held object stays through the hold time
+//! `hold_time_s`. A plant contact solve that does not converge ends the
+//! trial as a failure with the solver's status.
 
 use serde::{Deserialize, Serialize};
 
@@ -71,8 +78,10 @@ use crate::loads::Loads;
 use crate::statics::StaticSolver;
 
 mod finger;
+mod lift;
 mod record;
 use finger::{calibrate, FingerController};
+use lift::lifted_grip;
 use record::{contact_records, Stop};
 
 /// Which grasp strategy.
@@ -137,7 +146,8 @@ pub struct GraspSettings {
     pub lift_height_m: f64,
     /// Hold time (s; default 3): quasi-static, see the module docs.
     pub hold_time_s: f64,
-    /// Largest slip of a success (m; default 0.005).
+    /// Largest slip of a success: the sliding at the contacts after the
+    /// lift (m; default 0.005).
     pub max_slip_m: f64,
     /// An approaching finger has missed when its fingertip's surface is
     /// this far past the centreline (m; default 0.012: the largest
@@ -145,7 +155,8 @@ pub struct GraspSettings {
     /// averaged contact detection lags at `u1`, 4.5 mm). The plant has no
     /// finger–finger contact: past the centreline the fingers may cross.
     pub miss_overshoot_m: f64,
-    /// Step of a slipping object (m; default 0.002).
+    /// Step of a slipping object: the largest move of its centre of mass or
+    /// of a contact point per step (m; default 0.002).
     pub slip_step_m: f64,
     /// During the approach the palm is lowered at most until the object's
     /// top is this far below it (m; default 0.005).
@@ -367,7 +378,7 @@ pub struct TrialOutcome {
     /// The object's pose at the end (m, rad; palm frame): lowered palm and
     /// slip included.
     pub final_pose: Pose,
-    /// How far the object slid after the lift (m).
+    /// How far the object slid at the contacts after the lift (m; module docs).
     pub slip_m: f64,
     /// The object as an obstacle (for drawings).
     pub outline: Obstacle,
@@ -688,7 +699,7 @@ fn simulate(
         }
     }
     // the lift: the table no longer carries the object; while the contacts
-    // cannot carry it, it moves as a rigid body (module docs, [`slip`])
+    // cannot carry it, it moves as a rigid body (module docs, `slip`)
     let t_end = out.frames.last().map_or(0.0, |f| f.time_s) + dt;
     let max_steps = (2.0 * gripper.finger_length_m() / settings.slip_step_m).ceil() as usize;
     let mut k = 0;
@@ -726,68 +737,4 @@ fn simulate(
     };
     out.hold = Some(settled.first);
     Ok(())
-}
-
-/// The grip on the lifted object at `pose` (for [`settle`]): the friction
-/// contacts with cones about the object's own outline (not the cover's),
-/// each finger's strongest contact, and where each finger's material point
-/// of the last touch is now (on the same side of its centreline).
-fn lifted_grip(
-    plant: &GripperPlant,
-    object: &GraspObject,
-    pose: &Pose,
-    lifted: &[FingerState; 2],
-    r: f64,
-    before: [Option<Touch>; 2],
-) -> Result<Grip> {
-    let contacts = contact_records(lifted, r)
-        .iter()
-        .map(|c| {
-            let n = object.surface_normal(pose, c.point_m);
-            FrictionContact {
-                point_m: c.point_m,
-                normal: [-n[0], -n[1]],
-                max_normal_force_n: c.force_n,
-            }
-        })
-        .collect();
-    // a finger's surface point at arc s on side σ: centreline + r σ ν
-    let surface = |robot: &Robot<PlanarCable>, q: &[f64], s: f64, side: f64| -> Result<[f64; 2]> {
-        let p = robot.position_at(q, s)?;
-        let a = robot.angle_at(q, s)?;
-        Ok([p[0] - r * side * a.sin(), p[1] + r * side * a.cos()])
-    };
-    let mut touches = [None, None];
-    let mut followed_m = [None, None];
-    for (i, (f, robot)) in lifted.iter().zip(plant.fingers()).enumerate() {
-        if let Some(c) = f
-            .object_contacts
-            .iter()
-            .max_by(|a, b| a.force_n.total_cmp(&b.force_n))
-        {
-            // the surface point faces the object: −normal from the centreline
-            let a = robot.angle_at(&f.q, c.s_m)?;
-            let side = (-a.sin() * -c.normal[0] + a.cos() * -c.normal[1]).signum();
-            let d = r + c.gap_m;
-            touches[i] = Some(Touch {
-                s_m: c.s_m,
-                side,
-                point_m: [
-                    c.point_m[0] - d * c.normal[0],
-                    c.point_m[1] - d * c.normal[1],
-                ],
-                finger_point_m: surface(robot, &f.q, c.s_m, side)?,
-                normal: [-c.normal[0], -c.normal[1]],
-            });
-        }
-        if let Some(t) = before[i] {
-            followed_m[i] = Some(surface(robot, &f.q, t.s_m, t.side)?);
-        }
-    }
-    Ok(Grip {
-        contacts,
-        both_fingers: lifted.iter().all(|f| !f.object_contacts.is_empty()),
-        touches,
-        followed_m,
-    })
 }
