@@ -55,7 +55,7 @@ fn main() -> Result<(), softrod::Error> {
                 .contacts
                 .iter()
                 .map(|c| {
-                    let n = o.surface_normal(&pose, c.point_m);
+                    let n: [f64; 2] = o.surface_normal(&pose, c.point_m.into()).into();
                     FrictionContact {
                         point_m: c.point_m,
                         normal: [-n[0], -n[1]],

@@ -16,6 +16,7 @@
 //! 90–130 s for the 64-gon), so the cover is what the fingers touch. Its
 //! error is stated per shape there.
 
+use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
 use crate::contact::Obstacle;
@@ -374,10 +375,10 @@ impl GraspObject {
     /// let sq = GraspObject { name: "sq".into(), shape: Shape::RoundedPolygon { vertices_m: vec![[-0.02, -0.02], [0.02, -0.02], [0.02, 0.02], [-0.02, 0.02]], corner_radius_m: 0.008 }, mass_kg: 0.2, mu: 0.5 };
     /// let pose = Pose { position_m: [0.0, 0.0], angle_rad: 0.0 };
     /// // a point on the right face, 1 mm inside: the face's normal
-    /// let n = sq.surface_normal(&pose, [0.027, 0.011]);
-    /// assert!((n[0] - 1.0).abs() < 1e-12 && n[1].abs() < 1e-12);
+    /// let n = sq.surface_normal(&pose, nalgebra::Vector2::new(0.027, 0.011));
+    /// assert!((n.x - 1.0).abs() < 1e-12 && n.y.abs() < 1e-12);
     /// ```
-    pub fn surface_normal(&self, pose: &Pose, point_m: [f64; 2]) -> [f64; 2] {
+    pub fn surface_normal(&self, pose: &Pose, point_m: Vector2<f64>) -> Vector2<f64> {
         let (s, c) = pose.angle_rad.sin_cos();
         let d = [
             point_m[0] - pose.position_m[0],
@@ -428,7 +429,7 @@ impl GraspObject {
             }
             Shape::RoundedPolygon { vertices_m, .. } => polygon_normal(vertices_m, p),
         };
-        [c * local[0] - s * local[1], s * local[0] + c * local[1]]
+        Vector2::new(c * local[0] - s * local[1], s * local[0] + c * local[1])
     }
 
     /// The object's extent at `pose` (m): `[min x, max x, min y, max y]`.
@@ -581,13 +582,13 @@ mod tests {
         };
         let (s, c) = pose.angle_rad.sin_cos();
         let world = |p: [f64; 2]| {
-            [
+            Vector2::new(
                 pose.position_m[0] + c * p[0] - s * p[1],
                 pose.position_m[1] + s * p[0] + c * p[1],
-            ]
+            )
         };
         let turn = |n: [f64; 2]| [c * n[0] - s * n[1], s * n[0] + c * n[1]];
-        let close = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-9;
+        let close = |a: Vector2<f64>, b: [f64; 2]| (a.x - b[0]).hypot(a.y - b[1]) < 1e-9;
         let obj = |shape| GraspObject {
             name: "x".into(),
             shape,

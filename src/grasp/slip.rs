@@ -346,7 +346,7 @@ mod tests {
                 let overlap = radius - d.distance_m;
                 if overlap > 0.0 {
                     // the outline's nearest point and the normal into the object
-                    let n = object.surface_normal(pose, c);
+                    let n: [f64; 2] = object.surface_normal(pose, c.into()).into();
                     let p = [c[0] - d.distance_m * n[0], c[1] - d.distance_m * n[1]];
                     contacts.push(FrictionContact {
                         point_m: p,

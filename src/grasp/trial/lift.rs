@@ -18,7 +18,7 @@ pub(super) fn lifted_grip(
     let contacts = contact_records(lifted, r)
         .iter()
         .map(|c| {
-            let n = object.surface_normal(pose, c.point_m);
+            let n: [f64; 2] = object.surface_normal(pose, c.point_m.into()).into();
             FrictionContact {
                 point_m: c.point_m,
                 normal: [-n[0], -n[1]],
