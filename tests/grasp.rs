@@ -31,10 +31,11 @@ fn adaptive_holds_a_disc_the_open_loop_strategy_drops() {
         matches!(open.failure, Some(Failure::Slips { weight_factor, .. } | Failure::Dropped { weight_factor, .. }) if weight_factor < 1.0)
     );
     // the object the open loop cannot hold slides down (its pose follows
-    // from the contact solves) by more than the allowed slip
+    // from the contact solves) by more than the allowed slip, at the
+    // contacts and as a whole
     assert!(open.slip_m > s.max_slip_m, "{}", open.slip_m);
     let fell = open.pose.position_m[1] - open.final_pose.position_m[1];
-    assert!((fell - open.slip_m).abs() < 1e-12, "{fell}");
+    assert!(fell > s.max_slip_m, "{fell}");
     assert!(adaptive.success, "{:?}", adaptive.failure);
     assert!(adaptive.slip_m <= s.max_slip_m);
     // the adaptive grasp squeezes harder: it holds more than the baseline's
@@ -160,31 +161,63 @@ fn the_quick_report_part_writes_the_table_and_the_sequences() {
 }
 
 #[test]
-fn the_rulers_plant_solves_converge_and_a_seeded_try_holds() {
-    // the ruler (a 3 mm × 30 mm section) is covered by 37 circles of
-    // 1.5 mm: before the contact solver's fix these adaptive tries ended in
-    // failed plant solves (IterationLimit, LineSearchFailed); now they get
-    // to the friction check, and try 3 (offset −4.6 mm) holds
+fn the_ruler_turns_in_an_unequal_pinch_and_holds() {
+    // the ruler (a 3 mm × 30 mm section, covered by 37 circles of 1.5 mm):
+    // in tries 0 and 1 the fingertips touch it at heights 5 mm apart; the
+    // couple of the normal forces cannot be balanced by friction on 3 mm
+    // (weight factor 0), so it turns in the pinch (by 0.06 and 0.10 rad)
+    // until its contacts line up, rolling on the fingertips; with a
+    // translation-only slip these tries failed (slips of 18 mm). Try 3's
+    // pinch is square: it holds where it is.
     let o = &table_objects()[0];
+    let s = GraspSettings::default();
     for k in [0, 1, 3] {
         let out = run_trial(
             &GripperSpec::default(),
             o,
             placement(1, 0, k),
             Strategy::Adaptive,
-            &GraspSettings::default(),
+            &s,
             1 ^ (k as u64),
         )
         .unwrap();
-        assert!(
-            !matches!(out.failure, Some(Failure::PlantSolve { .. })),
-            "try {k}: {:?}",
-            out.failure
-        );
-        assert!(out.hold.is_some(), "try {k}");
+        assert!(out.success, "try {k}: {:?}", out.failure);
+        assert!(out.slip_m <= s.max_slip_m, "try {k}: {}", out.slip_m);
+        let turn = (out.final_pose.angle_rad - out.pose.angle_rad).abs();
+        let w0 = out.hold.as_ref().unwrap().weight_factor;
         if k == 3 {
-            assert!(out.success, "{:?}", out.failure);
+            assert!(w0 >= 1.0 && turn == 0.0 && out.slip_m == 0.0, "{w0} {turn}");
             assert!(out.holding_mass_kg > o.mass_kg);
+        } else {
+            assert!(w0 < 1e-6 && turn > 0.02, "try {k}: {w0} {turn}");
         }
     }
+}
+
+#[test]
+fn noise_alone_does_not_make_a_contact() {
+    // red apple, try 3: the second estimate of the left finger, 50 mm from
+    // the apple, had a resultant of 0.30 N (noise) and was taken for a
+    // contact; the finger turned outward and held nothing. Contact is now
+    // detected on a full averaging window only.
+    let o = &table_objects()[5];
+    let out = run_trial(
+        &GripperSpec::default(),
+        o,
+        placement(1, 5, 3),
+        Strategy::Adaptive,
+        &GraspSettings::default(),
+        1 ^ 503,
+    )
+    .unwrap();
+    assert!(out.success, "{:?}", out.failure);
+    let last = out.frames.last().unwrap();
+    assert!(last
+        .contacts
+        .iter()
+        .any(|c| c.point_m[0] < out.final_pose.position_m[0]));
+    assert!(last
+        .contacts
+        .iter()
+        .any(|c| c.point_m[0] > out.final_pose.position_m[0]));
 }

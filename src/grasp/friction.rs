@@ -383,6 +383,47 @@ mod tests {
     }
 
     #[test]
+    fn a_thin_rod_pinched_at_unequal_heights_matches_the_closed_form() {
+        // a rod of width w, contacts on its faces at heights ±d/2 about its
+        // centre of mass: the normals' couple N d must come from friction on
+        // the lever w: (w/2)(τ_R − τ_L) with τ_L + τ_R = m g, |τ| ≤ μ N, so
+        // it holds iff N (μ w − d) ≥ w m g / 2, i.e. m ≤ 2 N (μ w − d)/(w g)
+        let (w, mu, n) = (0.003, 0.5, 0.7);
+        for d in [0.0, 0.0005, 0.001, 0.0014] {
+            let rod = [
+                FrictionContact {
+                    point_m: [-0.5 * w, 0.5 * d],
+                    normal: [1.0, 0.0],
+                    max_normal_force_n: n,
+                },
+                FrictionContact {
+                    point_m: [0.5 * w, -0.5 * d],
+                    normal: [-1.0, 0.0],
+                    max_normal_force_n: n,
+                },
+            ];
+            let m = 2.0 * n * (mu * w - d) / (w * 9.81);
+            let h = hold_check(&rod, m, [0.0, 0.0], mu, G).unwrap();
+            assert!((h.weight_factor - 1.0).abs() < 1e-6, "d {d}: {h:?}");
+        }
+        // d ≥ μ w: nothing is held, however light (the ruler's 5 mm offset)
+        let rod = [
+            FrictionContact {
+                point_m: [-0.5 * w, 0.0025],
+                normal: [1.0, 0.0],
+                max_normal_force_n: n,
+            },
+            FrictionContact {
+                point_m: [0.5 * w, -0.0025],
+                normal: [-1.0, 0.0],
+                max_normal_force_n: n,
+            },
+        ];
+        let h = hold_check(&rod, 1e-3, [0.0, 0.0], mu, G).unwrap();
+        assert!(!h.holds && h.weight_factor < 1e-6, "{h:?}");
+    }
+
+    #[test]
     fn frictionless_jaws_hold_nothing_and_a_cup_holds_anything() {
         let h = hold_check(&jaws(10.0), 0.01, [0.0, 0.0], 0.0, G).unwrap();
         assert!(!h.holds && h.weight_factor < 1e-6);

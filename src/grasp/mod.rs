@@ -11,6 +11,8 @@
 //!   contact against the object and the table.
 //! - [`strategy`]: the contact pose (46)–(49) with a signed angle, the
 //!   Jacobian (50), the bounded least-squares step of (51)/(52).
+//! - `slip` (internal): the lifted object as a planar rigid body that
+//!   settles in the fingers (Gauss's principle of least constraint).
 //! - [`trial`]: one quasi-static grasp trial and its success criterion.
 //! - [`table`]: Table I's nine objects and the seeded runner.
 
@@ -18,6 +20,7 @@ pub mod friction;
 pub mod gripper;
 pub mod object;
 pub mod plant;
+mod slip;
 pub mod strategy;
 pub mod table;
 pub mod trial;

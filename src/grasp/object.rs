@@ -16,6 +16,7 @@
 //! 90–130 s for the 64-gon), so the cover is what the fingers touch. Its
 //! error is stated per shape there.
 
+use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
 use crate::contact::Obstacle;
@@ -338,6 +339,99 @@ impl GraspObject {
             .collect())
     }
 
+    /// The moment of inertia about the centre of mass, normal to the plane
+    /// (kg·m²), uniform density: a circle `m r²/2`, an ellipse
+    /// `m (a² + b²)/4`, a rectangle `m (w² + h²)/12`, a rounded polygon that
+    /// of its outline polygon (the corners by 8 vertices each).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::grasp::object::{GraspObject, Shape};
+    /// let rod = GraspObject { name: "rod".into(), shape: Shape::Rectangle { size_m: [0.003, 0.03] }, mass_kg: 0.02, mu: 0.5 };
+    /// let i = rod.moment_of_inertia_kg_m2();
+    /// assert!((i - 0.02 * (0.003f64.powi(2) + 0.03f64.powi(2)) / 12.0).abs() < 1e-15);
+    /// ```
+    pub fn moment_of_inertia_kg_m2(&self) -> f64 {
+        let m = self.mass_kg;
+        match &self.shape {
+            Shape::Circle { radius_m } => 0.5 * m * radius_m * radius_m,
+            Shape::Ellipse {
+                semi_axes_m: [a, b],
+            } => 0.25 * m * (a * a + b * b),
+            Shape::Rectangle { size_m: [w, h] } => m * (w * w + h * h) / 12.0,
+            Shape::RoundedPolygon { .. } => m * polygon_gyration_m2(&self.local_vertices()),
+        }
+    }
+
+    /// The unit normal of the object's true outline (not its circle cover)
+    /// at the boundary point nearest to `point_m`, pointing out of the
+    /// object, at `pose`. The friction check takes its cones about these:
+    /// the plant touches the circle cover, whose normals in the valleys
+    /// between two circles tilt by up to 14.5° from the outline's.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::grasp::object::{GraspObject, Pose, Shape};
+    /// let sq = GraspObject { name: "sq".into(), shape: Shape::RoundedPolygon { vertices_m: vec![[-0.02, -0.02], [0.02, -0.02], [0.02, 0.02], [-0.02, 0.02]], corner_radius_m: 0.008 }, mass_kg: 0.2, mu: 0.5 };
+    /// let pose = Pose { position_m: [0.0, 0.0], angle_rad: 0.0 };
+    /// // a point on the right face, 1 mm inside: the face's normal
+    /// let n = sq.surface_normal(&pose, nalgebra::Vector2::new(0.027, 0.011));
+    /// assert!((n.x - 1.0).abs() < 1e-12 && n.y.abs() < 1e-12);
+    /// ```
+    pub fn surface_normal(&self, pose: &Pose, point_m: Vector2<f64>) -> Vector2<f64> {
+        let (s, c) = pose.angle_rad.sin_cos();
+        let d = [
+            point_m[0] - pose.position_m[0],
+            point_m[1] - pose.position_m[1],
+        ];
+        // the point in the object's frame
+        let p = [c * d[0] + s * d[1], -s * d[0] + c * d[1]];
+        let unit = |v: [f64; 2]| {
+            let l = v[0].hypot(v[1]);
+            if l > 0.0 && l.is_finite() {
+                [v[0] / l, v[1] / l]
+            } else {
+                [0.0, 1.0]
+            }
+        };
+        let local = match &self.shape {
+            Shape::Circle { .. } => unit(p),
+            Shape::Ellipse {
+                semi_axes_m: [a, b],
+            } => {
+                // the nearest point (a cos t, b sin t): Newton on the
+                // stationarity of the distance, from the radial guess
+                let mut t = (a * p[1]).atan2(b * p[0]);
+                for _ in 0..30 {
+                    let (st, ct) = t.sin_cos();
+                    let f = (a * a - b * b) * st * ct - p[0] * a * st + p[1] * b * ct;
+                    let df = (a * a - b * b) * (ct * ct - st * st) - p[0] * a * ct - p[1] * b * st;
+                    if df.abs() < 1e-300 {
+                        break;
+                    }
+                    let step = f / df;
+                    t -= step.clamp(-0.5, 0.5);
+                    if step.abs() < 1e-14 {
+                        break;
+                    }
+                }
+                let (st, ct) = t.sin_cos();
+                unit([b * ct, a * st])
+            }
+            Shape::Rectangle { size_m: [w, h] } => {
+                let core = [
+                    [-0.5 * w, -0.5 * h],
+                    [0.5 * w, -0.5 * h],
+                    [0.5 * w, 0.5 * h],
+                    [-0.5 * w, 0.5 * h],
+                ];
+                polygon_normal(&core, p)
+            }
+            Shape::RoundedPolygon { vertices_m, .. } => polygon_normal(vertices_m, p),
+        };
+        Vector2::new(c * local[0] - s * local[1], s * local[0] + c * local[1])
+    }
+
     /// The object's extent at `pose` (m): `[min x, max x, min y, max y]`.
     pub fn bounds(&self, pose: &Pose) -> [f64; 4] {
         if let Shape::Circle { radius_m } = self.shape {
@@ -367,6 +461,59 @@ impl GraspObject {
         }
         b
     }
+}
+
+/// The outward normal of a convex counter-clockwise polygon at the boundary
+/// point nearest to `p`: from the nearest point when `p` is outside, the
+/// nearest edge's normal when inside.
+fn polygon_normal(vertices: &[[f64; 2]], p: [f64; 2]) -> [f64; 2] {
+    let n = vertices.len();
+    // (distance, direction) of the nearest boundary point; (depth, normal)
+    // of the shallowest edge for a point inside
+    let mut nearest: Option<(f64, [f64; 2])> = None;
+    let mut shallowest: Option<(f64, [f64; 2])> = None;
+    let mut inside = true;
+    for i in 0..n {
+        let (a, b) = (vertices[i], vertices[(i + 1) % n]);
+        let e = [b[0] - a[0], b[1] - a[1]];
+        let len2 = e[0] * e[0] + e[1] * e[1];
+        let len = len2.sqrt();
+        let out = [e[1] / len, -e[0] / len];
+        let side = (p[0] - a[0]) * out[0] + (p[1] - a[1]) * out[1];
+        inside &= side <= 0.0;
+        if shallowest.is_none_or(|(d, _)| -side < d) {
+            shallowest = Some((-side, out));
+        }
+        let t = (((p[0] - a[0]) * e[0] + (p[1] - a[1]) * e[1]) / len2).clamp(0.0, 1.0);
+        let dq = [p[0] - a[0] - t * e[0], p[1] - a[1] - t * e[1]];
+        let dist = dq[0].hypot(dq[1]);
+        if nearest.is_none_or(|(d, _)| dist < d) {
+            let dir = if dist > 1e-15 {
+                [dq[0] / dist, dq[1] / dist]
+            } else {
+                out
+            };
+            nearest = Some((dist, dir));
+        }
+    }
+    let pick = if inside { shallowest } else { nearest };
+    pick.map_or([0.0, 1.0], |(_, v)| v)
+}
+
+/// The squared radius of gyration of a uniform polygon (counter-clockwise)
+/// about the origin (m²): `∫ r² dA / A`.
+fn polygon_gyration_m2(vertices: &[[f64; 2]]) -> f64 {
+    let n = vertices.len();
+    let (mut area2, mut j12) = (0.0, 0.0);
+    for i in 0..n {
+        let (a, b) = (vertices[i], vertices[(i + 1) % n]);
+        let cr = a[0] * b[1] - b[0] * a[1];
+        area2 += cr;
+        j12 += cr
+            * (a[0] * a[0] + a[0] * b[0] + b[0] * b[0] + a[1] * a[1] + a[1] * b[1] + b[1] * b[1]);
+    }
+    // polar moment ∫ r² dA = Σ cr (…)/12, area = Σ cr / 2
+    (j12 / 12.0) / (0.5 * area2)
 }
 
 #[cfg(test)]
@@ -425,6 +572,134 @@ mod tests {
             angle_rad: 0.0,
         });
         assert!((b[1] - 0.014).abs() < 1e-12 && (b[2] + 0.014).abs() < 1e-12);
+    }
+
+    #[test]
+    fn surface_normals_are_the_outlines() {
+        let pose = Pose {
+            position_m: [0.01, -0.08],
+            angle_rad: 0.4,
+        };
+        let (s, c) = pose.angle_rad.sin_cos();
+        let world = |p: [f64; 2]| {
+            Vector2::new(
+                pose.position_m[0] + c * p[0] - s * p[1],
+                pose.position_m[1] + s * p[0] + c * p[1],
+            )
+        };
+        let turn = |n: [f64; 2]| [c * n[0] - s * n[1], s * n[0] + c * n[1]];
+        let close = |a: Vector2<f64>, b: [f64; 2]| (a.x - b[0]).hypot(a.y - b[1]) < 1e-9;
+        let obj = |shape| GraspObject {
+            name: "x".into(),
+            shape,
+            mass_kg: 0.1,
+            mu: 0.5,
+        };
+        // an ellipse: at (a cos t, b sin t) the normal is ∝ (cos t / a, sin t / b),
+        // also from a point 1 mm off the curve along it
+        let (a, b) = (0.03, 0.02);
+        let e = obj(Shape::Ellipse {
+            semi_axes_m: [a, b],
+        });
+        for t in [0.0, 0.3, 1.2, 2.5, 4.0] {
+            let (st, ct) = f64::sin_cos(t);
+            let l = (ct / a).hypot(st / b);
+            let n = [ct / a / l, st / b / l];
+            for off in [0.0, 0.001, -0.001] {
+                let p = [a * ct + off * n[0], b * st + off * n[1]];
+                assert!(
+                    close(e.surface_normal(&pose, world(p)), turn(n)),
+                    "t {t} off {off}"
+                );
+            }
+        }
+        // a circle: radial
+        let ci = obj(Shape::Circle { radius_m: 0.02 });
+        assert!(close(
+            ci.surface_normal(&pose, world([0.0, 0.03])),
+            turn([0.0, 1.0])
+        ));
+        // a rectangle: the face normal inside and outside, radial off a corner
+        let r = obj(Shape::Rectangle {
+            size_m: [0.04, 0.02],
+        });
+        assert!(close(
+            r.surface_normal(&pose, world([0.019, 0.003])),
+            turn([1.0, 0.0])
+        ));
+        assert!(close(
+            r.surface_normal(&pose, world([-0.01, -0.0105])),
+            turn([0.0, -1.0])
+        ));
+        let k = std::f64::consts::FRAC_1_SQRT_2;
+        assert!(close(
+            r.surface_normal(&pose, world([0.021, 0.011])),
+            turn([k, k])
+        ));
+        // a rounded square: the faces are flat, the corners arcs about the core's corners
+        let sq = obj(Shape::RoundedPolygon {
+            vertices_m: vec![
+                [-0.0245, -0.0245],
+                [0.0245, -0.0245],
+                [0.0245, 0.0245],
+                [-0.0245, 0.0245],
+            ],
+            corner_radius_m: 0.008,
+        });
+        for y in [-0.024, 0.0, 0.02] {
+            assert!(close(
+                sq.surface_normal(&pose, world([0.032, y])),
+                turn([1.0, 0.0])
+            ));
+        }
+        let (sa, ca) = f64::sin_cos(0.7);
+        let corner = [0.0245 + 0.008 * ca, 0.0245 + 0.008 * sa];
+        assert!(close(
+            sq.surface_normal(&pose, world(corner)),
+            turn([ca, sa])
+        ));
+    }
+
+    #[test]
+    fn moments_of_inertia_match_the_closed_forms() {
+        let obj = |shape| GraspObject {
+            name: "x".into(),
+            shape,
+            mass_kg: 0.2,
+            mu: 0.5,
+        };
+        // the polygon formula on a rectangle: m (w² + h²)/12
+        let (w, h) = (0.04, 0.01);
+        let rect = [
+            [-w / 2.0, -h / 2.0],
+            [w / 2.0, -h / 2.0],
+            [w / 2.0, h / 2.0],
+            [-w / 2.0, h / 2.0],
+        ];
+        assert!((0.2 * polygon_gyration_m2(&rect) - 0.2 * (w * w + h * h) / 12.0).abs() < 1e-15);
+        // a rounded polygon with a tiny radius tends to its core
+        let tiny = obj(Shape::RoundedPolygon {
+            vertices_m: rect.to_vec(),
+            corner_radius_m: 1e-7,
+        });
+        let i = tiny.moment_of_inertia_kg_m2();
+        assert!(
+            (i / (0.2 * (w * w + h * h) / 12.0) - 1.0).abs() < 1e-4,
+            "{i}"
+        );
+        // a rounded square of core side a, radius r: a disc's polygon limit when a → 0
+        let r = 0.01;
+        let round = obj(Shape::RoundedPolygon {
+            vertices_m: vec![[-1e-7, -1e-7], [1e-7, -1e-7], [1e-7, 1e-7], [-1e-7, 1e-7]],
+            corner_radius_m: r,
+        });
+        // the 32-gon inscribed in the circle: within 1 % of m r²/2
+        let i = round.moment_of_inertia_kg_m2();
+        assert!((i / (0.5 * 0.2 * r * r) - 1.0).abs() < 0.01, "{i}");
+        assert_eq!(
+            obj(Shape::Circle { radius_m: r }).moment_of_inertia_kg_m2(),
+            0.5 * 0.2 * r * r
+        );
     }
 
     #[test]

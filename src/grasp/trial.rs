@@ -42,16 +42,23 @@
 //! supports the object, the plant is solved again at the held pressures, and
 //! the friction check ([`crate::grasp::friction::hold_check`]) is run on
 //! the fingers' contact forces (normal forces as the bound of each contact's
-//! push). While the weight is not balanced inside the friction cones
-//! (weight factor `< 1`) the object slides: quasi-static, it moves down by
-//! `slip_step_m` along gravity (translation only), the fingers are solved
-//! against it again at the held pressures and the check is repeated, until
-//! it holds or a finger loses it (dropped). The trial succeeds iff the
-//! object is held after the lift with a total slip `<= max_slip_m`; with
-//! the pressures held and no creep in this quasi-static model, a held
-//! object stays through the hold time `hold_time_s`. A plant contact solve
-//! that does not converge ends the trial as a failure with the solver's
-//! status.
+//! push, friction cones about the object's own outline at each contact,
+//! [`GraspObject::surface_normal`]). While the weight is not balanced inside
+//! the friction cones (weight factor `< 1`) the object moves as a planar
+//! rigid body (position and rotation): quasi-static steps along the
+//! acceleration the contacts of least constraint leave it (at most
+//! `slip_step_m` for any contact point or its centre of mass, at most
+//! 0.02 rad), the fingers solved against it again at the held pressures
+//! after each, until it holds or a finger loses it (dropped). An unequal
+//! pinch turns a thin object until its contacts line up. The slip is the
+//! sliding at the contacts: the tangential relative displacement of the
+//! object's and the finger's material points that touched, summed over the
+//! steps (an object that rolls on the fingertips as it turns does not
+//! slip). The trial succeeds iff the object is held after the lift with a
+//! slip `<= max_slip_m`; with the pressures held and no creep in this
+//! quasi-static model, a held object stays through the hold time
+//! `hold_time_s`. A plant contact solve that does not converge ends the
+//! trial as a failure with the solver's status.
 
 use serde::{Deserialize, Serialize};
 
@@ -61,17 +68,20 @@ use crate::control::VirtualPayload;
 use crate::element::PlanarCable;
 use crate::error::{Error, Result};
 use crate::estimate::{Estimator, EstimatorSettings};
-use crate::grasp::friction::{hold_check, FrictionContact, HoldCheck};
+use crate::grasp::friction::{FrictionContact, HoldCheck};
 use crate::grasp::gripper::{GripperSpec, Side, FINGER_PRESSURES};
 use crate::grasp::object::{GraspObject, Pose};
 use crate::grasp::plant::{FingerState, GripperPlant, GripperPlantSettings, PlantStep};
+use crate::grasp::slip::{settle, Grip, Touch};
 use crate::grasp::strategy::{bounded_step, contact_jacobian, contact_pose};
 use crate::loads::Loads;
 use crate::statics::StaticSolver;
 
 mod finger;
+mod lift;
 mod record;
 use finger::{calibrate, FingerController};
+use lift::lifted_grip;
 use record::{contact_records, Stop};
 
 /// Which grasp strategy.
@@ -136,7 +146,8 @@ pub struct GraspSettings {
     pub lift_height_m: f64,
     /// Hold time (s; default 3): quasi-static, see the module docs.
     pub hold_time_s: f64,
-    /// Largest slip of a success (m; default 0.005).
+    /// Largest slip of a success: the sliding at the contacts after the
+    /// lift (m; default 0.005).
     pub max_slip_m: f64,
     /// An approaching finger has missed when its fingertip's surface is
     /// this far past the centreline (m; default 0.012: the largest
@@ -144,7 +155,8 @@ pub struct GraspSettings {
     /// averaged contact detection lags at `u1`, 4.5 mm). The plant has no
     /// finger–finger contact: past the centreline the fingers may cross.
     pub miss_overshoot_m: f64,
-    /// Step of a slipping object (m; default 0.002).
+    /// Step of a slipping object: the largest move of its centre of mass or
+    /// of a contact point per step (m; default 0.002).
     pub slip_step_m: f64,
     /// During the approach the palm is lowered at most until the object's
     /// top is this far below it (m; default 0.005).
@@ -309,6 +321,8 @@ pub struct Frame {
     pub contact_pose: [Option<[f64; 3]>; 2],
     /// The object's centre of mass in the palm's frame (m).
     pub object_position_m: [f64; 2],
+    /// The object's rotation (rad, counter-clockwise; it turns after the lift).
+    pub object_angle_rad: f64,
 }
 
 /// Why a trial failed.
@@ -364,7 +378,7 @@ pub struct TrialOutcome {
     /// The object's pose at the end (m, rad; palm frame): lowered palm and
     /// slip included.
     pub final_pose: Pose,
-    /// How far the object slid after the lift (m).
+    /// How far the object slid at the contacts after the lift (m; module docs).
     pub slip_m: f64,
     /// The object as an obstacle (for drawings).
     pub outline: Obstacle,
@@ -685,63 +699,42 @@ fn simulate(
         }
     }
     // the lift: the table no longer carries the object; while the contacts
-    // cannot carry it, it slides down (module docs)
+    // cannot carry it, it moves as a rigid body (module docs, `slip`)
     let t_end = out.frames.last().map_or(0.0, |f| f.time_s) + dt;
-    let g = gripper.gravity_m_per_s2;
-    let glen = g[0].hypot(g[1]);
-    let down = [g[0] / glen, g[1] / glen];
-    let max_steps = (gripper.finger_length_m() / settings.slip_step_m).ceil() as usize;
-    let mut first: Option<HoldCheck> = None;
-    for k in 0..=max_steps {
-        let cover = object.contact_cover(&out.final_pose)?;
-        plant.set_workspace(cover, None);
-        let lifted = plant.solve([&pressures[0], &pressures[1]])?.states()?;
-        out.push_frame(t_end + k as f64 * dt, phases, &pressures, &lifted, r, poses);
-        let contacts: Vec<FrictionContact> = contact_records(&lifted, r)
-            .iter()
-            .map(|c| FrictionContact {
-                point_m: c.point_m,
-                normal: c.normal,
-                max_normal_force_n: c.force_n,
-            })
-            .collect();
-        let both = lifted.iter().all(|f| !f.object_contacts.is_empty());
-        let hold = hold_check(
-            &contacts,
-            object.mass_kg,
-            out.final_pose.position_m,
-            object.mu,
-            g,
-        )?;
-        let w0 = first
-            .as_ref()
-            .map_or(hold.weight_factor, |h| h.weight_factor);
-        if first.is_none() {
-            out.holding_mass_kg = hold.holding_mass_kg(object.mass_kg);
-            first = Some(hold.clone());
-        }
-        if hold.holds {
-            out.success = out.slip_m <= settings.max_slip_m;
-            if !out.success {
-                out.failure = Some(Failure::Slips {
-                    weight_factor: w0,
-                    slip_m: out.slip_m,
-                });
-            }
-            break;
-        }
-        if !both || k == max_steps {
-            out.failure = Some(Failure::Dropped {
-                weight_factor: w0,
-                slip_m: out.slip_m,
-            });
-            break;
-        }
-        out.slip_m += settings.slip_step_m;
-        let p = &mut out.final_pose.position_m;
-        p[0] += settings.slip_step_m * down[0];
-        p[1] += settings.slip_step_m * down[1];
-    }
-    out.hold = first;
+    let max_steps = (2.0 * gripper.finger_length_m() / settings.slip_step_m).ceil() as usize;
+    let mut k = 0;
+    let settled = settle(
+        object,
+        out.final_pose,
+        gripper.gravity_m_per_s2,
+        settings.slip_step_m,
+        max_steps,
+        |pose: &Pose, before: [Option<Touch>; 2]| -> std::result::Result<Grip, Stop> {
+            out.final_pose = *pose;
+            plant.set_workspace(object.contact_cover(pose)?, None);
+            let lifted = plant.solve([&pressures[0], &pressures[1]])?.states()?;
+            out.push_frame(t_end + k as f64 * dt, phases, &pressures, &lifted, r, poses);
+            k += 1;
+            let grip = lifted_grip(plant, object, pose, &lifted, r, before)?;
+            Ok(grip)
+        },
+    )?;
+    out.final_pose = settled.pose;
+    out.slip_m = settled.slip_m;
+    let w0 = settled.first.weight_factor;
+    out.holding_mass_kg = settled.first.holding_mass_kg(object.mass_kg);
+    out.success = settled.holds && out.slip_m <= settings.max_slip_m;
+    out.failure = match (settled.holds, out.success) {
+        (_, true) => None,
+        (true, false) => Some(Failure::Slips {
+            weight_factor: w0,
+            slip_m: out.slip_m,
+        }),
+        (false, _) => Some(Failure::Dropped {
+            weight_factor: w0,
+            slip_m: out.slip_m,
+        }),
+    };
+    out.hold = Some(settled.first);
     Ok(())
 }

@@ -214,11 +214,16 @@ fn draw<DB: DrawingBackend>(
         let start = outline(&out.outline, [0.0, 0.0]);
         c.draw_series(LineSeries::new(start, BLACK.mix(0.35).stroke_width(1)))
             .map_err(e)?;
-        let shift = [
-            out.final_pose.position_m[0] - out.pose.position_m[0],
-            out.final_pose.position_m[1] - out.pose.position_m[1],
-        ];
-        let end = outline(&out.outline, shift);
+        // the start outline moved as a rigid body to the final pose
+        let (c0, c1) = (out.pose.position_m, out.final_pose.position_m);
+        let (s, co) = (out.final_pose.angle_rad - out.pose.angle_rad).sin_cos();
+        let end: Vec<(f64, f64)> = outline(&out.outline, [0.0, 0.0])
+            .into_iter()
+            .map(|(x, y)| {
+                let (dx, dy) = (x - c0[0], y - c0[1]);
+                (c1[0] + co * dx - s * dy, c1[1] + s * dx + co * dy)
+            })
+            .collect();
         c.draw_series(std::iter::once(Polygon::new(
             end.clone(),
             RGBColor(250, 200, 120).mix(0.6).filled(),

@@ -29,7 +29,7 @@ pub(super) fn frame(
     fingers: &[FingerState; 2],
     radius: f64,
     poses: [Option<[f64; 3]>; 2],
-    object_position_m: [f64; 2],
+    object: Pose,
 ) -> Frame {
     Frame {
         time_s,
@@ -41,7 +41,8 @@ pub(super) fn frame(
         ],
         contacts: contact_records(fingers, radius),
         contact_pose: poses,
-        object_position_m,
+        object_position_m: object.position_m,
+        object_angle_rad: object.angle_rad,
     }
 }
 
@@ -95,7 +96,7 @@ impl TrialOutcome {
             fingers,
             radius,
             poses,
-            self.final_pose.position_m,
+            self.final_pose,
         );
         self.frames.push(f);
     }
