@@ -180,14 +180,14 @@ fn first_estimate_of_a_large_deflection_costs_both_backends_alike() {
             w_n_per_m: vec![0.0, -4.4145 * f64::from(k) / 8.0],
         }];
         q = StaticSolver::default()
-            .solve(&fine, &truth, Some(&q))
+            .solve(&fine, &truth, Some(q.as_slice()))
             .unwrap()
             .q;
     }
     let markers = (1..=5)
         .map(|k| {
             let s = 0.24 * f64::from(k) / 5.0;
-            MarkerObservation::at_arc(s, fine.position_at(&q, s).unwrap())
+            MarkerObservation::at_arc(s, fine.position_at(q.as_slice(), s).unwrap().data.into())
         })
         .collect();
     let obs = Observation { markers }.with_noise(1e-5, 7);
