@@ -289,7 +289,7 @@ impl ObsRow {
 /// use softrod::{observe::{Observation, ObservationOperator}, scene::Scene};
 /// let robot = Scene::two_section().robot()?;
 /// let q = robot.reference_configuration();
-/// let obs = Observation::of_nodes(&robot, &q, &[4, 20])?;
+/// let obs = Observation::of_nodes(&robot, q.as_slice(), &[4, 20])?;
 /// let op = ObservationOperator::new(&robot, &obs, 1e-5, 1e-3)?;
 /// assert_eq!(op.len(), 4); // two markers, two components each
 /// assert!(!op.is_empty());

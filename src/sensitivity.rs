@@ -138,7 +138,7 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
     /// let mut tracker = EquilibriumTracker::new(robot, scene.loads()?, Default::default())?;
     /// let load = LoadModel::Concentrated { node: 20 };
     /// let q0 = tracker.robot().arc_configuration(&scene.pressures_pa);
-    /// let eq = tracker.solve(&load, &[0.0, 0.0], &q0)?;
+    /// let eq = tracker.solve(&load, &[0.0, 0.0], q0.as_slice())?;
     /// let mut g = nalgebra::DVector::zeros(n);
     /// g[n - 3] = -1e-3; // 1 mN down at the tip
     /// let dq: nalgebra::DVector<f64> =

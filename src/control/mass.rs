@@ -188,7 +188,7 @@ pub struct MassEstimate {
 /// let mut heavy = loads.clone();
 /// heavy.point_forces.push(PointForce { s_m: 0.24, force_n: vec![0.0, -0.05 * 9.81] });
 /// let loaded = robot.position_at(StaticSolver::default().solve(&robot, &heavy, None)?.q.as_slice(), 0.24)?;
-/// let m = est.estimate(&loads.pressures_pa, &unloaded, &loaded)?;
+/// let m = est.estimate(&loads.pressures_pa, unloaded.as_slice(), loaded.as_slice())?;
 /// assert!((m.mass_kg - 0.05).abs() < 1e-6, "{}", m.mass_kg);
 /// # Ok::<(), softrod::Error>(())
 /// ```

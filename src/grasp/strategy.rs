@@ -66,7 +66,7 @@ pub fn contact_pose(robot: &Robot<PlanarCable>, q: &[f64], s_m: f64) -> Result<[
 /// let f = GripperSpec::default().finger(Side::Left)?;
 /// let loads = Loads { pressures_pa: vec![0.0; 4], ..Loads::default() };
 /// let q = softrod::statics::StaticSolver::default().solve(&f, &loads, None)?.q;
-/// let j = contact_jacobian(&f, &q, &loads, 0.1)?;
+/// let j = contact_jacobian(&f, q.as_slice(), &loads, 0.1)?;
 /// // the proximal inward chamber turns the tip inward (θ grows), the outward one the other way
 /// assert!(j[(2, 0)] > 0.0 && j[(2, 1)] < 0.0);
 /// # Ok::<(), softrod::Error>(())

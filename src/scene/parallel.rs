@@ -92,7 +92,7 @@ impl ParallelScene {
     ///   "platform_force_n": [0, 0, -0.1]}"#)?;
     /// assert_eq!(s.platform_force()?.z, -0.1);
     /// assert_eq!(s.platform_moment()?, nalgebra::Vector3::zeros());
-    /// # Ok::<(), softrod::Error>(())
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn platform_force(&self) -> Result<nalgebra::Vector3<f64>> {
         if self.platform_force_n.is_empty() {

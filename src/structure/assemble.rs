@@ -377,7 +377,7 @@ impl<E: Element> Structure<E> {
     /// let dead = s.dead_force(&loads).unwrap();
     /// let u = s.reference_free_coordinates();
     /// // straight and unstressed: only the body's weight is unbalanced
-    /// let r = s.residual(u, &dead, &loads).unwrap();
+    /// let r = s.residual(u, dead.as_slice(), &loads).unwrap();
     /// let y = s.body_free_coordinates(0).unwrap().start + 1;
     /// assert!((r[y] + 0.1 * 9.81).abs() < 1e-12);
     /// ```
@@ -439,7 +439,7 @@ impl<E: Element> Structure<E> {
     /// let loads = StructureLoads::default();
     /// let dead = s.dead_force(&loads).unwrap();
     /// let u = s.reference_free_coordinates();
-    /// let (r, k) = s.residual_and_tangent(u, &dead, &loads).unwrap();
+    /// let (r, k) = s.residual_and_tangent(u, dead.as_slice(), &loads).unwrap();
     /// let k = k.to_dense();
     /// assert_eq!(k.nrows(), s.n_free());
     /// assert!((k.clone() - k.transpose()).amax() < 1e-9 * k.amax());
@@ -482,7 +482,7 @@ impl<E: Element> Structure<E> {
     /// // (strain −6 (δ/L_e) ξ (1 − ξ)): ½ EA L_e (6 δ/L_e)² / 30 = 3.6 mJ
     /// let mut down = u.to_vec();
     /// down[s.body_free_coordinates(0).unwrap().start + 1] -= 1e-3;
-    /// let d = s.potential_change(u, &down, &dead, &loads).unwrap();
+    /// let d = s.potential_change(u, &down, dead.as_slice(), &loads).unwrap();
     /// let expected = 0.5 * 300.0 * 0.05 * (6.0 * 1e-3 / 0.05f64).powi(2) / 30.0 - 0.1 * 9.81 * 1e-3;
     /// assert!((d - expected).abs() < 1e-12);
     /// ```
@@ -554,7 +554,7 @@ impl<E: Element> Structure<E> {
     /// let u = s.reference_free_coordinates();
     /// let q = s.configuration(u).unwrap();
     /// let mut f = vec![0.0; s.n_free()];
-    /// s.applied_force_into(u, &q, &dead, &loads, &mut f).unwrap();
+    /// s.applied_force_into(u, q.as_slice(), dead.as_slice(), &loads, &mut f).unwrap();
     /// // the tip force on the tip node's y (free coordinate 1 + 3·4 + 1), nothing else
     /// assert_eq!(f[14], -0.5);
     /// assert_eq!(f.iter().map(|v| v.abs()).sum::<f64>(), 0.5);
@@ -616,7 +616,7 @@ impl<E: Element> Structure<E> {
     /// let dead = s.dead_force(&loads).unwrap();
     /// let u = s.reference_free_coordinates();
     /// // the straight reference: only the weight acts, on the body's y
-    /// let f = s.generalized_force(u, &dead, &loads).unwrap();
+    /// let f = s.generalized_force(u, dead.as_slice(), &loads).unwrap();
     /// let b = s.body_coordinates(0).unwrap();
     /// assert!((f[b.start + 1] + 0.1 * 9.81).abs() < 1e-12 && f[0].abs() < 1e-12);
     /// ```
@@ -653,7 +653,7 @@ impl<E: Element> Structure<E> {
     /// let dead = s.dead_force(&loads).unwrap();
     /// let u = s.reference_free_coordinates();
     /// let eq = StaticSolver::default().solve(&s, &loads, None).unwrap();
-    /// let r = s.joint_reactions(eq.u.as_slice(), &dead, &loads).unwrap();
+    /// let r = s.joint_reactions(eq.u.as_slice(), dead.as_slice(), &loads).unwrap();
     /// // the rod holds the body up: its reaction carries the weight
     /// assert!((r[0].force_n[1] - 0.1 * 9.81).abs() < 1e-9);
     /// ```

@@ -199,7 +199,7 @@ pub trait Assembled {
     /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration().as_slice().to_vec());
     /// let dead = robot.dead_force(&loads)?;
     /// let mut f = vec![0.0; robot.n_free()];
-    /// robot.applied_force_into(&u, &q, &dead, &loads, &mut f)?;
+    /// robot.applied_force_into(&u, &q, dead.as_slice(), &loads, &mut f)?;
     /// // a weightless robot without loads: nothing applied
     /// assert!(f.iter().all(|v| *v == 0.0));
     /// # Ok::<(), softrod::Error>(())
@@ -228,7 +228,7 @@ pub trait Assembled {
     /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration().as_slice().to_vec());
     /// let dead = robot.dead_force(&loads)?;
     /// let mut k = softrod::linsolve::SymmetricMatrix::zeros(Assembled::tangent_pattern(&robot)?);
-    /// Assembled::tangent_into(&robot, &u, &q, &dead, &loads, &mut k)?;
+    /// Assembled::tangent_into(&robot, &u, &q, dead.as_slice(), &loads, &mut k)?;
     /// assert!(k.get(1, 1) > 0.0);
     /// # Ok::<(), softrod::Error>(())
     /// ```
@@ -463,8 +463,8 @@ pub trait Assembled {
     /// q1[5] += 1e-3; // node 1 lifted: bending stores energy
     /// let mut e = Vec::new();
     /// robot.energies_into(&q, &mut e)?;
-    /// let d = Assembled::potential_change_from(&robot, &u, &q, &e, &u1, &q1, &dead, &loads)?;
-    /// assert!(d > 0.0 && d == Assembled::potential_change(&robot, &u, &q, &u1, &q1, &dead, &loads)?);
+    /// let d = Assembled::potential_change_from(&robot, &u, &q, &e, &u1, &q1, dead.as_slice(), &loads)?;
+    /// assert!(d > 0.0 && d == Assembled::potential_change(&robot, &u, &q, &u1, &q1, dead.as_slice(), &loads)?);
     /// # Ok::<(), softrod::Error>(())
     /// ```
     #[allow(clippy::too_many_arguments)]

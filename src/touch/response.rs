@@ -75,7 +75,7 @@ pub(crate) fn dq_dp(robot: &Robot<PlanarCable>, loads: &Loads, q: &[f64]) -> Res
 /// let scene = five_section_scene(4);
 /// let (robot, loads) = (scene.robot()?, scene.loads()?);
 /// let q = softrod::statics::StaticSolver::default().solve(&robot, &loads, None)?.q;
-/// let r = MarkerResponse::new(&robot, &loads, &q, &[0.093, 0.465])?;
+/// let r = MarkerResponse::new(&robot, &loads, q.as_slice(), &[0.093, 0.465])?;
 /// let g = r.at(0.465)?; // 4 × 2: (markers × xy) × force xy
 /// assert!(g[(2, 0)] > g[(0, 0)] && g[(0, 0)] > 0.0);
 /// # Ok::<(), softrod::Error>(())
