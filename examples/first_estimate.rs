@@ -231,9 +231,10 @@ fn main() {
             .collect();
         for _ in 0..repeats {
             for (backend, r) in backends.iter().zip(runs.iter_mut()) {
-                let mut est = EstimatorSettings {
-                    backend: *backend,
-                    ..EstimatorSettings::default()
+                let settings = EstimatorSettings::default();
+                let mut est = softrod::estimate::EstimatorSettings {
+                    backend,
+                    ..settings
                 }
                 .build_for(&c.robot, &c.known)
                 .unwrap();

@@ -499,12 +499,11 @@ fn full_space<E: Element>(
     obj: f64,
 ) -> Option<(Vec<f64>, Vec<f64>, usize)> {
     if far.is_none() {
-        // the same problem, its settings naming the backend that runs it
-        let settings = EstimatorSettings {
-            backend: Backend::Sqp,
-            ..core.settings().clone()
-        };
-        let sqp = SqpEstimator::new(core.robot(), core.known(), &settings);
+        let sqp = SqpEstimator::new(
+            core.robot().clone(),
+            core.known().clone(),
+            core.settings().clone(),
+        );
         *far = Some(Box::new(sqp.ok()?));
     }
     let sqp = far.as_mut()?;
