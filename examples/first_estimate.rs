@@ -233,7 +233,7 @@ fn main() {
             for (backend, r) in backends.iter().zip(runs.iter_mut()) {
                 let settings = EstimatorSettings::default();
                 let mut est = softrod::estimate::EstimatorSettings {
-                    backend,
+                    backend: *backend,
                     ..settings
                 }
                 .build_for(&c.robot, &c.known)
