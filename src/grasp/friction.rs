@@ -233,41 +233,14 @@ pub fn hold_check(
     let p = CscMatrix::zeros((nx, nx));
     let mut q = vec![0.0; nx];
     q[is] = -1.0;
-    let settings = DefaultSettingsBuilder::default()
-        .verbose(false)
-        .tol_gap_abs(1e-10)
-        .tol_gap_rel(1e-10)
-        .tol_feas(1e-10)
-        .max_iter(200)
-        .build()
-        .map_err(|e| Error::invalid("hold_check settings", format!("{e:?}"), "rejected"))?;
-    let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, settings).map_err(|e| {
-        Error::invalid(
-            "hold_check",
-            format!("{e:?}"),
-            "clarabel rejected the program",
-        )
-    })?;
-    solver.solve();
-    let sol = &solver.solution;
-    if !matches!(
-        sol.status,
-        SolverStatus::Solved | SolverStatus::AlmostSolved
-    ) || !sol.x.iter().all(|v| v.is_finite())
-    {
-        return Err(Error::invalid(
-            "hold_check",
-            format!("{:?}", sol.status),
-            "clarabel did not solve the program",
-        ));
-    }
-    let s = sol.x[is].clamp(0.0, WEIGHT_FACTOR_CAP);
+    let x = solve_cone_program("hold_check", &p, &q, &a, &b, &cones, 1e-10)?;
+    let s = x[is].clamp(0.0, WEIGHT_FACTOR_CAP);
     Ok(HoldCheck {
         // the interior-point tolerance: a threshold case within 1e-8 holds
         holds: s >= 1.0 - 1e-8,
         weight_factor: s,
-        normal_forces_n: (0..k).map(|i| sol.x[2 * i] * weight).collect(),
-        friction_forces_n: (0..k).map(|i| sol.x[2 * i + 1] * weight).collect(),
+        normal_forces_n: (0..k).map(|i| x[2 * i] * weight).collect(),
+        friction_forces_n: (0..k).map(|i| x[2 * i + 1] * weight).collect(),
     })
 }
 
@@ -289,6 +262,45 @@ pub fn hold_check(
 /// ```
 pub fn disc_pinch_threshold_n(mu: f64, max_normal_force_n: f64, theta_rad: f64) -> f64 {
     (2.0 * max_normal_force_n * (mu * theta_rad.cos() - theta_rad.sin())).max(0.0)
+}
+
+/// Solves the cone program `min ½xᵀPx + qᵀx` s.t. `b − Ax ∈ cones` with
+/// clarabel (gap tolerance `tol_gap_abs`, relative gap and feasibility
+/// 1e-10, 200 iterations) and returns `x`; `what` names the program in the
+/// error when clarabel rejects it or does not solve it.
+pub(crate) fn solve_cone_program(
+    what: &str,
+    p: &CscMatrix<f64>,
+    q: &[f64],
+    a: &CscMatrix<f64>,
+    b: &[f64],
+    cones: &[SupportedConeT<f64>],
+    tol_gap_abs: f64,
+) -> Result<Vec<f64>> {
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .tol_gap_abs(tol_gap_abs)
+        .tol_gap_rel(1e-10)
+        .tol_feas(1e-10)
+        .max_iter(200)
+        .build()
+        .map_err(|e| Error::invalid(format!("{what} settings"), format!("{e:?}"), "rejected"))?;
+    let mut solver = DefaultSolver::new(p, q, a, b, cones, settings)
+        .map_err(|e| Error::invalid(what, format!("{e:?}"), "clarabel rejected the program"))?;
+    solver.solve();
+    let sol = &solver.solution;
+    if !matches!(
+        sol.status,
+        SolverStatus::Solved | SolverStatus::AlmostSolved
+    ) || !sol.x.iter().all(|v| v.is_finite())
+    {
+        return Err(Error::invalid(
+            what,
+            format!("{:?}", sol.status),
+            "clarabel did not solve the program",
+        ));
+    }
+    Ok(sol.x.clone())
 }
 
 #[cfg(test)]

@@ -29,13 +29,10 @@
 //! while it turns does not slip.
 
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{
-    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SecondOrderConeT,
-    SolverStatus, SupportedConeT,
-};
+use clarabel::solver::{NonnegativeConeT, SecondOrderConeT, SupportedConeT};
 
 use crate::error::{Error, Result};
-use crate::grasp::friction::{hold_check, FrictionContact, HoldCheck};
+use crate::grasp::friction::{hold_check, solve_cone_program, FrictionContact, HoldCheck};
 use crate::grasp::object::{GraspObject, Pose};
 
 /// The smallest step, as a fraction of the step length.
@@ -116,38 +113,11 @@ pub(crate) fn least_constraint_acceleration(
     cones.extend((0..k).map(|_| SecondOrderConeT(2)));
     let amat = CscMatrix::new_from_triplets(row, nx, ri, ci, vi);
     let p = CscMatrix::new_from_triplets(nx, nx, pr, pc, pv);
-    let settings = DefaultSettingsBuilder::default()
-        .verbose(false)
-        .tol_gap_abs(1e-12)
-        .tol_gap_rel(1e-10)
-        .tol_feas(1e-10)
-        .max_iter(200)
-        .build()
-        .map_err(|e| Error::invalid("least_constraint settings", format!("{e:?}"), "rejected"))?;
-    let mut solver = DefaultSolver::new(&p, &q, &amat, &b, &cones, settings).map_err(|e| {
-        Error::invalid(
-            "least_constraint",
-            format!("{e:?}"),
-            "clarabel rejected the program",
-        )
-    })?;
-    solver.solve();
-    let sol = &solver.solution;
-    if !matches!(
-        sol.status,
-        SolverStatus::Solved | SolverStatus::AlmostSolved
-    ) || !sol.x.iter().all(|v| v.is_finite())
-    {
-        return Err(Error::invalid(
-            "least_constraint",
-            format!("{:?}", sol.status),
-            "clarabel did not solve the program",
-        ));
-    }
+    let x = solve_cone_program("least_constraint", &p, &q, &amat, &b, &cones, 1e-12)?;
     let mut r = w;
     for (j, col) in a.iter().enumerate() {
         for d in 0..3 {
-            r[d] += col[d] * sol.x[j];
+            r[d] += col[d] * x[j];
         }
     }
     Ok([
