@@ -35,7 +35,7 @@ fn bench(c: &mut Criterion) {
     let spec = ParallelSpec::default();
     let full = spec.build_full().unwrap();
     let cable = spec.build_cable().unwrap();
-    let p = fig8_configurations(&spec)[1].clone();
+    let p = fig8_configurations(&spec)[1].as_slice().to_vec();
     let payload = [0.0, 0.0, -0.981];
     let loads = full.loads(&p, payload, [0.0; 3]).unwrap();
     let cable_loads = cable.loads(&p, payload, [0.0; 3]).unwrap();

@@ -76,8 +76,8 @@ fn scene_case(name: &str, lines: Vec<LineLoad>, points: Vec<PointForce>) -> Case
         q = solver.solve(&fine, &l, Some(q.as_slice())).unwrap().q;
     }
     let markers = sweep::marker_arcs(robot.length(), 5)
-        .into_iter()
-        .map(|s| {
+        .iter()
+        .map(|&s| {
             MarkerObservation::at_arc(s, fine.position_at(q.as_slice(), s).unwrap().data.into())
         })
         .collect();
@@ -118,7 +118,7 @@ fn scale_line(l: &LineLoad, t: f64) -> LineLoad {
 fn reference_case(name: &str) -> Case {
     let r = Reference::embedded(name).unwrap();
     let robot = sweep::model_robot(&r, 20).unwrap();
-    let obs = sweep::observe(&r, &sweep::marker_arcs(r.length_m, 5), 1e-5, 7);
+    let obs = sweep::observe(&r, sweep::marker_arcs(r.length_m, 5).as_slice(), 1e-5, 7);
     Case {
         name: name.into(),
         robot,

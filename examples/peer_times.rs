@@ -119,7 +119,7 @@ fn estimate() -> Vec<Value> {
         let r = Reference::embedded(name).unwrap();
         let robot = sweep::model_robot(&r, n).unwrap();
         let arcs = sweep::marker_arcs(r.length_m, 5);
-        let obs = sweep::observe(&r, &arcs, sigma, 7);
+        let obs = sweep::observe(&r, arcs.as_slice(), sigma, 7);
         let base = EstimatorSettings {
             noise_sigma_m: sigma,
             ..EstimatorSettings::default()

@@ -46,16 +46,16 @@ fn ik_jacobian_and_dq_dp_match_finite_differences() {
     let f = some_load(n);
     let p = [35e3, 5e3, 10e3, 40e3];
     let (q, _) = ik.forward(&p, &f, None).unwrap();
-    let jac = ik.jacobian(&q, &p, &f).unwrap();
-    let dqdp = ik.dq_dp(&q, &p, &f).unwrap();
+    let jac = ik.jacobian(q.as_slice(), &p, &f).unwrap();
+    let dqdp = ik.dq_dp(q.as_slice(), &p, &f).unwrap();
     let h = 10.0; // Pa
     let mut worst_q = 0.0f64;
     for c in 0..4 {
         let (mut pp, mut pm) = (p, p);
         pp[c] += h;
         pm[c] -= h;
-        let (qp, xp) = ik.forward(&pp, &f, Some(&q)).unwrap();
-        let (qm, xm) = ik.forward(&pm, &f, Some(&q)).unwrap();
+        let (qp, xp) = ik.forward(&pp, &f, Some(q.as_slice())).unwrap();
+        let (qm, xm) = ik.forward(&pm, &f, Some(q.as_slice())).unwrap();
         for k in 0..2 {
             let fd = (xp[k] - xm[k]) / (2.0 * h);
             assert!(
@@ -82,7 +82,7 @@ fn ik_reaches_targets_with_chambers_at_their_bounds_exactly() {
     // squares puts each antagonist exactly on its lower bound
     let p_true = [100e3, 0.0, 20e3, 0.0];
     let (q_t, x_t) = ik.forward(&p_true, &zero, None).unwrap();
-    let sol = ik.solve(&x_t, &zero).unwrap();
+    let sol = ik.solve(x_t.as_slice(), &zero).unwrap();
     assert!(sol.status.is_reached(), "{:?}", sol.status);
     assert!(sol.status.error_m() < 1e-7);
     assert!(
@@ -100,11 +100,13 @@ fn ik_reaches_targets_with_chambers_at_their_bounds_exactly() {
         assert_eq!(sol.bounds[c], PressureBound::Min);
     }
     // equilibrium holds at the solution: the tip is where the IK says
-    let (_, x) = ik.forward(&sol.pressures_pa, &zero, None).unwrap();
+    let (_, x) = ik
+        .forward(sol.pressures_pa.as_slice(), &zero, None)
+        .unwrap();
     assert!((x[0] - sol.effector_m[0]).abs() < 1e-12 && (x[1] - sol.effector_m[1]).abs() < 1e-12);
     // 2 mm further in the direction more pressure in chamber 0 would move the
     // tip: the closest pose has chamber 0 exactly at its maximum
-    let jac = ik.jacobian(&q_t, &p_true, &zero).unwrap();
+    let jac = ik.jacobian(q_t.as_slice(), &p_true, &zero).unwrap();
     let dir = jac.column(0).normalize();
     let beyond = [x_t[0] + 2e-3 * dir[0], x_t[1] + 2e-3 * dir[1]];
     let sol = ik.solve(&beyond, &zero).unwrap();
@@ -127,10 +129,12 @@ fn ik_with_a_load_field_compensates_it() {
     let target = [0.21, 0.095];
     let sol = ik.solve(&target, &f).unwrap();
     assert!(sol.status.is_reached(), "{:?}", sol.status);
-    let (_, x) = ik.forward(&sol.pressures_pa, &f, None).unwrap();
+    let (_, x) = ik.forward(sol.pressures_pa.as_slice(), &f, None).unwrap();
     assert!((x[0] - target[0]).abs() < 1e-7 && (x[1] - target[1]).abs() < 1e-7);
     // without the load the same pressures miss the target by millimetres
-    let (_, x0) = ik.forward(&sol.pressures_pa, &vec![0.0; n], None).unwrap();
+    let (_, x0) = ik
+        .forward(sol.pressures_pa.as_slice(), &vec![0.0; n], None)
+        .unwrap();
     assert!(((x0[0] - target[0]).powi(2) + (x0[1] - target[1]).powi(2)).sqrt() > 1e-3);
 }
 
@@ -353,7 +357,10 @@ fn bad_input_is_a_typed_error_naming_the_field() {
     let mut plant = SimulatedPlant::new(&scene, &arcs, PlantSettings::default()).unwrap();
     let t3 = Trajectory::new(vec![0.0, 1.0], vec![vec![0.2, 0.0, 0.0]; 2]).unwrap();
     assert_eq!(
-        field(lp.run(&mut plant, &t3, |_| None).unwrap_err()),
+        field(
+            lp.run(&mut plant, &t3, |_| None::<nalgebra::Vector2<f64>>)
+                .unwrap_err()
+        ),
         "trajectory.points_m[0]"
     );
     let e =
@@ -392,7 +399,9 @@ fn virtual_payload_recorded_without_payload_leaves_the_real_one() {
             LoopSettings::default(),
         )
         .unwrap();
-        let ts = lp.run(&mut plant, &traj, |_| None).unwrap();
+        let ts = lp
+            .run(&mut plant, &traj, |_| None::<nalgebra::Vector2<f64>>)
+            .unwrap();
         (lp, ts)
     };
     let (_, free) = run(PayloadSchedule::none());
@@ -405,7 +414,7 @@ fn virtual_payload_recorded_without_payload_leaves_the_real_one() {
     let (mut raw, mut sub, mut k) = (0.0, 0.0, 0.0);
     for s in loaded.samples.iter().filter(|s| s.time_s >= 2.0) {
         raw += s.f_bar_resultant_n[1];
-        sub += lp.resultant(&vp.subtract(&s.desired_m, &s.f_bar).unwrap())[1];
+        sub += lp.resultant(vp.subtract(&s.desired_m, &s.f_bar).unwrap().as_slice())[1];
         k += 1.0;
     }
     let (raw, sub) = (raw / k, sub / k);

@@ -181,7 +181,9 @@ fn a_plant_failure_ends_the_run_with_a_row_and_the_watchdog_too() {
         ..Default::default()
     };
     let mut lp = ClosedLoop::new(robot, scene.loads().unwrap(), &arcs, settings).unwrap();
-    let ts = lp.run(&mut plant, &traj, |_| None).unwrap();
+    let ts = lp
+        .run(&mut plant, &traj, |_| None::<nalgebra::Vector2<f64>>)
+        .unwrap();
     assert_eq!(ts.samples.len(), 1);
     assert!(
         matches!(ts.samples[0].status, StepStatus::Aborted { error_m } if error_m > 1e-9),
@@ -258,7 +260,10 @@ fn loop_and_sweep_bad_input_names_the_field() {
         Trajectory::new(vec![0.0, 0.01], vec![vec![0.19, 0.12]; 2]).unwrap(),
     ] {
         assert_eq!(
-            field(lp.run(&mut plant, &traj, |_| None).unwrap_err()),
+            field(
+                lp.run(&mut plant, &traj, |_| None::<nalgebra::Vector2<f64>>)
+                    .unwrap_err()
+            ),
             "trajectory.times_s"
         );
     }

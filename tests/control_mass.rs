@@ -31,13 +31,13 @@ fn mass_jacobian_matches_finite_differences() {
             fm[c] -= h;
             let (_, xp) = est.forward(&p, &fp).unwrap();
             let (_, xm) = est.forward(&p, &fm).unwrap();
-            let scale = jac[0][c].abs().max(jac[1][c].abs());
+            let scale = jac[(0, c)].abs().max(jac[(1, c)].abs());
             for r in 0..2 {
                 let fd = (xp[r] - xm[r]) / (2.0 * h);
                 assert!(
-                    (fd - jac[r][c]).abs() <= 1e-6 * scale,
+                    (fd - jac[(r, c)]).abs() <= 1e-6 * scale,
                     "s {load_s}: dx{r}/dF{c} fd {fd:e} vs {:e}",
-                    jac[r][c]
+                    jac[(r, c)]
                 );
             }
         }

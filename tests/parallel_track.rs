@@ -87,7 +87,9 @@ fn platform_sensitivities_match_finite_differences() {
         ..ParallelSpec::default()
     };
     let robot = spec.build_full().unwrap();
-    let mut p = softrod::control::parallel::centre_pressures(&spec);
+    let mut p = softrod::control::parallel::centre_pressures(&spec)
+        .as_slice()
+        .to_vec();
     // every chamber inside its bounds, so central differences stay in them
     p.iter_mut()
         .enumerate()

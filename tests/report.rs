@@ -118,7 +118,7 @@ fn quick_report_writes_every_file_and_records_every_case() {
     let scene = auto_scene(&reference, g.noise_m, tol).unwrap();
     let obs = observe(
         &reference,
-        &marker_arcs(reference.length_m, g.markers[0]),
+        marker_arcs(reference.length_m, g.markers[0]).as_slice(),
         g.noise_m,
         7,
     );

@@ -27,7 +27,8 @@ fn bent() -> Vec<f64> {
 fn disk() -> Obstacles {
     // the plant's contact-free shape at the bend: the point and normal at s = 0.3 m
     let scene = five_section_scene(4);
-    let mut free = SimulatedPlant::new(&scene, &marker_arcs(6), PlantSettings::default()).unwrap();
+    let mut free =
+        SimulatedPlant::new(&scene, marker_arcs(6).as_slice(), PlantSettings::default()).unwrap();
     free.command(&bent()).unwrap();
     for _ in 0..10 {
         free.advance(0.05).unwrap();
@@ -57,7 +58,8 @@ fn disk() -> Obstacles {
 fn plant_among_obstacles_touches_without_penetrating() {
     let scene = five_section_scene(4);
     let arcs = marker_arcs(6);
-    let mut plant = SimulatedPlant::new(&scene, &arcs, PlantSettings::default())
+    let arcs = arcs.as_slice();
+    let mut plant = SimulatedPlant::new(&scene, arcs, PlantSettings::default())
         .unwrap()
         .with_obstacles(disk())
         .unwrap();
@@ -76,7 +78,7 @@ fn plant_among_obstacles_touches_without_penetrating() {
     assert!((k.s_m - 0.3).abs() < 0.01 && k.force_n > 0.01, "{k:?}");
     // the contact force holds the plant away from its free shape: without
     // the disk the same pressures bend it further
-    let mut free = SimulatedPlant::new(&scene, &arcs, PlantSettings::default()).unwrap();
+    let mut free = SimulatedPlant::new(&scene, arcs, PlantSettings::default()).unwrap();
     free.command(&bent()).unwrap();
     for _ in 0..10 {
         free.advance(0.05).unwrap();
@@ -89,13 +91,14 @@ fn plant_among_obstacles_touches_without_penetrating() {
 fn plant_contact_that_does_not_converge_is_an_error_not_a_shape() {
     let scene = five_section_scene(4);
     let arcs = marker_arcs(6);
+    let arcs = arcs.as_slice();
     let starved = ContactSettings {
         max_iterations: 1,
         max_newton_iterations: 1,
         ..ContactSettings::default()
     };
     // hanging straight, far from the disk: solved without the contact solver
-    let mut plant = SimulatedPlant::new(&scene, &arcs, PlantSettings::default())
+    let mut plant = SimulatedPlant::new(&scene, arcs, PlantSettings::default())
         .unwrap()
         .with_contact(PlantContact::new(disk(), starved).unwrap())
         .unwrap();
@@ -120,7 +123,8 @@ fn plant_contact_that_does_not_converge_is_an_error_not_a_shape() {
 #[test]
 fn obstacle_overlapping_the_plant_is_refused_by_field() {
     let scene = five_section_scene(4);
-    let plant = SimulatedPlant::new(&scene, &marker_arcs(6), PlantSettings::default()).unwrap();
+    let plant =
+        SimulatedPlant::new(&scene, marker_arcs(6).as_slice(), PlantSettings::default()).unwrap();
     let on_robot = Obstacles::new(
         vec![
             Obstacle::Circle {
@@ -147,7 +151,8 @@ fn marker_response_matches_finite_differences() {
     let solver = StaticSolver::default();
     let q = solver.solve(&robot, &loads, None).unwrap().q;
     let arcs = marker_arcs(6);
-    let resp = MarkerResponse::new(&robot, &loads, q.as_slice(), &arcs).unwrap();
+    let arcs = arcs.as_slice();
+    let resp = MarkerResponse::new(&robot, &loads, q.as_slice(), arcs).unwrap();
     let markers = |q: &[f64]| -> Vec<f64> {
         arcs.iter()
             .flat_map(|&s| robot.position_at(q, s).unwrap().data.as_vec().clone())
@@ -193,7 +198,8 @@ fn marker_response_matches_finite_differences() {
 fn calibration_recovers_the_plants_stiffness_and_gain() {
     let scene = five_section_scene(4);
     let arcs = marker_arcs(6);
-    let mut plant = SimulatedPlant::new(&scene, &arcs, PlantSettings::default()).unwrap();
+    let arcs = arcs.as_slice();
+    let mut plant = SimulatedPlant::new(&scene, arcs, PlantSettings::default()).unwrap();
     let p = bent();
     let mut other = p.clone();
     other.rotate_right(1);
@@ -208,7 +214,7 @@ fn calibration_recovers_the_plants_stiffness_and_gain() {
             markers_m: plant.advance(0.05).unwrap().positions_m,
         });
     }
-    let c = calibrate(&scene, &arcs, &frames).unwrap();
+    let c = calibrate(&scene, arcs, &frames).unwrap();
     // the plant: EI x 1.15, gain x 0.90 (and a finer mesh, EA x 0.95, noise)
     assert!((c.ei_factor / 1.15 - 1.0).abs() < 0.03, "{c:?}");
     assert!((c.gain_factor / 0.90 - 1.0).abs() < 0.03, "{c:?}");
@@ -319,7 +325,8 @@ fn avoid(
     use softrod::touch::{calibrate_on_free_plant, run_avoidance, AvoidSettings};
     let scene = five_section_scene(4);
     let arcs = marker_arcs(6);
-    let cal = calibrate_on_free_plant(&scene, &arcs, &PlantSettings::default())?;
+    let arcs = arcs.as_slice();
+    let cal = calibrate_on_free_plant(&scene, arcs, &PlantSettings::default())?;
     let obstacles = Obstacles::new(
         vec![Obstacle::Circle {
             center_m: center,
@@ -328,13 +335,13 @@ fn avoid(
         ROD_RADIUS_M,
     )?;
     let mut plant =
-        SimulatedPlant::new(&scene, &arcs, PlantSettings::default())?.with_obstacles(obstacles)?;
+        SimulatedPlant::new(&scene, arcs, PlantSettings::default())?.with_obstacles(obstacles)?;
     let settings = AvoidSettings {
         duration_s,
         touch_feedback: feedback,
         ..AvoidSettings::default()
     };
-    run_avoidance(&scene, &cal, &arcs, &mut plant, goal, &settings)
+    run_avoidance(&scene, &cal, arcs, &mut plant, goal, &settings)
 }
 
 #[test]
@@ -428,7 +435,7 @@ fn avoidance_bad_input_is_typed_and_an_unreachable_goal_says_so() {
     .unwrap();
     let plant = SimulatedPlant::new(
         &five_section_scene(4),
-        &marker_arcs(6),
+        marker_arcs(6).as_slice(),
         PlantSettings::default(),
     )
     .unwrap();

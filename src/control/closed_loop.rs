@@ -16,6 +16,7 @@
 
 use std::time::Instant;
 
+use nalgebra::{DVector, Dim, RawStorage, Vector};
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
@@ -244,6 +245,71 @@ pub struct LoopSample {
     pub status: StepStatus,
 }
 
+impl LoopSample {
+    /// [`LoopSample::desired_m`] as a vector (m).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::control::{EstimateFlag, IkStatus, LoopSample, StepStatus};
+    /// let s = LoopSample {
+    ///     time_s: 0.1, desired_m: vec![0.2, 0.05], measured_tip_m: vec![0.2, 0.049],
+    ///     true_tip_m: Some(vec![0.2, 0.0495]), f_bar: vec![0.0; 12],
+    ///     f_bar_resultant_n: vec![0.0, -0.1], f_hat_resultant_n: vec![0.0, -0.09],
+    ///     pressures_pa: vec![1e4, 0.0, 0.0, 2e4], ik: IkStatus::NotSolved,
+    ///     estimate: EstimateFlag::NotRun, step_time_s: 0.0, status: StepStatus::Ok,
+    /// };
+    /// assert_eq!(s.desired(), nalgebra::dvector![0.2, 0.05]);
+    /// assert_eq!(s.measured_tip(), nalgebra::dvector![0.2, 0.049]);
+    /// assert_eq!(s.true_tip(), Some(nalgebra::dvector![0.2, 0.0495]));
+    /// assert_eq!(s.f_bar_resultant(), nalgebra::dvector![0.0, -0.1]);
+    /// assert_eq!(s.f_hat_resultant(), nalgebra::dvector![0.0, -0.09]);
+    /// assert_eq!(s.pressures()[3], 2e4);
+    /// ```
+    pub fn desired(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.desired_m)
+    }
+
+    /// [`LoopSample::measured_tip_m`] as a vector (m).
+    ///
+    /// # Example
+    /// See [`LoopSample::desired`].
+    pub fn measured_tip(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.measured_tip_m)
+    }
+
+    /// [`LoopSample::true_tip_m`] as a vector (m), if known.
+    ///
+    /// # Example
+    /// See [`LoopSample::desired`].
+    pub fn true_tip(&self) -> Option<DVector<f64>> {
+        self.true_tip_m.as_deref().map(DVector::from_column_slice)
+    }
+
+    /// [`LoopSample::f_bar_resultant_n`] as a vector (N).
+    ///
+    /// # Example
+    /// See [`LoopSample::desired`].
+    pub fn f_bar_resultant(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.f_bar_resultant_n)
+    }
+
+    /// [`LoopSample::f_hat_resultant_n`] as a vector (N).
+    ///
+    /// # Example
+    /// See [`LoopSample::desired`].
+    pub fn f_hat_resultant(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.f_hat_resultant_n)
+    }
+
+    /// [`LoopSample::pressures_pa`] as a vector (Pa).
+    ///
+    /// # Example
+    /// See [`LoopSample::desired`].
+    pub fn pressures(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.pressures_pa)
+    }
+}
+
 /// The samples of a run.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct TimeSeries {
@@ -262,9 +328,18 @@ impl TimeSeries {
 
     /// Tracking errors `|tip − x_d|` (m) from `from_s` on, of the true tip
     /// where known, else of the measured one; a row whose plant failed is
-    /// left out (its tip is not known).
-    pub fn errors_after(&self, from_s: f64) -> Vec<f64> {
-        self.samples
+    /// left out (its tip is not known). One entry per row, in time order.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::control::TimeSeries;
+    /// let ts = TimeSeries::default();
+    /// assert_eq!(ts.errors_after(0.0).len(), 0);
+    /// assert_eq!(ts.mean_max_after(0.0), (0.0, 0.0));
+    /// ```
+    pub fn errors_after(&self, from_s: f64) -> DVector<f64> {
+        let e: Vec<f64> = self
+            .samples
             .iter()
             .filter(|s| s.time_s >= from_s)
             .filter(|s| s.status.tip_known())
@@ -276,7 +351,8 @@ impl TimeSeries {
                     .sum::<f64>()
                     .sqrt()
             })
-            .collect()
+            .collect();
+        DVector::from_vec(e)
     }
 
     /// Mean and maximum tracking error from `from_s` on (m); zeros if no sample.
@@ -381,15 +457,32 @@ impl<E: Element + 'static> ClosedLoop<E> {
         self.updater.estimate()
     }
 
-    /// Resultant `∫ w dX` of a distributed load field `f` on the model (N).
-    pub fn resultant(&self, f: &[f64]) -> Vec<f64> {
+    /// Resultant `∫ w dX` of a distributed load field `f` on the model (N,
+    /// `DIM` components; NaN for a field of the wrong length).
+    ///
+    /// # Example
+    /// A uniform 1 N/m downwards on the 0.24 m robot:
+    /// ```
+    /// use softrod::control::{ClosedLoop, LoopSettings};
+    /// use softrod::scene::Scene;
+    /// let scene = Scene::two_section();
+    /// let robot = scene.robot()?;
+    /// let n = robot.n_q();
+    /// let lp = ClosedLoop::new(robot, scene.loads()?, &[0.24], LoopSettings::default())?;
+    /// // the field of (8) holding w = (0, -1) N/m at every node (value rows)
+    /// let f: Vec<f64> = (0..n).map(|i| if i % 4 == 1 { -1.0 } else { 0.0 }).collect();
+    /// let r = lp.resultant(&f);
+    /// assert!(r[0].abs() < 1e-12 && (r[1] + 0.24).abs() < 1e-12, "{r}");
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn resultant(&self, f: &[f64]) -> DVector<f64> {
         let d = E::DIM;
         let Ok(g) = self.model.apply_load_gram(f) else {
-            return vec![f64::NAN; d];
+            return DVector::from_element(d, f64::NAN);
         };
         // the generalized force's position rows sum to ∫ w dX
         let nd = E::NODE_DOFS;
-        (0..d).map(|k| g.iter().skip(k).step_by(nd).sum()).collect()
+        DVector::from_iterator(d, (0..d).map(|k| g.iter().skip(k).step_by(nd).sum()))
     }
 
     /// The estimator's `F̄` from the markers of `frame`; `(F̄, flag)` with
@@ -471,7 +564,7 @@ impl<E: Element + 'static> ClosedLoop<E> {
                 let (mut f_bar, flag) = self.estimate(frame);
                 if let Some(vp) = &self.virtual_payload {
                     if let Ok(f) = vp.subtract(x_now, &f_bar) {
-                        f_bar = f;
+                        f_bar = f.data.into();
                     }
                 }
                 let f_hat = self.updater.step(&f_bar)?.to_vec();
@@ -479,7 +572,7 @@ impl<E: Element + 'static> ClosedLoop<E> {
             }
         };
         let (pressures_pa, ik, status) = match self.ik.solve(x_next, &f_hat) {
-            Ok(sol) => (sol.pressures_pa, sol.status, StepStatus::Ok),
+            Ok(sol) => (sol.pressures_pa.data.into(), sol.status, StepStatus::Ok),
             Err(e) => (
                 self.commanded_pa.clone(),
                 IkStatus::NotSolved,
@@ -495,9 +588,9 @@ impl<E: Element + 'static> ClosedLoop<E> {
             desired_m: x_now.to_vec(),
             measured_tip_m: frame.positions_m.last().cloned().unwrap_or_default(),
             true_tip_m: None,
-            f_bar_resultant_n: self.resultant(&f_bar),
+            f_bar_resultant_n: self.resultant(&f_bar).data.into(),
             f_bar,
-            f_hat_resultant_n: self.resultant(&f_hat),
+            f_hat_resultant_n: self.resultant(&f_hat).data.into(),
             pressures_pa,
             ik,
             estimate: flag,
@@ -513,8 +606,9 @@ impl<E: Element + 'static> ClosedLoop<E> {
 
     /// Runs the loop on `plant` along `trajectory`, from its start to its
     /// end at the control rate; `inspect` is called on the plant after
-    /// every frame and may return the true tip for scoring (it must not
-    /// feed the controller).
+    /// every frame and may return the true tip for scoring (any nalgebra
+    /// vector of the robot's dimension, e.g. [`SimulatedPlant::true_tip_m`](crate::plant::SimulatedPlant::true_tip_m)'s
+    /// `Vector2`; it must not feed the controller).
     ///
     /// A plant failure over an interval ends the run with a last row of
     /// status [`StepStatus::PlantFailed`]; an inverse kinematics that finds
@@ -528,12 +622,13 @@ impl<E: Element + 'static> ClosedLoop<E> {
     /// one control interval (`trajectory.times_s`); the plant's refusal of
     /// the first command (pressures outside its bounds); the inverse
     /// kinematics' errors at the start point (no equilibrium to start from).
-    pub fn run<P: Plant>(
+    pub fn run<P: Plant, D: Dim, S: RawStorage<f64, D>>(
         &mut self,
         plant: &mut P,
         trajectory: &Trajectory,
-        mut inspect: impl FnMut(&P) -> Option<Vec<f64>>,
+        mut inspect: impl FnMut(&P) -> Option<Vector<f64, D, S>>,
     ) -> Result<TimeSeries> {
+        let mut inspect = |p: &P| inspect(p).map(|v| v.iter().copied().collect::<Vec<f64>>());
         trajectory.validate()?;
         check_len("trajectory.points_m[0]", E::DIM, trajectory.dim())?;
         check_len(
@@ -557,8 +652,8 @@ impl<E: Element + 'static> ClosedLoop<E> {
         }
         let zeros = vec![0.0; self.model.n_q()];
         // the first command: the start point, nothing estimated yet
-        let first = self.ik.solve(&trajectory.at(t0), &zeros)?;
-        self.commanded_pa.clone_from(&first.pressures_pa);
+        let first = self.ik.solve(trajectory.at(t0).as_slice(), &zeros)?;
+        self.commanded_pa = first.pressures_pa.data.into();
         plant.command(&self.commanded_pa)?;
         let mut series = TimeSeries::default();
         let mut last_tip_m: Vec<f64> = Vec::new();
@@ -571,7 +666,7 @@ impl<E: Element + 'static> ClosedLoop<E> {
                     let last = series.samples.last();
                     series.samples.push(LoopSample {
                         time_s: t,
-                        desired_m: trajectory.at(t),
+                        desired_m: trajectory.at(t).data.into(),
                         measured_tip_m: last_tip_m.clone(),
                         true_tip_m: inspect(plant),
                         f_bar: zeros.clone(),
@@ -606,7 +701,7 @@ impl<E: Element + 'static> ClosedLoop<E> {
                     let last = series.samples.last();
                     series.samples.push(LoopSample {
                         time_s: t,
-                        desired_m: x,
+                        desired_m: x.data.into(),
                         measured_tip_m: tip.clone(),
                         true_tip_m,
                         f_bar: zeros.clone(),
@@ -622,8 +717,11 @@ impl<E: Element + 'static> ClosedLoop<E> {
                     break;
                 }
             }
-            let mut sample =
-                self.control_step(&frame, &trajectory.at(t), &trajectory.at(t + dt))?;
+            let mut sample = self.control_step(
+                &frame,
+                trajectory.at(t).as_slice(),
+                trajectory.at(t + dt).as_slice(),
+            )?;
             sample.time_s = t;
             sample.true_tip_m = true_tip_m;
             last_tip_m.clone_from(&sample.measured_tip_m);

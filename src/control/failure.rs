@@ -366,7 +366,7 @@ pub fn plant_reach_m(
             k as f64 / (points - 1) as f64
         };
         let x = trajectory.at(settings.hold_s + frac * settings.duration_s);
-        let sol = ik.solve(&x, &zero)?;
+        let sol = ik.solve(x.as_slice(), &zero)?;
         worst = worst.max(sol.status.error_m());
     }
     Ok(worst)

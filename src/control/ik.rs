@@ -71,14 +71,27 @@ use super::ik_settings::{IkSettings, IkStatus, PressureBound};
 use super::{adapter, boxqp, corrector};
 
 /// The result of [`InverseKinematics::solve`].
+///
+/// # Example
+/// ```
+/// use softrod::{control::{InverseKinematics, IkSettings}, scene::Scene};
+/// let scene = Scene::two_section();
+/// let robot = scene.robot()?;
+/// let (n, np) = (robot.n_q(), robot.n_pressures());
+/// let mut ik = InverseKinematics::new(robot, scene.loads()?, IkSettings::default())?;
+/// let sol = ik.solve(&[0.20, 0.08], &vec![0.0; n])?;
+/// assert_eq!((sol.pressures_pa.len(), sol.q.len(), sol.effector_m.len()), (np, n, 2));
+/// assert!((sol.effector_m - nalgebra::dvector![0.20, 0.08]).norm() < 1e-7);
+/// # Ok::<(), softrod::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct IkSolution {
     /// Chamber pressures (Pa), within their bounds.
-    pub pressures_pa: Vec<f64>,
+    pub pressures_pa: DVector<f64>,
     /// The equilibrium shape at those pressures (all coordinates).
-    pub q: Vec<f64>,
-    /// End-effector position (m).
-    pub effector_m: Vec<f64>,
+    pub q: DVector<f64>,
+    /// End-effector position (m, `DIM` components).
+    pub effector_m: DVector<f64>,
     /// How the solve ended.
     pub status: IkStatus,
     /// Newton iterations taken.
@@ -101,6 +114,9 @@ pub struct IkSolution {
 /// let sol = ik.solve(&[0.20, 0.08], &vec![0.0; n])?;
 /// assert!(sol.status.is_reached());
 /// assert!((sol.effector_m[0] - 0.20).abs() < 1e-7 && (sol.effector_m[1] - 0.08).abs() < 1e-7);
+/// // the equilibrium at those pressures puts the end effector there
+/// let (q, x) = ik.forward(sol.pressures_pa.as_slice(), &vec![0.0; n], None)?;
+/// assert!((x - &sol.effector_m).norm() < 1e-9 && q.len() == n);
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone)]
@@ -268,11 +284,25 @@ impl<E: Element> InverseKinematics<E> {
 
     /// The equilibrium at pressures `p` (Pa) and load field `f_hat` (the
     /// distributed `F` of (8), `n_q` entries), from `q0` or cold; its shape
-    /// and end-effector position.
+    /// `q` and end-effector position (m, `DIM` components).
     ///
     /// # Errors
     /// The errors of [`StaticSolver::solve_with`] (bad loads, no equilibrium).
+    ///
+    /// # Example
+    /// See [`InverseKinematics`].
     pub fn forward(
+        &mut self,
+        p: &[f64],
+        f_hat: &[f64],
+        q0: Option<&[f64]>,
+    ) -> Result<(DVector<f64>, DVector<f64>)> {
+        let (q, x) = self.forward_raw(p, f_hat, q0)?;
+        Ok((DVector::from_vec(q), DVector::from_vec(x)))
+    }
+
+    /// [`InverseKinematics::forward`] as plain vectors (the Newton loop's).
+    fn forward_raw(
         &mut self,
         p: &[f64],
         f_hat: &[f64],
@@ -332,7 +362,7 @@ impl<E: Element> InverseKinematics<E> {
     fn first_equilibrium(&mut self, f_hat: &[f64], start: Start) -> Result<(Vec<f64>, Eq)> {
         match start {
             Start::Cold(p) => {
-                let (q, x) = self.forward(&p, f_hat, None)?;
+                let (q, x) = self.forward_raw(&p, f_hat, None)?;
                 Ok((p, (q, x, None)))
             }
             Start::Warm(h) if h.f_hat == f_hat => {
@@ -532,7 +562,7 @@ impl<E: Element> InverseKinematics<E> {
         self.robot.validate_loads(&loads)?;
         check_len("f_hat", self.robot.n_q(), f_hat.len())?;
         check_all_finite("f_hat", f_hat)?;
-        let (q, x) = self.forward(p0_pa, f_hat, None)?;
+        let (q, x) = self.forward_raw(p0_pa, f_hat, None)?;
         self.warm = Some(Held {
             p: p0_pa.to_vec(),
             q,
@@ -548,10 +578,10 @@ impl<E: Element> InverseKinematics<E> {
     /// of its tangent) as the next solve's warm start.
     fn hold(&mut self, s: &IkSolution, f_hat: &[f64], factors: Option<AutoFactors>) {
         self.warm = Some(Held {
-            p: s.pressures_pa.clone(),
-            q: s.q.clone(),
+            p: s.pressures_pa.as_slice().to_vec(),
+            q: s.q.as_slice().to_vec(),
             f_hat: f_hat.to_vec(),
-            x: s.effector_m.clone(),
+            x: s.effector_m.as_slice().to_vec(),
             factors,
         });
     }
@@ -709,9 +739,9 @@ impl<E: Element> InverseKinematics<E> {
             .collect();
         Ok((
             IkSolution {
-                pressures_pa: P,
-                q,
-                effector_m: x,
+                pressures_pa: DVector::from_vec(P),
+                q: DVector::from_vec(q),
+                effector_m: DVector::from_vec(x),
                 status,
                 iterations,
                 bounds,

@@ -22,6 +22,7 @@
 //! [`MassReference::Absolute`] (the loaded position as measured) is kept for
 //! comparison.
 
+use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
@@ -172,6 +173,41 @@ pub struct MassEstimate {
     pub converged: bool,
 }
 
+impl MassEstimate {
+    /// [`MassEstimate::force_n`] as a vector (N).
+    ///
+    /// # Example
+    /// ```
+    /// let e = softrod::control::MassEstimate {
+    ///     mass_kg: 0.05, force_n: vec![0.0, -0.49], target_m: vec![0.2, 0.0],
+    ///     model_unloaded_m: vec![0.2, 0.001], pressures_pa: vec![0.0; 4],
+    ///     residual_m: 0.0, iterations: 3, converged: true,
+    /// };
+    /// assert_eq!(e.force(), nalgebra::dvector![0.0, -0.49]);
+    /// assert_eq!(e.target(), nalgebra::dvector![0.2, 0.0]);
+    /// assert_eq!(e.model_unloaded(), nalgebra::dvector![0.2, 0.001]);
+    /// ```
+    pub fn force(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.force_n)
+    }
+
+    /// [`MassEstimate::target_m`] as a vector (m).
+    ///
+    /// # Example
+    /// See [`MassEstimate::force`].
+    pub fn target(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.target_m)
+    }
+
+    /// [`MassEstimate::model_unloaded_m`] as a vector (m).
+    ///
+    /// # Example
+    /// See [`MassEstimate::force`].
+    pub fn model_unloaded(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.model_unloaded_m)
+    }
+}
+
 /// The concentrated-load mass estimator of one robot model (see the
 /// [module documentation](crate::control)).
 ///
@@ -287,12 +323,44 @@ impl<E: Element> MassEstimator<E> {
     }
 
     /// The model's equilibrium at pressures `pressures_pa` with the force
-    /// `force_n` at the load node: its shape and end effector (m).
+    /// `force_n` at the load node: its shape `q` and end effector (m, `DIM`
+    /// components).
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] for pressures outside their bounds or not
     /// finite; the static solver's errors (no equilibrium found).
+    ///
+    /// # Example
+    /// A downward force at the tip lowers the end effector, by `∂x/∂F F` to
+    /// first order:
+    /// ```
+    /// use softrod::control::{MassEstimator, MassSettings};
+    /// use softrod::scene::Scene;
+    /// let scene = Scene::two_section();
+    /// let (robot, loads) = (scene.robot()?, scene.loads()?);
+    /// let p = loads.pressures_pa.clone();
+    /// let mut est = MassEstimator::new(robot, loads, 0.24, &scene.gravity_m_per_s2, MassSettings::default())?;
+    /// let (_, x0) = est.forward(&p, &[0.0, 0.0])?;
+    /// let (_, x1) = est.forward(&p, &[0.0, -1e-3])?;
+    /// let j = est.jacobian(&p, &[0.0, 0.0])?; // 2 × 2, m/N
+    /// let predicted = &x0 + &j * nalgebra::dvector![0.0, -1e-3];
+    /// assert!(x1[1] < x0[1] && (&x1 - predicted).norm() < 1e-2 * (&x1 - &x0).norm());
+    /// // the force that puts the end effector back where the load moved it
+    /// let (f, _, _, converged) = est.force_for(&p, x0.as_slice())?;
+    /// assert!(converged && f.norm() < 1e-9);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn forward(
+        &mut self,
+        pressures_pa: &[f64],
+        force_n: &[f64],
+    ) -> Result<(DVector<f64>, DVector<f64>)> {
+        let (q, x) = self.forward_raw(pressures_pa, force_n)?;
+        Ok((DVector::from_vec(q), DVector::from_vec(x)))
+    }
+
+    /// [`MassEstimator::forward`] as plain vectors (the Newton loop's).
+    fn forward_raw(
         &mut self,
         pressures_pa: &[f64],
         force_n: &[f64],
@@ -325,19 +393,22 @@ impl<E: Element> MassEstimator<E> {
     /// # Errors
     /// As [`MassEstimator::forward`]; [`Error::Singular`] if the tangent
     /// cannot be factored.
-    pub fn jacobian(&mut self, pressures_pa: &[f64], force_n: &[f64]) -> Result<Vec<Vec<f64>>> {
-        let (q, _) = self.forward(pressures_pa, force_n)?;
+    ///
+    /// # Example
+    /// See [`MassEstimator::forward`].
+    pub fn jacobian(&mut self, pressures_pa: &[f64], force_n: &[f64]) -> Result<DMatrix<f64>> {
+        let (q, _) = self.forward_raw(pressures_pa, force_n)?;
         let eq = self.tracker.solve(&self.load, force_n, &q)?;
         let robot = self.tracker.robot();
         let dq_df = Sensitivity::new(robot, &eq.factors)?.dq_df(&self.load)?;
         let point = robot.arc_point("effector", self.effector_s_m)?;
         let d = E::DIM;
-        let mut jac = vec![vec![0.0; d]; d];
+        let mut jac = DMatrix::zeros(d, d);
         let mut out = vec![0.0; d];
         for (c, col) in dq_df.column_iter().enumerate() {
             point.value_into(col.as_slice(), &mut out)?;
             for (r, v) in out.iter().enumerate() {
-                jac[r][c] = *v;
+                jac[(r, c)] = *v;
             }
         }
         Ok(jac)
@@ -353,7 +424,25 @@ impl<E: Element> MassEstimator<E> {
     ///
     /// # Errors
     /// As [`MassEstimator::jacobian`].
+    ///
+    /// # Example
+    /// See [`MassEstimator::forward`].
     pub fn force_for(
+        &mut self,
+        pressures_pa: &[f64],
+        target_m: &[f64],
+    ) -> Result<(DVector<f64>, DVector<f64>, usize, bool)> {
+        let (f, x, iterations, converged) = self.force_for_raw(pressures_pa, target_m)?;
+        Ok((
+            DVector::from_vec(f),
+            DVector::from_vec(x),
+            iterations,
+            converged,
+        ))
+    }
+
+    /// [`MassEstimator::force_for`] as plain vectors.
+    fn force_for_raw(
         &mut self,
         pressures_pa: &[f64],
         target_m: &[f64],
@@ -383,7 +472,7 @@ impl<E: Element> MassEstimator<E> {
         };
         let mut theta = vec![0.0; np];
         let mut f = force(&theta);
-        let (_, mut x) = self.forward(pressures_pa, &f)?;
+        let (_, mut x) = self.forward_raw(pressures_pa, &f)?;
         let mut r = dist(&x);
         let mut iterations = 0;
         let mut converged = r <= self.settings.tolerance_m;
@@ -394,7 +483,7 @@ impl<E: Element> MassEstimator<E> {
             let jt: Vec<Vec<f64>> = (0..d)
                 .map(|row| {
                     (0..np)
-                        .map(|c| (0..d).map(|k| jf[row][k] * b[k][c]).sum())
+                        .map(|c| (0..d).map(|k| jf[(row, k)] * b[k][c]).sum())
                         .collect()
                 })
                 .collect();
@@ -432,7 +521,7 @@ impl<E: Element> MassEstimator<E> {
             for _ in 0..20 {
                 let trial: Vec<f64> = theta.iter().zip(&step).map(|(a, s)| a + t * s).collect();
                 let ft = force(&trial);
-                if let Ok((_, xt)) = self.forward(pressures_pa, &ft) {
+                if let Ok((_, xt)) = self.forward_raw(pressures_pa, &ft) {
                     let rt = dist(&xt);
                     if rt < r {
                         theta = trial;
@@ -480,11 +569,13 @@ impl<E: Element> MassEstimator<E> {
                 self.ik
                     .solve_starting_at(unloaded_m, &zeros, pressures_pa)?
                     .pressures_pa
+                    .data
+                    .into()
             }
             _ => pressures_pa.to_vec(),
         };
         let pressures_pa = &pressures_pa[..];
-        let (_, model_unloaded_m) = self.forward(pressures_pa, &vec![0.0; d])?;
+        let (_, model_unloaded_m) = self.forward_raw(pressures_pa, &vec![0.0; d])?;
         let target_m: Vec<f64> = match self.settings.reference {
             MassReference::Relative | MassReference::Matched => model_unloaded_m
                 .iter()
@@ -493,7 +584,7 @@ impl<E: Element> MassEstimator<E> {
                 .collect(),
             MassReference::Absolute => loaded_m.to_vec(),
         };
-        let (force_n, x, iterations, converged) = self.force_for(pressures_pa, &target_m)?;
+        let (force_n, x, iterations, converged) = self.force_for_raw(pressures_pa, &target_m)?;
         let g2: f64 = self.gravity_m_per_s2.iter().map(|g| g * g).sum();
         let mass_kg = force_n
             .iter()

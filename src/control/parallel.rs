@@ -505,13 +505,14 @@ fn circle(centre: [f64; 3], s: &TrackSettings) -> Result<Trajectory> {
 /// # Example
 /// ```
 /// let spec = softrod::parallel::ParallelSpec::default();
-/// assert_eq!(softrod::control::parallel::centre_pressures(&spec)[0], 40e3);
+/// let p = softrod::control::parallel::centre_pressures(&spec);
+/// assert_eq!((p[0], p.len()), (40e3, spec.n_pressures()));
 /// ```
-pub fn centre_pressures(spec: &ParallelSpec) -> Vec<f64> {
+pub fn centre_pressures(spec: &ParallelSpec) -> nalgebra::DVector<f64> {
     crate::parallel::payload::fig8_configurations(spec)
         .get(1)
         .cloned()
-        .unwrap_or_default()
+        .unwrap_or_else(|| nalgebra::DVector::zeros(0))
 }
 
 /// Tracks the circle of `settings` with the robot of `spec` as the
@@ -541,7 +542,7 @@ pub fn run_track(
     let plant = crate::parallel::payload::plant_spec(spec).build_full()?;
     let dt = 1.0 / settings.control_rate_hz;
     let p_c = if centre_pa.is_empty() {
-        centre_pressures(spec)
+        centre_pressures(spec).data.into()
     } else {
         check_len("pressures_pa", spec.n_pressures(), centre_pa.len())?;
         check_all_finite("pressures_pa", centre_pa)?;

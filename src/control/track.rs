@@ -412,7 +412,7 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
                 check_point("trajectory.center_m", c, base.as_slice(), length)?;
                 Ok(c.clone())
             }
-            None => Ok(ik.forward(&loads.pressures_pa, &zeros, None)?.1),
+            None => Ok(ik.forward(&loads.pressures_pa, &zeros, None)?.1.data.into()),
         }
     };
     let arr = |v: &[f64]| [v[0], v.get(1).copied().unwrap_or(0.0)];
@@ -500,7 +500,7 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
                         ));
                     }
                 }
-                points.push(ik.forward(p, &zeros, None)?.1);
+                points.push(ik.forward(p, &zeros, None)?.1.data.into());
             }
             (
                 Trajectory::new(times_s.clone(), points)?,

@@ -1,5 +1,6 @@
 //! Desired end-effector trajectories: samples in time, linear between them.
 
+use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -102,22 +103,34 @@ impl Trajectory {
         self.times_s.last().copied().unwrap_or(0.0)
     }
 
-    /// `x_d(t)` (m): linear between samples, held outside them.
-    pub fn at(&self, t: f64) -> Vec<f64> {
+    /// `x_d(t)` (m, [`Trajectory::dim`] components): linear between
+    /// samples, held outside them (empty for an empty trajectory).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::control::Trajectory;
+    /// let t = Trajectory::new(vec![0.0, 1.0], vec![vec![0.2, 0.0], vec![0.2, 0.01]])?;
+    /// assert!((t.at(0.5) - nalgebra::dvector![0.2, 0.005]).norm() < 1e-15);
+    /// assert_eq!(t.at(-1.0), nalgebra::dvector![0.2, 0.0]); // held before the start
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn at(&self, t: f64) -> DVector<f64> {
         let i = self.times_s.partition_point(|&s| s <= t);
         if i == 0 {
-            return self.points_m.first().cloned().unwrap_or_default();
+            return DVector::from_vec(self.points_m.first().cloned().unwrap_or_default());
         }
         if i >= self.times_s.len() {
-            return self.points_m.last().cloned().unwrap_or_default();
+            return DVector::from_vec(self.points_m.last().cloned().unwrap_or_default());
         }
         let (t0, t1) = (self.times_s[i - 1], self.times_s[i]);
         let a = (t - t0) / (t1 - t0);
-        self.points_m[i - 1]
-            .iter()
-            .zip(&self.points_m[i])
-            .map(|(p, q)| p + a * (q - p))
-            .collect()
+        DVector::from_iterator(
+            self.points_m[i - 1].len(),
+            self.points_m[i - 1]
+                .iter()
+                .zip(&self.points_m[i])
+                .map(|(p, q)| p + a * (q - p)),
+        )
     }
 
     /// Samples `f(τ)` for `τ` from 0 to `duration_s` after holding

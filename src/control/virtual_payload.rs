@@ -3,6 +3,8 @@
 //! run as a function of the configuration, it is subtracted from later
 //! estimates to leave the real payload.
 
+use nalgebra::DVector;
+
 use crate::error::{check_all_finite, check_len, Error, Result};
 
 /// Recorded estimates `F(c)` at configurations `c` (any fixed-length
@@ -16,9 +18,9 @@ use crate::error::{check_all_finite, check_len, Error, Result};
 /// let mut v = VirtualPayload::new(4);
 /// v.record(&[0.0], &[1.0])?;
 /// v.record(&[1.0], &[3.0])?;
-/// assert_eq!(v.at(&[0.0])?, vec![1.0]);
+/// assert_eq!(v.at(&[0.0])?, nalgebra::dvector![1.0]);
 /// assert!((v.at(&[0.5])?[0] - 2.0).abs() < 1e-12);
-/// assert_eq!(v.subtract(&[1.0], &[5.0])?, vec![2.0]);
+/// assert_eq!(v.subtract(&[1.0], &[5.0])?, nalgebra::dvector![2.0]);
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone, PartialEq)]
@@ -72,7 +74,10 @@ impl VirtualPayload {
     /// # Errors
     /// [`Error::InvalidParameter`] if nothing is recorded;
     /// [`Error::DimensionMismatch`] for a key of another length.
-    pub fn at(&self, key: &[f64]) -> Result<Vec<f64>> {
+    ///
+    /// # Example
+    /// See [`VirtualPayload`].
+    pub fn at(&self, key: &[f64]) -> Result<DVector<f64>> {
         let (Some(k0), Some(v0)) = (self.keys.first(), self.values.first()) else {
             return Err(Error::invalid(
                 "virtual_payload",
@@ -93,7 +98,7 @@ impl VirtualPayload {
         d.sort_by(|a, b| a.0.total_cmp(&b.0));
         if let Some(&(d2, i)) = d.first() {
             if d2 == 0.0 {
-                return Ok(self.values[i].clone());
+                return Ok(DVector::from_column_slice(&self.values[i]));
             }
         }
         let mut out = vec![0.0; v0.len()];
@@ -106,7 +111,7 @@ impl VirtualPayload {
                 .for_each(|(o, v)| *o += w * v);
         }
         out.iter_mut().for_each(|o| *o /= wsum);
-        Ok(out)
+        Ok(DVector::from_vec(out))
     }
 
     /// `f` minus the virtual payload at `key`: the real payload's estimate.
@@ -114,9 +119,15 @@ impl VirtualPayload {
     /// # Errors
     /// As [`VirtualPayload::at`]; [`Error::DimensionMismatch`] for an `f` of
     /// another length than the records.
-    pub fn subtract(&self, key: &[f64], f: &[f64]) -> Result<Vec<f64>> {
+    ///
+    /// # Example
+    /// See [`VirtualPayload`].
+    pub fn subtract(&self, key: &[f64], f: &[f64]) -> Result<DVector<f64>> {
         let v = self.at(key)?;
         check_len("f", v.len(), f.len())?;
-        Ok(f.iter().zip(&v).map(|(a, b)| a - b).collect())
+        Ok(DVector::from_iterator(
+            v.len(),
+            f.iter().zip(v.iter()).map(|(a, b)| a - b),
+        ))
     }
 }

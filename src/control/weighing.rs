@@ -11,9 +11,10 @@
 //! weighing of a known mass (its own noise seed) calibrates the estimator's
 //! scale ([`MassEstimator::calibrate`]) for all configurations.
 
+use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result};
+use crate::error::{check_len, Error, Result};
 use crate::plant::{Payload, PayloadKind, PayloadSchedule, Plant, PlantSettings, SimulatedPlant};
 use crate::scene::Scene;
 
@@ -111,6 +112,28 @@ pub struct MassRow {
     pub converged: bool,
 }
 
+impl MassRow {
+    /// The measured displacement `loaded − unloaded` of the end effector (m).
+    ///
+    /// # Example
+    /// ```
+    /// let r = softrod::control::MassRow {
+    ///     configuration: 0, true_kg: 0.1, estimated_kg: 0.1, raw_kg: 0.1,
+    ///     unloaded_m: vec![0.24, 0.0], loaded_m: vec![0.239, -0.01], converged: true,
+    /// };
+    /// assert!((r.displacement() - nalgebra::dvector![-0.001, -0.01]).norm() < 1e-15);
+    /// ```
+    pub fn displacement(&self) -> nalgebra::DVector<f64> {
+        nalgebra::DVector::from_iterator(
+            self.loaded_m.len().min(self.unloaded_m.len()),
+            self.loaded_m
+                .iter()
+                .zip(&self.unloaded_m)
+                .map(|(l, u)| l - u),
+        )
+    }
+}
+
 /// The result of [`WeighingExperiment::run`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MassTable {
@@ -143,12 +166,22 @@ impl WeighingExperiment {
     /// # Errors
     /// The plant's errors (invalid settings, pressures outside their
     /// bounds, a static solve that fails).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{control::WeighingExperiment, scene::Scene};
+    /// let mut w = WeighingExperiment::paper_like(Scene::two_section());
+    /// w.frames = 2;
+    /// let (unloaded, loaded) = w.weigh(&[0.0; 4], 0.1, 7)?;
+    /// assert!(loaded.y < unloaded.y - 1e-3, "{unloaded} {loaded}"); // 100 g pulls the tip down
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn weigh(
         &self,
         pressures_pa: &[f64],
         mass_kg: f64,
         seed: u64,
-    ) -> Result<(Vec<f64>, Vec<f64>)> {
+    ) -> Result<(Vector2<f64>, Vector2<f64>)> {
         let dt = 1.0 / RATE_HZ;
         let n = self.frames.max(1);
         // settle 10 frames, average n; hang; settle 10, average n
@@ -170,20 +203,20 @@ impl WeighingExperiment {
         let length: f64 = self.scene.robot.sections.iter().map(|s| s.length_m).sum();
         let mut plant = SimulatedPlant::new(&self.scene, &[length], settings)?;
         plant.command(pressures_pa)?;
-        let average = |plant: &mut SimulatedPlant| -> Result<Vec<f64>> {
+        let average = |plant: &mut SimulatedPlant| -> Result<Vector2<f64>> {
             for _ in 0..10 {
                 plant.advance(dt)?;
             }
-            let mut sum: Vec<f64> = Vec::new();
+            let mut sum = Vector2::zeros();
             for _ in 0..n {
                 let f = plant.advance(dt)?;
                 let x = f.positions_m.first().ok_or_else(|| {
                     Error::invalid("markers", "[]", "the plant returned no marker")
                 })?;
-                sum.resize(x.len(), 0.0);
-                sum.iter_mut().zip(x).for_each(|(s, v)| *s += v);
+                check_len("markers[0]", 2, x.len())?;
+                sum += Vector2::new(x[0], x[1]);
             }
-            Ok(sum.into_iter().map(|s| s / n as f64).collect())
+            Ok(sum / n as f64)
         };
         let unloaded = average(&mut plant)?;
         let loaded = average(&mut plant)?;
@@ -210,20 +243,20 @@ impl WeighingExperiment {
             crate::error::check_index("calibration.configuration", c, self.configurations.len())?;
             let p = &self.configurations[c].pressures_pa;
             let (u, l) = self.weigh(p, known, seed)?;
-            est.calibrate(p, &u, &l, known)?;
+            est.calibrate(p, u.as_slice(), l.as_slice(), known)?;
         }
         let mut rows = Vec::new();
         for (c, conf) in self.configurations.iter().enumerate() {
             for &m in &self.masses_kg {
                 let (u, l) = self.weigh(&conf.pressures_pa, m, self.plant.seed)?;
-                let e = est.estimate(&conf.pressures_pa, &u, &l)?;
+                let e = est.estimate(&conf.pressures_pa, u.as_slice(), l.as_slice())?;
                 rows.push(MassRow {
                     configuration: c,
                     true_kg: m,
                     estimated_kg: e.mass_kg,
                     raw_kg: e.mass_kg / est.scale(),
-                    unloaded_m: u,
-                    loaded_m: l,
+                    unloaded_m: u.as_slice().to_vec(),
+                    loaded_m: l.as_slice().to_vec(),
                     converged: e.converged,
                 });
             }

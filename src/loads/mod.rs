@@ -37,11 +37,11 @@ use crate::error::{check_all_finite, check_finite, check_positive, Error, Result
 /// ```
 /// use softrod::loads::LineLoad;
 /// let w = LineLoad::Linear { w_start_n_per_m: vec![0.0, 0.0], w_end_n_per_m: vec![0.0, -2.0] };
-/// assert_eq!(w.at(0.5, 1.0), vec![0.0, -1.0]);
+/// assert_eq!(w.at(0.5, 1.0), nalgebra::dvector![0.0, -1.0]);
 /// // a table: -2 N/m at 0.1 m falling linearly to 0 at 0.2 m, nothing elsewhere
 /// let t = LineLoad::Tabulated { s_m: vec![0.1, 0.2], w_n_per_m: vec![vec![0.0, -2.0], vec![0.0, 0.0]] };
 /// assert!((t.at(0.15, 0.24)[1] + 1.0).abs() < 1e-15);
-/// assert_eq!(t.at(0.05, 0.24), vec![0.0, 0.0]);
+/// assert_eq!(t.at(0.05, 0.24), nalgebra::dvector![0.0, 0.0]);
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "profile", rename_all = "snake_case", deny_unknown_fields)]
@@ -82,8 +82,17 @@ pub enum LineLoad {
 }
 
 impl LineLoad {
-    /// The load per length at arc coordinate `x` on a robot of length `total` (N/m).
-    pub fn at(&self, x: f64, total: f64) -> Vec<f64> {
+    /// The load per length at arc coordinate `x` on a robot of length
+    /// `total` (N/m, world axes, as many components as the profile's vectors).
+    ///
+    /// # Example
+    /// See [`LineLoad`].
+    pub fn at(&self, x: f64, total: f64) -> nalgebra::DVector<f64> {
+        nalgebra::DVector::from_vec(self.at_vec(x, total))
+    }
+
+    /// [`LineLoad::at`] as a plain vector.
+    fn at_vec(&self, x: f64, total: f64) -> Vec<f64> {
         match self {
             LineLoad::Uniform { w_n_per_m } => w_n_per_m.clone(),
             LineLoad::Linear {

@@ -242,14 +242,14 @@ impl Default for Measurement {
 /// let model = ParallelSpec::default().build_full()?;
 /// // a noise-free plant equal to the model recovers the mass
 /// let m = Measurement { sigma_m: 0.0, ..Measurement::default() };
-/// let trials = mass_experiment(&model, &model, &[vec![]], &[0.1], m)?;
+/// let trials = mass_experiment(&model, &model, &[nalgebra::DVector::zeros(0)], &[0.1], m)?;
 /// assert!(trials[0].error_kg().abs() < 1e-9);
 /// # Ok::<(), softrod::Error>(())
 /// ```
 pub fn mass_experiment<E: Element, P: Element>(
     model: &ParallelRobot<E>,
     plant: &ParallelRobot<P>,
-    configurations: &[Vec<f64>],
+    configurations: &[DVector<f64>],
     masses_kg: &[f64],
     measurement: Measurement,
 ) -> Result<Vec<MassTrial>> {
@@ -267,6 +267,7 @@ pub fn mass_experiment<E: Element, P: Element>(
     let g = &plant.spec.gravity_m_per_s2;
     let mut trials = Vec::with_capacity(configurations.len() * masses_kg.len());
     for (c, p) in configurations.iter().enumerate() {
+        let p = p.as_slice();
         let plant_free = plant.solve(&plant.loads(p, [0.0; 3], [0.0; 3])?, None)?;
         let model_free = model.solve(&model.loads(p, [0.0; 3], [0.0; 3])?, None)?;
         let x_model = model.platform_pose(model_free.q.as_slice())?;
@@ -301,8 +302,9 @@ pub fn mass_experiment<E: Element, P: Element>(
 /// let spec = softrod::parallel::ParallelSpec::default();
 /// let c = softrod::parallel::payload::fig8_configurations(&spec);
 /// assert_eq!((c.len(), c[1].len()), (3, spec.n_pressures()));
+/// assert_eq!(c[1][0], 40e3);
 /// ```
-pub fn fig8_configurations(spec: &super::ParallelSpec) -> Vec<Vec<f64>> {
+pub fn fig8_configurations(spec: &super::ParallelSpec) -> Vec<DVector<f64>> {
     let n = spec.n_pressures();
     let per_leg = spec.sections_per_leg * super::CHAMBERS_PER_SECTION;
     let mut alike = vec![0.0; n];
@@ -313,7 +315,11 @@ pub fn fig8_configurations(spec: &super::ParallelSpec) -> Vec<Vec<f64>> {
         let k = (leg * super::CHAMBERS_PER_SECTION) % per_leg + leg / spec.sections_per_leg.max(1);
         apart[leg * per_leg + k % per_leg] = 50e3;
     }
-    vec![vec![0.0; n], alike, apart]
+    vec![
+        DVector::zeros(n),
+        DVector::from_vec(alike),
+        DVector::from_vec(apart),
+    ]
 }
 
 /// The "real robot" of the simulated experiments: the model's numbers off

@@ -31,6 +31,7 @@ mod payload;
 pub use obstacles::PlantContact;
 pub use payload::{Payload, PayloadKind, PayloadSchedule};
 
+use nalgebra::{DVector, Vector2};
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
@@ -48,6 +49,8 @@ use crate::statics::StaticSolver;
 /// ```
 /// let f = softrod::plant::MarkerFrame { time_s: 0.0, positions_m: vec![vec![0.24, 0.0]] };
 /// assert_eq!(f.positions_m.len(), 1);
+/// assert_eq!(f.position(0), Some(nalgebra::dvector![0.24, 0.0]));
+/// assert_eq!(f.position(1), None);
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MarkerFrame {
@@ -58,6 +61,16 @@ pub struct MarkerFrame {
 }
 
 impl MarkerFrame {
+    /// Marker `i`'s position as a vector (m), `None` past the last marker.
+    ///
+    /// # Example
+    /// See [`MarkerFrame`].
+    pub fn position(&self, i: usize) -> Option<DVector<f64>> {
+        self.positions_m
+            .get(i)
+            .map(|p| DVector::from_column_slice(p))
+    }
+
     /// The frame as an [`Observation`] of markers at the arc coordinates
     /// `s_m` (one per marker, m).
     ///
@@ -306,15 +319,26 @@ impl SimulatedPlant {
         &self.actual_pa
     }
 
-    /// The true (noise-free) marker positions now (m). For scoring only: a
-    /// controller sees [`Plant::advance`]'s noisy frame.
+    /// The true (noise-free) marker positions now (m), one per marker. For
+    /// scoring only: a controller sees [`Plant::advance`]'s noisy frame.
     ///
     /// # Errors
     /// As [`Robot::position_at`].
-    pub fn true_markers_m(&self) -> Result<Vec<Vec<f64>>> {
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::plant::{PlantSettings, SimulatedPlant};
+    /// let scene = softrod::scene::Scene::two_section();
+    /// let plant = SimulatedPlant::new(&scene, &[0.12, 0.24], PlantSettings::default())?;
+    /// let m = plant.true_markers_m()?;
+    /// assert_eq!(m.len(), 2);
+    /// assert!((m[1] - plant.true_tip_m()?).norm() < 1e-15);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn true_markers_m(&self) -> Result<Vec<Vector2<f64>>> {
         self.marker_s_m
             .iter()
-            .map(|&s| Ok(self.robot.position_at(&self.q, s)?.data.into()))
+            .map(|&s| self.robot.position_at_fixed::<2>(&self.q, s))
             .collect()
     }
 
@@ -322,12 +346,12 @@ impl SimulatedPlant {
     ///
     /// # Errors
     /// As [`Robot::position_at`].
-    pub fn true_tip_m(&self) -> Result<Vec<f64>> {
-        Ok(self
-            .robot
-            .position_at(&self.q, self.robot.length())?
-            .data
-            .into())
+    ///
+    /// # Example
+    /// See [`SimulatedPlant::true_markers_m`].
+    pub fn true_tip_m(&self) -> Result<Vector2<f64>> {
+        self.robot
+            .position_at_fixed::<2>(&self.q, self.robot.length())
     }
 }
 
@@ -386,7 +410,7 @@ impl Plant for SimulatedPlant {
         let obs = Observation {
             markers: truth
                 .into_iter()
-                .map(|p| MarkerObservation::at_arc(0.0, p))
+                .map(|p| MarkerObservation::at_arc(0.0, p.as_slice().to_vec()))
                 .collect(),
         };
         // a fresh seed per frame: the seed and the frame count

@@ -89,7 +89,12 @@ pub fn auto_points(
             let tol = AUTO_FORCE_FRACTION * resultant[0].hypot(resultant[1]);
             let scene = auto_scene(r, grid.noise_m, tol)?;
             // the sweep's measured frame (seed 7)
-            let obs = observe(r, &marker_arcs(r.length_m, markers), grid.noise_m, 7);
+            let obs = observe(
+                r,
+                marker_arcs(r.length_m, markers).as_slice(),
+                grid.noise_m,
+                7,
+            );
             let refinement = match auto_elements(&scene, Some(&obs)) {
                 Ok(x) => x,
                 Err(e) => {

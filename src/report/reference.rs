@@ -232,8 +232,8 @@ impl Reference {
         self.loads.iter().fold([0.0, 0.0], |acc, l| {
             let w = l.at(s, self.length_m);
             [
-                acc[0] + w.first().copied().unwrap_or(0.0),
-                acc[1] + w.get(1).copied().unwrap_or(0.0),
+                acc[0] + w.as_slice().first().copied().unwrap_or(0.0),
+                acc[1] + w.as_slice().get(1).copied().unwrap_or(0.0),
             ]
         })
     }

@@ -75,7 +75,7 @@ pub fn run(opts: &ReportOptions) -> Result<(SpatialReport, Vec<PathBuf>)> {
             description: String::new(),
             element: crate::parallel::LegElement::Ancf3d,
             parallel: spec.clone(),
-            pressures_pa: p.clone(),
+            pressures_pa: p.as_slice().to_vec(),
             platform_force_n: vec![0.0, 0.0, -0.2 * 9.81],
             platform_moment_nm: Vec::new(),
         };

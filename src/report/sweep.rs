@@ -437,9 +437,15 @@ pub fn model_robot(reference: &Reference, elements: usize) -> Result<Robot<Plana
     spec.build_planar()
 }
 
-/// Arc coordinates of `n` equally spaced markers, `L j / n`, `j = 1..=n`.
-pub fn marker_arcs(length_m: f64, n: usize) -> Vec<f64> {
-    (1..=n).map(|j| length_m * j as f64 / n as f64).collect()
+/// Arc coordinates of `n` equally spaced markers, `L j / n`, `j = 1..=n` (m).
+///
+/// # Example
+/// ```
+/// let s = softrod::report::sweep::marker_arcs(0.24, 4);
+/// assert_eq!(s, nalgebra::dvector![0.06, 0.12, 0.18, 0.24]);
+/// ```
+pub fn marker_arcs(length_m: f64, n: usize) -> nalgebra::DVector<f64> {
+    nalgebra::DVector::from_fn(n, |i, _| length_m * (i + 1) as f64 / n as f64)
 }
 
 /// The markers of the reference at `arcs`, with seeded noise `sigma` (m).
@@ -574,10 +580,11 @@ pub fn run_case(spec: &CaseSpec) -> Outcome {
         Err(e) => return fail(StepFailure::of_error(&e), Stage::Setup),
     };
     let arcs = marker_arcs(reference.length_m, spec.markers);
-    let measured = observe(reference, &arcs, spec.noise_m, spec.seed);
+    let arcs = arcs.as_slice();
+    let measured = observe(reference, arcs, spec.noise_m, spec.seed);
     let first = observe(
         reference,
-        &arcs,
+        arcs,
         spec.noise_m,
         spec.seed.wrapping_add(1_000_003),
     );
@@ -640,7 +647,7 @@ pub fn run_case(spec: &CaseSpec) -> Outcome {
     for k in 0..spec.warm_frames {
         let o = observe(
             reference,
-            &arcs,
+            arcs,
             spec.noise_m,
             spec.seed.wrapping_add(1 + k as u64),
         );

@@ -90,8 +90,9 @@ pub fn run(opts: &ReportOptions) -> Result<(TouchReport, Vec<PathBuf>)> {
     let point_mean_max_m = stats(&|r| r.location_errors_m().1);
     let scene = five_section_scene(4);
     let arcs = marker_arcs(6);
+    let arcs = arcs.as_slice();
     let ps = PlantSettings::default();
-    let cal = calibrate_on_free_plant(&scene, &arcs, &ps)?;
+    let cal = calibrate_on_free_plant(&scene, arcs, &ps)?;
     let (c, radius) = AVOID_DISK;
     let obstacles = Obstacles::new(
         vec![Obstacle::Circle {
@@ -100,13 +101,13 @@ pub fn run(opts: &ReportOptions) -> Result<(TouchReport, Vec<PathBuf>)> {
         }],
         ROD_RADIUS_M,
     )?;
-    let mut plant = SimulatedPlant::new(&scene, &arcs, ps)?.with_obstacles(obstacles)?;
+    let mut plant = SimulatedPlant::new(&scene, arcs, ps)?.with_obstacles(obstacles)?;
     let settings = AvoidSettings {
         duration_s: 70.0,
         shape_interval_s: 5.0,
         ..AvoidSettings::default()
     };
-    let avoidance = run_avoidance(&scene, &cal, &arcs, &mut plant, AVOID_GOAL, &settings)?;
+    let avoidance = run_avoidance(&scene, &cal, arcs, &mut plant, AVOID_GOAL, &settings)?;
     let (placements, goals, table_duration_s) = if opts.quick {
         (&FIG9_PLACEMENTS[..1], &FIG9_GOALS[..1], 70.0)
     } else {

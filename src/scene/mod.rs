@@ -80,13 +80,20 @@ impl ElementKind {
         }
     }
 
-    /// The default gravity of a scene with this element (m/s²): 9.81 down
-    /// the y axis in 2-D, down the z axis in 3-D.
-    pub fn default_gravity(self) -> Vec<f64> {
+    /// The default gravity of a scene with this element (m/s², [`ElementKind::dim`]
+    /// components): 9.81 down the y axis in 2-D, down the z axis in 3-D.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::scene::ElementKind;
+    /// assert_eq!(ElementKind::PlanarCable.default_gravity(), nalgebra::dvector![0.0, -9.81]);
+    /// assert_eq!(ElementKind::Ancf3d.default_gravity(), nalgebra::dvector![0.0, 0.0, -9.81]);
+    /// ```
+    pub fn default_gravity(self) -> nalgebra::DVector<f64> {
         match self {
-            ElementKind::PlanarCable => gravity(),
+            ElementKind::PlanarCable => nalgebra::DVector::from_vec(gravity()),
             ElementKind::SpatialCable | ElementKind::Ancf3d => {
-                vec![0.0, 0.0, params::GRAVITY_M_PER_S2[1]]
+                nalgebra::dvector![0.0, 0.0, params::GRAVITY_M_PER_S2[1]]
             }
         }
     }
@@ -220,7 +227,9 @@ impl From<SceneFile> for Scene {
             name: f.name,
             description: f.description,
             base: f.base.unwrap_or_else(|| kind.default_base()),
-            gravity_m_per_s2: f.gravity_m_per_s2.unwrap_or_else(|| kind.default_gravity()),
+            gravity_m_per_s2: f
+                .gravity_m_per_s2
+                .unwrap_or_else(|| kind.default_gravity().data.into()),
             robot: f.robot,
             loads: f.loads,
             pressures_pa: f.pressures_pa,

@@ -17,6 +17,7 @@
 //! to second order only (at an interior minimum) and the gradient at fixed
 //! `X` is the total one.
 
+use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
@@ -150,8 +151,8 @@ pub(crate) fn closest_on_element(
     Ok((xi, r, dist(r)))
 }
 
-/// The total potential `U_t = U_att + U_rep` (36), (38) at the shape `q`,
-/// and its gradient `∂U_t/∂q` over all `n_q` coordinates (41).
+/// The total potential `U_t = U_att + U_rep` (36), (38) at the shape `q`
+/// (J), and its gradient `∂U_t/∂q` over all `n_q` coordinates (41).
 ///
 /// # Errors
 /// [`Error::DimensionMismatch`] for a `q` of the wrong length;
@@ -162,9 +163,9 @@ pub(crate) fn closest_on_element(
 /// ```
 /// use softrod::touch::{field_gradient, five_section_scene, FieldParams};
 /// let robot = five_section_scene(4).robot()?;
-/// let q = robot.reference_configuration().as_slice().to_vec();
-/// let tip = robot.position_at(&q, robot.length())?;
-/// let (u, g) = field_gradient(&robot, &q, &FieldParams::default(), [tip[0], tip[1] + 0.01], &[])?;
+/// let q = robot.reference_configuration();
+/// let tip = robot.position_at(q.as_slice(), robot.length())?;
+/// let (u, g) = field_gradient(&robot, q.as_slice(), &FieldParams::default(), [tip[0], tip[1] + 0.01], &[])?;
 /// assert!((u - 200.0 * 0.01).abs() < 1e-9 && g.len() == robot.n_q());
 /// # Ok::<(), softrod::Error>(())
 /// ```
@@ -174,7 +175,7 @@ pub fn field_gradient(
     p: &FieldParams,
     goal_m: [f64; 2],
     obstacles_m: &[[f64; 2]],
-) -> Result<(f64, Vec<f64>)> {
+) -> Result<(f64, DVector<f64>)> {
     p.validate()?;
     check_len("q", robot.n_q(), q.len())?;
     if !goal_m.iter().all(|v| v.is_finite()) {
@@ -184,8 +185,8 @@ pub fn field_gradient(
             "must be finite",
         ));
     }
-    let mut g = vec![0.0; q.len()];
-    let add = |g: &mut [f64], p: &ArcPoint, dx: [f64; 2]| {
+    let mut g = DVector::zeros(q.len());
+    let add = |g: &mut DVector<f64>, p: &ArcPoint, dx: [f64; 2]| {
         for k in 0..4 {
             let node = p.element + k / 2;
             for (d, v) in dx.iter().enumerate() {

@@ -12,7 +12,7 @@
 //! `s`, its sign giving the obstacle's side); with `normal_only = false`
 //! both components are fitted.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Vector2};
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
@@ -68,7 +68,7 @@ pub struct PointContact {
 /// The point force on `robot` (under the known loads `known`, the virtual
 /// payload in `known.distributed_f`) that best explains the marker
 /// positions `markers_m` at the arc coordinates `marker_s_m` (see the
-/// [module documentation](crate::touch)). `offset_m` (empty, or one position per
+/// [module documentation](crate::touch)). `offset_m` (empty, or one vector per
 /// marker, m) is what the model with the virtual payload still misses of
 /// the contact-free markers, recorded with it ([`marker_offset`]); it is
 /// subtracted from the markers.
@@ -85,7 +85,7 @@ pub fn locate_point_force(
     known: &Loads,
     marker_s_m: &[f64],
     markers_m: &[Vec<f64>],
-    offset_m: &[Vec<f64>],
+    offset_m: &[Vector2<f64>],
     settings: &PointSearchSettings,
 ) -> Result<PointContact> {
     check_len("markers", marker_s_m.len(), markers_m.len())?;
@@ -99,7 +99,7 @@ pub fn locate_point_force(
     let mut y: Vec<f64> = markers_m.iter().flatten().copied().collect();
     check_len("markers_m", 2 * marker_s_m.len(), y.len())?;
     if !offset_m.is_empty() {
-        let o: Vec<f64> = offset_m.iter().flatten().copied().collect();
+        let o: Vec<f64> = offset_m.iter().flat_map(|v| v.iter().copied()).collect();
         check_len("offset_m", y.len(), o.len())?;
         y.iter_mut().zip(&o).for_each(|(a, b)| *a -= b);
     }
@@ -160,21 +160,38 @@ pub fn locate_point_force(
 ///
 /// # Errors
 /// As [`locate_point_force`].
+///
+/// # Example
+/// The model's own contact-free markers leave no offset:
+/// ```
+/// use softrod::{statics::StaticSolver, touch::{five_section_scene, marker_arcs, marker_offset}};
+/// let scene = five_section_scene(2);
+/// let (robot, loads) = (scene.robot()?, scene.loads()?);
+/// let arcs = marker_arcs(6);
+/// let q = StaticSolver::default().solve(&robot, &loads, None)?.q;
+/// let free: Vec<Vec<f64>> = arcs
+///     .iter()
+///     .map(|&s| Ok(robot.position_at(q.as_slice(), s)?.as_slice().to_vec()))
+///     .collect::<softrod::Result<_>>()?;
+/// let offset = marker_offset(&robot, &loads, arcs.as_slice(), &free)?;
+/// assert!(offset.len() == 6 && offset.iter().all(|o| o.norm() < 1e-12));
+/// # Ok::<(), softrod::Error>(())
+/// ```
 pub fn marker_offset(
     robot: &Robot<PlanarCable>,
     known: &Loads,
     marker_s_m: &[f64],
     free_markers_m: &[Vec<f64>],
-) -> Result<Vec<Vec<f64>>> {
+) -> Result<Vec<Vector2<f64>>> {
     check_len("markers", marker_s_m.len(), free_markers_m.len())?;
     let q = StaticSolver::default().solve(robot, known, None)?.q;
     marker_s_m
         .iter()
         .zip(free_markers_m)
         .map(|(&s, y)| {
-            let p = robot.position_at(q.as_slice(), s)?;
-            check_len("free_markers_m", p.len(), y.len())?;
-            Ok(y.iter().zip(&p).map(|(a, b)| a - b).collect())
+            let p: Vector2<f64> = robot.position_at_fixed(q.as_slice(), s)?;
+            check_len("free_markers_m", 2, y.len())?;
+            Ok(Vector2::new(y[0] - p[0], y[1] - p[1]))
         })
         .collect()
 }

@@ -3,6 +3,8 @@
 //! from its base (base tangent along −y, gravity −y), six markers: the base
 //! connector, the four section joints and the tip.
 
+use nalgebra::DVector;
+
 use crate::assembly::Base;
 use crate::params;
 use crate::scene::{Marker, Scene};
@@ -46,8 +48,8 @@ pub fn five_section_scene(elements_per_section: usize) -> Scene {
     scene.gravity_m_per_s2 = params::GRAVITY_M_PER_S2.to_vec();
     scene.pressures_pa = vec![0.0; 2 * SECTIONS];
     scene.markers = marker_arcs(6)
-        .into_iter()
-        .map(|s| Marker {
+        .iter()
+        .map(|&s| Marker {
             node: None,
             s_m: Some(s),
             tangent: false,
@@ -63,18 +65,21 @@ pub fn five_section_scene(elements_per_section: usize) -> Scene {
 /// ```
 /// let s = softrod::touch::marker_arcs(6);
 /// assert!((s[1] - 0.093).abs() < 1e-12 && (s[5] - 0.465).abs() < 1e-12);
+/// // a robot's markers take a slice
+/// let scene = softrod::touch::five_section_scene(2);
+/// let plant = softrod::plant::SimulatedPlant::new(&scene, s.as_slice(), Default::default())?;
+/// assert_eq!(plant.true_markers_m()?.len(), 6);
+/// # Ok::<(), softrod::Error>(())
 /// ```
-pub fn marker_arcs(count: usize) -> Vec<f64> {
+pub fn marker_arcs(count: usize) -> DVector<f64> {
     let n = count.max(2);
     // summed as the robot sums its sections, so the last one is its tip
     let length: f64 = (0..SECTIONS).map(|_| SECTION_LENGTH_M).sum();
-    (0..n)
-        .map(|i| {
-            if i + 1 == n {
-                length
-            } else {
-                length * i as f64 / (n - 1) as f64
-            }
-        })
-        .collect()
+    DVector::from_fn(n, |i, _| {
+        if i + 1 == n {
+            length
+        } else {
+            length * i as f64 / (n - 1) as f64
+        }
+    })
 }

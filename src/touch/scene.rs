@@ -129,9 +129,10 @@ impl AvoidScene {
         self.validate()?;
         let scene = five_section_scene(self.avoid.model_elements);
         let arcs = marker_arcs(self.markers);
-        let cal = calibrate_on_free_plant(&scene, &arcs, &self.plant)?;
-        let mut plant = SimulatedPlant::new(&scene, &arcs, self.plant.clone())?
+        let arcs = arcs.as_slice();
+        let cal = calibrate_on_free_plant(&scene, arcs, &self.plant)?;
+        let mut plant = SimulatedPlant::new(&scene, arcs, self.plant.clone())?
             .with_obstacles(self.checked_obstacles()?)?;
-        run_avoidance(&scene, &cal, &arcs, &mut plant, self.goal_m, &self.avoid)
+        run_avoidance(&scene, &cal, arcs, &mut plant, self.goal_m, &self.avoid)
     }
 }

@@ -146,6 +146,7 @@ pub fn run_localization(
 ) -> Result<LocalizationResult> {
     let scene = five_section_scene(model_elements);
     let arcs = marker_arcs(case.n_markers);
+    let arcs = arcs.as_slice();
     let settings = PlantSettings {
         regulator_time_constant_s: 0.0,
         seed: case.seed,
@@ -153,7 +154,7 @@ pub fn run_localization(
     };
     // the contact-free plant: calibration frames at the case's pressures and
     // two others, then the virtual payload's frame and the placement
-    let mut free = SimulatedPlant::new(&scene, &arcs, settings.clone())?;
+    let mut free = SimulatedPlant::new(&scene, arcs, settings.clone())?;
     let mut frames = Vec::new();
     let mut other = case.pressures_pa.clone();
     other.rotate_right(1);
@@ -165,7 +166,7 @@ pub fn run_localization(
             markers_m: averaged(&mut free, case.frames)?.positions_m,
         });
     }
-    let calib = calibrate(&scene, &arcs, &frames)?;
+    let calib = calibrate(&scene, arcs, &frames)?;
     let frame_free = MarkerFrame {
         time_s: free.time_s(),
         positions_m: frames[2].markers_m.clone(),
@@ -187,7 +188,7 @@ pub fn run_localization(
     let obstacles = Obstacles::new(vec![disk], ROD_RADIUS_M)?;
     let mut plant = SimulatedPlant::new(
         &scene,
-        &arcs,
+        arcs,
         PlantSettings {
             seed: case.seed.wrapping_add(1000),
             ..settings
@@ -220,8 +221,8 @@ pub fn run_localization(
     let mut known = scene.loads()?;
     known.pressures_pa.clone_from(&case.pressures_pa);
     let mut est: Box<dyn Estimator> = es.build_for(&nominal, &known)?;
-    let vp = est.step(&frame_free.observation(&arcs)?)?.converged()?;
-    let e = est.step(&frame.observation(&arcs)?)?.converged()?;
+    let vp = est.step(&frame_free.observation(arcs)?)?.converged()?;
+    let e = est.step(&frame.observation(arcs)?)?.converged()?;
     let peak = peak_contact(&nominal, e.f.as_slice(), vp.f.as_slice())?;
     // the point search on the calibrated model, with its own virtual payload
     let model_scene = calib.apply(&scene);
@@ -229,14 +230,14 @@ pub fn run_localization(
     let mut known = model_scene.loads()?;
     known.pressures_pa.clone_from(&case.pressures_pa);
     let mut est: Box<dyn Estimator> = es.build_for(&model, &known)?;
-    let vp = est.step(&frame_free.observation(&arcs)?)?.converged()?;
+    let vp = est.step(&frame_free.observation(arcs)?)?.converged()?;
     let mut with_vp = known;
     with_vp.distributed_f = vp.f.as_slice().to_vec();
-    let offset = marker_offset(&model, &with_vp, &arcs, &frame_free.positions_m)?;
+    let offset = marker_offset(&model, &with_vp, arcs, &frame_free.positions_m)?;
     let point = locate_point_force(
         &model,
         &with_vp,
-        &arcs,
+        arcs,
         &frame.positions_m,
         &offset,
         &PointSearchSettings::default(),

@@ -186,7 +186,8 @@ pub fn avoidance_table(
 ) -> Result<Vec<AvoidRow>> {
     let scene = five_section_scene(settings.model_elements);
     let arcs = marker_arcs(6);
-    let cal = calibrate_on_free_plant(&scene, &arcs, plant)?;
+    let arcs = arcs.as_slice();
+    let cal = calibrate_on_free_plant(&scene, arcs, plant)?;
     let bounds = scene.robot()?.pressure_bounds();
     let mut rows = Vec::new();
     for &(center_m, radius_m) in placements {
@@ -195,13 +196,13 @@ pub fn avoidance_table(
                 let obstacles =
                     Obstacles::new(vec![Obstacle::Circle { center_m, radius_m }], ROD_RADIUS_M)?;
                 let mut p =
-                    SimulatedPlant::new(&scene, &arcs, plant.clone())?.with_obstacles(obstacles)?;
+                    SimulatedPlant::new(&scene, arcs, plant.clone())?.with_obstacles(obstacles)?;
                 let s = AvoidSettings {
                     touch_feedback: feedback,
                     ..settings.clone()
                 };
                 let start = Instant::now();
-                let run = run_avoidance(&scene, &cal, &arcs, &mut p, goal_m, &s)?;
+                let run = run_avoidance(&scene, &cal, arcs, &mut p, goal_m, &s)?;
                 Ok(AvoidSummary::of(
                     &run,
                     start.elapsed().as_secs_f64(),

@@ -107,7 +107,10 @@ impl FingerController {
         let r: Vec<f64> = if self.vp.is_empty() {
             vec![0.0; est.f.len()]
         } else {
-            self.vp.subtract(&self.pressures, est.f.as_slice())?
+            self.vp
+                .subtract(&self.pressures, est.f.as_slice())?
+                .data
+                .into()
         };
         self.recent.push(r);
         if self.recent.len() > AVERAGED_ESTIMATES {

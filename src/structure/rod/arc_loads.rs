@@ -31,7 +31,7 @@ impl<E: Element> Rod<E> {
             if cuts.is_empty() {
                 for (xi, wt) in self.line_rule.iter() {
                     let w = l.at(x0 + xi * le, total);
-                    add_shape_force(el, xi, &w, wt * le, out);
+                    add_shape_force(el, xi, w.as_slice(), wt * le, out);
                 }
                 continue;
             }
@@ -42,7 +42,7 @@ impl<E: Element> Rod<E> {
                 let h = b - a;
                 for (xi, wt) in self.line_rule.iter() {
                     let x = a + xi * h;
-                    add_shape_force(el, (x - x0) / le, &l.at(x, total), wt * h, out);
+                    add_shape_force(el, (x - x0) / le, l.at(x, total).as_slice(), wt * h, out);
                 }
                 a = b;
             }
