@@ -28,6 +28,7 @@
 //! (`trajectory.radius_m`, `loop.gains.k_p_per_s`, `payloads[1].end_s`,
 //! `trajectory.pressures_pa[3][1]`, …).
 
+use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_all_finite, check_len, Error, Result};
@@ -315,6 +316,61 @@ pub struct TrackSample {
     /// How the step ended (`ok`, `ik_failed`: last command held,
     /// `plant_failed`: the plant's equilibrium failed and the run stopped).
     pub status: StepStatus,
+}
+
+impl TrackSample {
+    /// [`TrackSample::desired_m`] as a vector (m).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::control::{EstimateFlag, IkStatus, StepStatus, TrackSample};
+    /// let s = TrackSample {
+    ///     time_s: 1.0, desired_m: vec![0.2, 0.05], actual_m: vec![0.2, 0.0498],
+    ///     measured_m: vec![0.2, 0.0497], error_m: 2e-4, payload_kg: 0.0,
+    ///     estimated_load_n: vec![0.0, -0.1], estimator_load_n: vec![0.0, -0.12],
+    ///     pressures_pa: vec![0.0; 4], step_time_s: 0.0, ik: IkStatus::NotSolved,
+    ///     estimate: EstimateFlag::NotRun, status: StepStatus::Ok,
+    /// };
+    /// assert!(((s.actual() - s.desired()).norm() - s.error_m).abs() < 1e-15);
+    /// assert_eq!(s.measured(), nalgebra::dvector![0.2, 0.0497]);
+    /// assert_eq!(s.estimated_load(), nalgebra::dvector![0.0, -0.1]);
+    /// assert_eq!(s.estimator_load(), nalgebra::dvector![0.0, -0.12]);
+    /// ```
+    pub fn desired(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.desired_m)
+    }
+
+    /// [`TrackSample::actual_m`] as a vector (m).
+    ///
+    /// # Example
+    /// See [`TrackSample::desired`].
+    pub fn actual(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.actual_m)
+    }
+
+    /// [`TrackSample::measured_m`] as a vector (m).
+    ///
+    /// # Example
+    /// See [`TrackSample::desired`].
+    pub fn measured(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.measured_m)
+    }
+
+    /// [`TrackSample::estimated_load_n`] as a vector (N).
+    ///
+    /// # Example
+    /// See [`TrackSample::desired`].
+    pub fn estimated_load(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.estimated_load_n)
+    }
+
+    /// [`TrackSample::estimator_load_n`] as a vector (N).
+    ///
+    /// # Example
+    /// See [`TrackSample::desired`].
+    pub fn estimator_load(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.estimator_load_n)
+    }
 }
 
 /// The summary of a tracking run.

@@ -122,6 +122,7 @@ impl MassRow {
     ///     unloaded_m: vec![0.24, 0.0], loaded_m: vec![0.239, -0.01], converged: true,
     /// };
     /// assert!((r.displacement() - nalgebra::dvector![-0.001, -0.01]).norm() < 1e-15);
+    /// assert_eq!(r.loaded() - r.unloaded(), r.displacement());
     /// ```
     pub fn displacement(&self) -> nalgebra::DVector<f64> {
         nalgebra::DVector::from_iterator(
@@ -131,6 +132,22 @@ impl MassRow {
                 .zip(&self.unloaded_m)
                 .map(|(l, u)| l - u),
         )
+    }
+
+    /// [`MassRow::unloaded_m`] as a vector (m).
+    ///
+    /// # Example
+    /// See [`MassRow::displacement`].
+    pub fn unloaded(&self) -> nalgebra::DVector<f64> {
+        nalgebra::DVector::from_column_slice(&self.unloaded_m)
+    }
+
+    /// [`MassRow::loaded_m`] as a vector (m).
+    ///
+    /// # Example
+    /// See [`MassRow::displacement`].
+    pub fn loaded(&self) -> nalgebra::DVector<f64> {
+        nalgebra::DVector::from_column_slice(&self.loaded_m)
     }
 }
 

@@ -14,12 +14,33 @@ use crate::scene::Scene;
 use crate::statics::StaticSolver;
 
 /// One contact-free observation: pressures held and the markers seen.
+///
+/// # Example
+/// ```
+/// let f = softrod::touch::FreeFrame { pressures_pa: vec![0.0; 10], markers_m: vec![vec![0.0, 0.0], vec![0.0, -0.465]] };
+/// assert_eq!(f.marker(1), Some(nalgebra::Vector2::new(0.0, -0.465)));
+/// assert_eq!(f.marker(2), None);
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FreeFrame {
     /// Chamber pressures (Pa).
     pub pressures_pa: Vec<f64>,
     /// Marker positions (m), one per marker.
     pub markers_m: Vec<Vec<f64>>,
+}
+
+impl FreeFrame {
+    /// Marker `i`'s position (m); `None` past the last marker or for a
+    /// position that is not planar.
+    ///
+    /// # Example
+    /// See [`FreeFrame`].
+    pub fn marker(&self, i: usize) -> Option<nalgebra::Vector2<f64>> {
+        match self.markers_m.get(i)?.as_slice() {
+            [x, y] => Some(nalgebra::Vector2::new(*x, *y)),
+            _ => None,
+        }
+    }
 }
 
 /// The calibrated factors.
