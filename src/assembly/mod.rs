@@ -104,10 +104,12 @@ impl<E: Element> Robot<E> {
             |s: &Section, le, ax, be| make.build(s, le, ax, be),
         )?;
         let dir = base_direction(&spec.base, d)?;
-        let base_node = E::straight_node(&spec.base.position_m, &dir);
+        let base_node: Vec<f64> = E::straight_node(&spec.base.position_m, &dir).data.into();
         check_len("element straight_node", nd, base_node.len())?;
         let base_free = match spec.base.clamp {
-            Clamp::PositionAndDirection => E::clamp_free_directions(&base_node),
+            Clamp::PositionAndDirection => {
+                crate::element::direction_list(&E::clamp_free_directions(&base_node))
+            }
             Clamp::Full => Vec::new(),
         };
         for t in &base_free {

@@ -27,7 +27,7 @@ impl<E: Element> Robot<E> {
     /// assert!(a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-15));
     /// ```
     pub fn apply_load_gram(&self, f: &[f64]) -> Result<DVector<f64>> {
-        self.rod.apply_load_gram(f).map(DVector::from_vec)
+        self.rod.apply_load_gram(f)
     }
 
     /// Maps a step `du` of the free coordinates to the step of all `n_q`
@@ -95,7 +95,7 @@ impl<E: Element> Robot<E> {
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn position_at(&self, q: &[f64], s: f64) -> Result<DVector<f64>> {
-        self.rod.position_at(q, s).map(DVector::from_vec)
+        self.rod.position_at(q, s)
     }
 
     /// [`Robot::position_at`] as a fixed-size point of dimension `D`
@@ -118,7 +118,7 @@ impl<E: Element> Robot<E> {
     pub fn position_at_fixed<const D: usize>(&self, q: &[f64], s: f64) -> Result<SVector<f64, D>> {
         check_len("position dimension", E::DIM, D)?;
         let p = self.rod.position_at(q, s)?;
-        Ok(SVector::from_column_slice(&p))
+        Ok(SVector::from_column_slice(p.as_slice()))
     }
 
     /// The dead (configuration-independent) generalized forces over all
@@ -145,7 +145,7 @@ impl<E: Element> Robot<E> {
     /// ```
     pub fn dead_force(&self, loads: &Loads) -> Result<DVector<f64>> {
         self.validate_loads(loads)?;
-        self.rod.dead_force(loads).map(DVector::from_vec)
+        self.rod.dead_force(loads)
     }
 
     /// The section torques `M_s = Σ_c G_c P_c` (N·m): a `MOMENT_DIM ×
@@ -164,11 +164,7 @@ impl<E: Element> Robot<E> {
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn section_torques(&self, pressures: &[f64]) -> DMatrix<f64> {
-        let columns = self.rod.section_torques(pressures);
-        let rows = E::MOMENT_DIM;
-        DMatrix::from_fn(rows, columns.len(), |i, s| {
-            columns[s].get(i).copied().unwrap_or(0.0)
-        })
+        self.rod.section_torques(pressures)
     }
 
     /// Generalized force `Q(q)` over the free coordinates (17): the dead
@@ -254,7 +250,6 @@ impl<E: Element> Robot<E> {
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn node_positions(&self, q: &[f64]) -> DMatrix<f64> {
-        let nodes = self.rod.node_positions(q);
-        DMatrix::from_fn(E::DIM, nodes.len(), |i, n| nodes[n][i])
+        self.rod.node_positions(q)
     }
 }

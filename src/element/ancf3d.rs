@@ -89,6 +89,7 @@ mod kinematics;
 
 use jet::{Dual, Jet, Scalar};
 use kinematics::{line_density, node_frame, node_penalty, rotation_vector, strains, LineStiffness};
+use nalgebra::{DMatrix, DVector};
 
 use super::{hermite, Element, NodeKinematics, DEFAULT_GAUSS_POINTS};
 use crate::error::{check_positive, Error, Result};
@@ -595,33 +596,39 @@ impl NodeKinematics for Ancf3d {
     /// `[position, direction, e2, e3]`: `r_X` is `direction` as given, the
     /// section gradients the unit axes `straight_frame` carries along the
     /// unit direction (NaN for a zero or non-finite direction).
-    fn straight_node(position: &[f64], direction: &[f64]) -> Vec<f64> {
-        let ([x, y, z], [dx, dy, dz]) = (position, direction) else {
-            return vec![f64::NAN; ND];
-        };
-        let n = (dx * dx + dy * dy + dz * dz).sqrt();
-        if !(n > 0.0 && n.is_finite()) {
-            return vec![f64::NAN; ND];
-        }
-        let [_, e2, e3] = straight_frame([dx / n, dy / n, dz / n]);
-        let mut q = vec![*x, *y, *z, *dx, *dy, *dz];
-        q.extend_from_slice(&e2);
-        q.extend_from_slice(&e3);
-        q
+    fn straight_node(position: &[f64], direction: &[f64]) -> DVector<f64> {
+        DVector::from_vec({
+            let ([x, y, z], [dx, dy, dz]) = (position, direction) else {
+                return DVector::from_vec(vec![f64::NAN; ND]);
+            };
+            let n = (dx * dx + dy * dy + dz * dz).sqrt();
+            if !(n > 0.0 && n.is_finite()) {
+                return DVector::from_vec(vec![f64::NAN; ND]);
+            }
+            let [_, e2, e3] = straight_frame([dx / n, dy / n, dz / n]);
+            let mut q = vec![*x, *y, *z, *dx, *dy, *dz];
+            q.extend_from_slice(&e2);
+            q.extend_from_slice(&e3);
+            q
+        })
     }
 
-    fn node_tangent(node: &[f64]) -> Vec<f64> {
-        match frame_of(node) {
-            Some([t, _, _]) => t.to_vec(),
-            None => vec![f64::NAN; 3],
-        }
+    fn node_tangent(node: &[f64]) -> DVector<f64> {
+        DVector::from_vec({
+            match frame_of(node) {
+                Some([t, _, _]) => t.to_vec(),
+                None => vec![f64::NAN; 3],
+            }
+        })
     }
 
-    fn node_rotation(reference: &[f64], node: &[f64]) -> Vec<f64> {
-        match (frame_of(reference), gradients(node)) {
-            (Some(r0), Some(n)) => rotation_vector(&r0, &n).to_vec(),
-            _ => vec![f64::NAN; 3],
-        }
+    fn node_rotation(reference: &[f64], node: &[f64]) -> DVector<f64> {
+        DVector::from_vec({
+            match (frame_of(reference), gradients(node)) {
+                (Some(r0), Some(n)) => rotation_vector(&r0, &n).to_vec(),
+                _ => vec![f64::NAN; 3],
+            }
+        })
     }
 
     fn add_moment_work(
@@ -652,15 +659,17 @@ impl NodeKinematics for Ancf3d {
     }
 
     /// The stretch along the tangent: `r_X` scaled, the frame kept.
-    fn clamp_free_directions(node: &[f64]) -> Vec<Vec<f64>> {
-        match frame_of(node) {
-            Some([t, _, _]) => {
-                let mut d = vec![0.0; ND];
-                d[3..6].copy_from_slice(&t);
-                vec![d]
+    fn clamp_free_directions(node: &[f64]) -> DMatrix<f64> {
+        super::direction_columns(Self::NODE_DOFS, {
+            match frame_of(node) {
+                Some([t, _, _]) => {
+                    let mut d = vec![0.0; ND];
+                    d[3..6].copy_from_slice(&t);
+                    vec![d]
+                }
+                None => Vec::new(),
             }
-            None => Vec::new(),
-        }
+        })
     }
 
     fn moment_work_between(reference: &[f64], from: &[f64], to: &[f64], moment: &[f64]) -> f64 {

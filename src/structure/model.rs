@@ -12,6 +12,8 @@
 
 use std::sync::Arc;
 
+use nalgebra::DVector;
+
 use super::{Structure, StructureLoads, Triplets};
 use crate::element::Element;
 use crate::error::{check_len, Error, Result};
@@ -63,7 +65,7 @@ pub trait Assembled {
 
     /// The free coordinates of the straight, unstressed reference (where a
     /// solve starts by default).
-    fn reference_free_coordinates(&self) -> Vec<f64>;
+    fn reference_free_coordinates(&self) -> DVector<f64>;
 
     /// Checks that `loads` fit the model.
     ///
@@ -76,7 +78,7 @@ pub trait Assembled {
     ///
     /// # Errors
     /// As the model's load checks.
-    fn dead_force(&self, loads: &Self::Loads) -> Result<Vec<f64>>;
+    fn dead_force(&self, loads: &Self::Loads) -> Result<DVector<f64>>;
 
     /// `loads` scaled by `factor` (a load step).
     fn scaled_loads(&self, loads: &Self::Loads, factor: f64) -> Self::Loads;
@@ -158,7 +160,7 @@ pub trait Assembled {
     /// assert_eq!(robot.free_coordinates_of(&q)?, u);
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    fn free_coordinates_of(&self, q: &[f64]) -> Result<Vec<f64>>;
+    fn free_coordinates_of(&self, q: &[f64]) -> Result<DVector<f64>>;
 
     /// Where a solve without a start point starts: the straight reference
     /// ([`Assembled::reference_free_coordinates`]) unless the model knows a
@@ -177,7 +179,7 @@ pub trait Assembled {
     /// assert_eq!(u, robot.reference_free_coordinates());
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    fn start_free_coordinates(&self, loads: &Self::Loads) -> Result<Vec<f64>> {
+    fn start_free_coordinates(&self, loads: &Self::Loads) -> Result<DVector<f64>> {
         self.validate_loads(loads)?;
         Ok(self.reference_free_coordinates())
     }
@@ -431,7 +433,7 @@ pub trait Assembled {
     /// assert!(u.iter().zip(&straight).all(|(a, b)| (a - b).abs() < 1e-14));
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    fn prolong(&self, coarse: &Self, q_coarse: &[f64]) -> Result<Vec<f64>>
+    fn prolong(&self, coarse: &Self, q_coarse: &[f64]) -> Result<DVector<f64>>
     where
         Self: Sized,
     {
@@ -498,16 +500,16 @@ impl<E: Element> Assembled for Structure<E> {
         self.dof_map().configuration_into(u, q)
     }
 
-    fn reference_free_coordinates(&self) -> Vec<f64> {
-        Structure::reference_free_coordinates(self).to_vec()
+    fn reference_free_coordinates(&self) -> DVector<f64> {
+        DVector::from_column_slice(Structure::reference_free_coordinates(self))
     }
 
     fn validate_loads(&self, loads: &StructureLoads) -> Result<()> {
         Structure::validate_loads(self, loads)
     }
 
-    fn dead_force(&self, loads: &StructureLoads) -> Result<Vec<f64>> {
-        Structure::dead_force(self, loads).map(|f| f.data.into())
+    fn dead_force(&self, loads: &StructureLoads) -> Result<DVector<f64>> {
+        Structure::dead_force(self, loads)
     }
 
     fn scaled_loads(&self, loads: &StructureLoads, factor: f64) -> StructureLoads {
@@ -566,7 +568,7 @@ impl<E: Element> Assembled for Structure<E> {
     /// each joined block's, each force field's coordinates through the map,
     /// whatever their values): the pattern of every tangent of this
     /// structure.
-    fn free_coordinates_of(&self, q: &[f64]) -> Result<Vec<f64>> {
+    fn free_coordinates_of(&self, q: &[f64]) -> Result<DVector<f64>> {
         self.dof_map().free_coordinates_of(q)
     }
 
