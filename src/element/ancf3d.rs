@@ -233,8 +233,8 @@ impl Point {
 /// use softrod::element::{Ancf3d, Element, NodeKinematics};
 /// let e = Ancf3d::new(0.1, 300.0, 0.025, 0.019)?;
 /// // a straight stress-free element along x: no energy
-/// let mut qe = Ancf3d::straight_node(&[0.0; 3], &[1.0, 0.0, 0.0]);
-/// qe.extend(Ancf3d::straight_node(&[0.1, 0.0, 0.0], &[1.0, 0.0, 0.0]));
+/// let mut qe = Ancf3d::straight_node(&[0.0; 3], &[1.0, 0.0, 0.0]).as_slice().to_vec();
+/// qe.extend(Ancf3d::straight_node(&[0.1, 0.0, 0.0], &[1.0, 0.0, 0.0]).iter());
 /// assert!(e.energy(&qe).abs() < 1e-20);
 /// // twisted by 0.01 rad about x at node 2: U = ½ GJ τ² L_e, τ = 0.1 rad/m
 /// let (c, s) = (0.01f64.cos(), 0.01f64.sin());
@@ -359,8 +359,8 @@ impl Ancf3d {
     /// ```
     /// use softrod::element::{Ancf3d, NodeKinematics};
     /// let e = softrod::element::Ancf3d::new(0.1, 300.0, 0.025, 0.019)?;
-    /// let mut qe = Ancf3d::straight_node(&[0.0; 3], &[0.0, 0.0, 1.0]);
-    /// qe.extend(Ancf3d::straight_node(&[0.0, 0.0, 0.1], &[0.0, 0.0, 1.0]));
+    /// let mut qe = Ancf3d::straight_node(&[0.0; 3], &[0.0, 0.0, 1.0]).as_slice().to_vec();
+    /// qe.extend(Ancf3d::straight_node(&[0.0, 0.0, 0.1], &[0.0, 0.0, 1.0]).iter());
     /// let p = e.material_point(&qe, 0.5, 0.01, 0.0);
     /// assert!((p[2] - 0.05).abs() < 1e-15 && (p[1] - 0.01).abs() < 1e-15);
     /// # Ok::<(), softrod::Error>(())
@@ -387,8 +387,8 @@ impl Ancf3d {
     /// ```
     /// use softrod::element::{Ancf3d, NodeKinematics};
     /// let e = Ancf3d::new(1.0, 1.0, 1.0, 1.0)?;
-    /// let mut qe = Ancf3d::straight_node(&[0.0; 3], &[1.0, 0.0, 0.0]);
-    /// qe.extend(Ancf3d::straight_node(&[1.0, 0.0, 0.0], &[1.0, 0.0, 0.0]));
+    /// let mut qe = Ancf3d::straight_node(&[0.0; 3], &[1.0, 0.0, 0.0]).as_slice().to_vec();
+    /// qe.extend(Ancf3d::straight_node(&[1.0, 0.0, 0.0], &[1.0, 0.0, 0.0]).iter());
     /// let [eps, ky, kz, tau] = e.strains(&qe, 0.3);
     /// assert!(eps.abs() < 1e-15 && ky.abs() < 1e-15 && kz.abs() < 1e-15 && tau.abs() < 1e-15);
     /// # Ok::<(), softrod::Error>(())

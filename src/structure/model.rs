@@ -35,11 +35,11 @@ use crate::linsolve::{SymmetricMatrix, SymmetricPattern};
 /// fn residual_norm<M: Assembled>(m: &M, loads: &M::Loads) -> softrod::Result<f64> {
 ///     let u = m.reference_free_coordinates();
 ///     let mut q = vec![0.0; m.n_q()];
-///     m.configuration_into(&u, &mut q)?;
+///     m.configuration_into(u.as_slice(), &mut q)?;
 ///     let dead = m.dead_force(loads)?;
 ///     let mut r = vec![0.0; m.n_free()];
 ///     let mut k = SymmetricMatrix::zeros(m.tangent_pattern()?);
-///     m.residual_and_tangent_into(&u, &q, &dead, loads, &mut r, &mut k)?;
+///     m.residual_and_tangent_into(u.as_slice(), &q, dead.as_slice(), loads, &mut r, &mut k)?;
 ///     Ok(r.iter().fold(0.0f64, |a, v| a.max(v.abs())))
 /// }
 /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
@@ -156,7 +156,7 @@ pub trait Assembled {
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
     /// let u = robot.reference_free_coordinates();
     /// let mut q = vec![0.0; robot.n_q()];
-    /// robot.configuration_into(&u, &mut q)?;
+    /// robot.configuration_into(u.as_slice(), &mut q)?;
     /// assert_eq!(robot.free_coordinates_of(&q)?, u);
     /// # Ok::<(), softrod::Error>(())
     /// ```
@@ -198,7 +198,7 @@ pub trait Assembled {
     /// use softrod::structure::Assembled;
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
     /// let loads = softrod::loads::Loads::default();
-    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration().as_slice().to_vec());
+    /// let (u, q) = (robot.reference_free_coordinates().as_slice().to_vec(), robot.reference_configuration().as_slice().to_vec());
     /// let dead = robot.dead_force(&loads)?;
     /// let mut f = vec![0.0; robot.n_free()];
     /// robot.applied_force_into(&u, &q, dead.as_slice(), &loads, &mut f)?;
@@ -227,7 +227,7 @@ pub trait Assembled {
     /// use softrod::structure::Assembled;
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
     /// let loads = softrod::loads::Loads::default();
-    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration().as_slice().to_vec());
+    /// let (u, q) = (robot.reference_free_coordinates().as_slice().to_vec(), robot.reference_configuration().as_slice().to_vec());
     /// let dead = robot.dead_force(&loads)?;
     /// let mut k = softrod::linsolve::SymmetricMatrix::zeros(Assembled::tangent_pattern(&robot)?);
     /// Assembled::tangent_into(&robot, &u, &q, dead.as_slice(), &loads, &mut k)?;
@@ -261,7 +261,7 @@ pub trait Assembled {
     /// let mut du = vec![0.0; robot.n_free()];
     /// du[0] = 0.01;
     /// let mut dq = vec![0.0; robot.n_q()];
-    /// robot.step_into(&robot.reference_free_coordinates(), &du, &mut dq)?;
+    /// robot.step_into(robot.reference_free_coordinates().as_slice(), &du, &mut dq)?;
     /// assert_eq!(dq[2], 0.01);
     /// assert_eq!(robot.step_rotation(&dq), 0.01);
     /// # Ok::<(), softrod::Error>(())
@@ -282,7 +282,7 @@ pub trait Assembled {
     /// use softrod::assembly::{RobotSpec, Section};
     /// use softrod::structure::Assembled;
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
-    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration().as_slice().to_vec());
+    /// let (u, q) = (robot.reference_free_coordinates().as_slice().to_vec(), robot.reference_configuration().as_slice().to_vec());
     /// let mut du = vec![0.0; robot.n_free()];
     /// du[2] = 0.01; // node 1's y
     /// let mut dq = vec![0.0; robot.n_q()];
@@ -430,7 +430,7 @@ pub trait Assembled {
     /// let (coarse, _) = robot.coarse_model(&softrod::loads::Loads::default())?.unwrap();
     /// let u = robot.prolong(&coarse, coarse.reference_configuration().as_slice())?;
     /// let straight = robot.reference_free_coordinates();
-    /// assert!(u.iter().zip(&straight).all(|(a, b)| (a - b).abs() < 1e-14));
+    /// assert!(u.iter().zip(straight.iter()).all(|(a, b)| (a - b).abs() < 1e-14));
     /// # Ok::<(), softrod::Error>(())
     /// ```
     fn prolong(&self, coarse: &Self, q_coarse: &[f64]) -> Result<DVector<f64>>
@@ -458,7 +458,7 @@ pub trait Assembled {
     /// use softrod::structure::Assembled;
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
     /// let loads = softrod::loads::Loads::default();
-    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration().as_slice().to_vec());
+    /// let (u, q) = (robot.reference_free_coordinates().as_slice().to_vec(), robot.reference_configuration().as_slice().to_vec());
     /// let dead = robot.dead_force(&loads)?;
     /// let (mut u1, mut q1) = (u.clone(), q.clone());
     /// u1[2] += 1e-3;

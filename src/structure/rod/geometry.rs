@@ -92,7 +92,7 @@ impl<E: Element> Rod<E> {
     ///     |s, le, ax, be| PlanarCable::with_rules(le, s.ea_n, s.ei_nm2, 0.0, ax, be)).unwrap();
     /// let q = rod.straight_configuration(&[0.0, 0.0], &[1.0, 0.0]);
     /// let mut r = [0.0; 2];
-    /// rod.arc_point("s_m", 0.13).unwrap().value_into(&q, &mut r).unwrap();
+    /// rod.arc_point("s_m", 0.13).unwrap().value_into(q.as_slice(), &mut r).unwrap();
     /// assert!((r[0] - 0.13).abs() < 1e-15);
     /// ```
     pub fn arc_point(&self, name: &str, s: f64) -> Result<ArcPoint> {
