@@ -5,7 +5,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
 use crate::element::Element;
-use crate::error::{check_all_finite, check_finite, check_len, check_positive, Error, Result};
+use crate::error::{
+    check_all_finite, check_finite, check_index, check_len, check_positive, Error, Result,
+};
 
 use super::{FollowerLoad, LineLoad, Loads, NodeMoment, PointForce, PointMoment};
 
@@ -92,15 +94,139 @@ pub enum Load {
 }
 
 impl Load {
-    /// Adds this load to `loads` in the solver's terms: a tip load acts at
-    /// the arc coordinate `length_m` or the last of `n_nodes` nodes; a tip
-    /// mass under `gravity` (m/s²), which must have `dim` components. Errors
-    /// name the load's own fields (the caller prefixes them).
+    /// Checks this load against `robot`: vectors of the element's
+    /// dimension (a moment of its moment dimension), finite values, a
+    /// positive tip mass, a non-negative extra weight, and places on the
+    /// robot (arc positions, a node beyond the clamped base, a table's
+    /// entries, a Gaussian's centre, a follower load on a planar robot).
+    /// Errors name the field under `path` (`path.field`; just `field` when
+    /// `path` is empty): a scene checks its `loads[i]` with
+    /// `path = "loads[i]"`, and [`Loads::add`] with `""`.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] for a non-positive tip mass or a
-    /// negative extra weight; [`Error::DimensionMismatch`] for a gravity
-    /// vector of the wrong size.
+    /// [`Error::InvalidParameter`], [`Error::DimensionMismatch`] or
+    /// [`Error::IndexOutOfRange`] naming the field at fault.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::loads::Load;
+    /// let robot = softrod::scene::Scene::two_section().robot()?;
+    /// let off = Load::PointForce { s_m: 0.5, force_n: vec![0.0, -0.1] };
+    /// assert_eq!(off.validate(&robot, "loads[2]").unwrap_err().field(), Some("loads[2].s_m"));
+    /// let short = Load::TipForce { force_n: vec![0.0] };
+    /// assert_eq!(short.validate(&robot, "").unwrap_err().field(), Some("force_n"));
+    /// assert!(Load::TipMass { mass_kg: 0.02 }.validate(&robot, "loads[0]").is_ok());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn validate<E: Element>(&self, robot: &Robot<E>, path: &str) -> Result<()> {
+        self.check_values(E::DIM, E::MOMENT_DIM)
+            .and_then(|()| self.check_place(robot))
+            .map_err(|e| {
+                if path.is_empty() {
+                    e
+                } else {
+                    e.with_prefix(&format!("{path}."))
+                }
+            })
+    }
+
+    /// The checks of [`Load::validate`] that need no robot: sizes (`dim`
+    /// components, a moment `moment_dim`), finite values and signs. Errors
+    /// name the load's own fields.
+    pub(crate) fn check_values(&self, dim: usize, moment_dim: usize) -> Result<()> {
+        let vector = |name: &str, v: &[f64]| -> Result<()> {
+            check_len(name, dim, v.len())?;
+            check_all_finite(name, v)
+        };
+        match self {
+            Load::Distributed(l) => l.validate("", dim),
+            Load::TipForce { force_n } | Load::PointForce { force_n, .. } => {
+                vector("force_n", force_n)
+            }
+            Load::TipMoment { moment_nm }
+            | Load::NodeMoment { moment_nm, .. }
+            | Load::Moment { moment_nm, .. } => moment_nm.validate("moment_nm", moment_dim),
+            Load::SelfWeight {
+                mass_per_length_kg_per_m: m,
+                gravity_m_per_s2: g,
+            } => {
+                if !(m.is_finite() && *m >= 0.0) {
+                    return Err(Error::invalid(
+                        "mass_per_length_kg_per_m",
+                        m,
+                        "must be finite and >= 0",
+                    ));
+                }
+                vector("gravity_m_per_s2", g)
+            }
+            Load::TipMass { mass_kg } => check_positive("mass_kg", *mass_kg),
+            Load::Follower(f) => {
+                if dim != 2 {
+                    return Err(Error::invalid(
+                        "type",
+                        "\"follower\"",
+                        "a pressure normal to the backbone needs a planar scene (planar_cable)",
+                    ));
+                }
+                check_finite("pressure_n_per_m", f.pressure_n_per_m)
+            }
+        }
+    }
+
+    /// The checks of [`Load::validate`] against the robot's extent: arc
+    /// positions on it, moments beyond the clamped base.
+    fn check_place<E: Element>(&self, robot: &Robot<E>) -> Result<()> {
+        match self {
+            Load::Distributed(l) => {
+                l.check_on_robot("", robot.length())?;
+                match l {
+                    // a bump centred off the robot acts only through its tail:
+                    // almost surely a typo (a length in mm, the wrong section)
+                    LineLoad::Gaussian { center_m, .. } => {
+                        robot.locate("center_m", *center_m).map(|_| ())
+                    }
+                    _ => Ok(()),
+                }
+            }
+            Load::PointForce { s_m, .. } => robot.locate("s_m", *s_m).map(|_| ()),
+            Load::NodeMoment { node, .. } => {
+                check_index("node", *node, robot.n_nodes())?;
+                if *node == 0 {
+                    return Err(Error::invalid(
+                        "node",
+                        0,
+                        "the clamped base takes no moment: must be a free node, >= 1",
+                    ));
+                }
+                Ok(())
+            }
+            Load::Moment { s_m, .. } => {
+                robot.locate("s_m", *s_m)?;
+                if *s_m <= 0.0 {
+                    return Err(Error::invalid(
+                        "s_m",
+                        s_m,
+                        "the clamped base takes no moment: must be > 0",
+                    ));
+                }
+                Ok(())
+            }
+            Load::Follower(f) => f.validate("", robot.length()),
+            Load::TipForce { .. }
+            | Load::TipMoment { .. }
+            | Load::SelfWeight { .. }
+            | Load::TipMass { .. } => Ok(()),
+        }
+    }
+
+    /// Adds this load to `loads` in the solver's terms: a tip load acts at
+    /// the arc coordinate `length_m` or the last of `n_nodes` nodes; a tip
+    /// mass under `gravity` (m/s²), which must have `dim` components. The
+    /// load's values are checked by the callers ([`Load::validate`],
+    /// [`Load::check_values`]).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for a `gravity` of the wrong size.
     pub(crate) fn resolve_into(
         &self,
         dim: usize,
@@ -136,21 +262,11 @@ impl Load {
             Load::SelfWeight {
                 mass_per_length_kg_per_m: m,
                 gravity_m_per_s2: g,
-            } => {
-                if !(m.is_finite() && *m >= 0.0) {
-                    return Err(Error::invalid(
-                        "mass_per_length_kg_per_m",
-                        m,
-                        "must be finite and >= 0",
-                    ));
-                }
-                check_len("gravity_m_per_s2", d, g.len())?;
-                loads.line_loads.push(LineLoad::Uniform {
-                    w_n_per_m: g.iter().map(|g| m * g).collect(),
-                })
-            }
+            } => loads.line_loads.push(LineLoad::Uniform {
+                w_n_per_m: g.iter().map(|g| m * g).collect(),
+            }),
             Load::TipMass { mass_kg } => {
-                check_positive("mass_kg", *mass_kg)?;
+                // the robot's (or scene's) gravity, not a field of the load
                 check_len("gravity_m_per_s2", d, gravity.len())?;
                 loads.point_forces.push(PointForce {
                     s_m: total,
@@ -291,18 +407,19 @@ impl<'de> Deserialize<'de> for MomentNm {
 impl Loads {
     /// Adds `load` for `robot`: a tip load at the robot's tip (its length,
     /// its last node), a tip mass under the robot's gravity; the other
-    /// kinds as they are. The same conversion a scene's loads take
-    /// ([`crate::scene::Scene::loads`]). Errors name the load's fields.
+    /// kinds as they are. The same check ([`Load::validate`]) and
+    /// conversion a scene's loads take ([`crate::scene::Scene::loads`]):
+    /// a load a scene refuses is refused here too. Errors name the load's
+    /// fields.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] for a non-positive tip mass or a
-    /// negative extra weight; [`Error::DimensionMismatch`] for a self
-    /// weight's gravity of the wrong size. Everything else is checked where
-    /// the loads are used ([`Robot::validate_loads`]).
+    /// As [`Load::validate`]; [`Error::DimensionMismatch`] for a tip mass
+    /// on a robot whose gravity has the wrong size.
     ///
     /// # Example
     /// See [`Load`].
     pub fn add<E: Element>(&mut self, robot: &Robot<E>, load: &Load) -> Result<()> {
+        load.validate(robot, "")?;
         load.resolve_into(
             E::DIM,
             robot.length(),
