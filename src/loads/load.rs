@@ -428,4 +428,49 @@ impl Loads {
             self,
         )
     }
+
+    /// The loads of a solve from the chamber pressures (Pa) and a list of
+    /// known [`Load`]s, as a scene states them: each checked
+    /// ([`Load::validate`], errors named `loads[i].…` as in a scene file)
+    /// and added ([`Loads::add`]).
+    ///
+    /// # Errors
+    /// As [`Load::validate`] for `loads[i]`; [`Error::DimensionMismatch`]
+    /// named `pressures_pa` if there is not one pressure per chamber.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::loads::{Load, Loads, MomentNm};
+    /// let robot = softrod::scene::Scene::two_section().robot()?;
+    /// let loads = Loads::from_loads(&robot, &[0.0; 4], &[
+    ///     Load::TipForce { force_n: vec![0.0, -0.05] },
+    ///     Load::Moment { s_m: 0.12, moment_nm: MomentNm::Scalar(0.002) },
+    /// ])?;
+    /// assert_eq!((loads.point_forces.len(), loads.point_moments.len()), (1, 1));
+    /// let bad = Loads::from_loads(&robot, &[0.0; 4], &[Load::TipMass { mass_kg: -1.0 }]);
+    /// assert_eq!(bad.unwrap_err().field(), Some("loads[0].mass_kg"));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn from_loads<E: Element>(
+        robot: &Robot<E>,
+        pressures_pa: &[f64],
+        loads: &[Load],
+    ) -> Result<Loads> {
+        check_len("pressures_pa", robot.n_pressures(), pressures_pa.len())?;
+        let mut out = Loads {
+            pressures_pa: pressures_pa.to_vec(),
+            ..Loads::default()
+        };
+        for (i, load) in loads.iter().enumerate() {
+            load.validate(robot, &format!("loads[{i}]"))?;
+            load.resolve_into(
+                E::DIM,
+                robot.length(),
+                robot.n_nodes(),
+                robot.rod().gravity(),
+                &mut out,
+            )?;
+        }
+        Ok(out)
+    }
 }
