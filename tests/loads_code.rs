@@ -2,6 +2,7 @@
 //! `Loads::add` and `Scene::validate` both use `Load::validate`, so a bad
 //! load is refused by both, naming the same field (the scene's under
 //! `loads[i].`) with the same message.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use softrod::loads::{FollowerLoad, LineLoad, Load, Loads, MomentNm};
 use softrod::scene::Scene;

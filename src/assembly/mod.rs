@@ -31,6 +31,7 @@ mod angles;
 mod coarse;
 mod configuration;
 mod follower;
+mod known_loads;
 mod model;
 mod spec;
 mod tangent;
