@@ -31,7 +31,7 @@ impl<E: Element> Robot<E> {
     }
 
     /// Maps a step `du` of the free coordinates to the step of all `n_q`
-    /// coordinates, `dq = T du` ([`DofMap::expand_into`]).
+    /// coordinates, `dq = T du` ([`crate::structure::DofMap::expand_into`]).
     ///
     /// # Errors
     /// [`crate::Error::DimensionMismatch`] if `du` has the wrong size.
@@ -60,7 +60,7 @@ impl<E: Element> Robot<E> {
 
     /// Restricts a generalized force over all `n_q` coordinates to the free
     /// coordinates, `Tᵀ f` (the work-conjugate of [`Robot::expand_step`];
-    /// [`DofMap::restrict_into`]).
+    /// [`crate::structure::DofMap::restrict_into`]).
     ///
     /// # Errors
     /// [`crate::Error::DimensionMismatch`] if `f` has the wrong size.
