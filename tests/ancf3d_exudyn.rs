@@ -157,7 +157,9 @@ fn solve(r: &Value, n: usize) -> ([f64; 3], Vec<f64>) {
     let reference = Ancf3d::straight_node(&[0.0; 3], &[1.0, 0.0, 0.0]);
     (
         [node[0], node[1], node[2]],
-        Ancf3d::node_rotation(&reference, node),
+        Ancf3d::node_rotation(reference.as_slice(), node)
+            .data
+            .into(),
     )
 }
 

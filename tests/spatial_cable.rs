@@ -220,7 +220,7 @@ fn tip_moment_rolls_the_cable_into_a_circle_of_radius_ei_over_m() {
         worst = worst.max(dist(&node[..3], &want));
     }
     let phi = SpatialCable::node_rotation(robot.base_node(), &q[q.len() - 6..]);
-    let phi_err = dist(&phi, &axis.map(|a| theta * a));
+    let phi_err = dist(phi.as_slice(), &axis.map(|a| theta * a));
     println!(
         "circle of radius EI/M: max node distance {:.2e} L, tip rotation error {phi_err:.2e}",
         worst / L

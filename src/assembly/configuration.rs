@@ -23,10 +23,8 @@ impl<E: Element> Robot<E> {
     /// ```
     pub fn reference_configuration(&self) -> DVector<f64> {
         let d = E::DIM;
-        DVector::from_vec(
-            self.rod
-                .straight_configuration(&self.base_node[..d], &self.base_node[d..2 * d]),
-        )
+        self.rod
+            .straight_configuration(&self.base_node[..d], &self.base_node[d..2 * d])
     }
 
     /// The configuration the section torques of `pressures` (plus rest

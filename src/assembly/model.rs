@@ -3,6 +3,8 @@
 
 use std::sync::Arc;
 
+use nalgebra::DVector;
+
 use super::Robot;
 use crate::element::Element;
 use crate::error::{check_len, Result};
@@ -21,8 +23,8 @@ impl<E: Element> Assembled for Robot<E> {
         self.coarsened(loads)
     }
 
-    fn prolong(&self, coarse: &Self, q_coarse: &[f64]) -> Result<Vec<f64>> {
-        self.prolong_from(coarse, q_coarse).map(|u| u.data.into())
+    fn prolong(&self, coarse: &Self, q_coarse: &[f64]) -> Result<DVector<f64>> {
+        self.prolong_from(coarse, q_coarse)
     }
 
     fn n_free(&self) -> usize {
@@ -37,20 +39,20 @@ impl<E: Element> Assembled for Robot<E> {
         self.dof_map().configuration_into(u, q)
     }
 
-    fn reference_free_coordinates(&self) -> Vec<f64> {
+    fn reference_free_coordinates(&self) -> DVector<f64> {
         // the clamp's free directions at zero, the nodes where they lie
         let q = self.reference_configuration();
         let mut u = vec![0.0; self.n_base_free()];
         u.extend_from_slice(q.as_slice().get(E::NODE_DOFS..).unwrap_or(&[]));
-        u
+        DVector::from_vec(u)
     }
 
     fn validate_loads(&self, loads: &Loads) -> Result<()> {
         Robot::validate_loads(self, loads)
     }
 
-    fn dead_force(&self, loads: &Loads) -> Result<Vec<f64>> {
-        Robot::dead_force(self, loads).map(|f| f.data.into())
+    fn dead_force(&self, loads: &Loads) -> Result<DVector<f64>> {
+        Robot::dead_force(self, loads)
     }
 
     fn scaled_loads(&self, loads: &Loads, factor: f64) -> Loads {
@@ -102,7 +104,7 @@ impl<E: Element> Assembled for Robot<E> {
 
     /// The clamp resets the base position and direction and keeps the
     /// stretch along its free direction; nodes 1 … N are taken as given.
-    fn free_coordinates_of(&self, q: &[f64]) -> Result<Vec<f64>> {
+    fn free_coordinates_of(&self, q: &[f64]) -> Result<DVector<f64>> {
         let nd = E::NODE_DOFS;
         check_len("q0", self.n_q(), q.len())?;
         let mut d = vec![0.0; self.n_q()];
@@ -115,11 +117,11 @@ impl<E: Element> Assembled for Robot<E> {
         let mut u = Vec::with_capacity(self.n_free());
         u.extend_from_slice(&stretch.as_slice()[..nb]);
         u.extend_from_slice(&q[nd..]);
-        Ok(u)
+        Ok(DVector::from_vec(u))
     }
 
     /// The arcs of the actuation ([`Robot::arc_configuration`]).
-    fn start_free_coordinates(&self, loads: &Loads) -> Result<Vec<f64>> {
+    fn start_free_coordinates(&self, loads: &Loads) -> Result<DVector<f64>> {
         self.validate_loads(loads)?;
         self.free_coordinates_of(self.arc_configuration(&loads.pressures_pa).as_slice())
     }

@@ -74,7 +74,7 @@ fn attempt<E: Element>(
 ) -> Result<Option<Corrected>> {
     let (n, nq) = (robot.n_free(), robot.n_q());
     let dead: Vec<f64> = robot.dead_force(loads)?.data.into();
-    let mut u = robot.free_coordinates_of(q0)?;
+    let mut u: Vec<f64> = robot.free_coordinates_of(q0)?.data.into();
     let mut q = vec![0.0; nq];
     robot.configuration_into(&u, &mut q)?;
     let mut r = vec![0.0; n];

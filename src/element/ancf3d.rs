@@ -89,6 +89,7 @@ mod kinematics;
 
 use jet::{Dual, Jet, Scalar};
 use kinematics::{line_density, node_frame, node_penalty, rotation_vector, strains, LineStiffness};
+use nalgebra::{DMatrix, DVector};
 
 use super::{hermite, Element, NodeKinematics, DEFAULT_GAUSS_POINTS};
 use crate::error::{check_positive, Error, Result};
@@ -232,8 +233,8 @@ impl Point {
 /// use softrod::element::{Ancf3d, Element, NodeKinematics};
 /// let e = Ancf3d::new(0.1, 300.0, 0.025, 0.019)?;
 /// // a straight stress-free element along x: no energy
-/// let mut qe = Ancf3d::straight_node(&[0.0; 3], &[1.0, 0.0, 0.0]);
-/// qe.extend(Ancf3d::straight_node(&[0.1, 0.0, 0.0], &[1.0, 0.0, 0.0]));
+/// let mut qe = Ancf3d::straight_node(&[0.0; 3], &[1.0, 0.0, 0.0]).as_slice().to_vec();
+/// qe.extend(Ancf3d::straight_node(&[0.1, 0.0, 0.0], &[1.0, 0.0, 0.0]).iter());
 /// assert!(e.energy(&qe).abs() < 1e-20);
 /// // twisted by 0.01 rad about x at node 2: U = ½ GJ τ² L_e, τ = 0.1 rad/m
 /// let (c, s) = (0.01f64.cos(), 0.01f64.sin());
@@ -358,8 +359,8 @@ impl Ancf3d {
     /// ```
     /// use softrod::element::{Ancf3d, NodeKinematics};
     /// let e = softrod::element::Ancf3d::new(0.1, 300.0, 0.025, 0.019)?;
-    /// let mut qe = Ancf3d::straight_node(&[0.0; 3], &[0.0, 0.0, 1.0]);
-    /// qe.extend(Ancf3d::straight_node(&[0.0, 0.0, 0.1], &[0.0, 0.0, 1.0]));
+    /// let mut qe = Ancf3d::straight_node(&[0.0; 3], &[0.0, 0.0, 1.0]).as_slice().to_vec();
+    /// qe.extend(Ancf3d::straight_node(&[0.0, 0.0, 0.1], &[0.0, 0.0, 1.0]).iter());
     /// let p = e.material_point(&qe, 0.5, 0.01, 0.0);
     /// assert!((p[2] - 0.05).abs() < 1e-15 && (p[1] - 0.01).abs() < 1e-15);
     /// # Ok::<(), softrod::Error>(())
@@ -386,8 +387,8 @@ impl Ancf3d {
     /// ```
     /// use softrod::element::{Ancf3d, NodeKinematics};
     /// let e = Ancf3d::new(1.0, 1.0, 1.0, 1.0)?;
-    /// let mut qe = Ancf3d::straight_node(&[0.0; 3], &[1.0, 0.0, 0.0]);
-    /// qe.extend(Ancf3d::straight_node(&[1.0, 0.0, 0.0], &[1.0, 0.0, 0.0]));
+    /// let mut qe = Ancf3d::straight_node(&[0.0; 3], &[1.0, 0.0, 0.0]).as_slice().to_vec();
+    /// qe.extend(Ancf3d::straight_node(&[1.0, 0.0, 0.0], &[1.0, 0.0, 0.0]).iter());
     /// let [eps, ky, kz, tau] = e.strains(&qe, 0.3);
     /// assert!(eps.abs() < 1e-15 && ky.abs() < 1e-15 && kz.abs() < 1e-15 && tau.abs() < 1e-15);
     /// # Ok::<(), softrod::Error>(())
@@ -595,33 +596,39 @@ impl NodeKinematics for Ancf3d {
     /// `[position, direction, e2, e3]`: `r_X` is `direction` as given, the
     /// section gradients the unit axes `straight_frame` carries along the
     /// unit direction (NaN for a zero or non-finite direction).
-    fn straight_node(position: &[f64], direction: &[f64]) -> Vec<f64> {
-        let ([x, y, z], [dx, dy, dz]) = (position, direction) else {
-            return vec![f64::NAN; ND];
-        };
-        let n = (dx * dx + dy * dy + dz * dz).sqrt();
-        if !(n > 0.0 && n.is_finite()) {
-            return vec![f64::NAN; ND];
-        }
-        let [_, e2, e3] = straight_frame([dx / n, dy / n, dz / n]);
-        let mut q = vec![*x, *y, *z, *dx, *dy, *dz];
-        q.extend_from_slice(&e2);
-        q.extend_from_slice(&e3);
-        q
+    fn straight_node(position: &[f64], direction: &[f64]) -> DVector<f64> {
+        DVector::from_vec({
+            let ([x, y, z], [dx, dy, dz]) = (position, direction) else {
+                return DVector::from_vec(vec![f64::NAN; ND]);
+            };
+            let n = (dx * dx + dy * dy + dz * dz).sqrt();
+            if !(n > 0.0 && n.is_finite()) {
+                return DVector::from_vec(vec![f64::NAN; ND]);
+            }
+            let [_, e2, e3] = straight_frame([dx / n, dy / n, dz / n]);
+            let mut q = vec![*x, *y, *z, *dx, *dy, *dz];
+            q.extend_from_slice(&e2);
+            q.extend_from_slice(&e3);
+            q
+        })
     }
 
-    fn node_tangent(node: &[f64]) -> Vec<f64> {
-        match frame_of(node) {
-            Some([t, _, _]) => t.to_vec(),
-            None => vec![f64::NAN; 3],
-        }
+    fn node_tangent(node: &[f64]) -> DVector<f64> {
+        DVector::from_vec({
+            match frame_of(node) {
+                Some([t, _, _]) => t.to_vec(),
+                None => vec![f64::NAN; 3],
+            }
+        })
     }
 
-    fn node_rotation(reference: &[f64], node: &[f64]) -> Vec<f64> {
-        match (frame_of(reference), gradients(node)) {
-            (Some(r0), Some(n)) => rotation_vector(&r0, &n).to_vec(),
-            _ => vec![f64::NAN; 3],
-        }
+    fn node_rotation(reference: &[f64], node: &[f64]) -> DVector<f64> {
+        DVector::from_vec({
+            match (frame_of(reference), gradients(node)) {
+                (Some(r0), Some(n)) => rotation_vector(&r0, &n).to_vec(),
+                _ => vec![f64::NAN; 3],
+            }
+        })
     }
 
     fn add_moment_work(
@@ -652,15 +659,17 @@ impl NodeKinematics for Ancf3d {
     }
 
     /// The stretch along the tangent: `r_X` scaled, the frame kept.
-    fn clamp_free_directions(node: &[f64]) -> Vec<Vec<f64>> {
-        match frame_of(node) {
-            Some([t, _, _]) => {
-                let mut d = vec![0.0; ND];
-                d[3..6].copy_from_slice(&t);
-                vec![d]
+    fn clamp_free_directions(node: &[f64]) -> DMatrix<f64> {
+        super::direction_columns(Self::NODE_DOFS, {
+            match frame_of(node) {
+                Some([t, _, _]) => {
+                    let mut d = vec![0.0; ND];
+                    d[3..6].copy_from_slice(&t);
+                    vec![d]
+                }
+                None => Vec::new(),
             }
-            None => Vec::new(),
-        }
+        })
     }
 
     fn moment_work_between(reference: &[f64], from: &[f64], to: &[f64], moment: &[f64]) -> f64 {

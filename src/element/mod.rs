@@ -25,6 +25,8 @@
 //! [`hermite`] and [`ArcPoint`] are the one cubic Hermite interpolation every
 //! cable field (positions, slopes, distributed loads) goes through.
 
+use nalgebra::{DMatrix, DVector};
+
 use crate::error::{check_len, check_positive, Error, Result};
 use crate::quadrature::GaussRule;
 
@@ -60,10 +62,10 @@ pub const DEFAULT_GAUSS_POINTS: usize = 5;
 /// // a node turned by 90° about z from a reference along x
 /// let reference = SpatialCable::straight_node(&[0.0; 3], &[1.0, 0.0, 0.0]);
 /// let node = [0.1, 0.0, 0.0, 0.0, 2.0, 0.0];
-/// let phi = SpatialCable::node_rotation(&reference, &node);
+/// let phi = SpatialCable::node_rotation(reference.as_slice(), &node);
 /// assert!((phi[2] - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
 /// // a moment about z does the work M φ_z; about x (the reference tangent) none
-/// let w = SpatialCable::moment_work_between(&reference, &reference, &node, &[0.5, 0.0, 0.0]);
+/// let w = SpatialCable::moment_work_between(reference.as_slice(), reference.as_slice(), &node, &[0.5, 0.0, 0.0]);
 /// assert_eq!(w, 0.0);
 /// ```
 pub trait NodeKinematics {
@@ -76,12 +78,12 @@ pub trait NodeKinematics {
 
     /// Node coordinates of the stress-free straight element's node at
     /// `position` with unit tangent `direction` (length `DIM` each).
-    fn straight_node(position: &[f64], direction: &[f64]) -> Vec<f64>;
+    fn straight_node(position: &[f64], direction: &[f64]) -> DVector<f64>;
     /// Unit tangent `r'/|r'|` of a node (`DIM` numbers).
-    fn node_tangent(node: &[f64]) -> Vec<f64>;
+    fn node_tangent(node: &[f64]) -> DVector<f64>;
     /// Rotation `θ` of a node from `reference` (`MOMENT_DIM` numbers, rad): the
     /// quantity a concentrated moment `M` is work-conjugate to, `W = M · θ`.
-    fn node_rotation(reference: &[f64], node: &[f64]) -> Vec<f64>;
+    fn node_rotation(reference: &[f64], node: &[f64]) -> DVector<f64>;
     /// Gradient and Hessian (row-major) of the work `W = M · θ` of a
     /// concentrated moment `moment` at a node with coordinates `node`, with
     /// respect to the node coordinates, added into `grad` and `hess`; `θ` is
@@ -96,7 +98,9 @@ pub trait NodeKinematics {
     /// Directions in node-coordinate space that a clamp leaves free at a node
     /// with coordinates `node`: for a cable, the stretch along the prescribed
     /// tangent (a clamp fixes position and direction, not the axial strain).
-    fn clamp_free_directions(node: &[f64]) -> Vec<Vec<f64>>;
+    /// A `NODE_DOFS × k` matrix, one direction per column (none when the
+    /// node's tangent is degenerate).
+    fn clamp_free_directions(node: &[f64]) -> DMatrix<f64>;
     /// Work `M · (θ(to) − θ(from))` of a constant moment while a node moves
     /// from the coordinates `from` to `to` (rotations below π).
     fn moment_work_between(reference: &[f64], from: &[f64], to: &[f64], moment: &[f64]) -> f64;
@@ -393,6 +397,21 @@ struct GaussPoint {
 }
 
 /// Checks a cable's length and stiffnesses (`length_m`, `ea_n`, `ei_nm2`).
+/// The directions `dirs` (each `rows` numbers) as the columns of a matrix.
+fn direction_columns(rows: usize, dirs: Vec<Vec<f64>>) -> DMatrix<f64> {
+    DMatrix::from_fn(rows, dirs.len(), |i, k| {
+        dirs[k].get(i).copied().unwrap_or(f64::NAN)
+    })
+}
+
+/// The columns of a direction matrix as a list (the form the DOF map's
+/// blocks hold).
+pub(crate) fn direction_list(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    m.column_iter()
+        .map(|c| c.iter().copied().collect())
+        .collect()
+}
+
 fn check_cable(le: f64, ea: f64, ei: f64) -> Result<()> {
     check_positive("length_m", le)?;
     if !(1.0 / (le * le)).is_finite() {

@@ -7,6 +7,7 @@
 use super::DEFAULT_GAUSS_POINTS;
 use super::{check_cable, gauss_points, hermite, Element, GaussPoint, NodeKinematics};
 use crate::error::{check_finite, Result};
+use nalgebra::{DMatrix, DVector};
 
 /// Planar ANCF cable element (2-D, 4 coordinates per node).
 ///
@@ -471,28 +472,36 @@ impl NodeKinematics for PlanarCable {
     const NODE_DOFS: usize = 4;
     const MOMENT_DIM: usize = 1;
 
-    fn straight_node(position: &[f64], direction: &[f64]) -> Vec<f64> {
-        match (position, direction) {
-            ([x, y], [dx, dy]) => vec![*x, *y, *dx, *dy],
-            _ => vec![f64::NAN; 4],
-        }
-    }
-
-    fn node_tangent(node: &[f64]) -> Vec<f64> {
-        match node {
-            [_, _, x, y] => {
-                let n = (x * x + y * y).sqrt();
-                vec![x / n, y / n]
+    fn straight_node(position: &[f64], direction: &[f64]) -> DVector<f64> {
+        DVector::from_vec({
+            match (position, direction) {
+                ([x, y], [dx, dy]) => vec![*x, *y, *dx, *dy],
+                _ => vec![f64::NAN; 4],
             }
-            _ => vec![f64::NAN; 2],
-        }
+        })
     }
 
-    fn node_rotation(reference: &[f64], node: &[f64]) -> Vec<f64> {
-        match (reference, node) {
-            ([_, _, ax, ay], [_, _, bx, by]) => vec![(ax * by - ay * bx).atan2(ax * bx + ay * by)],
-            _ => vec![f64::NAN],
-        }
+    fn node_tangent(node: &[f64]) -> DVector<f64> {
+        DVector::from_vec({
+            match node {
+                [_, _, x, y] => {
+                    let n = (x * x + y * y).sqrt();
+                    vec![x / n, y / n]
+                }
+                _ => vec![f64::NAN; 2],
+            }
+        })
+    }
+
+    fn node_rotation(reference: &[f64], node: &[f64]) -> DVector<f64> {
+        DVector::from_vec({
+            match (reference, node) {
+                ([_, _, ax, ay], [_, _, bx, by]) => {
+                    vec![(ax * by - ay * bx).atan2(ax * bx + ay * by)]
+                }
+                _ => vec![f64::NAN],
+            }
+        })
     }
 
     fn add_moment_work(
@@ -527,14 +536,16 @@ impl NodeKinematics for PlanarCable {
         hess[3 * n + 3] += m * -2.0 * x * y / r4;
     }
 
-    fn clamp_free_directions(node: &[f64]) -> Vec<Vec<f64>> {
-        match node {
-            [_, _, x, y] => {
-                let n = (x * x + y * y).sqrt();
-                vec![vec![0.0, 0.0, x / n, y / n]]
+    fn clamp_free_directions(node: &[f64]) -> DMatrix<f64> {
+        super::direction_columns(Self::NODE_DOFS, {
+            match node {
+                [_, _, x, y] => {
+                    let n = (x * x + y * y).sqrt();
+                    vec![vec![0.0, 0.0, x / n, y / n]]
+                }
+                _ => Vec::new(),
             }
-            _ => Vec::new(),
-        }
+        })
     }
 
     fn moment_work_between(_reference: &[f64], from: &[f64], to: &[f64], moment: &[f64]) -> f64 {

@@ -40,6 +40,7 @@
 use super::DEFAULT_GAUSS_POINTS;
 use super::{check_cable, gauss_points, hermite, Element, GaussPoint, NodeKinematics};
 use crate::error::Result;
+use nalgebra::{DMatrix, DVector};
 
 /// Spatial ANCF cable element (3-D, 6 coordinates per node,
 /// `q_i = [x, y, z, x', y', z']`).
@@ -455,25 +456,31 @@ impl NodeKinematics for SpatialCable {
     const NODE_DOFS: usize = 6;
     const MOMENT_DIM: usize = 3;
 
-    fn straight_node(position: &[f64], direction: &[f64]) -> Vec<f64> {
-        match (position, direction) {
-            ([x, y, z], [dx, dy, dz]) => vec![*x, *y, *z, *dx, *dy, *dz],
-            _ => vec![f64::NAN; 6],
-        }
+    fn straight_node(position: &[f64], direction: &[f64]) -> DVector<f64> {
+        DVector::from_vec({
+            match (position, direction) {
+                ([x, y, z], [dx, dy, dz]) => vec![*x, *y, *z, *dx, *dy, *dz],
+                _ => vec![f64::NAN; 6],
+            }
+        })
     }
 
-    fn node_tangent(node: &[f64]) -> Vec<f64> {
-        match slope(node).and_then(unit) {
-            Some((t, _)) => t.to_vec(),
-            None => vec![f64::NAN; 3],
-        }
+    fn node_tangent(node: &[f64]) -> DVector<f64> {
+        DVector::from_vec({
+            match slope(node).and_then(unit) {
+                Some((t, _)) => t.to_vec(),
+                None => vec![f64::NAN; 3],
+            }
+        })
     }
 
-    fn node_rotation(reference: &[f64], node: &[f64]) -> Vec<f64> {
-        match (slope(reference).and_then(unit), slope(node).and_then(unit)) {
-            (Some((t0, _)), Some((t, _))) => rotation_vector(t0, t).to_vec(),
-            _ => vec![f64::NAN; 3],
-        }
+    fn node_rotation(reference: &[f64], node: &[f64]) -> DVector<f64> {
+        DVector::from_vec({
+            match (slope(reference).and_then(unit), slope(node).and_then(unit)) {
+                (Some((t0, _)), Some((t, _))) => rotation_vector(t0, t).to_vec(),
+                _ => vec![f64::NAN; 3],
+            }
+        })
     }
 
     #[allow(clippy::needless_range_loop)]
@@ -539,11 +546,13 @@ impl NodeKinematics for SpatialCable {
         }
     }
 
-    fn clamp_free_directions(node: &[f64]) -> Vec<Vec<f64>> {
-        match slope(node).and_then(unit) {
-            Some((t, _)) => vec![vec![0.0, 0.0, 0.0, t[0], t[1], t[2]]],
-            None => Vec::new(),
-        }
+    fn clamp_free_directions(node: &[f64]) -> DMatrix<f64> {
+        super::direction_columns(Self::NODE_DOFS, {
+            match slope(node).and_then(unit) {
+                Some((t, _)) => vec![vec![0.0, 0.0, 0.0, t[0], t[1], t[2]]],
+                None => Vec::new(),
+            }
+        })
     }
 
     fn moment_work_between(reference: &[f64], from: &[f64], to: &[f64], moment: &[f64]) -> f64 {

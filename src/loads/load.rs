@@ -1,10 +1,10 @@
 //! [`Load`]: one known load, as a scene file states it and as code adds it
-//! to the [`Loads`] of a solve.
+//! to the [`Loads`] of a solve. Its checks against a robot
+//! ([`Load::validate`]) and [`Loads::add`] live with the robot
+//! (`assembly`), so that this module needs none of it.
 
 use serde::{Deserialize, Serialize};
 
-use crate::assembly::Robot;
-use crate::element::Element;
 use crate::error::{check_all_finite, check_finite, check_len, check_positive, Error, Result};
 
 use super::{FollowerLoad, LineLoad, Loads, NodeMoment, PointForce, PointMoment};
@@ -92,15 +92,57 @@ pub enum Load {
 }
 
 impl Load {
+    /// The checks of [`Load::validate`] that need no robot: sizes (`dim`
+    /// components, a moment `moment_dim`), finite values and signs. Errors
+    /// name the load's own fields.
+    pub(crate) fn check_values(&self, dim: usize, moment_dim: usize) -> Result<()> {
+        let vector = |name: &str, v: &[f64]| -> Result<()> {
+            check_len(name, dim, v.len())?;
+            check_all_finite(name, v)
+        };
+        match self {
+            Load::Distributed(l) => l.validate("", dim),
+            Load::TipForce { force_n } | Load::PointForce { force_n, .. } => {
+                vector("force_n", force_n)
+            }
+            Load::TipMoment { moment_nm }
+            | Load::NodeMoment { moment_nm, .. }
+            | Load::Moment { moment_nm, .. } => moment_nm.validate("moment_nm", moment_dim),
+            Load::SelfWeight {
+                mass_per_length_kg_per_m: m,
+                gravity_m_per_s2: g,
+            } => {
+                if !(m.is_finite() && *m >= 0.0) {
+                    return Err(Error::invalid(
+                        "mass_per_length_kg_per_m",
+                        m,
+                        "must be finite and >= 0",
+                    ));
+                }
+                vector("gravity_m_per_s2", g)
+            }
+            Load::TipMass { mass_kg } => check_positive("mass_kg", *mass_kg),
+            Load::Follower(f) => {
+                if dim != 2 {
+                    return Err(Error::invalid(
+                        "type",
+                        "\"follower\"",
+                        "a pressure normal to the backbone needs a planar scene (planar_cable)",
+                    ));
+                }
+                check_finite("pressure_n_per_m", f.pressure_n_per_m)
+            }
+        }
+    }
+
     /// Adds this load to `loads` in the solver's terms: a tip load acts at
     /// the arc coordinate `length_m` or the last of `n_nodes` nodes; a tip
-    /// mass under `gravity` (m/s²), which must have `dim` components. Errors
-    /// name the load's own fields (the caller prefixes them).
+    /// mass under `gravity` (m/s²), which must have `dim` components. The
+    /// load's values are checked by the callers ([`Load::validate`],
+    /// [`Load::check_values`]).
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] for a non-positive tip mass or a
-    /// negative extra weight; [`Error::DimensionMismatch`] for a gravity
-    /// vector of the wrong size.
+    /// [`Error::DimensionMismatch`] for a `gravity` of the wrong size.
     pub(crate) fn resolve_into(
         &self,
         dim: usize,
@@ -136,21 +178,11 @@ impl Load {
             Load::SelfWeight {
                 mass_per_length_kg_per_m: m,
                 gravity_m_per_s2: g,
-            } => {
-                if !(m.is_finite() && *m >= 0.0) {
-                    return Err(Error::invalid(
-                        "mass_per_length_kg_per_m",
-                        m,
-                        "must be finite and >= 0",
-                    ));
-                }
-                check_len("gravity_m_per_s2", d, g.len())?;
-                loads.line_loads.push(LineLoad::Uniform {
-                    w_n_per_m: g.iter().map(|g| m * g).collect(),
-                })
-            }
+            } => loads.line_loads.push(LineLoad::Uniform {
+                w_n_per_m: g.iter().map(|g| m * g).collect(),
+            }),
             Load::TipMass { mass_kg } => {
-                check_positive("mass_kg", *mass_kg)?;
+                // the robot's (or scene's) gravity, not a field of the load
                 check_len("gravity_m_per_s2", d, gravity.len())?;
                 loads.point_forces.push(PointForce {
                     s_m: total,
@@ -285,30 +317,5 @@ impl<'de> Deserialize<'de> for MomentNm {
             }
         }
         d.deserialize_any(V)
-    }
-}
-
-impl Loads {
-    /// Adds `load` for `robot`: a tip load at the robot's tip (its length,
-    /// its last node), a tip mass under the robot's gravity; the other
-    /// kinds as they are. The same conversion a scene's loads take
-    /// ([`crate::scene::Scene::loads`]). Errors name the load's fields.
-    ///
-    /// # Errors
-    /// [`Error::InvalidParameter`] for a non-positive tip mass or a
-    /// negative extra weight; [`Error::DimensionMismatch`] for a self
-    /// weight's gravity of the wrong size. Everything else is checked where
-    /// the loads are used ([`Robot::validate_loads`]).
-    ///
-    /// # Example
-    /// See [`Load`].
-    pub fn add<E: Element>(&mut self, robot: &Robot<E>, load: &Load) -> Result<()> {
-        load.resolve_into(
-            E::DIM,
-            robot.length(),
-            robot.n_nodes(),
-            robot.rod().gravity(),
-            self,
-        )
     }
 }

@@ -6,8 +6,9 @@
 //! `tip_mass`, `self_weight`, `tip_moment`, `moment` at an arc position, a
 //! `distributed` profile including a table, a `follower` pressure, …): a
 //! scene's `loads` deserialize into it, and code adds the same values to
-//! the [`Loads`] of a solve with [`Loads::add`]. [`Loads`] holds them as
-//! the solver uses them (a tip load at the tip's arc position, a mass as its
+//! the [`Loads`] of a solve with [`Loads::add`] (or builds them from a
+//! list with [`Loads::from_loads`]); both check a load as a scene does
+//! ([`Load::validate`]). [`Loads`] holds them as the solver uses them (a tip load at the tip's arc position, a mass as its
 //! weight). Rest curvature is a property of a section, not a load
 //! ([`crate::assembly::Section`]).
 //!

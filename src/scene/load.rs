@@ -2,7 +2,7 @@
 
 use crate::assembly::Robot;
 use crate::element::Element;
-use crate::error::{check_all_finite, check_index, check_len, check_positive, Error, Result};
+use crate::error::{Error, Result};
 use crate::loads::{LineLoad, Load, MomentNm};
 
 /// How far beyond the scene's own scale a load may be: a force above
@@ -96,90 +96,15 @@ fn check_load_scale<E: Element>(robot: &Robot<E>, load: &Load, gravity: &[f64]) 
     }
 }
 
-/// Checks one scene load against the robot, naming its fields as in the
-/// scene file (the caller prefixes `loads[i].`); `gravity` is the scene's.
+/// Checks one scene load against the robot ([`Load::validate`], the same
+/// check [`crate::loads::Loads::add`] makes) and its magnitudes against the
+/// robot's scale, naming its fields as in the scene file (the caller
+/// prefixes `loads[i].`); `gravity` is the scene's.
 pub(super) fn validate_scene_load<E: Element>(
     robot: &Robot<E>,
     load: &Load,
     gravity: &[f64],
 ) -> Result<()> {
-    validate_scene_load_values(robot, load)?;
+    load.validate(robot, "")?;
     check_load_scale(robot, load, gravity)
-}
-
-/// The value checks of [`validate_scene_load`] (sizes, finiteness, places).
-fn validate_scene_load_values<E: Element>(robot: &Robot<E>, load: &Load) -> Result<()> {
-    let d = E::DIM;
-    let vector = |name: &str, v: &[f64]| -> Result<()> {
-        check_len(name, d, v.len())?;
-        check_all_finite(name, v)
-    };
-    match load {
-        Load::Distributed(l) => {
-            l.validate("", d)?;
-            l.check_on_robot("", robot.length())?;
-            match l {
-                // a bump centred off the robot acts only through its tail:
-                // almost surely a typo (a length in mm, the wrong section)
-                LineLoad::Gaussian { center_m, .. } => {
-                    robot.locate("center_m", *center_m).map(|_| ())
-                }
-                _ => Ok(()),
-            }
-        }
-        Load::TipForce { force_n } => vector("force_n", force_n),
-        Load::PointForce { s_m, force_n } => {
-            vector("force_n", force_n)?;
-            robot.locate("s_m", *s_m).map(|_| ())
-        }
-        Load::TipMoment { moment_nm } => moment_nm.validate("moment_nm", E::MOMENT_DIM),
-        Load::NodeMoment { node, moment_nm } => {
-            moment_nm.validate("moment_nm", E::MOMENT_DIM)?;
-            check_index("node", *node, robot.n_nodes())?;
-            if *node == 0 {
-                return Err(Error::invalid(
-                    "node",
-                    0,
-                    "the clamped base takes no moment: must be a free node, >= 1",
-                ));
-            }
-            Ok(())
-        }
-        Load::Moment { s_m, moment_nm } => {
-            moment_nm.validate("moment_nm", E::MOMENT_DIM)?;
-            robot.locate("s_m", *s_m)?;
-            if *s_m <= 0.0 {
-                return Err(Error::invalid(
-                    "s_m",
-                    s_m,
-                    "the clamped base takes no moment: must be > 0",
-                ));
-            }
-            Ok(())
-        }
-        Load::SelfWeight {
-            mass_per_length_kg_per_m: m,
-            gravity_m_per_s2: g,
-        } => {
-            if !(m.is_finite() && *m >= 0.0) {
-                return Err(Error::invalid(
-                    "mass_per_length_kg_per_m",
-                    m,
-                    "must be finite and >= 0",
-                ));
-            }
-            vector("gravity_m_per_s2", g)
-        }
-        Load::TipMass { mass_kg } => check_positive("mass_kg", *mass_kg),
-        Load::Follower(f) => {
-            if d != 2 {
-                return Err(Error::invalid(
-                    "type",
-                    "\"follower\"",
-                    "a pressure normal to the backbone needs a planar scene (planar_cable)",
-                ));
-            }
-            f.validate("", robot.length())
-        }
-    }
 }

@@ -653,9 +653,11 @@ impl Scene {
     /// The scene's loads and pressures as [`Loads`] (pressures default to zero).
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] for a non-positive tip mass or a negative
-    /// extra weight; [`Error::DimensionMismatch`] for a gravity vector of the
-    /// wrong size; as [`Scene::robot`] for an `"auto"` section (a tip
+    /// [`Error::InvalidParameter`] or [`Error::DimensionMismatch`] naming
+    /// `loads[i].…` for a load's values (sizes, finiteness, a non-positive
+    /// tip mass, a negative extra weight: the robot-free part of
+    /// [`Load::validate`]); [`Error::DimensionMismatch`] for a gravity
+    /// vector of the wrong size; as [`Scene::robot`] for an `"auto"` section (a tip
     /// moment's node depends on the mesh).
     pub fn loads(&self) -> Result<Loads> {
         self.check_resolved()?;
@@ -675,7 +677,11 @@ impl Scene {
             .sections
             .iter()
             .fold(1usize, |a, s| a.saturating_add(s.elements));
+        // a moment has one component in 2-D, three in 3-D
+        let moment_dim = if d == 2 { 1 } else { 3 };
         for (i, l) in self.loads.iter().enumerate() {
+            l.check_values(d, moment_dim)
+                .map_err(|e| e.with_prefix(&format!("loads[{i}].")))?;
             l.resolve_into(d, total, n_nodes, &self.gravity_m_per_s2, &mut loads)
                 .map_err(|e| match e.field() {
                     // the scene's own gravity is a top-level field

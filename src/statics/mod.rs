@@ -340,9 +340,9 @@ impl StaticSolver {
             Some(q0) => {
                 check_len("q0", model.n_q(), q0.len())?;
                 crate::error::check_all_finite("q0", q0)?;
-                model.free_coordinates_of(q0)
+                model.free_coordinates_of(q0).map(|u| u.data.into())
             }
-            None => model.start_free_coordinates(loads),
+            None => model.start_free_coordinates(loads).map(|u| u.data.into()),
         }
     }
 }

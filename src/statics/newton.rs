@@ -85,7 +85,7 @@ impl StaticSolver {
         solver: &mut AutoSolver,
     ) -> Result<Equilibrium> {
         let start = Instant::now();
-        let dead = model.dead_force(loads)?;
+        let dead: Vec<f64> = model.dead_force(loads)?.data.into();
         let n = model.n_free();
         let mut w = Work {
             k: SymmetricMatrix::zeros(solver.pattern().clone()),
@@ -191,7 +191,7 @@ impl StaticSolver {
             // acts as a dead force on the node slopes, which stretches them
             // on fine meshes)
             if cold {
-                u = model.reference_free_coordinates();
+                u = model.reference_free_coordinates().data.into();
                 model.configuration_into(&u, &mut w.q)?;
             }
             let end = self.continuation(model, &dead, loads, &mut u, &mut w, scale)?;

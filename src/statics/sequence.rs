@@ -50,7 +50,7 @@ impl StaticSolver {
     ) -> Result<CoarseStart> {
         let pattern = coarse.tangent_pattern()?;
         let mut solver = AutoSolver::with_kind(&pattern, self.settings.linear_solver)?;
-        let u0 = coarse.start_free_coordinates(&coarse_loads)?;
+        let u0: Vec<f64> = coarse.start_free_coordinates(&coarse_loads)?.data.into();
         let inner = StaticSolver {
             settings: super::StaticSettings {
                 max_total_iterations: budget.max(self.settings.max_iterations),
@@ -59,7 +59,7 @@ impl StaticSolver {
         };
         match inner.run(&coarse, &coarse_loads, u0, true, &mut solver) {
             Ok(eq) => Ok(CoarseStart {
-                u: Some(model.prolong(&coarse, eq.q.as_slice())?),
+                u: Some(model.prolong(&coarse, eq.q.as_slice())?.data.into()),
                 iterations: eq.report.iterations,
                 load_steps: eq.report.load_steps,
             }),

@@ -167,11 +167,11 @@ fn a_definite_only_attempt_gives_up_at_an_indefinite_tangent() {
     .unwrap();
     let (robot, loads) = (scene.robot().unwrap(), scene.loads().unwrap());
     assert!(robot.coarse_model(&loads).unwrap().is_some());
-    let dead = Assembled::dead_force(&robot, &loads).unwrap();
+    let dead: Vec<f64> = Assembled::dead_force(&robot, &loads).unwrap().data.into();
     let zero = vec![0.0; robot.n_free()];
     let attempt = |definite_only: bool| {
         let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), SolverKind::Auto).unwrap();
-        let mut u = robot.start_free_coordinates(&loads).unwrap();
+        let mut u: Vec<f64> = robot.start_free_coordinates(&loads).unwrap().data.into();
         let mut w = Work {
             k: SymmetricMatrix::zeros(robot.tangent_pattern().clone()),
             solver: &mut solver,
@@ -199,7 +199,7 @@ fn a_definite_only_attempt_gives_up_at_an_indefinite_tangent() {
         };
         let before = LinearWork::now();
         let status = quick.newton(&robot, &target, &mut u, &mut w, 2.0).unwrap();
-        let moved = u != robot.start_free_coordinates(&loads).unwrap();
+        let moved = u != robot.start_free_coordinates(&loads).unwrap().as_slice();
         let work = LinearWork::now().since(before);
         (status, w.iterations, w.definite, moved, work)
     };

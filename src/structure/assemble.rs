@@ -189,12 +189,12 @@ impl<E: Element> Structure<E> {
         for (i, rod) in self.rods.iter().enumerate() {
             let local = match self.rod_loads(loads, i) {
                 Some(l) => rod.dead_force(l)?,
-                None => rod.gravity_force().to_vec(),
+                None => DVector::from_column_slice(rod.gravity_force()),
             };
             let q0 = self.rod_node0[i] * nd;
             for (a, b) in f.as_mut_slice()[q0..q0 + local.len()]
                 .iter_mut()
-                .zip(&local)
+                .zip(local.iter())
             {
                 *a += b;
             }
@@ -388,7 +388,7 @@ impl<E: Element> Structure<E> {
         loads: &StructureLoads,
     ) -> Result<DVector<f64>> {
         self.check_sizes(u, dead, loads)?;
-        let q = self.dofs.configuration(u)?;
+        let q = self.dofs.configuration_vec(u)?;
         let g = self.gradient(u, &q, dead, loads, None)?;
         let mut r = DVector::zeros(self.n_free());
         self.dofs.restrict_into(u, &g, r.as_mut_slice())?;
@@ -412,7 +412,7 @@ impl<E: Element> Structure<E> {
     ) -> Result<()> {
         self.check_sizes(u, dead, loads)?;
         check_len("residual", self.n_free(), residual.len())?;
-        let q = self.dofs.configuration(u)?;
+        let q = self.dofs.configuration_vec(u)?;
         tangent.reset(self.n_free());
         let g = self.gradient(u, &q, dead, loads, Some(tangent))?;
         self.dofs.add_geometric_stiffness(u, &g, tangent)?;
@@ -496,7 +496,10 @@ impl<E: Element> Structure<E> {
         self.check_sizes(from, dead, loads)?;
         check_len("u", self.n_free(), to.len())?;
         let nd = E::NODE_DOFS;
-        let (q0, q1) = (self.dofs.configuration(from)?, self.dofs.configuration(to)?);
+        let (q0, q1) = (
+            self.dofs.configuration_vec(from)?,
+            self.dofs.configuration_vec(to)?,
+        );
         let mut d = 0.0;
         let (mut a, mut b) = ([0.0; MAX_EDOF], [0.0; MAX_EDOF]);
         for el in &self.connectivity {
@@ -627,7 +630,7 @@ impl<E: Element> Structure<E> {
         loads: &StructureLoads,
     ) -> Result<DVector<f64>> {
         self.check_sizes(u, dead, loads)?;
-        let q = self.dofs.configuration(u)?;
+        let q = self.dofs.configuration_vec(u)?;
         let g = self.gradient(u, &q, dead, loads, None)?;
         Ok(-DVector::from_vec(g))
     }
@@ -665,7 +668,7 @@ impl<E: Element> Structure<E> {
     ) -> Result<Vec<JointReaction>> {
         self.check_sizes(u, dead, loads)?;
         let nd = E::NODE_DOFS;
-        let q = self.dofs.configuration(u)?;
+        let q = self.dofs.configuration_vec(u)?;
         let g = self.gradient(u, &q, dead, loads, None)?;
         let mut out = Vec::with_capacity(self.joints.len());
         for (j, node) in &self.joints {

@@ -143,8 +143,8 @@ impl<E: Element> Structure<E> {
                 });
             }
             let straight = rod.straight_configuration(&r.start_m, &checked.directions[i]);
-            rod_reference.push(straight[..nd].to_vec());
-            q_ref.extend(straight);
+            rod_reference.push(straight.as_slice()[..nd].to_vec());
+            q_ref.extend(straight.iter());
             n_nodes += rod.n_nodes();
             rods.push(rod);
         }
@@ -401,7 +401,7 @@ impl<E: Element> Structure<E> {
     /// # Errors
     /// [`crate::Error::DimensionMismatch`] if `u` has the wrong size.
     pub fn configuration(&self, u: &[f64]) -> Result<nalgebra::DVector<f64>> {
-        self.dofs.configuration(u).map(nalgebra::DVector::from_vec)
+        self.dofs.configuration(u)
     }
 
     /// Adds a configuration-dependent force (a spring, a contact) over the
@@ -439,7 +439,9 @@ impl<E: Element> Structure<E> {
 /// fixed, the stretch free unless the clamp is [`Clamp::Full`].
 fn clamp_rule<E: Element>(offset: Vec<f64>, clamp: Clamp) -> BlockRule {
     let directions = match clamp {
-        Clamp::PositionAndDirection => E::clamp_free_directions(&offset),
+        Clamp::PositionAndDirection => {
+            crate::element::direction_list(&E::clamp_free_directions(&offset))
+        }
         Clamp::Full => Vec::new(),
     };
     BlockRule::Affine { offset, directions }

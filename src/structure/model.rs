@@ -12,6 +12,8 @@
 
 use std::sync::Arc;
 
+use nalgebra::DVector;
+
 use super::{Structure, StructureLoads, Triplets};
 use crate::element::Element;
 use crate::error::{check_len, Error, Result};
@@ -33,11 +35,11 @@ use crate::linsolve::{SymmetricMatrix, SymmetricPattern};
 /// fn residual_norm<M: Assembled>(m: &M, loads: &M::Loads) -> softrod::Result<f64> {
 ///     let u = m.reference_free_coordinates();
 ///     let mut q = vec![0.0; m.n_q()];
-///     m.configuration_into(&u, &mut q)?;
+///     m.configuration_into(u.as_slice(), &mut q)?;
 ///     let dead = m.dead_force(loads)?;
 ///     let mut r = vec![0.0; m.n_free()];
 ///     let mut k = SymmetricMatrix::zeros(m.tangent_pattern()?);
-///     m.residual_and_tangent_into(&u, &q, &dead, loads, &mut r, &mut k)?;
+///     m.residual_and_tangent_into(u.as_slice(), &q, dead.as_slice(), loads, &mut r, &mut k)?;
 ///     Ok(r.iter().fold(0.0f64, |a, v| a.max(v.abs())))
 /// }
 /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
@@ -63,7 +65,7 @@ pub trait Assembled {
 
     /// The free coordinates of the straight, unstressed reference (where a
     /// solve starts by default).
-    fn reference_free_coordinates(&self) -> Vec<f64>;
+    fn reference_free_coordinates(&self) -> DVector<f64>;
 
     /// Checks that `loads` fit the model.
     ///
@@ -76,7 +78,7 @@ pub trait Assembled {
     ///
     /// # Errors
     /// As the model's load checks.
-    fn dead_force(&self, loads: &Self::Loads) -> Result<Vec<f64>>;
+    fn dead_force(&self, loads: &Self::Loads) -> Result<DVector<f64>>;
 
     /// `loads` scaled by `factor` (a load step).
     fn scaled_loads(&self, loads: &Self::Loads, factor: f64) -> Self::Loads;
@@ -154,11 +156,11 @@ pub trait Assembled {
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
     /// let u = robot.reference_free_coordinates();
     /// let mut q = vec![0.0; robot.n_q()];
-    /// robot.configuration_into(&u, &mut q)?;
+    /// robot.configuration_into(u.as_slice(), &mut q)?;
     /// assert_eq!(robot.free_coordinates_of(&q)?, u);
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    fn free_coordinates_of(&self, q: &[f64]) -> Result<Vec<f64>>;
+    fn free_coordinates_of(&self, q: &[f64]) -> Result<DVector<f64>>;
 
     /// Where a solve without a start point starts: the straight reference
     /// ([`Assembled::reference_free_coordinates`]) unless the model knows a
@@ -177,7 +179,7 @@ pub trait Assembled {
     /// assert_eq!(u, robot.reference_free_coordinates());
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    fn start_free_coordinates(&self, loads: &Self::Loads) -> Result<Vec<f64>> {
+    fn start_free_coordinates(&self, loads: &Self::Loads) -> Result<DVector<f64>> {
         self.validate_loads(loads)?;
         Ok(self.reference_free_coordinates())
     }
@@ -196,7 +198,7 @@ pub trait Assembled {
     /// use softrod::structure::Assembled;
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
     /// let loads = softrod::loads::Loads::default();
-    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration().as_slice().to_vec());
+    /// let (u, q) = (robot.reference_free_coordinates().as_slice().to_vec(), robot.reference_configuration().as_slice().to_vec());
     /// let dead = robot.dead_force(&loads)?;
     /// let mut f = vec![0.0; robot.n_free()];
     /// robot.applied_force_into(&u, &q, dead.as_slice(), &loads, &mut f)?;
@@ -225,7 +227,7 @@ pub trait Assembled {
     /// use softrod::structure::Assembled;
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
     /// let loads = softrod::loads::Loads::default();
-    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration().as_slice().to_vec());
+    /// let (u, q) = (robot.reference_free_coordinates().as_slice().to_vec(), robot.reference_configuration().as_slice().to_vec());
     /// let dead = robot.dead_force(&loads)?;
     /// let mut k = softrod::linsolve::SymmetricMatrix::zeros(Assembled::tangent_pattern(&robot)?);
     /// Assembled::tangent_into(&robot, &u, &q, dead.as_slice(), &loads, &mut k)?;
@@ -259,7 +261,7 @@ pub trait Assembled {
     /// let mut du = vec![0.0; robot.n_free()];
     /// du[0] = 0.01;
     /// let mut dq = vec![0.0; robot.n_q()];
-    /// robot.step_into(&robot.reference_free_coordinates(), &du, &mut dq)?;
+    /// robot.step_into(robot.reference_free_coordinates().as_slice(), &du, &mut dq)?;
     /// assert_eq!(dq[2], 0.01);
     /// assert_eq!(robot.step_rotation(&dq), 0.01);
     /// # Ok::<(), softrod::Error>(())
@@ -280,7 +282,7 @@ pub trait Assembled {
     /// use softrod::assembly::{RobotSpec, Section};
     /// use softrod::structure::Assembled;
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
-    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration().as_slice().to_vec());
+    /// let (u, q) = (robot.reference_free_coordinates().as_slice().to_vec(), robot.reference_configuration().as_slice().to_vec());
     /// let mut du = vec![0.0; robot.n_free()];
     /// du[2] = 0.01; // node 1's y
     /// let mut dq = vec![0.0; robot.n_q()];
@@ -428,10 +430,10 @@ pub trait Assembled {
     /// let (coarse, _) = robot.coarse_model(&softrod::loads::Loads::default())?.unwrap();
     /// let u = robot.prolong(&coarse, coarse.reference_configuration().as_slice())?;
     /// let straight = robot.reference_free_coordinates();
-    /// assert!(u.iter().zip(&straight).all(|(a, b)| (a - b).abs() < 1e-14));
+    /// assert!(u.iter().zip(straight.iter()).all(|(a, b)| (a - b).abs() < 1e-14));
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    fn prolong(&self, coarse: &Self, q_coarse: &[f64]) -> Result<Vec<f64>>
+    fn prolong(&self, coarse: &Self, q_coarse: &[f64]) -> Result<DVector<f64>>
     where
         Self: Sized,
     {
@@ -456,7 +458,7 @@ pub trait Assembled {
     /// use softrod::structure::Assembled;
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 4)]).build_planar()?;
     /// let loads = softrod::loads::Loads::default();
-    /// let (u, q) = (robot.reference_free_coordinates(), robot.reference_configuration().as_slice().to_vec());
+    /// let (u, q) = (robot.reference_free_coordinates().as_slice().to_vec(), robot.reference_configuration().as_slice().to_vec());
     /// let dead = robot.dead_force(&loads)?;
     /// let (mut u1, mut q1) = (u.clone(), q.clone());
     /// u1[2] += 1e-3;
@@ -498,16 +500,16 @@ impl<E: Element> Assembled for Structure<E> {
         self.dof_map().configuration_into(u, q)
     }
 
-    fn reference_free_coordinates(&self) -> Vec<f64> {
-        Structure::reference_free_coordinates(self).to_vec()
+    fn reference_free_coordinates(&self) -> DVector<f64> {
+        DVector::from_column_slice(Structure::reference_free_coordinates(self))
     }
 
     fn validate_loads(&self, loads: &StructureLoads) -> Result<()> {
         Structure::validate_loads(self, loads)
     }
 
-    fn dead_force(&self, loads: &StructureLoads) -> Result<Vec<f64>> {
-        Structure::dead_force(self, loads).map(|f| f.data.into())
+    fn dead_force(&self, loads: &StructureLoads) -> Result<DVector<f64>> {
+        Structure::dead_force(self, loads)
     }
 
     fn scaled_loads(&self, loads: &StructureLoads, factor: f64) -> StructureLoads {
@@ -566,7 +568,7 @@ impl<E: Element> Assembled for Structure<E> {
     /// each joined block's, each force field's coordinates through the map,
     /// whatever their values): the pattern of every tangent of this
     /// structure.
-    fn free_coordinates_of(&self, q: &[f64]) -> Result<Vec<f64>> {
+    fn free_coordinates_of(&self, q: &[f64]) -> Result<DVector<f64>> {
         self.dof_map().free_coordinates_of(q)
     }
 

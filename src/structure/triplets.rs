@@ -17,7 +17,7 @@ use crate::loads::force_field::StiffnessSink;
 /// k.add(0, 0, 1.0);
 /// k.add(1, 0, -1.0);
 /// assert_eq!(k.to_dense()[(0, 0)], 3.0);
-/// assert_eq!(k.mul_vec(&[1.0, 1.0]).unwrap(), vec![3.0, -1.0]);
+/// assert_eq!(k.mul_vec(&[1.0, 1.0]).unwrap(), nalgebra::dvector![3.0, -1.0]);
 /// ```
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Triplets {
@@ -69,9 +69,9 @@ impl Triplets {
     ///
     /// # Errors
     /// [`crate::Error::DimensionMismatch`] if `x` does not have `n` entries.
-    pub fn mul_vec(&self, x: &[f64]) -> Result<Vec<f64>> {
+    pub fn mul_vec(&self, x: &[f64]) -> Result<nalgebra::DVector<f64>> {
         check_len("x", self.n, x.len())?;
-        let mut y = vec![0.0; self.n];
+        let mut y = nalgebra::DVector::zeros(self.n);
         for &(i, j, v) in &self.entries {
             y[i] += v * x[j];
         }

@@ -442,6 +442,6 @@ fn node_kinematics_of_bad_slices_are_nan_or_empty() {
     assert!(g.iter().chain(&h).all(|v| *v == 0.0));
     assert_eq!(
         SpatialCable::clamp_free_directions(&[0.0, 0.0, 0.0, 0.0, 2.0, 0.0]),
-        vec![vec![0.0, 0.0, 0.0, 0.0, 1.0, 0.0]]
+        nalgebra::DMatrix::from_column_slice(6, 1, &[0.0, 0.0, 0.0, 0.0, 1.0, 0.0])
     );
 }

@@ -26,9 +26,9 @@ impl DofMap {
     /// ]).unwrap();
     /// let u = vec![0.5, 0.1, 0.0, 1.0, 0.0];
     /// let q = map.configuration(&u).unwrap();
-    /// assert_eq!(map.free_coordinates_of(&q).unwrap(), u);
+    /// assert_eq!(map.free_coordinates_of(q.as_slice()).unwrap().as_slice(), &u[..]);
     /// ```
-    pub fn free_coordinates_of(&self, q: &[f64]) -> Result<Vec<f64>> {
+    pub fn free_coordinates_of(&self, q: &[f64]) -> Result<nalgebra::DVector<f64>> {
         check_len("q", self.n_q, q.len())?;
         let mut u = vec![0.0; self.n_u];
         for &(q0, u0, len) in &self.runs {
@@ -87,7 +87,7 @@ impl DofMap {
                 _ => {}
             }
         }
-        Ok(u)
+        Ok(nalgebra::DVector::from_vec(u))
     }
 
     /// A step of the free coordinates mapped to all coordinates,

@@ -521,7 +521,13 @@ impl DofMap {
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] if `u` has the wrong size.
-    pub fn configuration(&self, u: &[f64]) -> Result<Vec<f64>> {
+    pub fn configuration(&self, u: &[f64]) -> Result<nalgebra::DVector<f64>> {
+        self.configuration_vec(u).map(nalgebra::DVector::from_vec)
+    }
+
+    /// As [`DofMap::configuration`], as a plain vector (the assembly's
+    /// scratch).
+    pub(crate) fn configuration_vec(&self, u: &[f64]) -> Result<Vec<f64>> {
         let mut q = vec![0.0; self.n_q];
         self.configuration_into(u, &mut q)?;
         Ok(q)

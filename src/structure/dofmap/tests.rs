@@ -94,7 +94,7 @@ fn spatial_rigid_ends_match_finite_differences() {
     // q back to u
     let u = u_at(&m);
     let q = m.configuration(&u).unwrap();
-    let back = m.free_coordinates_of(&q).unwrap();
+    let back = m.free_coordinates_of(q.as_slice()).unwrap();
     let worst = u
         .iter()
         .zip(&back)

@@ -2,6 +2,8 @@
 //! the load Gram matrix `J_QF` applied to a load vector (23), and the node
 //! moments of the actuation (18).
 
+use nalgebra::{DMatrix, DVector};
+
 use super::{add_shape_force, slot, Rod};
 use crate::element::Element;
 use crate::error::{check_all_finite, check_index, check_len, Error, Result};
@@ -65,9 +67,9 @@ impl<E: Element> Rod<E> {
     /// let b = robot.load_gram().mul_vec(&f).unwrap();
     /// assert!(a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-15));
     /// ```
-    pub fn apply_load_gram(&self, f: &[f64]) -> Result<Vec<f64>> {
-        let mut out = vec![0.0; self.n_q()];
-        self.apply_load_gram_into(f, &mut out)?;
+    pub fn apply_load_gram(&self, f: &[f64]) -> Result<DVector<f64>> {
+        let mut out = DVector::zeros(self.n_q());
+        self.apply_load_gram_into(f, out.as_mut_slice())?;
         Ok(out)
     }
     /// Checks that `loads` fit this robot.
@@ -178,7 +180,7 @@ impl<E: Element> Rod<E> {
     /// # Errors
     /// As [`Rod::validate_loads`]; [`Error::NonFinite`] if the forces
     /// overflow.
-    pub fn dead_force(&self, loads: &Loads) -> Result<Vec<f64>> {
+    pub fn dead_force(&self, loads: &Loads) -> Result<DVector<f64>> {
         self.validate_loads(loads)?;
         let nd = E::NODE_DOFS;
         let mut f = self.gravity_force.clone();
@@ -197,7 +199,7 @@ impl<E: Element> Rod<E> {
         }
         if !loads.distributed_f.is_empty() {
             let jf = self.apply_load_gram(&loads.distributed_f)?;
-            f.iter_mut().zip(jf).for_each(|(a, b)| *a += b);
+            f.iter_mut().zip(jf.iter()).for_each(|(a, b)| *a += b);
         }
         // finite inputs can still overflow (huge loads, a Gaussian narrower
         // than the floating-point range resolves)
@@ -206,13 +208,15 @@ impl<E: Element> Rod<E> {
                 context: "dead forces (loads too large or too narrow)".into(),
             });
         }
-        Ok(f)
+        Ok(DVector::from_vec(f))
     }
-    /// The section torques `M_s = Σ_c G_c P_c` (N·m), one `MOMENT_DIM` vector per section.
-    pub fn section_torques(&self, pressures: &[f64]) -> Vec<Vec<f64>> {
-        let mut m = vec![vec![0.0; E::MOMENT_DIM]; self.sections.len()];
+    /// The section torques `M_s = Σ_c G_c P_c` (N·m): a `MOMENT_DIM ×
+    /// n_sections` matrix, column `s` the torque of section `s` (pressures
+    /// beyond the chambers are ignored, missing ones count as 0).
+    pub fn section_torques(&self, pressures: &[f64]) -> DMatrix<f64> {
+        let mut m = DMatrix::zeros(E::MOMENT_DIM, self.sections.len());
         for (c, p) in self.chambers.iter().zip(pressures) {
-            for (mi, g) in m[c.section].iter_mut().zip(&c.gain) {
+            for (mi, g) in m.column_mut(c.section).iter_mut().zip(&c.gain) {
                 *mi += g * p;
             }
         }

@@ -1,6 +1,8 @@
 //! Where things are on a rod: the straight configuration, arc positions
 //! located in elements, positions along the backbone.
 
+use nalgebra::DVector;
+
 use super::{slot, Rod};
 use crate::element::{ArcPoint, Element};
 use crate::error::{check_len, Result};
@@ -20,10 +22,10 @@ impl<E: Element> Rod<E> {
     /// let rod = Rod::new(&[Section::uniform(0.2, 300.0, 0.025, 4)], &[0.0, 0.0], 5, 5, "rod",
     ///     |s, le, ax, be| PlanarCable::with_rules(le, s.ea_n, s.ei_nm2, 0.0, ax, be)).unwrap();
     /// let q = rod.straight_configuration(&[1.0, 0.0], &[0.0, 1.0]);
-    /// assert_eq!(&q[16..], &[1.0, 0.2, 0.0, 1.0]);
-    /// assert!(rod.elastic_energy(&q).unwrap() < 1e-20);
+    /// assert_eq!(q.as_slice()[16..], [1.0, 0.2, 0.0, 1.0]);
+    /// assert!(rod.elastic_energy(q.as_slice()).unwrap() < 1e-20);
     /// ```
-    pub fn straight_configuration(&self, position: &[f64], direction: &[f64]) -> Vec<f64> {
+    pub fn straight_configuration(&self, position: &[f64], direction: &[f64]) -> DVector<f64> {
         let d = E::DIM;
         let nd = E::NODE_DOFS;
         let mut q = Vec::with_capacity(self.n_q());
@@ -34,7 +36,7 @@ impl<E: Element> Rod<E> {
             let node = E::straight_node(&p, &dir);
             q.extend(node.iter().take(nd));
         }
-        q
+        DVector::from_vec(q)
     }
 
     /// Element holding arc coordinate `s` and the local coordinate `ξ` in it.
@@ -62,18 +64,16 @@ impl<E: Element> Rod<E> {
     /// # Errors
     /// [`Error::InvalidParameter`](crate::Error::InvalidParameter) if `s` is off the robot,
     /// [`Error::DimensionMismatch`](crate::Error::DimensionMismatch) if `q` does not have `n_q` entries.
-    pub fn position_at(&self, q: &[f64], s: f64) -> Result<Vec<f64>> {
+    pub fn position_at(&self, q: &[f64], s: f64) -> Result<DVector<f64>> {
         check_len("q", self.n_q(), q.len())?;
         let p = self.arc_point("s_m", s)?;
         // the Hermite slots by offset (as ArcPoint::value_into for a cable)
         let base = p.element * E::NODE_DOFS;
-        Ok((0..E::DIM)
-            .map(|i| {
-                (0..4)
-                    .map(|k| p.values[k] * q[base + slot::<E>(k) + i])
-                    .sum()
-            })
-            .collect())
+        Ok(DVector::from_fn(E::DIM, |i, _| {
+            (0..4)
+                .map(|k| p.values[k] * q[base + slot::<E>(k) + i])
+                .sum()
+        }))
     }
 
     /// The element, `ξ` and Hermite weights at arc coordinate `s` (m): the
@@ -92,7 +92,7 @@ impl<E: Element> Rod<E> {
     ///     |s, le, ax, be| PlanarCable::with_rules(le, s.ea_n, s.ei_nm2, 0.0, ax, be)).unwrap();
     /// let q = rod.straight_configuration(&[0.0, 0.0], &[1.0, 0.0]);
     /// let mut r = [0.0; 2];
-    /// rod.arc_point("s_m", 0.13).unwrap().value_into(&q, &mut r).unwrap();
+    /// rod.arc_point("s_m", 0.13).unwrap().value_into(q.as_slice(), &mut r).unwrap();
     /// assert!((r[0] - 0.13).abs() < 1e-15);
     /// ```
     pub fn arc_point(&self, name: &str, s: f64) -> Result<ArcPoint> {

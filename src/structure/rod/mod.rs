@@ -11,6 +11,8 @@
 //! a rod clamped at its start, a [`super::Structure`] places several rods
 //! and rigid bodies by its [`super::DofMap`].
 
+use nalgebra::DMatrix;
+
 use crate::element::Element;
 use crate::error::{check_len, Result};
 use crate::linsolve::BandedMatrix;
@@ -198,13 +200,13 @@ impl<E: Element> Rod<E> {
         }
         Ok(())
     }
-    /// Node positions `r_i` (m), one `DIM` vector per node of `q` (a
-    /// trailing partial node is ignored, so this never panics).
-    pub fn node_positions(&self, q: &[f64]) -> Vec<Vec<f64>> {
+    /// Node positions `r_i` (m): a `DIM × nodes` matrix, column `i` the
+    /// position of node `i` of `q` (a trailing partial node is ignored, so
+    /// this never panics); as [`crate::assembly::Robot::node_positions`].
+    pub fn node_positions(&self, q: &[f64]) -> DMatrix<f64> {
         let nd = E::NODE_DOFS;
-        q.chunks_exact(nd)
-            .map(|c| c.iter().take(E::DIM).copied().collect())
-            .collect()
+        let nodes = q.len() / nd;
+        DMatrix::from_fn(E::DIM, nodes, |i, n| q[n * nd + i])
     }
 }
 
