@@ -9,6 +9,8 @@
 //! Modules, one concept each:
 //! - [`element`]: the cable element (14)–(16), energy, gradient, tangent.
 //! - [`assembly`]: a multi-section robot, loads (22), actuation (18).
+//! - [`loads`]: the loads of scenes and code (one type, [`loads::Load`]), dead
+//!   and configuration-dependent, and the actuation.
 //! - [`contact`]: rigid obstacles and frictionless contact in the static model.
 //! - [`statics`]: Newton's method on the equilibrium (17), and its warm
 //!   tracker for equilibria at nearby loads.
@@ -22,10 +24,14 @@
 //! - [`shape`]: typed results (nalgebra): positions, angles, tip pose, clamp reaction, the estimated load and its covariance.
 //! - [`outcome`]: how a solve ended: the status enums and the reports errors carry.
 //! - [`refine`]: `"elements": "auto"`, the smallest mesh meeting a tolerance.
-//! - [`linsolve`]: linear solvers for the tangent (banded, faer sparse); [`quadrature`]: Gauss rules.
+//! - [`linsolve`]: linear solvers for the tangent (faer sparse); [`quadrature`]: Gauss rules.
 //! - [`control`]: inverse kinematics, the parameter updater (31), the closed loop.
 //! - [`plant`]: the robot a controller acts on; a simulated plant that is not the model.
 //! - [`grasp`]: the two-finger gripper, objects with friction, the adaptive grasp (45)–(52).
+//! - [`touch`]: where an obstacle touches the robot, from the markers alone, and
+//!   steering around it (Sec. V).
+//! - [`parallel`]: the soft parallel robot (Figs. 7–8) and its payload estimate (32)–(35).
+//! - [`error`]: the one error type; every refusal names the field it is about.
 //! - `report` (feature `report`): `softrod report`, the speed–accuracy chart and the stability map.
 //!
 //! Features: the library needs only its numerical dependencies (nalgebra,

@@ -333,3 +333,102 @@ fn every_refused_parallel_mutation_names_its_field() {
         wrong.join("\n")
     );
 }
+
+/// Does the error name `path` or one of its ancestors (`obstacles[1]` for
+/// `obstacles[1].vertices_m[2][0]`), never the root alone?
+fn names_it_or_an_ancestor(message: &str, path: &str) -> bool {
+    let cuts = path
+        .char_indices()
+        .filter(|(_, c)| *c == '.' || *c == '[')
+        .map(|(i, _)| i)
+        .chain([path.len()]);
+    cuts.filter(|&i| i > 0)
+        .any(|i| message.contains(&format!("`{}`", &path[..i])))
+}
+
+/// Refusals of the avoid sweep known to name the wrong field (issue 16
+/// point 5, not met): `contact::Obstacle::validate` checks that a vertex is
+/// finite but does not bound it, so a coordinate of 1e308 overflows the
+/// polygon's edge arithmetic and another vertex is blamed. The fix (refuse
+/// coordinates and radii beyond a bound up front, as scenes do) belongs to
+/// `src/contact/obstacle.rs`; when it lands, this list must become empty
+/// (the test fails until it is).
+const KNOWN_WRONG_AVOID: [&str; 4] = [
+    "avoid_two_obstacles.json: obstacles[1].vertices_m[0][0] = 1e308",
+    "avoid_two_obstacles.json: obstacles[1].vertices_m[0][1] = 1e308",
+    "avoid_two_obstacles.json: obstacles[1].vertices_m[2][0] = 1e308",
+    "avoid_two_obstacles.json: obstacles[1].vertices_m[3][1] = 1e308",
+];
+
+/// The avoidance scenes of the examples (`{"obstacles": ..., "goal_m": ...}`,
+/// the input of `softrod avoid`), swept like the others: every refusal of
+/// `AvoidScene::from_json` (which parses and checks every field) names the
+/// field the user wrote, or the object whose condition it breaks: a
+/// circle's centre moved onto the robot is refused as `obstacles[0]`
+/// overlapping it, a vertex that makes the polygon clockwise as
+/// `obstacles[1].vertices_m`.
+#[test]
+fn every_refused_avoid_mutation_names_its_field() {
+    use softrod::touch::AvoidScene;
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|f| {
+            f.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with("avoid_"))
+                && f.extension().is_some_and(|e| e == "json")
+        })
+        .collect();
+    files.sort();
+    let (mut total, mut refused, mut exact, mut wrong) = (0, 0, 0, Vec::new());
+    for file in &files {
+        let base: Value = serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+        AvoidScene::from_json(&base.to_string()).unwrap();
+        let mut paths = Vec::new();
+        numbers(&base, String::new(), &mut paths, Vec::new());
+        for (path, steps) in &paths {
+            for x in VALUES {
+                total += 1;
+                let mut v = base.clone();
+                set(&mut v, steps, x);
+                if let Err(e) = AvoidScene::from_json(&v.to_string()) {
+                    refused += 1;
+                    let m = e.to_string();
+                    if names(&m, path) {
+                        exact += 1;
+                    } else if !names_it_or_an_ancestor(&m, path) {
+                        let name = file.file_name().unwrap().to_string_lossy();
+                        wrong.push(format!("{name}: {path} = {x:e}: {m}"));
+                    }
+                }
+            }
+        }
+    }
+    println!(
+        "{} avoid scenes, {total} mutations: {refused} refused ({exact} naming the field, \
+         {} its obstacle or vertex list), {} wrong",
+        files.len(),
+        refused - exact - wrong.len(),
+        wrong.len()
+    );
+    assert!(files.len() >= 2 && total >= 50, "{files:?}: {total}");
+    let heads: Vec<&str> = wrong
+        .iter()
+        .map(|w| w.split(": ").take(2).collect::<Vec<_>>().join(": "))
+        .map(|h| {
+            KNOWN_WRONG_AVOID
+                .iter()
+                .find(|k| **k == h)
+                .copied()
+                .unwrap_or("")
+        })
+        .collect();
+    assert!(
+        heads == KNOWN_WRONG_AVOID,
+        "{} of {refused} refusals name the wrong field (known: {}):\n{}",
+        wrong.len(),
+        KNOWN_WRONG_AVOID.len(),
+        wrong.join("\n")
+    );
+}

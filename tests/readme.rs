@@ -128,3 +128,64 @@ fn sh_blocks_run_and_the_test_command_is_ci_s() {
     assert_eq!(test_commands, 1, "the README names the test command once");
     assert!(ran >= 3, "only {ran} commands ran");
 }
+
+/// The module table of "What is in it" and the crate's rustdoc list every
+/// public module of `src/lib.rs`.
+#[test]
+fn the_module_table_and_the_crate_docs_list_every_public_module() {
+    let lib = include_str!("../src/lib.rs");
+    let modules: Vec<&str> = lib
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("pub mod "))
+        .map(|l| l.trim_end_matches(';').trim())
+        .collect();
+    assert!(modules.len() >= 20, "{modules:?}");
+    let docs: String = lib
+        .lines()
+        .filter_map(|l| l.strip_prefix("//!"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let mut missing = Vec::new();
+    for m in &modules {
+        if !README.contains(&format!("\n| `{m}` |")) {
+            missing.push(format!("README's module table: `{m}`"));
+        }
+        if !docs.contains(&format!("[`{m}`]")) && !docs.contains(&format!("- `{m}`")) {
+            missing.push(format!("the crate docs (src/lib.rs): `{m}`"));
+        }
+    }
+    assert!(missing.is_empty(), "not listed:\n{}", missing.join("\n"));
+}
+
+/// `softrod report` writes into `target/report` of the directory it runs
+/// in unless `--out` is given (so a run in a checkout leaves the committed
+/// figures alone): the quick coverage part, run in an empty directory.
+#[test]
+fn report_writes_into_target_report_unless_out_is_given() {
+    let dir = std::env::temp_dir().join(format!("softrod-readme-{}-report", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let run = |extra: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_softrod"))
+            .args(["report", "--only", "coverage", "--quick", "--quiet"])
+            .args(extra)
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    run(&[]);
+    assert!(dir.join("target/report/coverage.json").is_file());
+    run(&["--out", "elsewhere"]);
+    assert!(dir.join("elsewhere/coverage.json").is_file());
+    let written: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(written.len(), 2, "{written:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -705,7 +705,7 @@ impl Scene {
         }
     }
 
-    /// The paper's two-section robot (MODEL.md §5) with the values of
+    /// The paper's two-section robot (two 120 mm sections, Sec. IV) with the values of
     /// [`crate::params`], horizontal, under its own weight and the default
     /// pressures; five markers. This is the built-in default scene and equals
     /// `examples/two_section.json`.
