@@ -205,6 +205,29 @@ impl Refinement {
     }
 }
 
+// The trial record lives in `outcome` (which imports no error type); its
+// typed accessor lives here, beside the refinement that makes it.
+impl Trial {
+    /// [`Trial::value`] as a `D`-vector (m or N), `None` when the mesh
+    /// failed.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `value` if it does not
+    /// have `D` components.
+    ///
+    /// # Example
+    /// See [`Refinement::value_vector`].
+    pub fn value_vector<const D: usize>(&self) -> Result<Option<SVector<f64, D>>> {
+        self.value
+            .as_ref()
+            .map(|v| {
+                crate::error::check_len("value", D, v.len())?;
+                Ok(SVector::from_column_slice(v))
+            })
+            .transpose()
+    }
+}
+
 /// Chooses the element counts of a scene's `"elements": "auto"` sections:
 /// the smallest candidate mesh whose estimated error on the scene's
 /// `refinement` quantity meets its tolerance (see the

@@ -118,29 +118,6 @@ pub struct Trial {
     pub wall_time_s: f64,
 }
 
-impl Trial {
-    /// [`Trial::value`] as a `D`-vector (m or N), `None` when the mesh
-    /// failed.
-    ///
-    /// # Errors
-    /// [`crate::Error::DimensionMismatch`] named `value` if it does not
-    /// have `D` components.
-    ///
-    /// # Example
-    /// See [`crate::refine::Refinement::value_vector`].
-    pub fn value_vector<const D: usize>(
-        &self,
-    ) -> crate::error::Result<Option<nalgebra::SVector<f64, D>>> {
-        self.value
-            .as_ref()
-            .map(|v| {
-                crate::error::check_len("value", D, v.len())?;
-                Ok(nalgebra::SVector::from_column_slice(v))
-            })
-            .transpose()
-    }
-}
-
 /// Why a refinement stopped short of its tolerance.
 ///
 /// # Example
