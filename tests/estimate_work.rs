@@ -17,53 +17,12 @@ use softrod::assembly::{Base, Clamp, Robot, RobotSpec, Section};
 use softrod::element::PlanarCable;
 use softrod::estimate::{Backend, EstimatorSettings, MarkerObservation, Observation};
 use softrod::linsolve::LinearWork;
-use softrod::loads::{LineLoad, Loads, PointForce};
-use softrod::scene::Scene;
+use softrod::loads::{LineLoad, Loads};
 use softrod::statics::StaticSolver;
 
-/// The benches' robot with `n` elements, its known loads and `frames` noisy
-/// observations of `m` markers on the true shape.
-fn case(n: usize, m: usize, frames: u64) -> (Robot<PlanarCable>, Loads, Vec<Observation>) {
-    let mut scene = Scene::two_section();
-    scene.robot.sections[0].elements = n / 2;
-    scene.robot.sections[1].elements = n - n / 2;
-    let robot = scene.robot().unwrap();
-    let known = scene.loads().unwrap();
-    let truth_at = |k: f64| {
-        let mut truth = known.clone();
-        truth.point_forces.push(PointForce {
-            s_m: robot.length(),
-            force_n: vec![0.0, -0.02 * 9.81 * k],
-        });
-        truth.line_loads.push(LineLoad::Uniform {
-            w_n_per_m: vec![0.0, -0.5 * k],
-        });
-        truth
-    };
-    let solver = StaticSolver::default();
-    let mut q = solver.solve(&robot, &known, None).unwrap().q;
-    for k in 1..=8 {
-        q = solver
-            .solve(&robot, &truth_at(f64::from(k) / 8.0), Some(q.as_slice()))
-            .unwrap()
-            .q;
-    }
-    let markers: Vec<MarkerObservation> = (1..=m)
-        .map(|k| {
-            let s = robot.length() * k as f64 / m as f64;
-            MarkerObservation::at_arc(s, robot.position_at(q.as_slice(), s).unwrap().data.into())
-        })
-        .collect();
-    let frames = (0..frames)
-        .map(|k| {
-            Observation {
-                markers: markers.clone(),
-            }
-            .with_noise(1e-5, k)
-        })
-        .collect();
-    (robot, known, frames)
-}
+#[path = "common/streaming.rs"]
+mod streaming;
+use streaming::streaming_case as case;
 
 /// The work of each warm step (after a first step on frame 0), every step
 /// converged.
