@@ -42,6 +42,9 @@
 use std::hint::black_box;
 use std::time::Duration;
 
+#[path = "../tests/common/streaming.rs"]
+mod streaming;
+
 use criterion::{criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion};
 use softrod::assembly::Robot;
 use softrod::element::PlanarCable;
@@ -69,55 +72,7 @@ struct Case {
 }
 
 fn case(n: usize, m: usize) -> Case {
-    let mut scene = Scene::two_section();
-    scene.robot.sections[0].elements = n / 2;
-    scene.robot.sections[1].elements = n - n / 2;
-    let robot = scene.robot().unwrap();
-    assert_eq!(robot.elements().len(), n);
-    let known = scene.loads().unwrap();
-    let truth_at = |k: f64| {
-        let mut truth = known.clone();
-        truth.point_forces.push(PointForce {
-            s_m: robot.length(),
-            force_n: vec![0.0, -0.02 * 9.81 * k],
-        });
-        truth.line_loads.push(LineLoad::Uniform {
-            w_n_per_m: vec![0.0, -0.5 * k],
-        });
-        truth
-    };
-    // from the known loads' equilibrium, the unknown loads added in eight
-    // steps (a cold solve of the true loads does not converge at 450
-    // elements and more, nor one step from the known equilibrium at 2000:
-    // a static-solver robustness bug noted in README)
-    let solver = StaticSolver::default();
-    let mut q = solver.solve(&robot, &known, None).unwrap().q;
-    for k in 1..=8 {
-        q = solver
-            .solve(&robot, &truth_at(k as f64 / 8.0), Some(q.as_slice()))
-            .unwrap()
-            .q;
-    }
-    let eq = solver
-        .solve(&robot, &truth_at(1.0), Some(q.as_slice()))
-        .unwrap();
-    let markers: Vec<MarkerObservation> = (1..=m)
-        .map(|k| {
-            let s = robot.length() * k as f64 / m as f64;
-            MarkerObservation::at_arc(
-                s,
-                robot.position_at(eq.q.as_slice(), s).unwrap().data.into(),
-            )
-        })
-        .collect();
-    let frames = (0..64)
-        .map(|k| {
-            Observation {
-                markers: markers.clone(),
-            }
-            .with_noise(1e-5, k)
-        })
-        .collect();
+    let (robot, known, frames) = streaming::streaming_case(n, m, 64);
     Case {
         robot,
         known,

@@ -6,7 +6,8 @@
 //! ([`softrod::linsolve::LinearWork`], independent of the load), iterations,
 //! the `α` found and the ratio of the two backends' times.
 //!
-//! `cargo run --release --features report --example first_estimate [REPEATS]`
+//! `cargo run --release --features report --example first_estimate [REPEATS [FILTER]]`
+//! (`FILTER`: only the loads whose name contains it)
 //!
 //! Loads on the two-section robot (its known pressures; the truth solved on
 //! a mesh twice as fine, 5 markers at `L k / 5` with 0.01 mm seeded noise):
@@ -204,6 +205,7 @@ fn main() {
         .nth(1)
         .map(|a| a.parse().unwrap())
         .unwrap_or(5);
+    let filter = std::env::args().nth(2).unwrap_or_default();
     println!(
         "{:<34} {:>10} {:>5} {:>6} {:>9} {:>10} {:>5} {:>6} {:>9} {:>7} {:>7} {:>7}",
         "load",
@@ -221,7 +223,7 @@ fn main() {
     );
     let backends = [Backend::Newton, Backend::Sqp];
     let (mut worst, mut worst_min, mut worst_work) = (0.0f64, 0.0f64, 0.0f64);
-    for c in cases() {
+    for c in cases().into_iter().filter(|c| c.name.contains(&filter)) {
         let mut runs: Vec<Runs> = backends
             .iter()
             .map(|_| Runs {

@@ -429,6 +429,28 @@ fn bounds_every_cm(
         .collect()
 }
 
+/// The sqp estimates at `α = 10` of `obs` with the bounds of `settings` and
+/// without any: the bounded one, the free one.
+fn sqp_bounded_and_free(
+    robot: &Robot<PlanarCable>,
+    k: &Loads,
+    obs: &Observation,
+    settings: EstimatorSettings,
+) -> (Estimate, Estimate) {
+    let run = |s: EstimatorSettings| {
+        EstimatorSettings {
+            backend: Backend::Sqp,
+            alpha: Some(10.0),
+            ..s
+        }
+        .build_for(robot, k)
+        .unwrap()
+        .step(obs)
+        .unwrap()
+    };
+    (run(settings), run(EstimatorSettings::default()))
+}
+
 /// A contact that can only push: with a lower bound on the normal component
 /// of w (local frame) the SQP estimate respects it at every bounded point,
 /// and the Newton backend refuses bounds.
@@ -450,25 +472,7 @@ fn sqp_respects_load_bounds() {
     }
     .build_for(&robot, &k)
     .is_err());
-    let e = softrod::estimate::EstimatorSettings {
-        backend: Backend::Sqp,
-        ..settings
-    }
-    .build_for(&robot, &k)
-    .unwrap()
-    .step(&obs)
-    .unwrap();
-    let free = softrod::estimate::EstimatorSettings {
-        backend: Backend::Sqp,
-        ..EstimatorSettings {
-            alpha: Some(10.0),
-            ..EstimatorSettings::default()
-        }
-    }
-    .build_for(&robot, &k)
-    .unwrap()
-    .step(&obs)
-    .unwrap();
+    let (e, free) = sqp_bounded_and_free(&robot, &k, &obs, settings);
     let worst = bounds
         .iter()
         .map(|b| e.load_at(b.s_m)[1])
@@ -516,25 +520,7 @@ fn sqp_respects_local_frame_bounds() {
         bounds: bounds.clone(),
         ..EstimatorSettings::default()
     };
-    let e = softrod::estimate::EstimatorSettings {
-        backend: Backend::Sqp,
-        ..settings
-    }
-    .build_for(&robot, &k)
-    .unwrap()
-    .step(&obs)
-    .unwrap();
-    let free = softrod::estimate::EstimatorSettings {
-        backend: Backend::Sqp,
-        ..EstimatorSettings {
-            alpha: Some(10.0),
-            ..EstimatorSettings::default()
-        }
-    }
-    .build_for(&robot, &k)
-    .unwrap()
-    .step(&obs)
-    .unwrap();
+    let (e, free) = sqp_bounded_and_free(&robot, &k, &obs, settings);
     let worst = bounds
         .iter()
         .map(|b| normal_load(&e, b.s_m))
