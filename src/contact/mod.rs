@@ -49,6 +49,7 @@
 
 mod gap;
 mod obstacle;
+mod qp;
 mod settings;
 mod solver;
 #[cfg(test)]
