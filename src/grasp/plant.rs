@@ -7,8 +7,11 @@
 //! its markers carry Gaussian noise (default 0.05 mm). In each contact
 //! solve the object is a fixed obstacle; between solves the trial moves it
 //! ([`GripperPlant::set_workspace`]): while the fingers close it rests on
-//! the table, after the lift it slides down while the friction check
-//! ([`crate::grasp::friction::hold_check`]) says the contacts cannot carry it.
+//! the table, after the lift it is a planar rigid body (position and
+//! rotation) that the trial steps, pose by pose, while the friction check
+//! ([`crate::grasp::friction::hold_check`]) says the contact forces cannot
+//! balance its weight (Gauss's least constraint inside the friction
+//! cones): it may slide, turn in the pinch, or drop.
 
 use serde::{Deserialize, Serialize};
 
