@@ -52,6 +52,7 @@ mod obstacle;
 mod qp;
 mod settings;
 mod solver;
+mod start;
 #[cfg(test)]
 mod tests;
 

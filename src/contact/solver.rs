@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 pub use super::settings::ContactSettings;
 
 use super::qp::solve_qp;
+use super::start::cold_start;
 use super::{Gap, Obstacles};
 use crate::assembly::Robot;
 use crate::element::PlanarCable;
@@ -283,13 +284,14 @@ impl ContactSolver {
     }
 
     /// The equilibrium of `robot` under `loads` among `obstacles`, from `q0`
-    /// (all `n_q` coordinates) or, cold, from the configuration of the
-    /// actuation alone ([`Robot::arc_configuration`]) if it does not
-    /// penetrate, else from the reference configuration. The SQP's steps
-    /// are bounded and their linearized gaps keep them on the near side of
-    /// every obstacle, so the solve follows the loading from the start: an
-    /// obstacle the free equilibrium would pass through is met, not
-    /// tunnelled.
+    /// (all `n_q` coordinates) or, cold, from the shapes of the actuation
+    /// alone ([`Robot::arc_configuration`]) followed as the pressures grow
+    /// from zero up to the last one that touches no obstacle (so a start is
+    /// never beyond a thin obstacle that the loading path meets). The SQP's
+    /// steps are bounded and their linearized gaps keep them on the near
+    /// side of every obstacle, so the solve follows the loading from the
+    /// start: an obstacle the free equilibrium would pass through is met,
+    /// not tunnelled.
     ///
     /// # Errors
     /// Bad input only: the settings ([`ContactSettings::validate`]), the
@@ -330,16 +332,10 @@ impl ContactSolver {
                 check_all_finite("q0", q0)?;
                 self.with_clamp(robot, q0)?
             }
-            None => {
-                // not the free equilibrium, even if it does not penetrate: it
-                // may lie beyond an obstacle the loading path meets
-                let arc: Vec<f64> = robot.arc_configuration(&loads.pressures_pa).data.into();
-                if ctx.penetration(&arc)?.0 == 0.0 {
-                    arc
-                } else {
-                    robot.reference_configuration().data.into()
-                }
-            }
+            // not the free equilibrium nor the actuation's shape, even if
+            // they do not penetrate: they may lie beyond an obstacle the
+            // loading path meets
+            None => cold_start(robot, &loads.pressures_pa, obstacles)?,
         };
         let (status, active) = self.sqp(&ctx, &mut q, &mut report)?;
         report.status = status;
