@@ -46,6 +46,15 @@ pub enum ContactStatus {
     /// No step along the SQP direction decreased the merit function
     /// (potential plus a penalty on penetration).
     LineSearchFailed,
+    /// The SQP iterate stopped moving (its steps at round-off), but
+    /// Newton's method on the KKT system of its active set, and of the
+    /// closed contacts among them, did not reach a solution that passes
+    /// the checks: the solve stops there instead of spending its iteration
+    /// budget on the same point.
+    Stalled {
+        /// Contacts in the SQP's active set.
+        active_contacts: usize,
+    },
     /// A number that is not finite appeared.
     NonFinite {
         /// Where.
@@ -72,6 +81,10 @@ impl std::fmt::Display for ContactStatus {
                 write!(f, "iteration limit ({iterations} iterations)")
             }
             ContactStatus::LineSearchFailed => write!(f, "line search failed"),
+            ContactStatus::Stalled { active_contacts } => write!(
+                f,
+                "stalled (the SQP stopped; the polish of its {active_contacts} contacts failed)"
+            ),
             ContactStatus::NonFinite { at } => write!(f, "non-finite {}", at.name()),
         }
     }

@@ -73,7 +73,10 @@ impl PlantStep {
     pub(super) fn states(self) -> std::result::Result<[FingerState; 2], Failure> {
         match self {
             PlantStep::Solved(s) => Ok(*s),
-            PlantStep::Failed { side, status } => Err(Failure::PlantSolve { side, status }),
+            PlantStep::Failed { side, status } => Err(Failure::PlantSolve {
+                side,
+                status: format!("{status:?}"),
+            }),
         }
     }
 }
