@@ -346,20 +346,6 @@ fn names_it_or_an_ancestor(message: &str, path: &str) -> bool {
         .any(|i| message.contains(&format!("`{}`", &path[..i])))
 }
 
-/// Refusals of the avoid sweep known to name the wrong field (issue 16
-/// point 5, not met): `contact::Obstacle::validate` checks that a vertex is
-/// finite but does not bound it, so a coordinate of 1e308 overflows the
-/// polygon's edge arithmetic and another vertex is blamed. The fix (refuse
-/// coordinates and radii beyond a bound up front, as scenes do) belongs to
-/// `src/contact/obstacle.rs`; when it lands, this list must become empty
-/// (the test fails until it is).
-const KNOWN_WRONG_AVOID: [&str; 4] = [
-    "avoid_two_obstacles.json: obstacles[1].vertices_m[0][0] = 1e308",
-    "avoid_two_obstacles.json: obstacles[1].vertices_m[0][1] = 1e308",
-    "avoid_two_obstacles.json: obstacles[1].vertices_m[2][0] = 1e308",
-    "avoid_two_obstacles.json: obstacles[1].vertices_m[3][1] = 1e308",
-];
-
 /// The avoidance scenes of the examples (`{"obstacles": ..., "goal_m": ...}`,
 /// the input of `softrod avoid`), swept like the others: every refusal of
 /// `AvoidScene::from_json` (which parses and checks every field) names the
@@ -413,22 +399,12 @@ fn every_refused_avoid_mutation_names_its_field() {
         wrong.len()
     );
     assert!(files.len() >= 2 && total >= 50, "{files:?}: {total}");
-    let heads: Vec<&str> = wrong
-        .iter()
-        .map(|w| w.split(": ").take(2).collect::<Vec<_>>().join(": "))
-        .map(|h| {
-            KNOWN_WRONG_AVOID
-                .iter()
-                .find(|k| **k == h)
-                .copied()
-                .unwrap_or("")
-        })
-        .collect();
+    // A 1e308 polygon vertex used to overflow the edge arithmetic and blame
+    // another vertex; `Obstacle::validate` now bounds coordinates and radii.
     assert!(
-        heads == KNOWN_WRONG_AVOID,
-        "{} of {refused} refusals name the wrong field (known: {}):\n{}",
+        wrong.is_empty(),
+        "{} of {refused} refusals name the wrong field:\n{}",
         wrong.len(),
-        KNOWN_WRONG_AVOID.len(),
         wrong.join("\n")
     );
 }

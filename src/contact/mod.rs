@@ -70,7 +70,7 @@ pub(crate) mod faults {
 }
 
 pub use gap::Gap;
-pub use obstacle::{Obstacle, SignedDistance};
+pub use obstacle::{Obstacle, SignedDistance, MAX_OBSTACLE_EXTENT_M};
 pub use solver::{ContactForce, ContactSettings, ContactSolution, ContactSolver};
 
 use crate::assembly::Robot;

@@ -5,6 +5,18 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{check_positive, Error, Result};
 
+/// Largest coordinate or radius (m) an obstacle may have: beyond it the gap
+/// arithmetic (squared lengths, cross products) can only overflow, so
+/// [`Obstacle::validate`] refuses it by the field the user wrote.
+///
+/// # Example
+/// ```
+/// use softrod::contact::{Obstacle, MAX_OBSTACLE_EXTENT_M};
+/// let far = Obstacle::Circle { center_m: [2.0 * MAX_OBSTACLE_EXTENT_M, 0.0], radius_m: 0.01 };
+/// assert!(far.validate("obstacles[0]").unwrap_err().to_string().contains("obstacles[0].center_m"));
+/// ```
+pub const MAX_OBSTACLE_EXTENT_M: f64 = 1e12;
+
 /// A rigid obstacle fixed in the world plane (coordinates in m).
 ///
 /// Serialized with a `"shape"` tag:
@@ -172,17 +184,37 @@ impl Obstacle {
     /// ```
     pub fn validate(&self, path: &str) -> Result<()> {
         let field = |f: &str| format!("{path}.{f}");
+        // Magnitudes that can only overflow the gap arithmetic (squared
+        // edge lengths, cross products) are refused up front, by the field
+        // the user wrote, instead of blaming a neighbouring vertex later.
         let point = |f: &str, p: &[f64; 2]| -> Result<()> {
-            if p.iter().all(|v| v.is_finite()) {
-                Ok(())
-            } else {
+            if !p.iter().all(|v| v.is_finite()) {
                 Err(Error::invalid(field(f), format!("{p:?}"), "must be finite"))
+            } else if p.iter().any(|v| v.abs() > MAX_OBSTACLE_EXTENT_M) {
+                Err(Error::invalid(
+                    field(f),
+                    format!("{p:?}"),
+                    format!("must lie within {MAX_OBSTACLE_EXTENT_M:e} m of the origin"),
+                ))
+            } else {
+                Ok(())
             }
+        };
+        let radius = |r: f64| -> Result<()> {
+            check_positive(&field("radius_m"), r)?;
+            if r > MAX_OBSTACLE_EXTENT_M {
+                return Err(Error::invalid(
+                    field("radius_m"),
+                    r,
+                    format!("must not exceed {MAX_OBSTACLE_EXTENT_M:e} m"),
+                ));
+            }
+            Ok(())
         };
         match self {
             Obstacle::Circle { center_m, radius_m } => {
                 point("center_m", center_m)?;
-                check_positive(&field("radius_m"), *radius_m)
+                radius(*radius_m)
             }
             Obstacle::Capsule {
                 start_m,
@@ -191,7 +223,7 @@ impl Obstacle {
             } => {
                 point("start_m", start_m)?;
                 point("end_m", end_m)?;
-                check_positive(&field("radius_m"), *radius_m)
+                radius(*radius_m)
             }
             Obstacle::Polygon { vertices_m } => {
                 let name = field("vertices_m");
