@@ -181,6 +181,7 @@ fn a_definite_only_attempt_gives_up_at_an_indefinite_tangent() {
             floor: 0.0,
             last_step: 0.0,
             definite: false,
+            settled: false,
         };
         robot.configuration_into(&u, &mut w.q).unwrap();
         let target = Target::<crate::assembly::Robot<crate::element::PlanarCable>> {
@@ -190,6 +191,7 @@ fn a_definite_only_attempt_gives_up_at_an_indefinite_tangent() {
             strict: true,
             descent: false,
             definite_only,
+            full: true,
         };
         let quick = StaticSolver {
             settings: StaticSettings {
