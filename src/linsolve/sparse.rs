@@ -7,7 +7,6 @@
 //! so the process-wide setting is left to the application): the tangents
 //! of slender structures are too small for threads to pay.
 
-use std::cell::RefCell;
 use std::sync::{Arc, OnceLock};
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
@@ -32,8 +31,10 @@ use super::{
 };
 
 mod factors;
+mod kept;
 use factors::Numeric;
 pub use factors::SparseFactors;
+use kept::{keep_analysis, kept_analysis, Analysis};
 
 /// The symmetric factorization [`SparseSolver`] tries first.
 ///
@@ -110,63 +111,6 @@ struct Permuted {
     /// each of its entries the stored entry it copies: built when an LU of
     /// this pattern is first needed, then shared by every solver of it.
     full: OnceLock<(SymbolicSparseColMat<usize>, Vec<usize>)>,
-}
-
-/// How many symbolic analyses each thread keeps ([`SparseSolver::with_settings`]).
-const ANALYSES_KEPT: usize = 8;
-
-/// One symbolic analysis kept for reuse: the pattern it was made of, its
-/// settings and its products.
-struct Analysis {
-    pattern: Arc<SymmetricPattern>,
-    settings: SparseSettings,
-    symbolic: Arc<SymbolicCholesky<usize>>,
-    perm: Arc<Permuted>,
-}
-
-thread_local! {
-    /// The analyses made last on this thread, most recent first: the
-    /// analysis depends only on the pattern (the mesh) and the settings, and
-    /// a solver analyzed per solve (a cold static solve, a fresh estimator)
-    /// then costs no more than a lookup. The first entries of a pattern of
-    /// 1 000 elements cost as much as its first factorizations.
-    static ANALYSES: RefCell<Vec<Analysis>> = const { RefCell::new(Vec::new()) };
-}
-
-/// The kept analysis of `pattern` (the same one or an equal sparsity
-/// structure) with `settings`, if any, moved to the front.
-fn kept_analysis(
-    pattern: &Arc<SymmetricPattern>,
-    settings: SparseSettings,
-) -> Option<(Arc<SymbolicCholesky<usize>>, Arc<Permuted>)> {
-    ANALYSES
-        .try_with(|cell| {
-            let mut kept = cell.try_borrow_mut().ok()?;
-            let at = kept.iter().position(|a| {
-                a.settings == settings
-                    && (Arc::ptr_eq(&a.pattern, pattern)
-                        || (a.pattern.n() == pattern.n()
-                            && a.pattern.col_ptr() == pattern.col_ptr()
-                            && a.pattern.row_idx() == pattern.row_idx()))
-            })?;
-            let a = kept.remove(at);
-            let found = (a.symbolic.clone(), a.perm.clone());
-            kept.insert(0, a);
-            Some(found)
-        })
-        .ok()
-        .flatten()
-}
-
-/// Keeps an analysis (dropping the least recently used past
-/// [`ANALYSES_KEPT`]).
-fn keep_analysis(analysis: Analysis) {
-    let _ = ANALYSES.try_with(|cell| {
-        if let Ok(mut kept) = cell.try_borrow_mut() {
-            kept.insert(0, analysis);
-            kept.truncate(ANALYSES_KEPT);
-        }
-    });
 }
 
 /// The faer sparse solver behind [`TangentSolver`], for any pattern.

@@ -16,7 +16,7 @@ use nalgebra::DVector;
 use super::{finite_or_max, residual_floor, Equilibrium, StaticSolver};
 use crate::error::{Error, Result};
 use crate::linsolve::{
-    AutoSolver, FactorOptions, Factorization, Inertia, LinsolveError, SymmetricMatrix,
+    AutoFactors, AutoSolver, FactorOptions, Factorization, Inertia, LinsolveError, SymmetricMatrix,
     TangentSolver,
 };
 use crate::numeric::norm2;
@@ -399,6 +399,8 @@ impl StaticSolver {
         let mut dq = vec![0.0; nq];
         let mut energies = Vec::new();
         let (mut floor_steps, mut floor_previous) = (0, f64::INFINITY);
+        // the factorization of the first step on the round-off floor
+        let mut floor_lu: Option<AutoFactors> = None;
         for _ in 0..self.settings.max_iterations {
             if !rn.is_finite() {
                 return Ok(StaticStatus::NonFinite {
@@ -413,14 +415,29 @@ impl StaticSolver {
                     iterations: w.iterations,
                 });
             }
-            model.tangent_into(u, &w.q, dead, loads, &mut w.k)?;
-            let qmax = w.q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            w.floor = residual_floor(w.k.max_abs(), qmax, n);
+            // On the floor after a first step there: a chord step with that
+            // step's factorization (the tangent moves by round-off between
+            // points on the floor; a fresh one cost a tangent and a
+            // factorization per step, up to three steps at 2000 elements).
+            let chord = match (&floor_lu, floor_steps > 0) {
+                (Some(f), true) => {
+                    du.copy_from_slice(&w.r);
+                    f.solve_in_place(&mut du)?;
+                    let slope: f64 = w.r.iter().zip(&du).map(|(a, b)| a * b).sum();
+                    slope > 0.0 && du.iter().all(|v| v.is_finite())
+                }
+                _ => false,
+            };
+            if !chord {
+                model.tangent_into(u, &w.q, dead, loads, &mut w.k)?;
+                let qmax = w.q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                w.floor = residual_floor(w.k.max_abs(), qmax, n);
+            }
             // At the round-off floor the residual cannot certify more digits,
             // but one more Newton step still can gain them (the floor does not
             // shrink with the load; stopping here left small-load solves 1e-11 m
             // short): take it, keep it unless it raises the residual, stop.
-            let at_floor = rn <= w.floor;
+            let at_floor = chord || rn <= w.floor;
             w.iterations += 1;
             // Newton direction from the Jacobi-scaled factorization (the rows
             // of a fine cable's tangent span many orders of magnitude: bending
@@ -429,8 +446,10 @@ impl StaticSolver {
             // equilibrium), shift the scaled diagonal with growing μ until it
             // does. (The tangent is symmetric: L D Lᵀ when positive definite,
             // the pivoted LU otherwise, neither consuming it.)
-            let mut found = false;
-            let shifts: &[f64] = if t.descent {
+            let mut found = chord;
+            let shifts: &[f64] = if chord {
+                &[]
+            } else if t.descent {
                 &DESCENT_SHIFTS
             } else if t.definite_only {
                 &[0.0]
@@ -463,6 +482,9 @@ impl StaticSolver {
                 let slope: f64 = w.r.iter().zip(&du).map(|(a, b)| a * b).sum();
                 if slope > 0.0 && du.iter().all(|v| v.is_finite()) {
                     found = true;
+                    if at_floor && mu == 0.0 {
+                        floor_lu = Some(lu);
+                    }
                     break;
                 }
             }
