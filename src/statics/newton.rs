@@ -59,7 +59,7 @@ pub(super) struct Work<'a> {
     /// residual cannot resolve, so the factorization gives its inertia (no
     /// factorization again for the stability test), and `r` is its
     /// residual. Read by [`StaticSolver::run`]'s stability test only.
-    pub settled: bool,
+    pub(super) settled: bool,
 }
 
 /// The loads of one Newton run: the dead forces, the model's loads and
@@ -81,7 +81,7 @@ pub(super) struct Target<'a, M: Assembled> {
     pub definite_only: bool,
     /// The problem itself (its dead forces and loads, no offset), not a
     /// homotopy's or continuation's intermediate one (see `Work::settled`).
-    pub full: bool,
+    pub(super) full: bool,
 }
 
 impl StaticSolver {

@@ -15,10 +15,10 @@ const ANALYSES_KEPT: usize = 8;
 /// One symbolic analysis kept for reuse: the pattern it was made of, its
 /// settings and its products.
 pub(super) struct Analysis {
-    pub pattern: Arc<SymmetricPattern>,
-    pub settings: SparseSettings,
-    pub symbolic: Arc<SymbolicCholesky<usize>>,
-    pub perm: Arc<Permuted>,
+    pub(super) pattern: Arc<SymmetricPattern>,
+    pub(super) settings: SparseSettings,
+    pub(super) symbolic: Arc<SymbolicCholesky<usize>>,
+    pub(super) perm: Arc<Permuted>,
 }
 
 thread_local! {
