@@ -7,7 +7,7 @@
 //! so the process-wide setting is left to the application): the tangents
 //! of slender structures are too small for threads to pay.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
@@ -31,8 +31,10 @@ use super::{
 };
 
 mod factors;
+mod kept;
 use factors::Numeric;
 pub use factors::SparseFactors;
+use kept::{keep_analysis, kept_analysis, Analysis};
 
 /// The symmetric factorization [`SparseSolver`] tries first.
 ///
@@ -105,6 +107,10 @@ struct Permuted {
     diag: Vec<usize>,
     /// The identity permutation (the LU's column order: already permuted).
     identity: Vec<usize>,
+    /// The full permuted matrix (both triangles) the LU factors, and for
+    /// each of its entries the stored entry it copies: built when an LU of
+    /// this pattern is first needed, then shared by every solver of it.
+    full: OnceLock<(SymbolicSparseColMat<usize>, Vec<usize>)>,
 }
 
 /// The faer sparse solver behind [`TangentSolver`], for any pattern.
@@ -142,10 +148,6 @@ pub struct SparseSolver {
     settings: SparseSettings,
     symbolic: Arc<SymbolicCholesky<usize>>,
     perm: Arc<Permuted>,
-    /// The full permuted matrix (both triangles) the LU factors, and for
-    /// each of its entries the stored entry it copies: built when an LU is
-    /// first needed.
-    full: Option<Arc<(SymbolicSparseColMat<usize>, Vec<usize>)>>,
     /// Scratch of one factorization: the scaled, shifted, permuted values.
     scaled: Vec<f64>,
     /// Scratch: the pivots of the last `L D Lᵀ` / `L Lᵀ` (elimination order).
@@ -204,6 +206,38 @@ impl SparseSolver {
         pattern: &Arc<SymmetricPattern>,
         settings: SparseSettings,
     ) -> Result<Self, LinsolveError> {
+        let (symbolic, perm) = match kept_analysis(pattern, settings) {
+            Some(found) => found,
+            None => {
+                let (symbolic, perm) = Self::symbolic_analysis(pattern, settings)?;
+                let (symbolic, perm) = (Arc::new(symbolic), Arc::new(perm));
+                keep_analysis(Analysis {
+                    pattern: pattern.clone(),
+                    settings,
+                    symbolic: symbolic.clone(),
+                    perm: perm.clone(),
+                });
+                (symbolic, perm)
+            }
+        };
+        Ok(SparseSolver {
+            pattern: pattern.clone(),
+            settings,
+            symbolic,
+            perm,
+            scaled: Vec::new(),
+            pivots: Vec::with_capacity(pattern.n()),
+            workspace: Workspace::default(),
+        })
+    }
+
+    /// The fill-reducing ordering of `pattern` and the symbolic
+    /// factorization of the permuted matrix (what [`Self::with_settings`]
+    /// keeps per thread).
+    fn symbolic_analysis(
+        pattern: &SymmetricPattern,
+        settings: SparseSettings,
+    ) -> Result<(SymbolicCholesky<usize>, Permuted), LinsolveError> {
         let n = pattern.n();
         let a =
             SymbolicSparseColMatRef::new_checked(n, n, pattern.col_ptr(), None, pattern.row_idx());
@@ -252,24 +286,18 @@ impl SparseSolver {
             })
             .collect();
         let tri = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-
-        Ok(SparseSolver {
-            pattern: pattern.clone(),
-            settings,
-            symbolic: Arc::new(symbolic),
-            perm: Arc::new(Permuted {
+        Ok((
+            symbolic,
+            Permuted {
                 fwd,
                 side,
                 tri,
                 src,
                 diag,
                 identity: (0..n).collect(),
-            }),
-            full: None,
-            scaled: Vec::new(),
-            pivots: Vec::with_capacity(n),
-            workspace: Workspace::default(),
-        })
+                full: OnceLock::new(),
+            },
+        ))
     }
 
     /// The settings.
@@ -415,20 +443,15 @@ impl SparseSolver {
     /// in the fill-reducing order).
     fn lu(&mut self, rowmax: &[f64]) -> Result<(Numeric, f64), LinsolveError> {
         let n = self.pattern.n();
-        let full = match &self.full {
-            Some(f) => f.clone(),
-            None => {
-                let tri = self.perm.tri.as_ref();
-                let (ptr, rows, src) = full_pattern(n, tri.col_ptr(), tri.row_idx());
-                let f = Arc::new((
-                    SymbolicSparseColMat::new_checked(n, n, ptr, None, rows),
-                    src,
-                ));
-                self.full = Some(f.clone());
-                f
-            }
-        };
         let pm = &self.perm;
+        let full = pm.full.get_or_init(|| {
+            let tri = pm.tri.as_ref();
+            let (ptr, rows, src) = full_pattern(n, tri.col_ptr(), tri.row_idx());
+            (
+                SymbolicSparseColMat::new_checked(n, n, ptr, None, rows),
+                src,
+            )
+        });
         let full_values: Vec<f64> = full.1.iter().map(|&k| self.scaled[k]).collect();
         let a = SparseColMatRef::new(full.0.as_ref(), &full_values[..]);
         let mut lu = SimplicialLu::new();

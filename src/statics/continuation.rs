@@ -192,6 +192,7 @@ impl StaticSolver {
                 strict: false,
                 descent: false,
                 definite_only: false,
+                full: false,
             };
             match self.corrector(model, &tgt, &mut u_try, &mut q_try, w)? {
                 // a step from a stable point to an unstable one stepped over

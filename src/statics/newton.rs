@@ -16,7 +16,8 @@ use nalgebra::DVector;
 use super::{finite_or_max, residual_floor, Equilibrium, StaticSolver};
 use crate::error::{Error, Result};
 use crate::linsolve::{
-    AutoSolver, FactorOptions, Factorization, LinsolveError, SymmetricMatrix, TangentSolver,
+    AutoFactors, AutoSolver, FactorOptions, Factorization, Inertia, LinsolveError, SymmetricMatrix,
+    TangentSolver,
 };
 use crate::numeric::norm2;
 use crate::outcome::{NonFiniteAt, StaticCriterion, StaticReport, StaticStatus};
@@ -51,6 +52,14 @@ pub(super) struct Work<'a> {
     /// Whether the last tangent [`StaticSolver::newton`] factored was
     /// positive definite.
     pub definite: bool,
+    /// Whether the last Newton run ended at an equilibrium of its target's
+    /// full problem (`Target::full`) whose tangent it had factored, positive definite and
+    /// unshifted, at a point that already met the convergence test to the
+    /// round-off floor: the answer is that point plus one Newton step the
+    /// residual cannot resolve, so the factorization gives its inertia (no
+    /// factorization again for the stability test), and `r` is its
+    /// residual. Read by [`StaticSolver::run`]'s stability test only.
+    pub(super) settled: bool,
 }
 
 /// The loads of one Newton run: the dead forces, the model's loads and
@@ -70,6 +79,9 @@ pub(super) struct Target<'a, M: Assembled> {
     /// any pivoted LU of it (the quick attempt of a cold solve with the
     /// coarse mesh's start behind it, see [`StaticSolver::run`]).
     pub definite_only: bool,
+    /// The problem itself (its dead forces and loads, no offset), not a
+    /// homotopy's or continuation's intermediate one (see `Work::settled`).
+    pub(super) full: bool,
 }
 
 impl StaticSolver {
@@ -96,6 +108,7 @@ impl StaticSolver {
             floor: 0.0,
             last_step: 0.0,
             definite: false,
+            settled: false,
         };
         model.configuration_into(&u, &mut w.q)?;
         let scale = {
@@ -133,6 +146,7 @@ impl StaticSolver {
                 strict: true,
                 descent: false,
                 definite_only: coarse.is_some(),
+                full: true,
             };
             let quick = StaticSolver {
                 settings: super::StaticSettings {
@@ -156,6 +170,7 @@ impl StaticSolver {
             w.iterations += start.iterations;
             load_steps += start.load_steps;
             if let Some(uc) = start.u {
+                w.settled = false;
                 u.copy_from_slice(&uc);
                 model.configuration_into(&u, &mut w.q)?;
                 let full = Target::<M> {
@@ -165,6 +180,7 @@ impl StaticSolver {
                     strict: true,
                     descent: false,
                     definite_only: false,
+                    full: true,
                 };
                 let before = w.iterations;
                 let status = self.fine_newton(model, &full, &mut u, &mut w, scale)?;
@@ -184,6 +200,7 @@ impl StaticSolver {
             // homotopy below handles them.
             StaticStatus::LineSearchFailed
         } else if scale.is_finite() {
+            w.settled = false;
             u.copy_from_slice(&u_start);
             w.q.copy_from_slice(&q_start);
             // cold: the path starts from the unloaded reference, an exact
@@ -195,6 +212,7 @@ impl StaticSolver {
                 model.configuration_into(&u, &mut w.q)?;
             }
             let end = self.continuation(model, &dead, loads, &mut u, &mut w, scale)?;
+            w.settled = false;
             load_steps += end.load_steps;
             match end.status {
                 // near the full load's equilibrium: Newton to the tolerance
@@ -206,6 +224,7 @@ impl StaticSolver {
                         strict: false,
                         descent: false,
                         definite_only: false,
+                        full: true,
                     };
                     self.newton(model, &full, &mut u, &mut w, scale)?
                 }
@@ -223,6 +242,7 @@ impl StaticSolver {
             // R_λ(u) = R(u; λ loads) − (1 − λ) R(u_start; no loads) (slower on
             // fine meshes, but it reaches some equilibria the plain
             // corrector cannot: see the module documentation).
+            w.settled = false;
             u.copy_from_slice(&u_start);
             w.q.copy_from_slice(&q_start);
             let full = Target::<M> {
@@ -232,10 +252,12 @@ impl StaticSolver {
                 strict: false,
                 descent: false,
                 definite_only: false,
+                full: true,
             };
             status = self.newton(model, &full, &mut u, &mut w, scale)?;
         }
         if !status.is_converged() && scale.is_finite() {
+            w.settled = false;
             u.copy_from_slice(&u_start);
             w.q.copy_from_slice(&q_start);
             let unloaded = model.scaled_loads(loads, 0.0);
@@ -259,6 +281,7 @@ impl StaticSolver {
                     strict: false,
                     descent: false,
                     definite_only: false,
+                    full: false,
                 };
                 let step_status = self.newton(model, &t, &mut u, &mut w, scale)?;
                 if step_status.is_converged() {
@@ -295,14 +318,25 @@ impl StaticSolver {
             }
         }
         // a saddle (the straight column beyond buckling) is left for a
-        // stable equilibrium; the answer's inertia goes into the report
+        // stable equilibrium; the answer's inertia goes into the report (read
+        // off the last Newton factorization when it was made at an
+        // equilibrium to the floor, see `Work::settled`: then `w.r` is the
+        // answer's residual too)
+        let settled = status.is_converged() && w.settled && model.conservative(loads);
         let mut inertia = None;
-        if status.is_converged() {
+        if settled {
+            inertia = Some(Inertia {
+                positive: n,
+                negative: 0,
+            });
+        } else if status.is_converged() {
             (status, inertia) =
                 self.stabilize(model, &dead, loads, &mut u, &mut w, scale, status)?;
         }
-        // final residual for the report
-        model.residual_into(&u, &w.q, &dead, loads, &mut w.r)?;
+        if !settled {
+            // final residual for the report
+            model.residual_into(&u, &w.q, &dead, loads, &mut w.r)?;
+        }
         let res = norm2(&w.r);
         // no NaN leaves the library: a "converged" state with a non-finite
         // coordinate or residual is a failure
@@ -356,6 +390,7 @@ impl StaticSolver {
             r.iter_mut().zip(offset).for_each(|(a, b)| *a -= b);
             Ok(norm2(r))
         };
+        w.settled = false;
         let mut rn = eval(u, &w.q, &mut w.r)?;
         let mut trial = u.to_vec();
         let mut q_trial = w.q.clone();
@@ -364,6 +399,8 @@ impl StaticSolver {
         let mut dq = vec![0.0; nq];
         let mut energies = Vec::new();
         let (mut floor_steps, mut floor_previous) = (0, f64::INFINITY);
+        // the factorization of the first step on the round-off floor
+        let mut floor_lu: Option<AutoFactors> = None;
         for _ in 0..self.settings.max_iterations {
             if !rn.is_finite() {
                 return Ok(StaticStatus::NonFinite {
@@ -378,14 +415,29 @@ impl StaticSolver {
                     iterations: w.iterations,
                 });
             }
-            model.tangent_into(u, &w.q, dead, loads, &mut w.k)?;
-            let qmax = w.q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            w.floor = residual_floor(w.k.max_abs(), qmax, n);
+            // On the floor after a first step there: a chord step with that
+            // step's factorization (the tangent moves by round-off between
+            // points on the floor; a fresh one cost a tangent and a
+            // factorization per step, up to three steps at 2000 elements).
+            let chord = match (&floor_lu, floor_steps > 0) {
+                (Some(f), true) => {
+                    du.copy_from_slice(&w.r);
+                    f.solve_in_place(&mut du)?;
+                    let slope: f64 = w.r.iter().zip(&du).map(|(a, b)| a * b).sum();
+                    slope > 0.0 && du.iter().all(|v| v.is_finite())
+                }
+                _ => false,
+            };
+            if !chord {
+                model.tangent_into(u, &w.q, dead, loads, &mut w.k)?;
+                let qmax = w.q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                w.floor = residual_floor(w.k.max_abs(), qmax, n);
+            }
             // At the round-off floor the residual cannot certify more digits,
             // but one more Newton step still can gain them (the floor does not
             // shrink with the load; stopping here left small-load solves 1e-11 m
             // short): take it, keep it unless it raises the residual, stop.
-            let at_floor = rn <= w.floor;
+            let at_floor = chord || rn <= w.floor;
             w.iterations += 1;
             // Newton direction from the Jacobi-scaled factorization (the rows
             // of a fine cable's tangent span many orders of magnitude: bending
@@ -394,8 +446,10 @@ impl StaticSolver {
             // equilibrium), shift the scaled diagonal with growing μ until it
             // does. (The tangent is symmetric: L D Lᵀ when positive definite,
             // the pivoted LU otherwise, neither consuming it.)
-            let mut found = false;
-            let shifts: &[f64] = if t.descent {
+            let mut found = chord;
+            let shifts: &[f64] = if chord {
+                &[]
+            } else if t.descent {
                 &DESCENT_SHIFTS
             } else if t.definite_only {
                 &[0.0]
@@ -422,11 +476,15 @@ impl StaticSolver {
                     Err(e) => return Err(e.into()),
                 };
                 w.definite = mu == 0.0 && lu.is_positive_definite();
+                w.settled = t.full && at_floor && w.definite;
                 du.copy_from_slice(&w.r);
                 lu.solve_in_place(&mut du)?;
                 let slope: f64 = w.r.iter().zip(&du).map(|(a, b)| a * b).sum();
                 if slope > 0.0 && du.iter().all(|v| v.is_finite()) {
                     found = true;
+                    if at_floor && mu == 0.0 {
+                        floor_lu = Some(lu);
+                    }
                     break;
                 }
             }
@@ -468,8 +526,13 @@ impl StaticSolver {
                 }
                 return Ok(StaticStatus::Converged(StaticCriterion::RoundOffFloor));
             }
-            // what the model keeps of the energies at u, once for all trials
-            model.energies_into(&w.q, &mut energies)?;
+            if t.strict && s < 1.0 {
+                // only full steps: this one is capped
+                return Ok(StaticStatus::LineSearchFailed);
+            }
+            // the energies at u, once for all trials, when a trial first
+            // needs them (a trial that lowers |R| enough needs none)
+            let mut energies_at_u = false;
             let offset_slope: f64 = offset.iter().zip(&du).map(|(a, b)| a * b).sum();
             // Π decreases along du when R·du > 0 (K positive along du).
             let slope: f64 = w.r.iter().zip(&du).map(|(a, b)| a * b).sum();
@@ -478,16 +541,27 @@ impl StaticSolver {
                 model.advance_into(u, &w.q, &du, &dq, s, &mut trial, &mut q_trial)?;
                 let rt = eval(&trial, &q_trial, &mut r_trial)?;
                 if rt.is_finite() {
+                    let residual_ok = !t.descent && rt * rt <= (1.0 - 1e-4 * s) * rn * rn;
+                    if residual_ok {
+                        accepted = true;
+                        break;
+                    }
+                    if !energies_at_u {
+                        model.energies_into(&w.q, &mut energies)?;
+                        energies_at_u = true;
+                    }
                     let offset_work = s * offset_slope;
                     let dpi = model
                         .potential_change_from(u, &w.q, &energies, &trial, &q_trial, dead, loads)?
                         + offset_work;
-                    let energy_ok = dpi <= -1e-4 * s * slope;
-                    let residual_ok = !t.descent && rt * rt <= (1.0 - 1e-4 * s) * rn * rn;
-                    if energy_ok || residual_ok {
+                    if dpi <= -1e-4 * s * slope {
                         accepted = true;
                         break;
                     }
+                }
+                if t.strict {
+                    // only full steps: this one is not accepted
+                    break;
                 }
                 s *= 0.5;
             }

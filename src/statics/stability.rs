@@ -75,6 +75,7 @@ impl StaticSolver {
                 strict: false,
                 descent: true,
                 definite_only: false,
+                full: true,
             };
             let next = self.newton(model, &descent, u, w, scale)?;
             if !next.is_converged() {

@@ -181,6 +181,7 @@ fn a_definite_only_attempt_gives_up_at_an_indefinite_tangent() {
             floor: 0.0,
             last_step: 0.0,
             definite: false,
+            settled: false,
         };
         robot.configuration_into(&u, &mut w.q).unwrap();
         let target = Target::<crate::assembly::Robot<crate::element::PlanarCable>> {
@@ -190,6 +191,7 @@ fn a_definite_only_attempt_gives_up_at_an_indefinite_tangent() {
             strict: true,
             descent: false,
             definite_only,
+            full: true,
         };
         let quick = StaticSolver {
             settings: StaticSettings {
@@ -213,4 +215,63 @@ fn a_definite_only_attempt_gives_up_at_an_indefinite_tangent() {
     assert_eq!(status, StaticStatus::LineSearchFailed);
     assert_eq!((iterations, definite, moved), (1, false, false));
     assert_eq!((work.factorizations, work.solves), (1, 0));
+}
+
+/// A small load (a 1e-3 N·m tip moment on 16 elements) converges in plain
+/// Newton to the round-off floor; the answer's stability is read off the
+/// last Newton factorization (made at a point that had met the floor), so
+/// the solve factors once per iteration and no more, and reports the
+/// inertia and the residual a fresh factorization and evaluation at the
+/// answer give.
+#[test]
+fn a_small_load_reads_its_stability_off_the_last_newton_factorization() {
+    use crate::linsolve::{AutoSolver, Factorization, LinearWork, SymmetricMatrix};
+    let scene: crate::scene::Scene = serde_json::from_value(serde_json::json!({
+        "robot": {"sections": [
+            {"length_m": 0.24, "ea_n": 300.0, "ei_nm2": 0.025, "elements": 16}]},
+        "gravity_m_per_s2": [0.0, 0.0],
+        "loads": [{"type": "tip_moment", "moment_nm": 1e-3}],
+    }))
+    .unwrap();
+    let (robot, loads) = (scene.robot().unwrap(), scene.loads().unwrap());
+    let before = LinearWork::now();
+    let eq = StaticSolver::default().solve(&robot, &loads, None).unwrap();
+    let work = LinearWork::now().since(before);
+    assert_eq!(
+        eq.report.status,
+        StaticStatus::Converged(StaticCriterion::RoundOffFloor),
+        "{}",
+        eq.report
+    );
+    assert_eq!(work.factorizations, eq.report.iterations, "{}", eq.report);
+    // what a factorization at the answer says
+    let mut k = SymmetricMatrix::zeros(robot.tangent_pattern().clone());
+    let dead = Assembled::dead_force(&robot, &loads).unwrap();
+    Assembled::tangent_into(
+        &robot,
+        eq.u.as_slice(),
+        eq.q.as_slice(),
+        &dead,
+        &loads,
+        &mut k,
+    )
+    .unwrap();
+    let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), SolverKind::Auto).unwrap();
+    let f = solver.factor(&k, Default::default()).unwrap();
+    assert_eq!(
+        eq.report.negative_eigenvalues,
+        f.inertia().map(|i| i.negative)
+    );
+    assert_eq!(eq.report.negative_eigenvalues, Some(0));
+    let mut r = vec![0.0; Assembled::n_free(&robot)];
+    Assembled::residual_into(
+        &robot,
+        eq.u.as_slice(),
+        eq.q.as_slice(),
+        &dead,
+        &loads,
+        &mut r,
+    )
+    .unwrap();
+    assert_eq!(eq.report.residual_norm_n, crate::numeric::norm2(&r));
 }
