@@ -251,7 +251,7 @@ fn a_small_load_reads_its_stability_off_the_last_newton_factorization() {
         &robot,
         eq.u.as_slice(),
         eq.q.as_slice(),
-        &dead,
+        dead.as_slice(),
         &loads,
         &mut k,
     )
@@ -268,7 +268,7 @@ fn a_small_load_reads_its_stability_off_the_last_newton_factorization() {
         &robot,
         eq.u.as_slice(),
         eq.q.as_slice(),
-        &dead,
+        dead.as_slice(),
         &loads,
         &mut r,
     )
