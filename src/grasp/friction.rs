@@ -306,22 +306,12 @@ pub(crate) fn solve_cone_program(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grasp::fixtures::{disc_pinch, flat_jaws};
 
     const G: [f64; 2] = [0.0, -9.81];
 
     fn jaws(n: f64) -> [FrictionContact; 2] {
-        [
-            FrictionContact {
-                point_m: [-0.03, 0.01],
-                normal: [1.0, 0.0],
-                max_normal_force_n: n,
-            },
-            FrictionContact {
-                point_m: [0.03, 0.01],
-                normal: [-1.0, 0.0],
-                max_normal_force_n: n,
-            },
-        ]
+        flat_jaws(0.03, [0.01, 0.01], n)
     }
 
     #[test]
@@ -344,19 +334,7 @@ mod tests {
         let (mu, n, r) = (0.5, 2.0, 0.03);
         // elevation above the centre: below helps, above hurts; atan(μ) ≈ 26.6° is the limit
         for &theta in &[-0.6, -0.2, 0.0, 0.2, 0.4] {
-            let (s, c) = f64::sin_cos(theta);
-            let contacts = [
-                FrictionContact {
-                    point_m: [-r * c, r * s],
-                    normal: [c, -s],
-                    max_normal_force_n: n,
-                },
-                FrictionContact {
-                    point_m: [r * c, r * s],
-                    normal: [-c, -s],
-                    max_normal_force_n: n,
-                },
-            ];
+            let contacts = disc_pinch(r, theta, n);
             let w = disc_pinch_threshold_n(mu, n, theta);
             assert!(w > 0.0);
             let m = w / 9.81;
@@ -377,20 +355,7 @@ mod tests {
         let theta: f64 = 0.5;
         assert!(theta > mu.atan());
         assert_eq!(disc_pinch_threshold_n(mu, n, theta), 0.0);
-        let (s, c) = theta.sin_cos();
-        let contacts = [
-            FrictionContact {
-                point_m: [-r * c, r * s],
-                normal: [c, -s],
-                max_normal_force_n: n,
-            },
-            FrictionContact {
-                point_m: [r * c, r * s],
-                normal: [-c, -s],
-                max_normal_force_n: n,
-            },
-        ];
-        let h = hold_check(&contacts, 1e-3, [0.0, 0.0], mu, G).unwrap();
+        let h = hold_check(&disc_pinch(r, theta, n), 1e-3, [0.0, 0.0], mu, G).unwrap();
         assert!(!h.holds && h.weight_factor < 1e-6, "{h:?}");
     }
 
@@ -402,35 +367,13 @@ mod tests {
         // it holds iff N (μ w − d) ≥ w m g / 2, i.e. m ≤ 2 N (μ w − d)/(w g)
         let (w, mu, n) = (0.003, 0.5, 0.7);
         for d in [0.0, 0.0005, 0.001, 0.0014] {
-            let rod = [
-                FrictionContact {
-                    point_m: [-0.5 * w, 0.5 * d],
-                    normal: [1.0, 0.0],
-                    max_normal_force_n: n,
-                },
-                FrictionContact {
-                    point_m: [0.5 * w, -0.5 * d],
-                    normal: [-1.0, 0.0],
-                    max_normal_force_n: n,
-                },
-            ];
+            let rod = flat_jaws(0.5 * w, [0.5 * d, -0.5 * d], n);
             let m = 2.0 * n * (mu * w - d) / (w * 9.81);
             let h = hold_check(&rod, m, [0.0, 0.0], mu, G).unwrap();
             assert!((h.weight_factor - 1.0).abs() < 1e-6, "d {d}: {h:?}");
         }
         // d ≥ μ w: nothing is held, however light (the ruler's 5 mm offset)
-        let rod = [
-            FrictionContact {
-                point_m: [-0.5 * w, 0.0025],
-                normal: [1.0, 0.0],
-                max_normal_force_n: n,
-            },
-            FrictionContact {
-                point_m: [0.5 * w, -0.0025],
-                normal: [-1.0, 0.0],
-                max_normal_force_n: n,
-            },
-        ];
+        let rod = flat_jaws(0.5 * w, [0.0025, -0.0025], n);
         let h = hold_check(&rod, 1e-3, [0.0, 0.0], mu, G).unwrap();
         assert!(!h.holds && h.weight_factor < 1e-6, "{h:?}");
     }

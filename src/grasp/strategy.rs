@@ -231,31 +231,16 @@ mod tests {
             let q = solver.solve(&f, &loads(&p), None).unwrap().q;
             for s in [0.07, 0.1] {
                 let j = contact_jacobian(&f, q.as_slice(), &loads(&p), s).unwrap();
+                // the pose at the pressures with chamber c changed by dp
+                let pose_at = |c: usize, dp: f64| {
+                    let mut pp = p.clone();
+                    pp[c] += dp;
+                    let qp = solver.solve(&f, &loads(&pp), Some(q.as_slice())).unwrap().q;
+                    contact_pose(&f, qp.as_slice(), s).unwrap()
+                };
                 for c in 0..4 {
                     let h = 50.0;
-                    let mut pp = p.clone();
-                    pp[c] += h;
-                    let xp = contact_pose(
-                        &f,
-                        solver
-                            .solve(&f, &loads(&pp), Some(q.as_slice()))
-                            .unwrap()
-                            .q
-                            .as_slice(),
-                        s,
-                    )
-                    .unwrap();
-                    pp[c] -= 2.0 * h;
-                    let xm = contact_pose(
-                        &f,
-                        solver
-                            .solve(&f, &loads(&pp), Some(q.as_slice()))
-                            .unwrap()
-                            .q
-                            .as_slice(),
-                        s,
-                    )
-                    .unwrap();
+                    let (xp, xm) = (pose_at(c, h), pose_at(c, -h));
                     for r in 0..3 {
                         let fd = (xp[r] - xm[r]) / (2.0 * h);
                         let scale = j.column(c).amax();

@@ -4,8 +4,18 @@
 //! # The scene
 //! The palm at `y = 0`, fingers hanging down; the table top
 //! `table_clearance_m` below the straight fingertips' surface; the object
-//! rests on it (its lowest point on the table), shifted sideways by the
-//! placement's offset and turned by its angle (both randomized in Table I).
+//! is set down on it (its lowest point on the table), shifted sideways by
+//! the placement's offset and turned by its angle (both randomized in
+//! Table I), and comes to rest as a planar rigid body under gravity with
+//! the table's friction `table_mu` (`crate::grasp::rest`): a disc rests
+//! where it is set down, an ellipse rolls back onto its flat side, a
+//! rectangle or rounded square set down on a corner tips until it lies on
+//! a face (measured: the tape measure set down turned by −0.138 rad lies
+//! flat 3.4 mm further left; before this it stood turned on its corner, the
+//! fingers touched it 30 mm apart in height, and after the lift it turned in
+//! the pinch by 0.22 rad and slipped by 16.6 mm). The fingers' pushes
+//! move it on the table only with `push_object_on_table` (default off: it
+//! stays where it came to rest).
 //!
 //! # The strategies
 //! - **Open loop** (the baseline of the paper's ref. \[53\]): the proximal
@@ -72,6 +82,7 @@ use crate::grasp::friction::{FrictionContact, HoldCheck};
 use crate::grasp::gripper::{GripperSpec, Side, FINGER_PRESSURES};
 use crate::grasp::object::{GraspObject, Pose};
 use crate::grasp::plant::{FingerState, GripperPlant, GripperPlantSettings, PlantStep};
+use crate::grasp::rest::{rest_on_table, TableTop};
 use crate::grasp::slip::{settle, Grip, Touch};
 use crate::grasp::strategy::{bounded_step, contact_jacobian, contact_pose};
 use crate::loads::Loads;
@@ -81,7 +92,7 @@ mod finger;
 mod lift;
 mod record;
 use finger::{calibrate, FingerController};
-use lift::lifted_grip;
+use lift::{friction_contacts, lifted_grip};
 use record::{contact_records, Stop};
 
 /// Which grasp strategy.
@@ -142,6 +153,16 @@ pub struct GraspSettings {
     pub max_time_s: f64,
     /// Table top below the straight fingertips' surface (m; default 0.004).
     pub table_clearance_m: f64,
+    /// Friction coefficient between the object and the table (default 0.4:
+    /// plastic, fruit skin or cardboard on a laminated table top).
+    pub table_mu: f64,
+    /// Whether the fingers' pushes move the object on the table while the
+    /// gripper closes (default false: it stays where it came to rest, held
+    /// by the table). Measured with true on Table I: the green apple, pushed
+    /// 12 mm by the first finger, reached the other finger's straight
+    /// shape, an obstacle the plant's contact solver refuses; a marking pen
+    /// pushed on the table was dropped after the lift.
+    pub push_object_on_table: bool,
     /// Lift height (m; default 0.05): quasi-static, it only removes the table.
     pub lift_height_m: f64,
     /// Hold time (s; default 3): quasi-static, see the module docs.
@@ -190,6 +211,8 @@ impl Default for GraspSettings {
             theta_band_rad: 0.1,
             max_time_s: 12.0,
             table_clearance_m: 0.004,
+            table_mu: 0.4,
+            push_object_on_table: false,
             lift_height_m: 0.05,
             hold_time_s: 3.0,
             max_slip_m: 0.005,
@@ -243,6 +266,13 @@ impl GraspSettings {
                 "settings.max_time_s",
                 self.max_time_s,
                 "at most 10000 control steps",
+            ));
+        }
+        if !(self.table_mu.is_finite() && self.table_mu >= 0.0) {
+            return Err(Error::invalid(
+                "settings.table_mu",
+                self.table_mu,
+                "must be finite and >= 0",
             ));
         }
         if let Some(p) = self.open_loop_pressure_pa {
@@ -356,6 +386,12 @@ pub enum Failure {
         side: Side,
         /// The solver's status.
         status: String,
+    },
+    /// The object's motion on the table could not be computed (its
+    /// least-constraint program was not solved).
+    ObjectMotion {
+        /// The solver's message.
+        message: String,
     },
     /// The controller could not compute a step (estimator or Jacobian).
     Controller {
@@ -524,8 +560,6 @@ pub fn run_trial(
         }
     }
     let table = table_at(table_y);
-    // the palm may come down until the object's top is this close
-    let max_descent = (-b[3] - settings.palm_clearance_m).max(0.0);
     let mut plant = GripperPlant::new(
         gripper,
         &settings.plant,
@@ -555,9 +589,7 @@ pub fn run_trial(
         settings,
         strategy,
         seed,
-        pose,
         table_y,
-        max_descent,
     };
     match simulate(&scene, &mut plant, &mut out) {
         Ok(()) => Ok(out),
@@ -576,12 +608,64 @@ struct Scene<'a> {
     settings: &'a GraspSettings,
     strategy: Strategy,
     seed: u64,
-    /// The object's pose on the table.
-    pose: Pose,
     /// The table top (m).
     table_y: f64,
-    /// How far the palm may come down (m).
-    max_descent: f64,
+}
+
+/// Largest steps of the object on the table when it is set down.
+const REST_STEPS_START: usize = 400;
+/// Largest steps of the object on the table per control interval (when the
+/// fingers' pushes move it).
+const REST_STEPS_PER_INTERVAL: usize = 20;
+
+impl Scene<'_> {
+    /// The table as the plant's obstacle when the palm has come down by
+    /// `descent` (m): the contact solver takes no obstacle that overlaps
+    /// the straight fingers, so a table risen to their tips is left out
+    /// (the tips have risen above it).
+    fn plant_table(&self, descent: f64) -> Option<Obstacle> {
+        (descent < self.settings.table_clearance_m - 5e-4).then(|| table_at(self.table_y + descent))
+    }
+
+    /// Solves the fingers at `pressures` with the object on the table
+    /// (palm come down by `descent`), the object moving on it until it
+    /// rests (`crate::grasp::rest`, at most `max_steps` steps); `pose` is
+    /// the object's pose, updated. The fingers' states at the last pose.
+    fn rest(
+        &self,
+        plant: &mut GripperPlant,
+        pose: &mut Pose,
+        pressures: [&[f64]; 2],
+        descent: f64,
+        max_steps: usize,
+    ) -> std::result::Result<[FingerState; 2], Stop> {
+        let r = self.gripper.finger_radius_m;
+        let table = TableTop {
+            top_m: self.table_y + descent,
+            mu: self.settings.table_mu,
+        };
+        let mut last = None;
+        let rested = rest_on_table(
+            self.object,
+            *pose,
+            &table,
+            self.gripper.gravity_m_per_s2,
+            self.settings.slip_step_m,
+            max_steps,
+            |p: &Pose| -> std::result::Result<Vec<FrictionContact>, Stop> {
+                plant.set_workspace(self.object.contact_cover(p)?, self.plant_table(descent));
+                let states = plant.solve(pressures)?.states()?;
+                let contacts = friction_contacts(self.object, p, &states, r);
+                last = Some(states);
+                Ok(contacts)
+            },
+        )?;
+        *pose = rested.pose;
+        if let Some(message) = rested.failed {
+            return Err(Failure::ObjectMotion { message }.into());
+        }
+        last.ok_or_else(|| Stop::Bad(Error::invalid("rest", "none", "no plant solve")))
+    }
 }
 
 /// The closing and the lift (module docs); a failed trial stops with its
@@ -597,15 +681,28 @@ fn simulate(
         settings,
         strategy,
         seed,
-        pose,
-        table_y,
-        max_descent,
+        ..
     } = *scene;
     let r = gripper.finger_radius_m;
     let dt = 1.0 / settings.control_rate_hz;
     let mut descent = 0.0;
     let zero = vec![0.0; FINGER_PRESSURES];
-    let mut state = plant.solve([&zero, &zero])?.states()?;
+    // the object is set down at its placement and comes to rest
+    let mut state = scene.rest(
+        plant,
+        &mut out.final_pose,
+        [&zero, &zero],
+        0.0,
+        REST_STEPS_START,
+    )?;
+    // the object's steps on the table per control interval
+    let pushed = if settings.push_object_on_table {
+        REST_STEPS_PER_INTERVAL
+    } else {
+        0
+    };
+    // the palm may come down until the object's top is this close
+    let max_descent = (-object.bounds(&out.final_pose)[3] - settings.palm_clearance_m).max(0.0);
     let mut pressures = [zero.clone(), zero.clone()];
     let mut phases = [Phase::Ramp; 2];
     let mut poses = [None; 2];
@@ -620,7 +717,13 @@ fn simulate(
                 let p = (k as f64 * dt / settings.open_loop_ramp_s).min(1.0) * p_ol;
                 let cmd = vec![p, 0.0, 0.0, 0.0];
                 pressures = [cmd.clone(), cmd];
-                state = plant.solve([&pressures[0], &pressures[1]])?.states()?;
+                state = scene.rest(
+                    plant,
+                    &mut out.final_pose,
+                    [&pressures[0], &pressures[1]],
+                    0.0,
+                    pushed,
+                )?;
                 out.push_frame(k as f64 * dt, phases, &pressures, &state, r, poses);
             }
         }
@@ -670,17 +773,18 @@ fn simulate(
                         .fold(f64::INFINITY, f64::min);
                     let target = (rise - 0.001).clamp(0.0, max_descent);
                     if target > descent {
+                        // in the palm's frame the table and the object rise
+                        out.final_pose.position_m[1] += target - descent;
                         descent = target;
-                        out.final_pose.position_m[1] = pose.position_m[1] + descent;
-                        // the contact solver takes no obstacle overlapping the
-                        // straight fingers: a table risen to their tips is
-                        // left out (the tips have risen above it)
-                        let table = (descent < settings.table_clearance_m - 5e-4)
-                            .then(|| table_at(table_y + descent));
-                        plant.set_workspace(object.contact_cover(&out.final_pose)?, table);
                     }
                 }
-                state = plant.solve([&pressures[0], &pressures[1]])?.states()?;
+                state = scene.rest(
+                    plant,
+                    &mut out.final_pose,
+                    [&pressures[0], &pressures[1]],
+                    descent,
+                    pushed,
+                )?;
                 out.push_frame(k as f64 * dt, phases, &pressures, &state, r, poses);
             }
             // how far the estimated contact point is from the true one
