@@ -104,9 +104,9 @@ fn main() -> Result<(), softrod::Error> {
                 let h = hold_check(
                     &cs,
                     o.mass_kg,
-                    f.object_position_m,
+                    f.object_position_m.into(),
                     o.mu,
-                    g.gravity_m_per_s2,
+                    g.gravity_m_per_s2.into(),
                 )?;
                 println!(
                 "  t {:6.2} {:?} P {:?}/{:?} xc {:?}/{:?} obj [{:.2},{:.2}] mm {:.3} rad wf {:.3}",

@@ -18,8 +18,6 @@
 //! - [`trial`]: one quasi-static grasp trial and its success criterion.
 //! - [`table`]: Table I's nine objects and the seeded runner.
 
-#[cfg(test)]
-mod fixtures;
 pub mod friction;
 pub mod gripper;
 pub mod object;
@@ -29,3 +27,6 @@ mod slip;
 pub mod strategy;
 pub mod table;
 pub mod trial;
+
+#[cfg(test)]
+mod fixtures;

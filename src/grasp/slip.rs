@@ -330,7 +330,7 @@ pub(crate) fn settle<E: From<Error>>(
         }
         last = Some((pose, touches));
         let c = pose.position_m;
-        let hold = hold_check(&contacts, m, c, object.mu, gravity_m_per_s2)?;
+        let hold = hold_check(&contacts, m, c.into(), object.mu, gravity_m_per_s2.into())?;
         let holds = hold.holds;
         let first = first.get_or_insert(hold);
         if holds || !both_fingers || k == max_steps {
