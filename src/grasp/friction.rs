@@ -34,7 +34,8 @@
 //!     FrictionContact { point_m: [-0.02, 0.0], normal: [1.0, 0.0], max_normal_force_n: 1.0 },
 //!     FrictionContact { point_m: [0.02, 0.0], normal: [-1.0, 0.0], max_normal_force_n: 1.0 },
 //! ];
-//! let h = hold_check(&jaws, 0.1, [0.0, 0.0], 0.5, [0.0, -9.81])?;
+//! let g = nalgebra::Vector2::new(0.0, -9.81);
+//! let h = hold_check(&jaws, 0.1, nalgebra::Vector2::zeros(), 0.5, g)?;
 //! assert!(h.holds && (h.weight_factor - 1.0 / 0.981).abs() < 1e-6);
 //! # Ok::<(), softrod::Error>(())
 //! ```
@@ -44,6 +45,7 @@ use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SecondOrderConeT,
     SolverStatus, SupportedConeT, ZeroConeT,
 };
+use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_all_finite, Error, Result};
@@ -67,6 +69,27 @@ pub struct FrictionContact {
     pub normal: [f64; 2],
     /// The largest normal force the finger gives there (N, `>= 0`).
     pub max_normal_force_n: f64,
+}
+
+impl FrictionContact {
+    /// The contact point as a vector (m; the field `point_m`).
+    ///
+    /// # Example
+    /// ```
+    /// let c = softrod::grasp::friction::FrictionContact { point_m: [0.02, 0.0], normal: [-1.0, 0.0], max_normal_force_n: 1.0 };
+    /// assert_eq!((c.point(), c.unit_normal()), (nalgebra::Vector2::new(0.02, 0.0), -nalgebra::Vector2::x()));
+    /// ```
+    pub fn point(&self) -> Vector2<f64> {
+        self.point_m.into()
+    }
+
+    /// The unit normal into the object as a vector (the field `normal`).
+    ///
+    /// # Example
+    /// See [`FrictionContact::point`].
+    pub fn unit_normal(&self) -> Vector2<f64> {
+        self.normal.into()
+    }
 }
 
 /// The answer of [`hold_check`].
@@ -114,18 +137,20 @@ impl HoldCheck {
 ///     FrictionContact { point_m: [0.02, 0.0], normal: [-1.0, 0.0], max_normal_force_n: 1.0 },
 /// ];
 /// // 2 μ N = 0.8 N < m g = 0.981 N: it slips
-/// let h = hold_check(&jaws, 0.1, [0.0, 0.0], 0.4, [0.0, -9.81])?;
+/// let g = nalgebra::Vector2::new(0.0, -9.81);
+/// let h = hold_check(&jaws, 0.1, nalgebra::Vector2::zeros(), 0.4, g)?;
 /// assert!(!h.holds);
-/// assert!(hold_check(&jaws, 0.1, [0.0, 0.0], -0.1, [0.0, -9.81]).is_err());
+/// assert!(hold_check(&jaws, 0.1, nalgebra::Vector2::zeros(), -0.1, g).is_err());
 /// # Ok::<(), softrod::Error>(())
 /// ```
 pub fn hold_check(
     contacts: &[FrictionContact],
     mass_kg: f64,
-    com_m: [f64; 2],
+    com_m: Vector2<f64>,
     mu: f64,
-    gravity_m_per_s2: [f64; 2],
+    gravity_m_per_s2: Vector2<f64>,
 ) -> Result<HoldCheck> {
+    let (com_m, gravity_m_per_s2): ([f64; 2], [f64; 2]) = (com_m.into(), gravity_m_per_s2.into());
     if !(mass_kg.is_finite() && mass_kg > 0.0) {
         return Err(Error::invalid("mass_kg", mass_kg, "must be finite and > 0"));
     }
@@ -306,22 +331,12 @@ pub(crate) fn solve_cone_program(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grasp::fixtures::{disc_pinch, flat_jaws};
 
     const G: [f64; 2] = [0.0, -9.81];
 
     fn jaws(n: f64) -> [FrictionContact; 2] {
-        [
-            FrictionContact {
-                point_m: [-0.03, 0.01],
-                normal: [1.0, 0.0],
-                max_normal_force_n: n,
-            },
-            FrictionContact {
-                point_m: [0.03, 0.01],
-                normal: [-1.0, 0.0],
-                max_normal_force_n: n,
-            },
-        ]
+        flat_jaws(0.03, [0.01, 0.01], n)
     }
 
     #[test]
@@ -330,10 +345,10 @@ mod tests {
         // no moment from it, the closed form is unchanged
         for &(mu, n) in &[(0.3, 2.0), (0.8, 0.5), (0.5, 1.0)] {
             let threshold = 2.0 * mu * n / 9.81; // kg
-            let h = hold_check(&jaws(n), threshold, [0.0, 0.0], mu, G).unwrap();
+            let h = hold_check(&jaws(n), threshold, Vector2::zeros(), mu, G.into()).unwrap();
             assert!((h.weight_factor - 1.0).abs() < 1e-7, "{h:?}");
             for (m, expect) in [(threshold * 0.99, true), (threshold * 1.01, false)] {
-                let h = hold_check(&jaws(n), m, [0.0, 0.0], mu, G).unwrap();
+                let h = hold_check(&jaws(n), m, Vector2::zeros(), mu, G.into()).unwrap();
                 assert_eq!(h.holds, expect, "mu {mu} n {n} m {m}: {h:?}");
             }
         }
@@ -344,31 +359,19 @@ mod tests {
         let (mu, n, r) = (0.5, 2.0, 0.03);
         // elevation above the centre: below helps, above hurts; atan(μ) ≈ 26.6° is the limit
         for &theta in &[-0.6, -0.2, 0.0, 0.2, 0.4] {
-            let (s, c) = f64::sin_cos(theta);
-            let contacts = [
-                FrictionContact {
-                    point_m: [-r * c, r * s],
-                    normal: [c, -s],
-                    max_normal_force_n: n,
-                },
-                FrictionContact {
-                    point_m: [r * c, r * s],
-                    normal: [-c, -s],
-                    max_normal_force_n: n,
-                },
-            ];
+            let contacts = disc_pinch(r, theta, n);
             let w = disc_pinch_threshold_n(mu, n, theta);
             assert!(w > 0.0);
             let m = w / 9.81;
-            let h = hold_check(&contacts, m, [0.0, 0.0], mu, G).unwrap();
+            let h = hold_check(&contacts, m, Vector2::zeros(), mu, G.into()).unwrap();
             assert!((h.weight_factor - 1.0).abs() < 1e-7, "θ {theta}: {h:?}");
             assert!(
-                hold_check(&contacts, 0.99 * m, [0.0, 0.0], mu, G)
+                hold_check(&contacts, 0.99 * m, Vector2::zeros(), mu, G.into())
                     .unwrap()
                     .holds
             );
             assert!(
-                !hold_check(&contacts, 1.01 * m, [0.0, 0.0], mu, G)
+                !hold_check(&contacts, 1.01 * m, Vector2::zeros(), mu, G.into())
                     .unwrap()
                     .holds
             );
@@ -377,20 +380,14 @@ mod tests {
         let theta: f64 = 0.5;
         assert!(theta > mu.atan());
         assert_eq!(disc_pinch_threshold_n(mu, n, theta), 0.0);
-        let (s, c) = theta.sin_cos();
-        let contacts = [
-            FrictionContact {
-                point_m: [-r * c, r * s],
-                normal: [c, -s],
-                max_normal_force_n: n,
-            },
-            FrictionContact {
-                point_m: [r * c, r * s],
-                normal: [-c, -s],
-                max_normal_force_n: n,
-            },
-        ];
-        let h = hold_check(&contacts, 1e-3, [0.0, 0.0], mu, G).unwrap();
+        let h = hold_check(
+            &disc_pinch(r, theta, n),
+            1e-3,
+            Vector2::zeros(),
+            mu,
+            G.into(),
+        )
+        .unwrap();
         assert!(!h.holds && h.weight_factor < 1e-6, "{h:?}");
     }
 
@@ -402,42 +399,20 @@ mod tests {
         // it holds iff N (μ w − d) ≥ w m g / 2, i.e. m ≤ 2 N (μ w − d)/(w g)
         let (w, mu, n) = (0.003, 0.5, 0.7);
         for d in [0.0, 0.0005, 0.001, 0.0014] {
-            let rod = [
-                FrictionContact {
-                    point_m: [-0.5 * w, 0.5 * d],
-                    normal: [1.0, 0.0],
-                    max_normal_force_n: n,
-                },
-                FrictionContact {
-                    point_m: [0.5 * w, -0.5 * d],
-                    normal: [-1.0, 0.0],
-                    max_normal_force_n: n,
-                },
-            ];
+            let rod = flat_jaws(0.5 * w, [0.5 * d, -0.5 * d], n);
             let m = 2.0 * n * (mu * w - d) / (w * 9.81);
-            let h = hold_check(&rod, m, [0.0, 0.0], mu, G).unwrap();
+            let h = hold_check(&rod, m, Vector2::zeros(), mu, G.into()).unwrap();
             assert!((h.weight_factor - 1.0).abs() < 1e-6, "d {d}: {h:?}");
         }
         // d ≥ μ w: nothing is held, however light (the ruler's 5 mm offset)
-        let rod = [
-            FrictionContact {
-                point_m: [-0.5 * w, 0.0025],
-                normal: [1.0, 0.0],
-                max_normal_force_n: n,
-            },
-            FrictionContact {
-                point_m: [0.5 * w, -0.0025],
-                normal: [-1.0, 0.0],
-                max_normal_force_n: n,
-            },
-        ];
-        let h = hold_check(&rod, 1e-3, [0.0, 0.0], mu, G).unwrap();
+        let rod = flat_jaws(0.5 * w, [0.0025, -0.0025], n);
+        let h = hold_check(&rod, 1e-3, Vector2::zeros(), mu, G.into()).unwrap();
         assert!(!h.holds && h.weight_factor < 1e-6, "{h:?}");
     }
 
     #[test]
     fn frictionless_jaws_hold_nothing_and_a_cup_holds_anything() {
-        let h = hold_check(&jaws(10.0), 0.01, [0.0, 0.0], 0.0, G).unwrap();
+        let h = hold_check(&jaws(10.0), 0.01, Vector2::zeros(), 0.0, G.into()).unwrap();
         assert!(!h.holds && h.weight_factor < 1e-6);
         // a support from below through the centre of mass: any weight
         let cup = [FrictionContact {
@@ -445,7 +420,7 @@ mod tests {
             normal: [0.0, 1.0],
             max_normal_force_n: 1.0,
         }];
-        let h = hold_check(&cup, 0.05, [0.0, 0.0], 0.0, G).unwrap();
+        let h = hold_check(&cup, 0.05, Vector2::zeros(), 0.0, G.into()).unwrap();
         assert!(h.holds && (h.weight_factor - 1.0 / (0.05 * 9.81)).abs() < 1e-6);
         // off the centre of mass one contact cannot balance the moment
         let off = [FrictionContact {
@@ -453,7 +428,11 @@ mod tests {
             normal: [0.0, 1.0],
             max_normal_force_n: 1.0,
         }];
-        assert!(!hold_check(&off, 0.05, [0.0, 0.0], 0.5, G).unwrap().holds);
+        assert!(
+            !hold_check(&off, 0.05, Vector2::zeros(), 0.5, G.into())
+                .unwrap()
+                .holds
+        );
     }
 
     #[test]
@@ -461,29 +440,33 @@ mod tests {
         let j = jaws(1.0);
         let f = |r: Result<HoldCheck>| r.unwrap_err().field().map(str::to_string);
         assert_eq!(
-            f(hold_check(&j, 0.0, [0.0; 2], 0.5, G)).as_deref(),
+            f(hold_check(&j, 0.0, Vector2::zeros(), 0.5, G.into())).as_deref(),
             Some("mass_kg")
         );
         assert_eq!(
-            f(hold_check(&j, 0.1, [0.0; 2], -0.5, G)).as_deref(),
+            f(hold_check(&j, 0.1, Vector2::zeros(), -0.5, G.into())).as_deref(),
             Some("mu")
         );
         assert_eq!(
-            f(hold_check(&j, 0.1, [0.0; 2], 0.5, [0.0, 0.0])).as_deref(),
+            f(hold_check(&j, 0.1, Vector2::zeros(), 0.5, Vector2::zeros())).as_deref(),
             Some("gravity_m_per_s2")
         );
         let mut bad = j;
         bad[1].normal = [-2.0, 0.0];
         assert_eq!(
-            f(hold_check(&bad, 0.1, [0.0; 2], 0.5, G)).as_deref(),
+            f(hold_check(&bad, 0.1, Vector2::zeros(), 0.5, G.into())).as_deref(),
             Some("contacts[1].normal")
         );
         bad = j;
         bad[0].max_normal_force_n = -1.0;
         assert_eq!(
-            f(hold_check(&bad, 0.1, [0.0; 2], 0.5, G)).as_deref(),
+            f(hold_check(&bad, 0.1, Vector2::zeros(), 0.5, G.into())).as_deref(),
             Some("contacts[0].max_normal_force_n")
         );
-        assert!(!hold_check(&[], 0.1, [0.0; 2], 0.5, G).unwrap().holds);
+        assert!(
+            !hold_check(&[], 0.1, Vector2::zeros(), 0.5, G.into())
+                .unwrap()
+                .holds
+        );
     }
 }

@@ -159,8 +159,27 @@ impl GripperSpec {
     }
 
     /// The base point of a finger (m).
-    pub fn base_m(&self, side: Side) -> [f64; 2] {
-        [-side.inward() * 0.5 * self.base_spacing_m, 0.0]
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::grasp::gripper::{GripperSpec, Side};
+    /// let g = GripperSpec::default();
+    /// assert_eq!(g.base_m(Side::Left), nalgebra::Vector2::new(-0.5 * g.base_spacing_m, 0.0));
+    /// ```
+    pub fn base_m(&self, side: Side) -> nalgebra::Vector2<f64> {
+        nalgebra::Vector2::new(-side.inward() * 0.5 * self.base_spacing_m, 0.0)
+    }
+
+    /// Gravity in the palm's frame as a vector (m/s²; the field
+    /// `gravity_m_per_s2`).
+    ///
+    /// # Example
+    /// ```
+    /// let g = softrod::grasp::gripper::GripperSpec::default();
+    /// assert_eq!(g.gravity().y, g.gravity_m_per_s2[1]);
+    /// ```
+    pub fn gravity(&self) -> nalgebra::Vector2<f64> {
+        self.gravity_m_per_s2.into()
     }
 
     /// The sections of one finger, with stiffness and gain scaled and the
@@ -205,7 +224,7 @@ impl GripperSpec {
         let mut spec =
             RobotSpec::new(self.finger_sections(side, ei_factor, gain_factor, mesh_factor));
         spec.base = Base {
-            position_m: self.base_m(side).to_vec(),
+            position_m: self.base_m(side).as_slice().to_vec(),
             angle_rad: -std::f64::consts::FRAC_PI_2,
             direction: Some(vec![0.0, -1.0]),
             ..Base::default()
@@ -242,7 +261,7 @@ impl GripperSpec {
         let rod = |side| {
             RodSpec::clamped(
                 self.finger_sections(side, 1.0, 1.0, 1),
-                self.base_m(side).to_vec(),
+                self.base_m(side).as_slice().to_vec(),
                 vec![0.0, -1.0],
             )
         };

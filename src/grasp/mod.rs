@@ -11,6 +11,8 @@
 //!   contact against the object and the table.
 //! - [`strategy`]: the contact pose (46)–(49) with a signed angle, the
 //!   Jacobian (50), the bounded least-squares step of (51)/(52).
+//! - `rest` (internal): the object on the table as a planar rigid body
+//!   under gravity, the table's friction and the fingers' pushes.
 //! - `slip` (internal): the lifted object as a planar rigid body that
 //!   settles in the fingers (Gauss's principle of least constraint).
 //! - [`trial`]: one quasi-static grasp trial and its success criterion.
@@ -20,7 +22,11 @@ pub mod friction;
 pub mod gripper;
 pub mod object;
 pub mod plant;
+mod rest;
 mod slip;
 pub mod strategy;
 pub mod table;
 pub mod trial;
+
+#[cfg(test)]
+mod fixtures;

@@ -98,6 +98,20 @@ pub struct Pose {
     pub angle_rad: f64,
 }
 
+impl Pose {
+    /// The centre of mass as a vector (m; the field `position_m`).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::grasp::object::Pose;
+    /// let p = Pose { position_m: [0.01, -0.08], angle_rad: 0.1 };
+    /// assert_eq!(p.position(), nalgebra::Vector2::new(0.01, -0.08));
+    /// ```
+    pub fn position(&self) -> Vector2<f64> {
+        self.position_m.into()
+    }
+}
+
 fn positive(path: &str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {
         Ok(())

@@ -36,11 +36,29 @@ use crate::grasp::friction::{hold_check, solve_cone_program, FrictionContact, Ho
 use crate::grasp::object::{GraspObject, Pose};
 
 /// The smallest step, as a fraction of the step length.
-const MIN_STEP_FRACTION: f64 = 0.125;
+pub(crate) const MIN_STEP_FRACTION: f64 = 0.125;
 /// The largest turn of a full step (rad): a turn of 0.4 rad in one 2 mm step
 /// of a contact 5 mm from the centre of mass overshot on the ruler and made
 /// it rock (measured).
-const MAX_TURN_RAD: f64 = 0.02;
+pub(crate) const MAX_TURN_RAD: f64 = 0.02;
+
+/// A contact of the rigid body for its least-constraint program: the
+/// normal force `λ` bounded by `min_normal_force_n ≤ λ ≤ max_normal_force_n`
+/// (the upper bound may be infinite: a rigid support), the friction force
+/// `|τ| ≤ μ λ`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Support {
+    /// Contact point (m).
+    pub(crate) point_m: [f64; 2],
+    /// Unit normal into the object (the direction of the push).
+    pub(crate) normal: [f64; 2],
+    /// Smallest normal force (N, `>= 0`).
+    pub(crate) min_normal_force_n: f64,
+    /// Largest normal force (N, `>= min`; `f64::INFINITY`: unbounded).
+    pub(crate) max_normal_force_n: f64,
+    /// Friction coefficient there.
+    pub(crate) mu: f64,
+}
 
 /// The acceleration `[a_x, a_y, α]` (m/s², m/s², rad/s²) of a rigid body at
 /// rest under gravity and the contact forces of least constraint (module
@@ -53,10 +71,38 @@ pub(crate) fn least_constraint_acceleration(
     mu: f64,
     gravity_m_per_s2: [f64; 2],
 ) -> Result<[f64; 3]> {
+    let supports: Vec<Support> = contacts
+        .iter()
+        .map(|c| Support {
+            point_m: c.point_m,
+            normal: c.normal,
+            min_normal_force_n: 0.0,
+            max_normal_force_n: c.max_normal_force_n,
+            mu,
+        })
+        .collect();
+    Ok(least_constraint(&supports, mass_kg, inertia_kg_m2, com_m, gravity_m_per_s2)?.acceleration)
+}
+
+/// [`least_constraint_acceleration`] for general supports: the forces in
+/// their bounds and cones that minimize `rᵀ M⁻¹ r` (module docs); a support
+/// whose lower bound is positive pushes at least that hard (a finger
+/// pressing on an object on the table), an unbounded one is rigid (the
+/// table: the acceleration it leaves does not point into it).
+pub(crate) fn least_constraint(
+    contacts: &[Support],
+    mass_kg: f64,
+    inertia_kg_m2: f64,
+    com_m: [f64; 2],
+    gravity_m_per_s2: [f64; 2],
+) -> Result<LeastConstraint> {
     let k = contacts.len();
     let g = gravity_m_per_s2;
     if k == 0 {
-        return Ok([g[0], g[1], 0.0]);
+        return Ok(LeastConstraint {
+            acceleration: [g[0], g[1], 0.0],
+            normal_forces_n: Vec::new(),
+        });
     }
     // scaled: forces by the weight, moments by weight · ell
     let weight = mass_kg * g[0].hypot(g[1]);
@@ -65,19 +111,35 @@ pub(crate) fn least_constraint_acceleration(
         .map(|c| (c.point_m[0] - com_m[0]).hypot(c.point_m[1] - com_m[1]))
         .fold(0.0, f64::max)
         .max(1e-12);
-    // r = A x + w with x = [λ_0, τ_0, …], w = m g / W
-    let mut a = vec![[0.0; 3]; 2 * k];
-    for (i, c) in contacts.iter().enumerate() {
+    // r = A x + w with x the free forces (λ_i, τ_i of a support whose normal
+    // force is free, τ_i alone of one whose normal force is fixed: its push
+    // goes into w), w = (m g + fixed pushes) / W
+    let mut w = [mass_kg * g[0] / weight, mass_kg * g[1] / weight, 0.0];
+    let mut a: Vec<[f64; 3]> = Vec::with_capacity(2 * k);
+    // per support: the column of its λ (None: fixed) and of its τ
+    let mut cols: Vec<(Option<usize>, usize)> = Vec::with_capacity(k);
+    for c in contacts {
         let n = c.normal;
         let t = [-n[1], n[0]];
         let r = [c.point_m[0] - com_m[0], c.point_m[1] - com_m[1]];
-        a[2 * i] = [n[0], n[1], (r[0] * n[1] - r[1] * n[0]) / ell];
-        a[2 * i + 1] = [t[0], t[1], (r[0] * t[1] - r[1] * t[0]) / ell];
+        let an = [n[0], n[1], (r[0] * n[1] - r[1] * n[0]) / ell];
+        let at = [t[0], t[1], (r[0] * t[1] - r[1] * t[0]) / ell];
+        let fixed = c.max_normal_force_n <= c.min_normal_force_n;
+        let ln = if fixed {
+            for d in 0..3 {
+                w[d] += an[d] * c.min_normal_force_n / weight;
+            }
+            None
+        } else {
+            a.push(an);
+            Some(a.len() - 1)
+        };
+        a.push(at);
+        cols.push((ln, a.len() - 1));
     }
-    let w = [mass_kg * g[0] / weight, mass_kg * g[1] / weight, 0.0];
     // M⁻¹ in these units: force rows 1, the moment row m ell² / I
     let minv = [1.0, 1.0, mass_kg * ell * ell / inertia_kg_m2];
-    let nx = 2 * k;
+    let nx = a.len();
     // P = Aᵀ M⁻¹ A (upper triangle), q = Aᵀ M⁻¹ w
     let (mut pr, mut pc, mut pv) = (Vec::new(), Vec::new(), Vec::new());
     let mut q = vec![0.0; nx];
@@ -92,25 +154,44 @@ pub(crate) fn least_constraint_acceleration(
         }
         q[col] = (0..3).map(|d| a[col][d] * minv[d] * w[d]).sum();
     }
-    // constraints: 0 ≤ λ_i ≤ N_i / W, (μ λ_i, τ_i) in the second-order cone
+    // constraints: min_i ≤ λ_i (≤ max_i when bounded); a fixed normal
+    // force's |τ_i| ≤ μ_i N_i; then (μ_i λ_i, τ_i) in the second-order cone
     let (mut ri, mut ci, mut vi, mut b) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut row = 0;
-    for (i, c) in contacts.iter().enumerate() {
-        ri.extend([row, row + 1]);
-        ci.extend([2 * i, 2 * i]);
-        vi.extend([-1.0, 1.0]);
-        b.extend([0.0, c.max_normal_force_n / weight]);
-        row += 2;
+    for (c, &(ln, lt)) in contacts.iter().zip(&cols) {
+        let mut push = |col: usize, v: f64, rhs: f64| {
+            ri.push(row);
+            ci.push(col);
+            vi.push(v);
+            b.push(rhs);
+            row += 1;
+        };
+        match ln {
+            Some(l) => {
+                push(l, -1.0, -c.min_normal_force_n / weight);
+                if c.max_normal_force_n.is_finite() {
+                    push(l, 1.0, c.max_normal_force_n / weight);
+                }
+            }
+            None => {
+                let cap = c.mu * c.min_normal_force_n / weight;
+                push(lt, 1.0, cap);
+                push(lt, -1.0, cap);
+            }
+        }
     }
-    for i in 0..k {
-        ri.extend([row, row + 1]);
-        ci.extend([2 * i, 2 * i + 1]);
-        vi.extend([-mu, -1.0]);
-        b.extend([0.0, 0.0]);
-        row += 2;
+    let bounds = row;
+    let mut cones: Vec<SupportedConeT<f64>> = vec![NonnegativeConeT(bounds)];
+    for (c, &(ln, lt)) in contacts.iter().zip(&cols) {
+        if let Some(l) = ln {
+            ri.extend([row, row + 1]);
+            ci.extend([l, lt]);
+            vi.extend([-c.mu, -1.0]);
+            b.extend([0.0, 0.0]);
+            row += 2;
+            cones.push(SecondOrderConeT(2));
+        }
     }
-    let mut cones: Vec<SupportedConeT<f64>> = vec![NonnegativeConeT(2 * k)];
-    cones.extend((0..k).map(|_| SecondOrderConeT(2)));
     let amat = CscMatrix::new_from_triplets(row, nx, ri, ci, vi);
     let p = CscMatrix::new_from_triplets(nx, nx, pr, pc, pv);
     let x = solve_cone_program("least_constraint", &p, &q, &amat, &b, &cones, 1e-12)?;
@@ -120,11 +201,27 @@ pub(crate) fn least_constraint_acceleration(
             r[d] += col[d] * x[j];
         }
     }
-    Ok([
-        r[0] * weight / mass_kg,
-        r[1] * weight / mass_kg,
-        r[2] * weight * ell / inertia_kg_m2,
-    ])
+    Ok(LeastConstraint {
+        acceleration: [
+            r[0] * weight / mass_kg,
+            r[1] * weight / mass_kg,
+            r[2] * weight * ell / inertia_kg_m2,
+        ],
+        normal_forces_n: contacts
+            .iter()
+            .zip(&cols)
+            .map(|(c, (ln, _))| ln.map_or(c.min_normal_force_n, |l| x[l] * weight))
+            .collect(),
+    })
+}
+
+/// The answer of [`least_constraint`].
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct LeastConstraint {
+    /// `[a_x, a_y, α]` (m/s², m/s², rad/s²).
+    pub(crate) acceleration: [f64; 3],
+    /// Each support's normal force (N).
+    pub(crate) normal_forces_n: Vec<f64>,
 }
 
 /// How the object ended after the lift.
@@ -233,7 +330,7 @@ pub(crate) fn settle<E: From<Error>>(
         }
         last = Some((pose, touches));
         let c = pose.position_m;
-        let hold = hold_check(&contacts, m, c, object.mu, gravity_m_per_s2)?;
+        let hold = hold_check(&contacts, m, c.into(), object.mu, gravity_m_per_s2.into())?;
         let holds = hold.holds;
         let first = first.get_or_insert(hold);
         if holds || !both_fingers || k == max_steps {
@@ -282,6 +379,7 @@ pub(crate) fn settle<E: From<Error>>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grasp::fixtures::{disc_pinch, flat_jaws};
     use crate::grasp::friction::disc_pinch_threshold_n;
     use crate::grasp::object::Shape;
 
@@ -354,18 +452,7 @@ mod tests {
     fn a_block_too_heavy_for_its_jaws_accelerates_by_the_missing_friction() {
         // flat jaws pressing N each, 2 μ N < m g: a_y = −(m g − 2 μ N)/m, no turn
         let (m, mu, n) = (0.1, 0.4, 0.8);
-        let jaws = [
-            FrictionContact {
-                point_m: [-0.02, 0.01],
-                normal: [1.0, 0.0],
-                max_normal_force_n: n,
-            },
-            FrictionContact {
-                point_m: [0.02, 0.01],
-                normal: [-1.0, 0.0],
-                max_normal_force_n: n,
-            },
-        ];
+        let jaws = flat_jaws(0.02, [0.01, 0.01], n);
         let a = least_constraint_acceleration(&jaws, m, 1e-4, [0.0, 0.0], mu, G).unwrap();
         let expect = -(m * 9.81 - 2.0 * mu * n) / m;
         assert!(
@@ -377,19 +464,7 @@ mod tests {
         assert!(a.iter().all(|v| v.abs() < 1e-5), "{a:?}");
         // a disc pinched above its centre: the closed form's missing weight
         let (r, theta): (f64, f64) = (0.03, 0.3);
-        let (s, c) = theta.sin_cos();
-        let pinch = [
-            FrictionContact {
-                point_m: [-r * c, r * s],
-                normal: [c, -s],
-                max_normal_force_n: n,
-            },
-            FrictionContact {
-                point_m: [r * c, r * s],
-                normal: [-c, -s],
-                max_normal_force_n: n,
-            },
-        ];
+        let pinch = disc_pinch(r, theta, n);
         let held = disc_pinch_threshold_n(mu, n, theta);
         let m = 2.0 * held / 9.81;
         let a =

@@ -19,7 +19,7 @@
 //!   picks the smallest step among the exact ones (the minimum-norm
 //!   solution of the pseudo-inverse when no bound is active).
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector, Vector3};
 
 use crate::assembly::Robot;
 use crate::element::PlanarCable;
@@ -39,16 +39,16 @@ use crate::loads::Loads;
 /// let f = GripperSpec::default().finger(Side::Left)?;
 /// let x = contact_pose(&f, f.reference_configuration().as_slice(), 0.1)?;
 /// // the straight finger hangs down: tip at (−0.055, −0.1), θ = 0
-/// assert!((x[0] + 0.055).abs() < 1e-12 && (x[1] + 0.1).abs() < 1e-12 && x[2].abs() < 1e-12);
+/// assert!((x.x + 0.055).abs() < 1e-12 && (x.y + 0.1).abs() < 1e-12 && x.z.abs() < 1e-12);
 /// # Ok::<(), softrod::Error>(())
 /// ```
-pub fn contact_pose(robot: &Robot<PlanarCable>, q: &[f64], s_m: f64) -> Result<[f64; 3]> {
+pub fn contact_pose(robot: &Robot<PlanarCable>, q: &[f64], s_m: f64) -> Result<Vector3<f64>> {
     let point = robot.arc_point("s_m", s_m)?;
     let (mut p, mut eta) = ([0.0; 2], [0.0; 2]);
     point.value_into(q, &mut p)?;
     point.slope_into(q, &mut eta)?;
     // η0 = (0, −1): η0 × η = η_x, η0 · η = −η_y
-    Ok([p[0], p[1], eta[0].atan2(-eta[1])])
+    Ok(Vector3::new(p[0], p[1], eta[0].atan2(-eta[1])))
 }
 
 /// (50) `J_c = ∂x_c/∂P` (3 × n_pressures; m/Pa, m/Pa, rad/Pa) at the
@@ -107,22 +107,22 @@ pub fn contact_jacobian(
 ///
 /// # Example
 /// ```
-/// use nalgebra::DMatrix;
+/// use nalgebra::{DMatrix, Vector3};
 /// use softrod::grasp::strategy::bounded_step;
 /// // two chambers move x alike; the first is at its bound
 /// let j = DMatrix::from_row_slice(3, 2, &[1e-6, 1e-6, 0.0, 0.0, 0.0, 0.0]);
-/// let dp = bounded_step(&j, &[1e-3, 0.0, 0.0], 1.0, &[1e5, 0.0], &[(0.0, 1e5), (0.0, 1e5)], 0.1)?;
+/// let dp = bounded_step(&j, &Vector3::new(1e-3, 0.0, 0.0), 1.0, &[1e5, 0.0], &[(0.0, 1e5), (0.0, 1e5)], 0.1)?;
 /// assert!(dp[0].abs() < 1e-3 && (dp[1] - 1e3).abs() < 1e-2);
 /// # Ok::<(), softrod::Error>(())
 /// ```
 pub fn bounded_step(
     j: &DMatrix<f64>,
-    xdot: &[f64],
+    xdot: &Vector3<f64>,
     dt_s: f64,
     pressures_pa: &[f64],
     bounds: &[(f64, f64)],
     length_m: f64,
-) -> Result<Vec<f64>> {
+) -> Result<DVector<f64>> {
     let n = j.ncols();
     check_len("xdot", j.nrows(), xdot.len())?;
     check_len("pressures_pa", n, pressures_pa.len())?;
@@ -199,10 +199,12 @@ pub fn bounded_step(
     let Some((_, x)) = best else {
         return Err(Error::invalid("pressure_step", "none", "no feasible step"));
     };
-    Ok(x.iter()
-        .zip(bounds.iter().zip(pressures_pa))
-        .map(|(x, ((lo, hi), pc))| (pc + x * scale).clamp(*lo, *hi) - pc)
-        .collect())
+    Ok(DVector::from_iterator(
+        n,
+        x.iter()
+            .zip(bounds.iter().zip(pressures_pa))
+            .map(|(x, ((lo, hi), pc))| (pc + x * scale).clamp(*lo, *hi) - pc),
+    ))
 }
 
 #[cfg(test)]
@@ -231,31 +233,16 @@ mod tests {
             let q = solver.solve(&f, &loads(&p), None).unwrap().q;
             for s in [0.07, 0.1] {
                 let j = contact_jacobian(&f, q.as_slice(), &loads(&p), s).unwrap();
+                // the pose at the pressures with chamber c changed by dp
+                let pose_at = |c: usize, dp: f64| {
+                    let mut pp = p.clone();
+                    pp[c] += dp;
+                    let qp = solver.solve(&f, &loads(&pp), Some(q.as_slice())).unwrap().q;
+                    contact_pose(&f, qp.as_slice(), s).unwrap()
+                };
                 for c in 0..4 {
                     let h = 50.0;
-                    let mut pp = p.clone();
-                    pp[c] += h;
-                    let xp = contact_pose(
-                        &f,
-                        solver
-                            .solve(&f, &loads(&pp), Some(q.as_slice()))
-                            .unwrap()
-                            .q
-                            .as_slice(),
-                        s,
-                    )
-                    .unwrap();
-                    pp[c] -= 2.0 * h;
-                    let xm = contact_pose(
-                        &f,
-                        solver
-                            .solve(&f, &loads(&pp), Some(q.as_slice()))
-                            .unwrap()
-                            .q
-                            .as_slice(),
-                        s,
-                    )
-                    .unwrap();
+                    let (xp, xm) = (pose_at(c, h), pose_at(c, -h));
                     for r in 0..3 {
                         let fd = (xp[r] - xm[r]) / (2.0 * h);
                         let scale = j.column(c).amax();
@@ -298,18 +285,18 @@ mod tests {
             4,
             &[1.0, 2.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0, 0.0, 0.0, 2.0],
         ) * 1e-6;
-        let v = [1e-3, -2e-3, 0.5e-3];
+        let v = Vector3::new(1e-3, -2e-3, 0.5e-3);
         let bounds = vec![(0.0, 1e5); 4];
         let p = vec![5e4; 4];
         let dp = bounded_step(&j, &v, 1.0, &p, &bounds, 1.0).unwrap();
         let pinv = j.clone().pseudo_inverse(1e-18).unwrap();
-        let expect = pinv * nalgebra::DVector::from_column_slice(&v);
+        let expect = pinv * v;
         for (a, b) in dp.iter().zip(expect.iter()) {
             assert!((a - b).abs() < 1e-5 * expect.amax(), "{dp:?} {expect:?}");
         }
         // a bound binds: the result stays inside
         let p = vec![99e3, 1e3, 50e3, 50e3];
-        let dp = bounded_step(&j, &[1.0, 0.0, 0.0], 1.0, &p, &bounds, 1.0).unwrap();
+        let dp = bounded_step(&j, &Vector3::x(), 1.0, &p, &bounds, 1.0).unwrap();
         for (d, pc) in dp.iter().zip(&p) {
             assert!(pc + d >= -1e-9 && pc + d <= 1e5 + 1e-9);
         }

@@ -18,9 +18,13 @@
 //! | walnut | circle | Ø 32 mm | 10 g | 0.6 (rough shell) |
 //!
 //! Placement: the object's centre offset uniformly within ±6 mm of the
-//! centreline and turned uniformly within ±0.15 rad (a circle's turn does
-//! not matter), from a SplitMix64 generator seeded per object and try; both
-//! strategies see the same placements.
+//! centreline and turned uniformly within ±0.15 rad, from a SplitMix64
+//! generator seeded per object and try; both strategies see the same
+//! placements. The object is set down so and comes to rest on the table
+//! ([`crate::grasp::trial`]): a circle's turn does not matter, the ruler
+//! (turns up to 0.079 rad, below the 0.1 rad at which it would fall over)
+//! and the tangerine come back upright, the mouse and the tape measure tip
+//! onto a face; the offset stays (it shifts by the tipping, a few mm).
 
 use serde::{Deserialize, Serialize};
 

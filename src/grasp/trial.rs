@@ -4,8 +4,18 @@
 //! # The scene
 //! The palm at `y = 0`, fingers hanging down; the table top
 //! `table_clearance_m` below the straight fingertips' surface; the object
-//! rests on it (its lowest point on the table), shifted sideways by the
-//! placement's offset and turned by its angle (both randomized in Table I).
+//! is set down on it (its lowest point on the table), shifted sideways by
+//! the placement's offset and turned by its angle (both randomized in
+//! Table I), and comes to rest as a planar rigid body under gravity with
+//! the table's friction `table_mu` (`crate::grasp::rest`): a disc rests
+//! where it is set down, an ellipse rolls back onto its flat side, a
+//! rectangle or rounded square set down on a corner tips until it lies on
+//! a face (measured: the tape measure set down turned by −0.138 rad lies
+//! flat 3.4 mm further left; before this it stood turned on its corner, the
+//! fingers touched it 30 mm apart in height, and after the lift it turned in
+//! the pinch by 0.22 rad and slipped by 16.6 mm). The fingers' pushes
+//! move it on the table only with `push_object_on_table` (default off: it
+//! stays where it came to rest).
 //!
 //! # The strategies
 //! - **Open loop** (the baseline of the paper's ref. \[53\]): the proximal
@@ -72,6 +82,7 @@ use crate::grasp::friction::{FrictionContact, HoldCheck};
 use crate::grasp::gripper::{GripperSpec, Side, FINGER_PRESSURES};
 use crate::grasp::object::{GraspObject, Pose};
 use crate::grasp::plant::{FingerState, GripperPlant, GripperPlantSettings, PlantStep};
+use crate::grasp::rest::{rest_on_table, TableTop};
 use crate::grasp::slip::{settle, Grip, Touch};
 use crate::grasp::strategy::{bounded_step, contact_jacobian, contact_pose};
 use crate::loads::Loads;
@@ -80,9 +91,11 @@ use crate::statics::StaticSolver;
 mod finger;
 mod lift;
 mod record;
+mod simulate;
 use finger::{calibrate, FingerController};
-use lift::lifted_grip;
+use lift::{friction_contacts, lifted_grip};
 use record::{contact_records, Stop};
+use simulate::{simulate, Scene};
 
 /// Which grasp strategy.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -142,6 +155,16 @@ pub struct GraspSettings {
     pub max_time_s: f64,
     /// Table top below the straight fingertips' surface (m; default 0.004).
     pub table_clearance_m: f64,
+    /// Friction coefficient between the object and the table (default 0.4:
+    /// plastic, fruit skin or cardboard on a laminated table top).
+    pub table_mu: f64,
+    /// Whether the fingers' pushes move the object on the table while the
+    /// gripper closes (default false: it stays where it came to rest, held
+    /// by the table). Measured with true on Table I: the green apple, pushed
+    /// 12 mm by the first finger, reached the other finger's straight
+    /// shape, an obstacle the plant's contact solver refuses; a marking pen
+    /// pushed on the table was dropped after the lift.
+    pub push_object_on_table: bool,
     /// Lift height (m; default 0.05): quasi-static, it only removes the table.
     pub lift_height_m: f64,
     /// Hold time (s; default 3): quasi-static, see the module docs.
@@ -190,6 +213,8 @@ impl Default for GraspSettings {
             theta_band_rad: 0.1,
             max_time_s: 12.0,
             table_clearance_m: 0.004,
+            table_mu: 0.4,
+            push_object_on_table: false,
             lift_height_m: 0.05,
             hold_time_s: 3.0,
             max_slip_m: 0.005,
@@ -243,6 +268,13 @@ impl GraspSettings {
                 "settings.max_time_s",
                 self.max_time_s,
                 "at most 10000 control steps",
+            ));
+        }
+        if !(self.table_mu.is_finite() && self.table_mu >= 0.0) {
+            return Err(Error::invalid(
+                "settings.table_mu",
+                self.table_mu,
+                "must be finite and >= 0",
             ));
         }
         if let Some(p) = self.open_loop_pressure_pa {
@@ -304,6 +336,29 @@ pub struct ContactRecord {
     pub force_n: f64,
 }
 
+impl ContactRecord {
+    /// The contact point as a vector (m; the field `point_m`).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::grasp::{gripper::Side, trial::ContactRecord};
+    /// let c = ContactRecord { side: Side::Left, point_m: [-0.03, -0.08], normal: [1.0, 0.0], force_n: 0.5 };
+    /// assert_eq!(c.point(), nalgebra::Vector2::new(-0.03, -0.08));
+    /// assert_eq!(c.force(), nalgebra::Vector2::new(0.5, 0.0));
+    /// ```
+    pub fn point(&self) -> nalgebra::Vector2<f64> {
+        self.point_m.into()
+    }
+
+    /// The normal force on the object as a vector (N): `force_n` along `normal`.
+    ///
+    /// # Example
+    /// See [`ContactRecord::point`].
+    pub fn force(&self) -> nalgebra::Vector2<f64> {
+        nalgebra::Vector2::from(self.normal) * self.force_n
+    }
+}
+
 /// The state after one control interval.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Frame {
@@ -356,6 +411,12 @@ pub enum Failure {
         side: Side,
         /// The solver's status.
         status: String,
+    },
+    /// The object's motion on the table could not be computed (its
+    /// least-constraint program was not solved).
+    ObjectMotion {
+        /// The solver's message.
+        message: String,
     },
     /// The controller could not compute a step (estimator or Jacobian).
     Controller {
@@ -524,8 +585,6 @@ pub fn run_trial(
         }
     }
     let table = table_at(table_y);
-    // the palm may come down until the object's top is this close
-    let max_descent = (-b[3] - settings.palm_clearance_m).max(0.0);
     let mut plant = GripperPlant::new(
         gripper,
         &settings.plant,
@@ -555,9 +614,7 @@ pub fn run_trial(
         settings,
         strategy,
         seed,
-        pose,
         table_y,
-        max_descent,
     };
     match simulate(&scene, &mut plant, &mut out) {
         Ok(()) => Ok(out),
@@ -567,174 +624,4 @@ pub fn run_trial(
         }
         Err(Stop::Bad(e)) => Err(e),
     }
-}
-
-/// What a trial's simulation needs besides the plant.
-struct Scene<'a> {
-    gripper: &'a GripperSpec,
-    object: &'a GraspObject,
-    settings: &'a GraspSettings,
-    strategy: Strategy,
-    seed: u64,
-    /// The object's pose on the table.
-    pose: Pose,
-    /// The table top (m).
-    table_y: f64,
-    /// How far the palm may come down (m).
-    max_descent: f64,
-}
-
-/// The closing and the lift (module docs); a failed trial stops with its
-/// cause, which the caller records.
-fn simulate(
-    scene: &Scene<'_>,
-    plant: &mut GripperPlant,
-    out: &mut TrialOutcome,
-) -> std::result::Result<(), Stop> {
-    let Scene {
-        gripper,
-        object,
-        settings,
-        strategy,
-        seed,
-        pose,
-        table_y,
-        max_descent,
-    } = *scene;
-    let r = gripper.finger_radius_m;
-    let dt = 1.0 / settings.control_rate_hz;
-    let mut descent = 0.0;
-    let zero = vec![0.0; FINGER_PRESSURES];
-    let mut state = plant.solve([&zero, &zero])?.states()?;
-    let mut pressures = [zero.clone(), zero.clone()];
-    let mut phases = [Phase::Ramp; 2];
-    let mut poses = [None; 2];
-    match strategy {
-        Strategy::OpenLoop => {
-            let p_ol = match settings.open_loop_pressure_pa {
-                Some(p) => p.min(gripper.pressure_max_pa),
-                None => meeting_pressure_pa(gripper)?,
-            };
-            let n = (settings.open_loop_ramp_s / dt).ceil() as usize + 10;
-            for k in 1..=n {
-                let p = (k as f64 * dt / settings.open_loop_ramp_s).min(1.0) * p_ol;
-                let cmd = vec![p, 0.0, 0.0, 0.0];
-                pressures = [cmd.clone(), cmd];
-                state = plant.solve([&pressures[0], &pressures[1]])?.states()?;
-                out.push_frame(k as f64 * dt, phases, &pressures, &state, r, poses);
-            }
-        }
-        Strategy::Adaptive => {
-            let noise = settings.plant.marker_noise_m;
-            let vp = calibrate(gripper, settings, seed)?;
-            let mut ctrl = [
-                FingerController::new(
-                    gripper,
-                    Side::Left,
-                    noise,
-                    settings.estimator_alpha,
-                    Some(vp[0].clone()),
-                )?,
-                FingerController::new(
-                    gripper,
-                    Side::Right,
-                    noise,
-                    settings.estimator_alpha,
-                    Some(vp[1].clone()),
-                )?,
-            ];
-            let n = (settings.max_time_s / dt).ceil() as usize;
-            for k in 1..=n {
-                for (c, st) in ctrl.iter_mut().zip(&state) {
-                    let failure = c.step(st, settings).map_err(|e| Failure::Controller {
-                        message: e.to_string(),
-                    })?;
-                    if let Some(f) = failure {
-                        return Err(f.into());
-                    }
-                }
-                phases = [ctrl[0].phase, ctrl[1].phase];
-                poses = [ctrl[0].pose, ctrl[1].pose];
-                if phases.iter().all(|p| *p == Phase::Hold) {
-                    break;
-                }
-                pressures = [ctrl[0].pressures.clone(), ctrl[1].pressures.clone()];
-                // while a finger approaches, the arm lowers the palm by its
-                // estimated fingertip rise (module docs)
-                if phases.contains(&Phase::Approach) {
-                    let rise = ctrl
-                        .iter()
-                        .filter(|c| c.phase == Phase::Approach)
-                        .filter_map(|c| c.pose)
-                        .map(|p| p[1] + gripper.finger_length_m())
-                        .fold(f64::INFINITY, f64::min);
-                    let target = (rise - 0.001).clamp(0.0, max_descent);
-                    if target > descent {
-                        descent = target;
-                        out.final_pose.position_m[1] = pose.position_m[1] + descent;
-                        // the contact solver takes no obstacle overlapping the
-                        // straight fingers: a table risen to their tips is
-                        // left out (the tips have risen above it)
-                        let table = (descent < settings.table_clearance_m - 5e-4)
-                            .then(|| table_at(table_y + descent));
-                        plant.set_workspace(object.contact_cover(&out.final_pose)?, table);
-                    }
-                }
-                state = plant.solve([&pressures[0], &pressures[1]])?.states()?;
-                out.push_frame(k as f64 * dt, phases, &pressures, &state, r, poses);
-            }
-            // how far the estimated contact point is from the true one
-            let mut worst: Option<f64> = None;
-            for (c, st) in ctrl.iter().zip(&state) {
-                if let (Some(p), false) = (c.pose, st.object_contacts.is_empty()) {
-                    let e = st
-                        .object_contacts
-                        .iter()
-                        .map(|t| (t.point_m[0] - p[0]).hypot(t.point_m[1] - p[1]))
-                        .fold(f64::INFINITY, f64::min);
-                    worst = Some(worst.map_or(e, |w: f64| w.max(e)));
-                }
-            }
-            out.contact_estimate_error_m = worst;
-        }
-    }
-    // the lift: the table no longer carries the object; while the contacts
-    // cannot carry it, it moves as a rigid body (module docs, `slip`)
-    let t_end = out.frames.last().map_or(0.0, |f| f.time_s) + dt;
-    let max_steps = (2.0 * gripper.finger_length_m() / settings.slip_step_m).ceil() as usize;
-    let mut k = 0;
-    let settled = settle(
-        object,
-        out.final_pose,
-        gripper.gravity_m_per_s2,
-        settings.slip_step_m,
-        max_steps,
-        |pose: &Pose, before: [Option<Touch>; 2]| -> std::result::Result<Grip, Stop> {
-            out.final_pose = *pose;
-            plant.set_workspace(object.contact_cover(pose)?, None);
-            let lifted = plant.solve([&pressures[0], &pressures[1]])?.states()?;
-            out.push_frame(t_end + k as f64 * dt, phases, &pressures, &lifted, r, poses);
-            k += 1;
-            let grip = lifted_grip(plant, object, pose, &lifted, r, before)?;
-            Ok(grip)
-        },
-    )?;
-    out.final_pose = settled.pose;
-    out.slip_m = settled.slip_m;
-    let w0 = settled.first.weight_factor;
-    out.holding_mass_kg = settled.first.holding_mass_kg(object.mass_kg);
-    out.success = settled.holds && out.slip_m <= settings.max_slip_m;
-    out.failure = match (settled.holds, out.success) {
-        (_, true) => None,
-        (true, false) => Some(Failure::Slips {
-            weight_factor: w0,
-            slip_m: out.slip_m,
-        }),
-        (false, _) => Some(Failure::Dropped {
-            weight_factor: w0,
-            slip_m: out.slip_m,
-        }),
-    };
-    out.hold = Some(settled.first);
-    Ok(())
 }

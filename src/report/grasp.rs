@@ -352,6 +352,7 @@ fn failure_name(f: &crate::grasp::trial::Failure) -> String {
         Failure::Dropped { .. } => "dropped".into(),
         Failure::Missed { side } => format!("{side:?} finger missed"),
         Failure::PlantSolve { status, .. } => format!("plant solve ({status})"),
+        Failure::ObjectMotion { .. } => "object motion".into(),
         Failure::Controller { .. } => "controller".into(),
     }
 }

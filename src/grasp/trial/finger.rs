@@ -147,7 +147,7 @@ impl FingerController {
             ..Loads::default()
         };
         let pose = contact_pose(&self.model, est.q.as_slice(), s_c)?;
-        self.pose = Some(pose);
+        self.pose = Some(pose.into());
         let inward = self.side.inward();
         let near_bound = self
             .pressures
@@ -172,9 +172,9 @@ impl FingerController {
         // contact blocks the motion (51) asks for, and its push turns the finger
         let squaring = self.phase == Phase::Squeeze && pose[2].abs() > s.theta_band_rad;
         let xdot = if self.phase == Phase::Align || squaring {
-            [0.0, 0.0, turn]
+            nalgebra::Vector3::new(0.0, 0.0, turn)
         } else {
-            [inward * s.u1_m_per_s, 0.0, turn]
+            nalgebra::Vector3::new(inward * s.u1_m_per_s, 0.0, turn)
         };
         let j = contact_jacobian(&self.model, est.q.as_slice(), &loads, s_c)?;
         let dp = bounded_step(

@@ -1,7 +1,29 @@
-//! The grip on the lifted object: what `grasp::slip`'s settling
-//! needs from the plant at each pose of the object.
+//! The fingers' grip on the object: what `grasp::rest` (on the table) and
+//! `grasp::slip` (lifted) need from the plant at each pose of the object.
 
 use super::*;
+
+/// The fingers' contacts on `object` at `pose` for the friction programs:
+/// each finger's push (its normal force) with the cone about the object's
+/// own outline (not the cover's).
+pub(super) fn friction_contacts(
+    object: &GraspObject,
+    pose: &Pose,
+    fingers: &[FingerState; 2],
+    r: f64,
+) -> Vec<FrictionContact> {
+    contact_records(fingers, r)
+        .iter()
+        .map(|c| {
+            let n: [f64; 2] = object.surface_normal(pose, c.point_m.into()).into();
+            FrictionContact {
+                point_m: c.point_m,
+                normal: [-n[0], -n[1]],
+                max_normal_force_n: c.force_n,
+            }
+        })
+        .collect()
+}
 
 /// The grip on the lifted object at `pose` (for `settle`): the friction
 /// contacts with cones about the object's own outline (not the cover's),
@@ -15,17 +37,7 @@ pub(super) fn lifted_grip(
     r: f64,
     before: [Option<Touch>; 2],
 ) -> Result<Grip> {
-    let contacts = contact_records(lifted, r)
-        .iter()
-        .map(|c| {
-            let n: [f64; 2] = object.surface_normal(pose, c.point_m.into()).into();
-            FrictionContact {
-                point_m: c.point_m,
-                normal: [-n[0], -n[1]],
-                max_normal_force_n: c.force_n,
-            }
-        })
-        .collect();
+    let contacts = friction_contacts(object, pose, lifted, r);
     // a finger's surface point at arc s on side σ: centreline + r σ ν
     let surface = |robot: &Robot<PlanarCable>, q: &[f64], s: f64, side: f64| -> Result<[f64; 2]> {
         let p = robot.position_at(q, s)?;
