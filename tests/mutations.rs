@@ -43,6 +43,20 @@ enum PathStep {
     Index(usize),
 }
 
+/// Every mutant of a file: each number (by its JSON path) set to each of
+/// [`VALUES`], with the path and the value it got.
+fn mutants(base: &Value) -> impl Iterator<Item = (String, f64, Value)> + '_ {
+    let mut paths = Vec::new();
+    numbers(base, String::new(), &mut paths, Vec::new());
+    paths.into_iter().flat_map(move |(path, steps)| {
+        VALUES.into_iter().map(move |x| {
+            let mut v = base.clone();
+            set(&mut v, &steps, x);
+            (path.clone(), x, v)
+        })
+    })
+}
+
 fn set(v: &mut Value, steps: &[PathStep], x: f64) {
     let mut cur = v;
     for s in steps {
@@ -97,33 +111,27 @@ fn every_refused_mutation_names_its_field() {
         if base.get("robot").is_none() {
             continue; // a markers file, not a scene
         }
-        let mut paths = Vec::new();
-        numbers(&base, String::new(), &mut paths, Vec::new());
-        for (path, steps) in &paths {
-            for x in VALUES {
-                total += 1;
-                let mut v = base.clone();
-                set(&mut v, steps, x);
-                let name = file.file_name().unwrap().to_string_lossy();
-                match Scene::from_json(&v.to_string()) {
-                    Err(e) => {
-                        refused += 1;
-                        let m = e.to_string();
-                        if !names(&m, path) {
-                            wrong.push(format!("{name}: {path} = {x:e}: {m}"));
-                        }
+        for (path, x, v) in mutants(&base) {
+            total += 1;
+            let name = file.file_name().unwrap().to_string_lossy();
+            match Scene::from_json(&v.to_string()) {
+                Err(e) => {
+                    refused += 1;
+                    let m = e.to_string();
+                    if !names(&m, &path) {
+                        wrong.push(format!("{name}: {path} = {x:e}: {m}"));
                     }
-                    Ok(scene) => {
-                        accepted += 1;
-                        if scene.has_auto_elements() {
-                            continue;
-                        }
-                        match solve_finite(&scene) {
-                            Ok(true) | Err(_) => {}
-                            Ok(false) => wrong.push(format!(
-                                "{name}: {path} = {x:e}: accepted, non-finite shape"
-                            )),
-                        }
+                }
+                Ok(scene) => {
+                    accepted += 1;
+                    if scene.has_auto_elements() {
+                        continue;
+                    }
+                    match solve_finite(&scene) {
+                        Ok(true) | Err(_) => {}
+                        Ok(false) => wrong.push(format!(
+                            "{name}: {path} = {x:e}: accepted, non-finite shape"
+                        )),
                     }
                 }
             }
@@ -175,25 +183,19 @@ fn every_refused_marker_mutation_names_its_field() {
         let three_d = base["markers"][0]["position_m"]
             .as_array()
             .is_some_and(|p| p.len() == 3);
-        let mut paths = Vec::new();
-        numbers(&base, String::new(), &mut paths, Vec::new());
-        for (path, steps) in &paths {
-            for x in VALUES {
-                total += 1;
-                let mut v = base.clone();
-                set(&mut v, steps, x);
-                let obs: softrod::estimate::Observation = serde_json::from_value(v).unwrap();
-                let op = if three_d {
-                    softrod::observe::ObservationOperator::new(&spatial, &obs, 1e-5, 1e-3)
-                } else {
-                    softrod::observe::ObservationOperator::new(&robot, &obs, 1e-5, 1e-3)
-                };
-                if let Err(e) = op {
-                    refused += 1;
-                    let m = e.to_string();
-                    if !names(&m, &format!("observation.{path}")) {
-                        wrong.push(format!("{}: {path} = {x:e}: {m}", file.display()));
-                    }
+        for (path, x, v) in mutants(&base) {
+            total += 1;
+            let obs: softrod::estimate::Observation = serde_json::from_value(v).unwrap();
+            let op = if three_d {
+                softrod::observe::ObservationOperator::new(&spatial, &obs, 1e-5, 1e-3)
+            } else {
+                softrod::observe::ObservationOperator::new(&robot, &obs, 1e-5, 1e-3)
+            };
+            if let Err(e) = op {
+                refused += 1;
+                let m = e.to_string();
+                if !names(&m, &format!("observation.{path}")) {
+                    wrong.push(format!("{}: {path} = {x:e}: {m}", file.display()));
                 }
             }
         }
@@ -300,20 +302,14 @@ fn every_refused_parallel_mutation_names_its_field() {
         }
         scenes += 1;
         let base: Value = serde_json::from_str(&text).unwrap();
-        let mut paths = Vec::new();
-        numbers(&base, String::new(), &mut paths, Vec::new());
-        for (path, steps) in &paths {
-            for x in VALUES {
-                total += 1;
-                let mut v = base.clone();
-                set(&mut v, steps, x);
-                if let Err(e) = ParallelScene::from_json(&v.to_string()) {
-                    refused += 1;
-                    let m = e.to_string();
-                    if !names(&m, path) {
-                        let name = file.file_name().unwrap().to_string_lossy();
-                        wrong.push(format!("{name}: {path} = {x:e}: {m}"));
-                    }
+        for (path, x, v) in mutants(&base) {
+            total += 1;
+            if let Err(e) = ParallelScene::from_json(&v.to_string()) {
+                refused += 1;
+                let m = e.to_string();
+                if !names(&m, &path) {
+                    let name = file.file_name().unwrap().to_string_lossy();
+                    wrong.push(format!("{name}: {path} = {x:e}: {m}"));
                 }
             }
         }
@@ -371,22 +367,16 @@ fn every_refused_avoid_mutation_names_its_field() {
     for file in &files {
         let base: Value = serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
         AvoidScene::from_json(&base.to_string()).unwrap();
-        let mut paths = Vec::new();
-        numbers(&base, String::new(), &mut paths, Vec::new());
-        for (path, steps) in &paths {
-            for x in VALUES {
-                total += 1;
-                let mut v = base.clone();
-                set(&mut v, steps, x);
-                if let Err(e) = AvoidScene::from_json(&v.to_string()) {
-                    refused += 1;
-                    let m = e.to_string();
-                    if names(&m, path) {
-                        exact += 1;
-                    } else if !names_it_or_an_ancestor(&m, path) {
-                        let name = file.file_name().unwrap().to_string_lossy();
-                        wrong.push(format!("{name}: {path} = {x:e}: {m}"));
-                    }
+        for (path, x, v) in mutants(&base) {
+            total += 1;
+            if let Err(e) = AvoidScene::from_json(&v.to_string()) {
+                refused += 1;
+                let m = e.to_string();
+                if names(&m, &path) {
+                    exact += 1;
+                } else if !names_it_or_an_ancestor(&m, &path) {
+                    let name = file.file_name().unwrap().to_string_lossy();
+                    wrong.push(format!("{name}: {path} = {x:e}: {m}"));
                 }
             }
         }
