@@ -43,7 +43,7 @@ fn main() -> softrod::Result<()> {
         .iter()
         .map(|m| robot.node_arc()[m.node.unwrap()])
         .collect();
-    let c = [0.1911, 0.1203];
+    let c = nalgebra::Vector2::new(0.1911, 0.1203);
     let hold = 3.0;
     let mut trajectories = vec![("circle", Trajectory::circle(c, 0.005, 15.0, 15.0, hold)?)];
     if !quick {
@@ -54,8 +54,8 @@ fn main() -> softrod::Result<()> {
         trajectories.push((
             "line",
             Trajectory::line(
-                [c[0] - 0.004, c[1] - 0.004],
-                [c[0] + 0.004, c[1] + 0.004],
+                c - nalgebra::Vector2::new(0.004, 0.004),
+                c + nalgebra::Vector2::new(0.004, 0.004),
                 15.0,
                 15.0,
                 hold,

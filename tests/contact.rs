@@ -304,7 +304,10 @@ fn a_robot_sagging_onto_a_capsule_and_a_polygon_balances_its_contact_forces() {
         let s = 0.24 * k as f64 / 2400.0;
         let r = robot.position_at(sol.q.as_slice(), s).unwrap();
         for o in obstacles.obstacles() {
-            let d = o.signed_distance(&[r[0], r[1]]).distance_m - 0.008;
+            let d = o
+                .signed_distance(nalgebra::Vector2::new(r[0], r[1]))
+                .distance_m
+                - 0.008;
             assert!(d >= -1e-9, "penetration {d:e} at s = {s}");
         }
     }

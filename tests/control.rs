@@ -243,7 +243,7 @@ fn closed_loop_converges_against_a_plant_with_errors_and_survives_a_dropout() {
     // hold a point for 4 s: the plant has EI +15 %, gain -10 %, EA -5 %, a
     // finer mesh, a 10 g tip mass, noise and lag
     let target = [0.21, 0.095];
-    let traj = Trajectory::new(vec![0.0, 4.0], vec![target.to_vec(), target.to_vec()]).unwrap();
+    let traj = Trajectory::new(&[0.0, 4.0], &[nalgebra::Vector2::from(target); 2]).unwrap();
     let plant_settings = PlantSettings {
         payloads: PayloadSchedule::tip_mass(0.01, 0.24),
         ..Default::default()
@@ -307,12 +307,19 @@ fn bad_input_is_a_typed_error_naming_the_field() {
     };
     // trajectories
     assert_eq!(
-        field(Trajectory::new(vec![], vec![]).unwrap_err()),
+        field(Trajectory::new::<2>(&[], &[]).unwrap_err()),
         "trajectory.times_s"
     );
-    let e = Trajectory::new(vec![0.0, 1.0], vec![vec![0.2, 0.0], vec![f64::NAN, 0.0]]).unwrap_err();
+    let e = Trajectory::new(
+        &[0.0, 1.0],
+        &[
+            nalgebra::Vector2::new(0.2, 0.0),
+            nalgebra::Vector2::new(f64::NAN, 0.0),
+        ],
+    )
+    .unwrap_err();
     assert_eq!(field(e), "trajectory.points_m[1]");
-    let e = Trajectory::new(vec![0.0, 1.0, 0.5], vec![vec![0.2, 0.0]; 3]).unwrap_err();
+    let e = Trajectory::new(&[0.0, 1.0, 0.5], &[nalgebra::Vector2::new(0.2, 0.0); 3]).unwrap_err();
     assert_eq!(field(e), "trajectory.times_s[2]");
     // control rate and gains
     for r in [0.0, -30.0, 20e3, f64::NAN] {
@@ -355,7 +362,7 @@ fn bad_input_is_a_typed_error_naming_the_field() {
     )
     .unwrap();
     let mut plant = SimulatedPlant::new(&scene, &arcs, PlantSettings::default()).unwrap();
-    let t3 = Trajectory::new(vec![0.0, 1.0], vec![vec![0.2, 0.0, 0.0]; 2]).unwrap();
+    let t3 = Trajectory::new(&[0.0, 1.0], &[nalgebra::Vector3::new(0.2, 0.0, 0.0); 2]).unwrap();
     assert_eq!(
         field(
             lp.run(&mut plant, &t3, |_| None::<nalgebra::Vector2<f64>>)
@@ -379,8 +386,8 @@ fn virtual_payload_recorded_without_payload_leaves_the_real_one() {
     let arcs = marker_arcs(&scene);
     let c = [0.1911, 0.1203];
     let traj = Trajectory::line(
-        [c[0] - 0.003, c[1] - 0.003],
-        [c[0] + 0.003, c[1] + 0.003],
+        nalgebra::Vector2::new(c[0] - 0.003, c[1] - 0.003),
+        nalgebra::Vector2::new(c[0] + 0.003, c[1] + 0.003),
         8.0,
         8.0,
         2.0,

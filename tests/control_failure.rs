@@ -145,7 +145,7 @@ fn a_plant_failure_ends_the_run_with_a_row_and_the_watchdog_too() {
     let robot = scene.robot().unwrap();
     let arcs = marker_arcs(&scene);
     let target = [0.1911, 0.1203];
-    let traj = Trajectory::new(vec![0.0, 2.0], vec![target.to_vec(), target.to_vec()]).unwrap();
+    let traj = Trajectory::new(&[0.0, 2.0], &[nalgebra::Vector2::from(target); 2]).unwrap();
     let inner = SimulatedPlant::new(&scene, &arcs, PlantSettings::default()).unwrap();
     let mut plant = Failing {
         inner,
@@ -256,8 +256,8 @@ fn loop_and_sweep_bad_input_names_the_field() {
     )
     .unwrap();
     for traj in [
-        Trajectory::new(vec![0.0], vec![vec![0.19, 0.12]]).unwrap(),
-        Trajectory::new(vec![0.0, 0.01], vec![vec![0.19, 0.12]; 2]).unwrap(),
+        Trajectory::new(&[0.0], &[nalgebra::Vector2::new(0.19, 0.12)]).unwrap(),
+        Trajectory::new(&[0.0, 0.01], &[nalgebra::Vector2::new(0.19, 0.12); 2]).unwrap(),
     ] {
         assert_eq!(
             field(

@@ -18,6 +18,8 @@
 //! elements is one candidate, counted once, so no two constraints sample
 //! the same point). The clamped base point never moves and is no constraint.
 
+use nalgebra::{SMatrix, SVector, Vector2};
+
 use super::obstacle::{Feature, Obstacle, SignedDistance};
 use crate::element::hermite;
 
@@ -50,17 +52,17 @@ pub struct Gap {
     /// the rod radius (m; negative: penetration).
     pub gap_m: f64,
     /// The centreline point (m).
-    pub point_m: [f64; 2],
+    pub point_m: Vector2<f64>,
     /// Outward normal of the obstacle at the closest point: the direction
     /// of the contact force on the rod.
-    pub normal: [f64; 2],
+    pub normal: Vector2<f64>,
     /// Whether the minimum is stationary in `ξ` (it slides along the rod
     /// with the configuration) or at the tip end (a fixed material point).
     pub stationary: bool,
     /// `∂g/∂q_e` over the element's 8 coordinates.
-    pub gradient: [f64; 8],
-    /// `∂²g/∂q_e²`, row-major 8 × 8.
-    pub hessian: [f64; 64],
+    pub gradient: SVector<f64, 8>,
+    /// `∂²g/∂q_e²` (8 × 8, symmetric).
+    pub hessian: SMatrix<f64, 8, 8>,
 }
 
 /// Polynomial with coefficients `p[k]` of `ξ^k` at `x` (Horner).
@@ -157,7 +159,7 @@ fn poly_mul(a: &[f64], b: &[f64]) -> Vec<f64> {
 /// `ξ^k` (two components each).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Cubic {
-    pub coef: [[f64; 2]; 4],
+    pub(crate) coef: [[f64; 2]; 4],
 }
 
 impl Cubic {
@@ -297,23 +299,23 @@ pub(crate) fn gap_at(
         distance_m,
         normal: n,
         hessian_per_m: h,
-    } = obstacle.signed_distance(&l.r);
-    let mut gradient = [0.0; 8];
-    let mut hessian = [0.0; 64];
+    } = obstacle.signed_distance(Vector2::from(l.r));
+    let mut gradient = SVector::<f64, 8>::zeros();
+    let mut hessian = SMatrix::<f64, 8, 8>::zeros();
     for k in 0..4 {
         for i in 0..2 {
             gradient[2 * k + i] = l.s[k] * n[i];
             for m in 0..4 {
                 for j in 0..2 {
-                    hessian[(2 * k + i) * 8 + 2 * m + j] = l.s[k] * l.s[m] * h[2 * i + j];
+                    hessian[(2 * k + i, 2 * m + j)] = l.s[k] * l.s[m] * h[(i, j)];
                 }
             }
         }
     }
     if stationary {
         let hr = [
-            h[0] * l.r_xi[0] + h[1] * l.r_xi[1],
-            h[2] * l.r_xi[0] + h[3] * l.r_xi[1],
+            h[(0, 0)] * l.r_xi[0] + h[(0, 1)] * l.r_xi[1],
+            h[(1, 0)] * l.r_xi[0] + h[(1, 1)] * l.r_xi[1],
         ];
         let g_xixi =
             l.r_xi[0] * hr[0] + l.r_xi[1] * hr[1] + n[0] * l.r_xixi[0] + n[1] * l.r_xixi[1];
@@ -326,7 +328,7 @@ pub(crate) fn gap_at(
             }
             for a in 0..8 {
                 for c in 0..8 {
-                    hessian[a * 8 + c] -= b[a] * b[c] / g_xixi;
+                    hessian[(a, c)] -= b[a] * b[c] / g_xixi;
                 }
             }
         }
@@ -337,7 +339,7 @@ pub(crate) fn gap_at(
         xi,
         s_m,
         gap_m: distance_m - rod_radius,
-        point_m: l.r,
+        point_m: Vector2::from(l.r),
         normal: n,
         stationary,
         gradient,
@@ -354,5 +356,5 @@ pub(crate) fn gap_value(obstacle: &Obstacle, rod_radius: f64, cubic: &Cubic, xi:
         r[1] += p * c[1];
         p *= xi;
     }
-    obstacle.signed_distance(&r).distance_m - rod_radius
+    obstacle.signed_distance(Vector2::from(r)).distance_m - rod_radius
 }

@@ -147,7 +147,7 @@ impl Obstacles {
         let base = robot.base_node();
         let base = [base[0], base[1]];
         for (i, o) in self.obstacles.iter().enumerate() {
-            let g = o.signed_distance(&base).distance_m - self.rod_radius_m;
+            let g = o.signed_distance(nalgebra::Vector2::from(base)).distance_m - self.rod_radius_m;
             if g.is_nan() || g < -tol {
                 return Err(Error::invalid(
                     format!("obstacles[{i}]"),
@@ -209,7 +209,10 @@ impl Obstacles {
                     .iter()
                     .map(|p| ((p[0] - mid[0]).powi(2) + (p[1] - mid[1]).powi(2)).sqrt())
                     .fold(0.0, f64::max);
-                let far = o.signed_distance(&mid).distance_m - rad - self.rod_radius_m > screen;
+                let far = o.signed_distance(nalgebra::Vector2::from(mid)).distance_m
+                    - rad
+                    - self.rod_radius_m
+                    > screen;
                 let xs = if far {
                     vec![0.0, 1.0]
                 } else {

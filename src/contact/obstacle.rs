@@ -1,6 +1,7 @@
 //! Rigid planar obstacles and their signed distance: value, outward normal
 //! and curvature at a point.
 
+use nalgebra::{Matrix2, Vector2};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_positive, Error, Result};
@@ -28,7 +29,7 @@ pub const MAX_OBSTACLE_EXTENT_M: f64 = 1e12;
 /// let o: Obstacle = serde_json::from_str(r#"{"shape": "circle", "center_m": [0.1, -0.02], "radius_m": 0.01}"#)?;
 /// o.validate("obstacles[0]")?;
 /// // a point 0.03 m from the centre is 0.02 m from the surface
-/// assert!((o.signed_distance(&[0.1, 0.01]).distance_m - 0.02).abs() < 1e-15);
+/// assert!((o.signed_distance(nalgebra::Vector2::new(0.1, 0.01)).distance_m - 0.02).abs() < 1e-15);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -65,22 +66,22 @@ pub enum Obstacle {
 ///
 /// # Example
 /// ```
+/// use nalgebra::{Matrix2, Vector2};
 /// use softrod::contact::Obstacle;
 /// let o = Obstacle::Capsule { start_m: [0.0, 0.0], end_m: [1.0, 0.0], radius_m: 0.1 };
-/// let d = o.signed_distance(&[0.5, 0.3]);
-/// assert!((d.distance_m - 0.2).abs() < 1e-15 && d.normal == [0.0, 1.0]);
-/// assert_eq!(d.hessian_per_m, [0.0; 4]); // flat side: no curvature
+/// let d = o.signed_distance(Vector2::new(0.5, 0.3));
+/// assert!((d.distance_m - 0.2).abs() < 1e-15 && d.normal == Vector2::new(0.0, 1.0));
+/// assert_eq!(d.hessian_per_m, Matrix2::zeros()); // flat side: no curvature
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SignedDistance {
     /// Distance to the surface (m; negative inside).
     pub distance_m: f64,
     /// Unit gradient of the distance: the outward normal.
-    pub normal: [f64; 2],
-    /// Hessian of the distance, row-major (1/m): `(I − n nᵀ)/d` from a
-    /// point or a rounded end at distance `d` from its centre, 0 from a flat
-    /// side.
-    pub hessian_per_m: [f64; 4],
+    pub normal: Vector2<f64>,
+    /// Hessian of the distance (1/m): `(I − n nᵀ)/d` from a point or a
+    /// rounded end at distance `d` from its centre, 0 from a flat side.
+    pub hessian_per_m: Matrix2<f64>,
 }
 
 /// The closest-point features of an obstacle: what the distance is measured
@@ -115,20 +116,20 @@ fn from_point(x: &[f64; 2], c: &[f64; 2], radius: f64) -> SignedDistance {
         // at the centre the normal is undefined: any unit vector, no curvature
         return SignedDistance {
             distance_m: d - radius,
-            normal: [1.0, 0.0],
-            hessian_per_m: [0.0; 4],
+            normal: Vector2::new(1.0, 0.0),
+            hessian_per_m: Matrix2::zeros(),
         };
     }
     let n = [v[0] / d, v[1] / d];
     SignedDistance {
         distance_m: d - radius,
-        normal: n,
-        hessian_per_m: [
+        normal: Vector2::from(n),
+        hessian_per_m: Matrix2::new(
             (1.0 - n[0] * n[0]) / d,
             -n[0] * n[1] / d,
             -n[0] * n[1] / d,
             (1.0 - n[1] * n[1]) / d,
-        ],
+        ),
     }
 }
 
@@ -159,8 +160,8 @@ fn from_segment(x: &[f64; 2], a: &[f64; 2], b: &[f64; 2], radius: f64) -> Signed
     };
     SignedDistance {
         distance_m: d - radius,
-        normal: n,
-        hessian_per_m: [0.0; 4],
+        normal: Vector2::from(n),
+        hessian_per_m: Matrix2::zeros(),
     }
 }
 
@@ -293,7 +294,18 @@ impl Obstacle {
     /// positive outside, with its gradient and Hessian (see
     /// [`SignedDistance`]). Inside a polygon: the largest signed distance to
     /// its edges' lines.
-    pub fn signed_distance(&self, x: &[f64; 2]) -> SignedDistance {
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use softrod::contact::Obstacle;
+    /// let disk = Obstacle::Circle { center_m: [0.0, 0.0], radius_m: 0.1 };
+    /// let d = disk.signed_distance(Vector2::new(0.0, -0.3));
+    /// assert!((d.distance_m - 0.2).abs() < 1e-15);
+    /// assert!((d.normal - Vector2::new(0.0, -1.0)).norm() < 1e-15);
+    /// ```
+    pub fn signed_distance(&self, x: Vector2<f64>) -> SignedDistance {
+        let x: &[f64; 2] = &x.into();
         match self {
             Obstacle::Circle { center_m, radius_m } => from_point(x, center_m, *radius_m),
             Obstacle::Capsule {
@@ -328,8 +340,8 @@ impl Obstacle {
                     Some(s) if !inside => s,
                     _ => SignedDistance {
                         distance_m: best_line.0,
-                        normal: best_line.1,
-                        hessian_per_m: [0.0; 4],
+                        normal: Vector2::from(best_line.1),
+                        hessian_per_m: Matrix2::zeros(),
                     },
                 }
             }

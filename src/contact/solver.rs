@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use clarabel::solver::SolverStatus;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Vector2};
 use serde::{Deserialize, Serialize};
 
 pub use super::settings::ContactSettings;
@@ -54,6 +54,48 @@ pub struct ContactForce {
     pub force_n: f64,
     /// The gap there (m; zero to the tolerance).
     pub gap_m: f64,
+}
+
+impl ContactForce {
+    /// The centreline point in contact (m), typed.
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use softrod::contact::ContactForce;
+    /// let c = ContactForce { obstacle: 0, s_m: 0.1, point_m: [0.1, -0.02], normal: [0.0, 1.0], force_n: 0.5, gap_m: 0.0 };
+    /// assert_eq!(c.point(), Vector2::new(0.1, -0.02));
+    /// ```
+    pub fn point(&self) -> Vector2<f64> {
+        Vector2::from(self.point_m)
+    }
+
+    /// The obstacle's outward unit normal: the direction of the force on the
+    /// rod, typed.
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use softrod::contact::ContactForce;
+    /// let c = ContactForce { obstacle: 0, s_m: 0.1, point_m: [0.1, -0.02], normal: [0.0, 1.0], force_n: 0.5, gap_m: 0.0 };
+    /// assert_eq!(c.direction(), Vector2::new(0.0, 1.0));
+    /// ```
+    pub fn direction(&self) -> Vector2<f64> {
+        Vector2::from(self.normal)
+    }
+
+    /// The contact force on the rod (N): `force_n` along the normal.
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use softrod::contact::ContactForce;
+    /// let c = ContactForce { obstacle: 0, s_m: 0.1, point_m: [0.1, -0.02], normal: [0.0, 1.0], force_n: 0.5, gap_m: 0.0 };
+    /// assert_eq!(c.force(), Vector2::new(0.0, 0.5));
+    /// ```
+    pub fn force(&self) -> Vector2<f64> {
+        self.force_n * self.direction()
+    }
 }
 
 /// The result of a contact solve: the last iterate, its contacts and the
@@ -200,7 +242,7 @@ impl ElementMap {
             for (ua, ca) in self.of(g.element, a) {
                 for b in 0..8 {
                     for (ub, cb) in self.of(g.element, b) {
-                        h[(ua, ub)] += scale * ca * cb * g.hessian[a * 8 + b];
+                        h[(ua, ub)] += scale * ca * cb * g.hessian[(a, b)];
                     }
                 }
             }
@@ -363,8 +405,8 @@ impl ContactSolver {
                 contacts.push(ContactForce {
                     obstacle: g.obstacle,
                     s_m: g.s_m,
-                    point_m: g.point_m,
-                    normal: g.normal,
+                    point_m: g.point_m.into(),
+                    normal: g.normal.into(),
                     force_n: a.lambda,
                     gap_m: g.gap_m,
                 });

@@ -121,7 +121,7 @@ fn gap_gradient_and_hessian_match_finite_differences() {
         assert!(g.stationary && g.xi > 0.0 && g.xi < 1.0, "shape {k}: {g:?}");
         let e = g.element;
         let h = 1e-6;
-        let grad_at = |qq: &[f64]| -> [f64; 8] {
+        let grad_at = |qq: &[f64]| -> nalgebra::SVector<f64, 8> {
             let gs = obstacles.gaps(&robot, qq).unwrap();
             gs.into_iter()
                 .filter(|x| x.obstacle == g.obstacle)
@@ -147,7 +147,7 @@ fn gap_gradient_and_hessian_match_finite_differences() {
             let scale = g.hessian.iter().fold(1.0f64, |m, v| m.max(v.abs()));
             for b in 0..8 {
                 let fd = (gp[b] - gm[b]) / (2.0 * h);
-                let an = g.hessian[b * 8 + a];
+                let an = g.hessian[(b, a)];
                 assert!(
                     (fd - an).abs() < 1e-5 * scale,
                     "shape {k} hessian ({b}, {a}): fd {fd} analytic {an}"

@@ -128,7 +128,7 @@ impl LoopCase {
 #[serde(deny_unknown_fields, default)]
 pub struct FailureSettings {
     /// The circle's centre (m; default (0.1911, 0.1203), the model's end
-    /// effector at (45, 0, 45, 0) kPa).
+    /// effector at (45, 0, 45, 0) kPa; typed: [`FailureSettings::center`]).
     pub center_m: [f64; 2],
     /// The circle's radius (m, default 5 mm).
     pub radius_m: f64,
@@ -168,6 +168,19 @@ impl Default for FailureSettings {
             flag_fraction: 0.1,
             abort_error_m: None,
         }
+    }
+}
+
+impl FailureSettings {
+    /// The circle's centre (m), typed.
+    ///
+    /// # Example
+    /// ```
+    /// let s = softrod::control::FailureSettings::default();
+    /// assert_eq!(s.center(), nalgebra::Vector2::new(0.1911, 0.1203));
+    /// ```
+    pub fn center(&self) -> nalgebra::Vector2<f64> {
+        self.center_m.into()
     }
 }
 

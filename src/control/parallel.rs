@@ -45,6 +45,7 @@
 //! under `F̄` (estimator), so the measured platform is at `x_d`: the
 //! updater acts as an integral action on the position through the model.
 
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use super::{ControllerKind, ParameterUpdater, Trajectory, UpdaterGains};
@@ -209,7 +210,23 @@ pub struct ParallelController<E: Element> {
     u_est: Vec<f64>,
 }
 
-/// What a controller step did.
+/// What a controller step did (written to JSON; the forces typed by
+/// [`ControlStep::f_bar`] and [`ControlStep::f_hat`]).
+///
+/// # Example
+/// ```
+/// use nalgebra::Vector3;
+/// use softrod::control::parallel::ControlStep;
+/// let s = ControlStep {
+///     f_bar_n: [0.0, 0.0, -0.5],
+///     f_hat_n: [0.0, 0.0, -0.4],
+///     pressures_pa: vec![1e4; 9],
+///     ik_error_m: 1e-7,
+///     ik_iterations: 2,
+/// };
+/// assert_eq!(s.f_bar(), Vector3::new(0.0, 0.0, -0.5));
+/// assert_eq!(s.f_hat(), Vector3::new(0.0, 0.0, -0.4));
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ControlStep {
     /// The estimator's force `F̄` (N; zeros for feedforward only).
@@ -222,6 +239,32 @@ pub struct ControlStep {
     pub ik_error_m: f64,
     /// Inverse-kinematics iterations.
     pub ik_iterations: usize,
+}
+
+impl ControlStep {
+    /// The estimator's force `F̄` (N), typed.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::control::parallel::ControlStep;
+    /// let s = ControlStep { f_bar_n: [0.1, 0.0, -0.5], f_hat_n: [0.0; 3], pressures_pa: vec![], ik_error_m: 0.0, ik_iterations: 0 };
+    /// assert_eq!(s.f_bar().z, -0.5);
+    /// ```
+    pub fn f_bar(&self) -> Vector3<f64> {
+        self.f_bar_n.into()
+    }
+
+    /// The updater's force `F̂` (N), typed.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::control::parallel::ControlStep;
+    /// let s = ControlStep { f_bar_n: [0.0; 3], f_hat_n: [0.1, 0.0, -0.4], pressures_pa: vec![], ik_error_m: 0.0, ik_iterations: 0 };
+    /// assert_eq!(s.f_hat().x, 0.1);
+    /// ```
+    pub fn f_hat(&self) -> Vector3<f64> {
+        self.f_hat_n.into()
+    }
 }
 
 impl<E: Element> ParallelController<E> {
@@ -394,12 +437,18 @@ impl<E: Element> ParallelController<E> {
 
     /// One control instant: the measured platform (m) in, the command for
     /// the next interval (towards `x_next`, the target at the next instant)
-    /// out.
+    /// out. The points are [`Vector3`]s (arrays convert).
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] for non-finite input; the errors of the
     /// static solves.
-    pub fn step(&mut self, measured_m: [f64; 3], x_next_m: [f64; 3]) -> Result<ControlStep> {
+    pub fn step(
+        &mut self,
+        measured_m: impl Into<Vector3<f64>>,
+        x_next_m: impl Into<Vector3<f64>>,
+    ) -> Result<ControlStep> {
+        let measured_m: [f64; 3] = measured_m.into().into();
+        let x_next_m: [f64; 3] = x_next_m.into().into();
         check_all_finite("measured_m", &measured_m)?;
         check_all_finite("x_d", &x_next_m)?;
         let (f_bar, f_hat) = match self.kind {
@@ -421,7 +470,9 @@ impl<E: Element> ParallelController<E> {
     }
 }
 
-/// One instant of a tracking run.
+/// One instant of a tracking run (written to JSON; the points typed by
+/// [`TrackSample::desired`], [`TrackSample::actual`] and
+/// [`TrackSample::measured`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TrackSample {
     /// Time (s).
@@ -438,6 +489,74 @@ pub struct TrackSample {
     pub control: ControlStep,
     /// Wall time of the controller's step (s).
     pub step_time_s: f64,
+}
+
+impl TrackSample {
+    /// The desired platform position (m), typed.
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector3;
+    /// use softrod::control::parallel::{ControlStep, TrackSample};
+    /// let control = ControlStep { f_bar_n: [0.0; 3], f_hat_n: [0.0; 3], pressures_pa: vec![], ik_error_m: 0.0, ik_iterations: 0 };
+    /// let s = TrackSample {
+    ///     time_s: 0.1,
+    ///     desired_m: [0.0, 0.01, 0.3],
+    ///     actual_m: [0.0, 0.0, 0.3],
+    ///     measured_m: [1e-5, 0.0, 0.3],
+    ///     error_m: 0.01,
+    ///     control,
+    ///     step_time_s: 1e-3,
+    /// };
+    /// assert_eq!(s.desired(), Vector3::new(0.0, 0.01, 0.3));
+    /// ```
+    pub fn desired(&self) -> Vector3<f64> {
+        self.desired_m.into()
+    }
+
+    /// The plant's platform position (m), typed.
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector3;
+    /// use softrod::control::parallel::{ControlStep, TrackSample};
+    /// let control = ControlStep { f_bar_n: [0.0; 3], f_hat_n: [0.0; 3], pressures_pa: vec![], ik_error_m: 0.0, ik_iterations: 0 };
+    /// let s = TrackSample {
+    ///     time_s: 0.1,
+    ///     desired_m: [0.0, 0.01, 0.3],
+    ///     actual_m: [0.0, 0.0, 0.3],
+    ///     measured_m: [1e-5, 0.0, 0.3],
+    ///     error_m: 0.01,
+    ///     control,
+    ///     step_time_s: 1e-3,
+    /// };
+    /// assert_eq!(s.actual(), Vector3::new(0.0, 0.0, 0.3));
+    /// ```
+    pub fn actual(&self) -> Vector3<f64> {
+        self.actual_m.into()
+    }
+
+    /// The measured platform marker (m), typed.
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector3;
+    /// use softrod::control::parallel::{ControlStep, TrackSample};
+    /// let control = ControlStep { f_bar_n: [0.0; 3], f_hat_n: [0.0; 3], pressures_pa: vec![], ik_error_m: 0.0, ik_iterations: 0 };
+    /// let s = TrackSample {
+    ///     time_s: 0.1,
+    ///     desired_m: [0.0, 0.01, 0.3],
+    ///     actual_m: [0.0, 0.0, 0.3],
+    ///     measured_m: [1e-5, 0.0, 0.3],
+    ///     error_m: 0.01,
+    ///     control,
+    ///     step_time_s: 1e-3,
+    /// };
+    /// assert_eq!(s.measured(), Vector3::new(1e-5, 0.0, 0.3));
+    /// ```
+    pub fn measured(&self) -> Vector3<f64> {
+        self.measured_m.into()
+    }
 }
 
 /// The summary of a run.
@@ -484,7 +603,7 @@ pub struct TrackRun {
 /// As [`Trajectory::new`].
 fn circle(centre: [f64; 3], s: &TrackSettings) -> Result<Trajectory> {
     let planar = Trajectory::circle(
-        [centre[0], centre[1]],
+        nalgebra::Vector2::new(centre[0], centre[1]),
         s.radius_m,
         s.period_s,
         s.duration_s,
@@ -495,7 +614,7 @@ fn circle(centre: [f64; 3], s: &TrackSettings) -> Result<Trajectory> {
         .iter()
         .map(|p| vec![p[0], p[1], centre[2]])
         .collect();
-    Trajectory::new(planar.times_s.clone(), points)
+    Trajectory::from_rows(planar.times_s.clone(), points)
 }
 
 /// The centre pressures of a run: chamber 0 of every leg's first section

@@ -471,7 +471,7 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
             None => Ok(ik.forward(&loads.pressures_pa, &zeros, None)?.1.data.into()),
         }
     };
-    let arr = |v: &[f64]| [v[0], v.get(1).copied().unwrap_or(0.0)];
+    let arr = |v: &[f64]| nalgebra::Vector2::new(v[0], v.get(1).copied().unwrap_or(0.0));
     // (the trajectory, the field a point out of reach is blamed on)
     let (traj, blame) = match spec {
         TrajectorySpec::Circle(CircleSpec {
@@ -517,7 +517,7 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
             )
         }
         TrajectorySpec::Samples(SamplesSpec { times_s, points_m }) => {
-            let t = Trajectory::new(times_s.clone(), points_m.clone())?;
+            let t = Trajectory::from_rows(times_s.clone(), points_m.clone())?;
             for (i, p) in points_m.iter().enumerate() {
                 check_point(
                     &format!("trajectory.points_m[{i}]"),
@@ -559,7 +559,7 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
                 points.push(ik.forward(p, &zeros, None)?.1.data.into());
             }
             (
-                Trajectory::new(times_s.clone(), points)?,
+                Trajectory::from_rows(times_s.clone(), points)?,
                 "trajectory.pressures_pa".to_string(),
             )
         }

@@ -1,6 +1,6 @@
 //! Desired end-effector trajectories: samples in time, linear between them.
 
-use nalgebra::DVector;
+use nalgebra::{DVector, SVector, Vector2};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -13,10 +13,11 @@ const SAMPLE_S: f64 = 0.01;
 ///
 /// # Example
 /// ```
+/// use nalgebra::Vector2;
 /// use softrod::control::Trajectory;
-/// let t = Trajectory::new(vec![0.0, 1.0], vec![vec![0.2, 0.0], vec![0.2, 0.01]])?;
+/// let t = Trajectory::new(&[0.0, 1.0], &[Vector2::new(0.2, 0.0), Vector2::new(0.2, 0.01)])?;
 /// assert!((t.at(0.5)[1] - 0.005).abs() < 1e-15);
-/// assert!(Trajectory::new(vec![], vec![]).is_err());
+/// assert!(Trajectory::new::<2>(&[], &[]).is_err());
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -24,12 +25,25 @@ const SAMPLE_S: f64 = 0.01;
 pub struct Trajectory {
     /// Times (s), strictly increasing.
     pub times_s: Vec<f64>,
-    /// Positions (m), one per time, all of one dimension.
+    /// Positions (m), one per time, all of one dimension (typed:
+    /// [`Trajectory::point`]).
     pub points_m: Vec<Vec<f64>>,
 }
 
 impl Trajectory {
-    /// A checked trajectory.
+    /// A checked trajectory through the points `points_m` (m, `D`
+    /// components each: 2 for a planar robot's tip, 3 for a platform) at
+    /// the times `times_s` (s).
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector3;
+    /// use softrod::control::Trajectory;
+    /// let t = Trajectory::new(&[0.0, 2.0], &[Vector3::new(0.0, 0.0, 0.3), Vector3::new(0.01, 0.0, 0.3)])?;
+    /// assert_eq!(t.dim(), 3);
+    /// assert!((t.at(1.0)[0] - 0.005).abs() < 1e-15);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] naming the field: `trajectory.times_s`
@@ -37,10 +51,34 @@ impl Trajectory {
     /// from the times', `trajectory.points_m[i]` for a non-finite point or
     /// one of another dimension, `trajectory.times_s[i]` for a non-finite
     /// time or one not after the previous (time going backwards).
-    pub fn new(times_s: Vec<f64>, points_m: Vec<Vec<f64>>) -> Result<Self> {
+    pub fn new<const D: usize>(times_s: &[f64], points_m: &[SVector<f64, D>]) -> Result<Self> {
+        Trajectory::from_rows(
+            times_s.to_vec(),
+            points_m.iter().map(|p| p.as_slice().to_vec()).collect(),
+        )
+    }
+
+    /// A checked trajectory from rows as a scene holds them.
+    pub(crate) fn from_rows(times_s: Vec<f64>, points_m: Vec<Vec<f64>>) -> Result<Self> {
         let t = Trajectory { times_s, points_m };
         t.validate()?;
         Ok(t)
+    }
+
+    /// The `i`-th sample point (m, [`Trajectory::dim`] components), or
+    /// `None` past the end.
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::{dvector, Vector2};
+    /// use softrod::control::Trajectory;
+    /// let t = Trajectory::new(&[0.0, 1.0], &[Vector2::new(0.2, 0.0), Vector2::new(0.2, 0.01)])?;
+    /// assert_eq!(t.point(1), Some(dvector![0.2, 0.01]));
+    /// assert_eq!(t.point(2), None);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn point(&self, i: usize) -> Option<DVector<f64>> {
+        self.points_m.get(i).map(|p| DVector::from_column_slice(p))
     }
 
     /// Checks the fields (see [`Trajectory::new`]).
@@ -108,8 +146,9 @@ impl Trajectory {
     ///
     /// # Example
     /// ```
+    /// use nalgebra::Vector2;
     /// use softrod::control::Trajectory;
-    /// let t = Trajectory::new(vec![0.0, 1.0], vec![vec![0.2, 0.0], vec![0.2, 0.01]])?;
+    /// let t = Trajectory::new(&[0.0, 1.0], &[Vector2::new(0.2, 0.0), Vector2::new(0.2, 0.01)])?;
     /// assert!((t.at(0.5) - nalgebra::dvector![0.2, 0.005]).norm() < 1e-15);
     /// assert_eq!(t.at(-1.0), nalgebra::dvector![0.2, 0.0]); // held before the start
     /// # Ok::<(), softrod::Error>(())
@@ -160,7 +199,7 @@ impl Trajectory {
             times.insert(1, hold_s);
             points.insert(1, f(0.0));
         }
-        Trajectory::new(times, points)
+        Trajectory::from_rows(times, points)
     }
 
     /// A circle of radius `radius_m` about `center_m` (2-D), counter-clockwise
@@ -171,8 +210,19 @@ impl Trajectory {
     ///
     /// # Errors
     /// As [`Trajectory::new`]; [`Error::InvalidParameter`] for a period ≤ 0.
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use softrod::control::Trajectory;
+    /// let t = Trajectory::circle(Vector2::new(0.2, 0.0), 0.01, 4.0, 4.0, 1.0)?;
+    /// // held at the point at angle 0 for the first second
+    /// assert!((t.at(0.5) - nalgebra::dvector![0.21, 0.0]).norm() < 1e-15);
+    /// assert!(Trajectory::circle(Vector2::new(0.2, 0.0), 0.01, 0.0, 4.0, 1.0).is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn circle(
-        center_m: [f64; 2],
+        center_m: Vector2<f64>,
         radius_m: f64,
         period_s: f64,
         duration_s: f64,
@@ -194,8 +244,17 @@ impl Trajectory {
     ///
     /// # Errors
     /// As [`Trajectory::circle`].
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use softrod::control::Trajectory;
+    /// let t = Trajectory::figure_eight(Vector2::new(0.2, 0.0), 0.01, 4.0, 4.0, 0.0)?;
+    /// assert!((t.at(0.0) - nalgebra::dvector![0.2, 0.0]).norm() < 1e-15);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn figure_eight(
-        center_m: [f64; 2],
+        center_m: Vector2<f64>,
         size_m: f64,
         period_s: f64,
         duration_s: f64,
@@ -216,9 +275,19 @@ impl Trajectory {
     ///
     /// # Errors
     /// As [`Trajectory::circle`].
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use softrod::control::Trajectory;
+    /// let t = Trajectory::line(Vector2::new(0.2, 0.0), Vector2::new(0.2, 0.02), 2.0, 2.0, 0.0)?;
+    /// // half a period: at the far end
+    /// assert!((t.at(1.0) - nalgebra::dvector![0.2, 0.02]).norm() < 1e-12);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn line(
-        from_m: [f64; 2],
-        to_m: [f64; 2],
+        from_m: Vector2<f64>,
+        to_m: Vector2<f64>,
         period_s: f64,
         duration_s: f64,
         hold_s: f64,

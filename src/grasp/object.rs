@@ -235,7 +235,7 @@ impl GraspObject {
     /// use softrod::grasp::object::{GraspObject, Pose, Shape};
     /// let o = GraspObject { name: "box".into(), shape: Shape::Rectangle { size_m: [0.04, 0.02] }, mass_kg: 0.1, mu: 0.5 };
     /// let obs = o.obstacle(&Pose { position_m: [0.0, -0.1], angle_rad: 0.0 });
-    /// let d = obs.signed_distance(&[0.03, -0.1]);
+    /// let d = obs.signed_distance([0.03, -0.1].into());
     /// assert!((d.distance_m - 0.01).abs() < 1e-12);
     /// ```
     pub fn obstacle(&self, pose: &Pose) -> Obstacle {
@@ -284,7 +284,7 @@ impl GraspObject {
     /// let o = GraspObject { name: "box".into(), shape: Shape::Rectangle { size_m: [0.04, 0.02] }, mass_kg: 0.1, mu: 0.5 };
     /// let cover = o.contact_cover(&Pose { position_m: [0.0, 0.0], angle_rad: 0.0 })?;
     /// // the stadium reaches the rectangle's ends and sides
-    /// let d = |p: [f64; 2]| cover.iter().map(|c| c.signed_distance(&p).distance_m).fold(f64::INFINITY, f64::min);
+    /// let d = |p: [f64; 2]| cover.iter().map(|c| c.signed_distance(p.into()).distance_m).fold(f64::INFINITY, f64::min);
     /// assert!((d([0.03, 0.0]) - 0.01).abs() < 1e-12 && (d([0.0, 0.02]) - 0.01).abs() < 1e-12);
     /// # Ok::<(), softrod::Error>(())
     /// ```
@@ -563,8 +563,8 @@ mod tests {
             let obs = o.obstacle(&pose);
             obs.validate("o").unwrap();
             // the centre is inside, a point far away outside
-            assert!(obs.signed_distance(&pose.position_m).distance_m < 0.0);
-            assert!(obs.signed_distance(&[1.0, 1.0]).distance_m > 0.9);
+            assert!(obs.signed_distance(pose.position_m.into()).distance_m < 0.0);
+            assert!(obs.signed_distance([1.0, 1.0].into()).distance_m > 0.9);
         }
         // a rounded square: the distance from its centre along an axis is half-side + r
         let sq = GraspObject {
@@ -580,7 +580,7 @@ mod tests {
             position_m: [0.0, 0.0],
             angle_rad: 0.0,
         });
-        assert!((obs.signed_distance(&[0.05, 0.0]).distance_m - 0.036).abs() < 1e-12);
+        assert!((obs.signed_distance([0.05, 0.0].into()).distance_m - 0.036).abs() < 1e-12);
         let b = sq.bounds(&Pose {
             position_m: [0.0, 0.0],
             angle_rad: 0.0,

@@ -410,7 +410,7 @@ mod tests {
             let mut contacts = Vec::new();
             let mut touches = [None, None];
             for (i, c) in centres.into_iter().enumerate() {
-                let d = outline.signed_distance(&c);
+                let d = outline.signed_distance(c.into());
                 let overlap = radius - d.distance_m;
                 if overlap > 0.0 {
                     // the outline's nearest point and the normal into the object
