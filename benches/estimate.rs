@@ -120,8 +120,8 @@ fn warm(c: &Case, backend: Backend, settings: EstimatorSettings) -> Warm {
                     .iter()
                     .zip(&mk.position_m)
                     .map(|(a, b)| a + t * (b - a))
-                    .collect();
-                MarkerObservation::at_arc(s, p)
+                    .collect::<Vec<f64>>();
+                MarkerObservation::at_arc(s, nalgebra::DVector::from_vec(p))
             })
             .collect();
         if let Err(e) = est
@@ -453,7 +453,7 @@ fn first_estimate(c: &mut Criterion) {
                             let s = robot.length() * f64::from(k) / 5.0;
                             MarkerObservation::at_arc(
                                 s,
-                                robot.position_at(q.as_slice(), s).unwrap().data.into(),
+                                robot.position_at(q.as_slice(), s).unwrap(),
                             )
                         })
                         .collect();

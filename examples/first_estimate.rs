@@ -78,9 +78,7 @@ fn scene_case(name: &str, lines: Vec<LineLoad>, points: Vec<PointForce>) -> Case
     }
     let markers = sweep::marker_arcs(robot.length(), 5)
         .iter()
-        .map(|&s| {
-            MarkerObservation::at_arc(s, fine.position_at(q.as_slice(), s).unwrap().data.into())
-        })
+        .map(|&s| MarkerObservation::at_arc(s, fine.position_at(q.as_slice(), s).unwrap()))
         .collect();
     Case {
         name: name.into(),

@@ -14,7 +14,7 @@
 //! slope), so the same code serves the planar cable (4 per node) and the
 //! spatial one (6 per node).
 
-use nalgebra::SVector;
+use nalgebra::{Dim, RawStorage, SVector, Vector};
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
@@ -31,8 +31,9 @@ pub const MAX_MARKER_SCALE: f64 = 1e12;
 ///
 /// # Example
 /// ```
-/// let m = softrod::observe::MarkerObservation::at_node(20, vec![0.2, 0.05]);
+/// let m = softrod::observe::MarkerObservation::at_node(20, nalgebra::Vector2::new(0.2, 0.05));
 /// assert_eq!(m.node, Some(20));
+/// assert_eq!(m.position_m, vec![0.2, 0.05]); // as a scene's JSON holds it
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -57,29 +58,46 @@ pub struct MarkerObservation {
 }
 
 impl MarkerObservation {
-    /// A position-only marker at a node with default weights.
+    /// A position-only marker at a node with default weights; `position_m`
+    /// (m) is a vector of the robot's dimension (2 planar, 3 spatial): a
+    /// `Vector2`/`Vector3`, or the `DVector` a robot's
+    /// [`position_at`](crate::assembly::Robot::position_at) returns.
     ///
     /// # Example
-    /// See [`MarkerObservation`].
-    pub fn at_node(node: usize, position_m: Vec<f64>) -> Self {
+    /// ```
+    /// use nalgebra::Vector3;
+    /// let m = softrod::observe::MarkerObservation::at_node(4, Vector3::new(0.1, 0.0, 0.02));
+    /// assert_eq!(m.position::<3>()?, Vector3::new(0.1, 0.0, 0.02));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn at_node<D: Dim, S: RawStorage<f64, D>>(
+        node: usize,
+        position_m: Vector<f64, D, S>,
+    ) -> Self {
         MarkerObservation {
             node: Some(node),
             s_m: None,
-            position_m,
+            position_m: position_m.iter().copied().collect(),
             tangent: None,
             position_weight: None,
             tangent_weight: None,
         }
     }
 
-    /// A position-only marker at arc coordinate `s_m` with default weights.
+    /// A position-only marker at arc coordinate `s_m` with default weights;
+    /// `position_m` (m) as in [`MarkerObservation::at_node`].
     ///
     /// # Example
     /// ```
-    /// let m = softrod::observe::MarkerObservation::at_arc(0.12, vec![0.12, 0.0]);
+    /// let m = softrod::observe::MarkerObservation::at_arc(0.12, nalgebra::Vector2::new(0.12, 0.0));
     /// assert_eq!(m.s_m, Some(0.12));
     /// ```
-    pub fn at_arc(s_m: f64, position_m: Vec<f64>) -> Self {
+    pub fn at_arc<D: Dim, S: RawStorage<f64, D>>(s_m: f64, position_m: Vector<f64, D, S>) -> Self {
+        MarkerObservation::at_arc_slice(s_m, position_m.iter().copied().collect())
+    }
+
+    /// [`MarkerObservation::at_arc`] from a position as a frame holds it.
+    pub(crate) fn at_arc_slice(s_m: f64, position_m: Vec<f64>) -> Self {
         MarkerObservation {
             node: None,
             s_m: Some(s_m),
@@ -99,7 +117,7 @@ impl MarkerObservation {
     /// # Example
     /// ```
     /// use softrod::observe::MarkerObservation;
-    /// let mut m = MarkerObservation::at_node(20, vec![0.2, 0.05]);
+    /// let mut m = MarkerObservation::at_node(20, nalgebra::Vector2::new(0.2, 0.05));
     /// assert_eq!(m.position::<2>()?, nalgebra::Vector2::new(0.2, 0.05));
     /// assert!(m.position::<3>().is_err());
     /// assert_eq!(m.tangent_vector::<2>()?, None);
@@ -178,7 +196,12 @@ impl Observation {
         Ok(Observation {
             markers: nodes
                 .iter()
-                .map(|&n| MarkerObservation::at_node(n, q[n * nd..n * nd + d].to_vec()))
+                .map(|&n| {
+                    MarkerObservation::at_node(
+                        n,
+                        nalgebra::DVectorView::from(&q[n * nd..n * nd + d]),
+                    )
+                })
                 .collect(),
         })
     }
@@ -201,7 +224,7 @@ impl Observation {
     /// # Example
     /// ```
     /// use softrod::observe::{MarkerObservation, Observation};
-    /// let o = Observation { markers: vec![MarkerObservation::at_node(1, vec![0.0, 0.0])] };
+    /// let o = Observation { markers: vec![MarkerObservation::at_node(1, nalgebra::Vector2::zeros())] };
     /// let (a, b) = (o.clone().with_noise(1e-3, 7), o.with_noise(1e-3, 7));
     /// assert_eq!(a, b);
     /// assert!(a.markers[0].position_m.iter().all(|v| *v != 0.0 && v.abs() < 1e-2));

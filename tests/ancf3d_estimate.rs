@@ -78,7 +78,10 @@ fn a_tip_force_in_both_bending_planes_from_beam_theory_markers() {
         .iter()
         .map(|&i| {
             let s = L * i as f64 / N as f64;
-            let mut m = MarkerObservation::at_node(i, vec![s, v(s, p[1], EI_Z), v(s, p[2], EI_Y)]);
+            let mut m = MarkerObservation::at_node(
+                i,
+                nalgebra::Vector3::new(s, v(s, p[1], EI_Z), v(s, p[2], EI_Y)),
+            );
             if i == N {
                 m.tangent = Some(vec![1.0, dv(s, p[1], EI_Z), dv(s, p[2], EI_Y)]);
             }
@@ -122,7 +125,10 @@ fn a_uniform_line_load_from_beam_theory_markers() {
     let markers = (1..=N)
         .map(|i| {
             let s = L * i as f64 / N as f64;
-            MarkerObservation::at_node(i, vec![s, v(s, w[1], EI_Z), v(s, w[2], EI_Y)])
+            MarkerObservation::at_node(
+                i,
+                nalgebra::Vector3::new(s, v(s, w[1], EI_Z), v(s, w[2], EI_Y)),
+            )
         })
         .collect();
     let obs = Observation { markers };

@@ -217,7 +217,7 @@ fn tip_force_estimation(tol: f64) -> (Scene, Observation) {
     let obs = Observation {
         markers: [12usize, 24, 36, 48]
             .iter()
-            .map(|&i| MarkerObservation::at_arc(s[i], vec![x[i], y[i]]))
+            .map(|&i| MarkerObservation::at_arc(s[i], nalgebra::Vector2::new(x[i], y[i])))
             .collect(),
     };
     let section = json!({"length_m": 0.12, "ea_n": 300.0, "ei_nm2": EI, "elements": "auto"});
@@ -411,7 +411,10 @@ fn refinement_inputs_are_checked() {
         Some("observation")
     );
     let by_node = Observation {
-        markers: vec![MarkerObservation::at_node(4, vec![0.1, 0.0])],
+        markers: vec![MarkerObservation::at_node(
+            4,
+            nalgebra::Vector2::new(0.1, 0.0),
+        )],
     };
     assert_eq!(
         field(auto_elements(&scene, Some(&by_node)).unwrap_err()).as_deref(),

@@ -73,7 +73,12 @@ fn estimate(
     let mut obs = Observation {
         markers: [4usize, 8, 12, 16, 20]
             .iter()
-            .map(|&n| MarkerObservation::at_node(n, q.as_slice()[4 * n..4 * n + 2].to_vec()))
+            .map(|&n| {
+                MarkerObservation::at_node(
+                    n,
+                    nalgebra::Vector2::from_column_slice(&q.as_slice()[4 * n..4 * n + 2]),
+                )
+            })
             .collect(),
     };
     fo(&mut obs);
@@ -141,7 +146,12 @@ fn estimate_spatial(
     let mut obs = Observation {
         markers: [4usize, 8, 12, 16]
             .iter()
-            .map(|&n| MarkerObservation::at_node(n, q.as_slice()[6 * n..6 * n + 3].to_vec()))
+            .map(|&n| {
+                MarkerObservation::at_node(
+                    n,
+                    nalgebra::Vector3::from_column_slice(&q.as_slice()[6 * n..6 * n + 3]),
+                )
+            })
             .collect(),
     };
     fo(&mut obs);
@@ -1566,7 +1576,7 @@ fn cases() -> Vec<Case> {
                 estimate(
                     Backend::Sqp,
                     |_| {},
-                    |o| o.markers[4] = MarkerObservation::at_arc(0.3, vec![0.3, 0.0]),
+                    |o| o.markers[4] = MarkerObservation::at_arc(0.3, nalgebra::Vector2::new(0.3, 0.0)),
                 )
             },
             Invalid,

@@ -110,7 +110,7 @@ fn a_marker_at_the_clamped_base_is_no_information() {
     let scene = Scene::two_section();
     let (robot, loads) = (scene.robot().unwrap(), scene.loads().unwrap());
     let obs = Observation {
-        markers: vec![MarkerObservation::at_arc(0.0, vec![0.0, 0.0])],
+        markers: vec![MarkerObservation::at_arc(0.0, nalgebra::Vector2::zeros())],
     };
     for backend in [Backend::Newton, Backend::Sqp] {
         for rule in [AlphaRule::Evidence, AlphaRule::Discrepancy] {

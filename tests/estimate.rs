@@ -61,8 +61,8 @@ fn marker_jacobian_matches_finite_differences() {
         let f: Vec<f64> = lcg(3, n_f).iter().map(|v| 0.3 * v).collect();
         let mut obs = Observation {
             markers: vec![
-                MarkerObservation::at_node(7, vec![0.0, 0.0]),
-                MarkerObservation::at_arc(0.173, vec![0.0, 0.0]),
+                MarkerObservation::at_node(7, nalgebra::Vector2::zeros()),
+                MarkerObservation::at_arc(0.173, nalgebra::Vector2::zeros()),
             ],
         };
         obs.markers[1].tangent = Some(vec![1.0, 0.0]);
@@ -228,10 +228,7 @@ fn estimate_truth(
             .iter()
             .map(|&n| {
                 let s = coarse.node_arc()[n];
-                MarkerObservation::at_node(
-                    n,
-                    fine.position_at(eq.q.as_slice(), s).unwrap().data.into(),
-                )
+                MarkerObservation::at_node(n, fine.position_at(eq.q.as_slice(), s).unwrap())
             })
             .collect(),
     }

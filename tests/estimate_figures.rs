@@ -68,8 +68,10 @@ fn fig3_direct_solution_amplifies_a_marker_error() {
     let obs = Observation {
         markers: (1..n)
             .map(|i| {
-                let mut m =
-                    MarkerObservation::at_node(i, q_obs.as_slice()[4 * i..4 * i + 2].to_vec());
+                let mut m = MarkerObservation::at_node(
+                    i,
+                    nalgebra::Vector2::from_column_slice(&q_obs.as_slice()[4 * i..4 * i + 2]),
+                );
                 m.tangent = Some(q_obs.as_slice()[4 * i + 2..4 * i + 4].to_vec());
                 m
             })
@@ -129,13 +131,7 @@ fn observe(
         markers: nodes
             .iter()
             .map(|&n| {
-                MarkerObservation::at_node(
-                    n,
-                    fine.position_at(q, coarse.node_arc()[n])
-                        .unwrap()
-                        .data
-                        .into(),
-                )
+                MarkerObservation::at_node(n, fine.position_at(q, coarse.node_arc()[n]).unwrap())
             })
             .collect(),
     }

@@ -123,7 +123,7 @@ fn run(name: &str, markers: usize, backend: Backend, seed: u64, sigma_model_m: f
         markers: (1..=markers)
             .map(|j| {
                 let s = L * j as f64 / markers as f64;
-                MarkerObservation::at_arc(s, shape.at(s).to_vec())
+                MarkerObservation::at_arc(s, nalgebra::Vector2::from(shape.at(s)))
             })
             .collect(),
     }

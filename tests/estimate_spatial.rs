@@ -57,7 +57,10 @@ fn markers(shape: &[Vec<f64>], nodes: &[usize]) -> Observation {
         markers: nodes
             .iter()
             .map(|&i| {
-                let mut m = MarkerObservation::at_node(i, shape[i][..3].to_vec());
+                let mut m = MarkerObservation::at_node(
+                    i,
+                    nalgebra::Vector3::from_column_slice(&shape[i][..3]),
+                );
                 if i == tip {
                     m.tangent = Some(shape[i][3..].to_vec());
                 }

@@ -146,7 +146,7 @@ fn first_estimate_of_a_large_deflection_costs_both_backends_alike() {
     let markers = (1..=5)
         .map(|k| {
             let s = 0.24 * f64::from(k) / 5.0;
-            MarkerObservation::at_arc(s, fine.position_at(q.as_slice(), s).unwrap().data.into())
+            MarkerObservation::at_arc(s, fine.position_at(q.as_slice(), s).unwrap())
         })
         .collect();
     let obs = Observation { markers }.with_noise(1e-5, 7);

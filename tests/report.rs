@@ -281,7 +281,10 @@ fn constructed_failures_are_classified() {
     .build_for(&robot, &Loads::default())
     .unwrap();
     let bad = Observation {
-        markers: vec![MarkerObservation::at_arc(0.24, vec![f64::NAN, 0.0])],
+        markers: vec![MarkerObservation::at_arc(
+            0.24,
+            nalgebra::Vector2::new(f64::NAN, 0.0),
+        )],
     };
     assert_eq!(
         FailureCause::classify(&est.step(&bad).unwrap_err()),
@@ -318,7 +321,7 @@ fn constructed_failures_are_classified() {
         markers: (1..=5)
             .map(|j| {
                 let s = 0.048 * j as f64;
-                MarkerObservation::at_arc(s, r.position_at(s).to_vec())
+                MarkerObservation::at_arc(s, nalgebra::Vector2::from(r.position_at(s)))
             })
             .collect(),
     };

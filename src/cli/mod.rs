@@ -494,7 +494,7 @@ fn observe<E: Element>(scene: &Scene, robot: &Robot<E>, q: &[f64]) -> Result<Obs
             _ => anyhow::bail!("a marker needs `node` or `s_m`"),
         };
         let point = robot.arc_point("marker", s)?;
-        let p: Vec<f64> = robot.position_at(q, s)?.data.into();
+        let p = robot.position_at(q, s)?;
         let mut mo = match m.node {
             Some(n) => MarkerObservation::at_node(n, p),
             None => MarkerObservation::at_arc(s, p),

@@ -591,7 +591,7 @@ mod tests {
             .map(|k| {
                 let s = 0.24 * f64::from(k) / 5.0;
                 let p = robot.position_at(q.as_slice(), s).unwrap();
-                MarkerObservation::at_arc(s, p.data.into())
+                MarkerObservation::at_arc(s, p)
             })
             .collect();
         (robot, Observation { markers }.with_noise(1e-5, 3))

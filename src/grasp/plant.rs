@@ -292,7 +292,7 @@ impl GripperPlant {
             for &s in &self.markers_s_m {
                 markers.push(MarkerObservation::at_arc(
                     s,
-                    robot.position_at(sol.q.as_slice(), s)?.data.into(),
+                    robot.position_at(sol.q.as_slice(), s)?,
                 ));
             }
             let seed = self

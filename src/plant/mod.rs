@@ -83,7 +83,7 @@ impl MarkerFrame {
                 .positions_m
                 .iter()
                 .zip(s_m)
-                .map(|(p, &s)| MarkerObservation::at_arc(s, p.clone()))
+                .map(|(p, &s)| MarkerObservation::at_arc_slice(s, p.clone()))
                 .collect(),
         })
     }
@@ -410,7 +410,7 @@ impl Plant for SimulatedPlant {
         let obs = Observation {
             markers: truth
                 .into_iter()
-                .map(|p| MarkerObservation::at_arc(0.0, p.as_slice().to_vec()))
+                .map(|p| MarkerObservation::at_arc(0.0, p))
                 .collect(),
         };
         // a fresh seed per frame: the seed and the frame count

@@ -282,7 +282,7 @@ pub fn measure(fine: &Robot<PlanarCable>, known: &Loads, spec: &TrialSpec) -> Re
         .map(|&s| {
             Ok(MarkerObservation::at_arc(
                 s,
-                fine.position_at(eq.q.as_slice(), s)?.data.into(),
+                fine.position_at(eq.q.as_slice(), s)?,
             ))
         })
         .collect::<Result<Vec<_>>>()?;

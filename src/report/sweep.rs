@@ -453,7 +453,9 @@ pub fn observe(reference: &Reference, arcs: &[f64], sigma: f64, seed: u64) -> Ob
     let obs = Observation {
         markers: arcs
             .iter()
-            .map(|&s| MarkerObservation::at_arc(s, reference.position_at(s).to_vec()))
+            .map(|&s| {
+                MarkerObservation::at_arc(s, nalgebra::Vector2::from(reference.position_at(s)))
+            })
             .collect(),
     };
     if sigma > 0.0 {
@@ -484,10 +486,10 @@ pub(crate) fn previous_frame(current: &Observation, jump_m: f64) -> Observation 
             .iter()
             .map(|m| {
                 let r = rest(m);
-                let p = vec![
+                let p = nalgebra::Vector2::new(
                     m.position_m[0] + lambda * (r[0] - m.position_m[0]),
                     m.position_m[1] + lambda * (r[1] - m.position_m[1]),
-                ];
+                );
                 MarkerObservation::at_arc(m.s_m.unwrap_or(0.0), p)
             })
             .collect(),

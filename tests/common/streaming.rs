@@ -49,7 +49,7 @@ pub fn streaming_case(
     let markers: Vec<MarkerObservation> = (1..=m)
         .map(|k| {
             let s = robot.length() * k as f64 / m as f64;
-            MarkerObservation::at_arc(s, robot.position_at(q.as_slice(), s).unwrap().data.into())
+            MarkerObservation::at_arc(s, robot.position_at(q.as_slice(), s).unwrap())
         })
         .collect();
     let frames = (0..frames)
