@@ -20,7 +20,7 @@ fn vertical() -> ParallelSpec {
 fn twist<E: softrod::element::Element>(robot: &ParallelRobot<E>, torque_nm: f64) -> [f64; 6] {
     let loads = robot.loads(&[], [0.0; 3], [0.0, 0.0, torque_nm]).unwrap();
     let eq = robot.solve(&loads, None).unwrap();
-    robot.platform_pose(eq.q.as_slice()).unwrap()
+    robot.platform_pose(eq.q.as_slice()).unwrap().into()
 }
 
 /// An axial load W on the platform's centre: each of the three identical

@@ -119,7 +119,7 @@ pub(super) fn estimate(
         &EstimateOut {
             scene: scene.name.clone(),
             observation: source,
-            force_n: e.force_n,
+            force_n: e.force_n.into(),
             mass_kg: e.mass_kg,
             iterations: e.iterations,
             residual_m: e.residual_m,

@@ -275,8 +275,16 @@ impl ParallelSpec {
     ///
     /// # Errors
     /// As [`ParallelSpec::validate`].
-    pub fn platform_reference_m(&self) -> Result<[f64; 3]> {
-        Ok([0.0, 0.0, -self.platform_depth_m()?])
+    ///
+    /// # Example
+    /// ```
+    /// let spec = softrod::parallel::ParallelSpec::default();
+    /// let x0 = spec.platform_reference_m()?;
+    /// assert_eq!(x0, nalgebra::Vector3::new(0.0, 0.0, -spec.platform_depth_m()?));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn platform_reference_m(&self) -> Result<nalgebra::Vector3<f64>> {
+        Ok(nalgebra::Vector3::new(0.0, 0.0, -self.platform_depth_m()?))
     }
 
     /// The leg's unit tangent and the section axes `e₂`, `e₃` of its
@@ -487,14 +495,27 @@ impl<E: Element> ParallelRobot<E> {
     }
 
     /// The platform's pose `(x, ψ)` (m, rad: position of its centre and
-    /// rotation vector) in a configuration `q`.
+    /// rotation vector) in a configuration `q`: `[x, y, z, ψx, ψy, ψz]`
+    /// (`pose.fixed_rows::<3>(0)` is the position, `fixed_rows::<3>(3)`
+    /// the rotation vector).
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] for a `q` of the wrong size.
-    pub fn platform_pose(&self, q: &[f64]) -> Result<[f64; 6]> {
+    ///
+    /// # Example
+    /// ```
+    /// let robot = softrod::parallel::ParallelSpec::default().build_cable()?;
+    /// let eq = robot.solve(&robot.loads(&[], [0.0; 3], [0.0; 3])?, None)?;
+    /// let pose = robot.platform_pose(eq.q.as_slice())?;
+    /// // unloaded and unpressurized: where the reference puts it, not turned
+    /// assert!((pose.fixed_rows::<3>(0) - robot.spec().platform_reference_m()?).norm() < 1e-3);
+    /// assert!(pose.fixed_rows::<3>(3).norm() < 1e-9);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn platform_pose(&self, q: &[f64]) -> Result<nalgebra::Vector6<f64>> {
         check_len("q", self.structure.n_q(), q.len())?;
         let r = self.structure.body_coordinates(0)?;
-        Ok(std::array::from_fn(|k| q[r.start + k]))
+        Ok(nalgebra::Vector6::from_fn(|k, _| q[r.start + k]))
     }
 
     /// The index in the free coordinates `u` of the platform's position

@@ -18,7 +18,7 @@
 //! loaded robot, so an offset between model and robot that does not depend
 //! on the payload cancels.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DVector, Matrix3, Vector3, Vector6};
 
 use super::ParallelRobot;
 use crate::element::Element;
@@ -33,13 +33,14 @@ pub const MAX_ITERATIONS: usize = 30;
 ///
 /// # Example
 /// ```
-/// let e = softrod::parallel::payload::PayloadEstimate { force_n: [0.0, 0.0, -0.981], mass_kg: 0.1, iterations: 3, residual_m: 1e-12 };
+/// use nalgebra::Vector3;
+/// let e = softrod::parallel::payload::PayloadEstimate { force_n: Vector3::new(0.0, 0.0, -0.981), mass_kg: 0.1, iterations: 3, residual_m: 1e-12 };
 /// assert_eq!(e.mass_kg, 0.1);
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct PayloadEstimate {
     /// The force on the platform's centre (N, world axes).
-    pub force_n: [f64; 3],
+    pub force_n: Vector3<f64>,
     /// Its mass, `F·g/|g|²` (kg).
     pub mass_kg: f64,
     /// Newton iterations.
@@ -63,14 +64,14 @@ impl<E: Element> ParallelRobot<E> {
     /// let eq = robot.solve(&loads, None)?;
     /// let c = robot.platform_compliance(&eq, &loads)?;
     /// // the vertical compliance: about L/(3 EA) (the legs lean a little)
-    /// assert!(c[2][2] > 0.12 / 900.0 && c[2][2] < 2.0 * 0.12 / 900.0);
+    /// assert!(c[(2, 2)] > 0.12 / 900.0 && c[(2, 2)] < 2.0 * 0.12 / 900.0);
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn platform_compliance(
         &self,
         eq: &Equilibrium,
         loads: &crate::structure::StructureLoads,
-    ) -> Result<[[f64; 3]; 3]> {
+    ) -> Result<Matrix3<f64>> {
         let s = &self.structure;
         let dead: Vec<f64> = s.dead_force(loads)?.data.into();
         let (_, k) = s.residual_and_tangent(eq.u.as_slice(), &dead, loads)?;
@@ -78,7 +79,7 @@ impl<E: Element> ParallelRobot<E> {
         let n = k.nrows();
         let x0 = self.platform_free_start()?;
         let lu = k.lu();
-        let mut c = [[0.0; 3]; 3];
+        let mut c = Matrix3::zeros();
         for j in 0..3 {
             let mut e = DVector::zeros(n);
             e[x0 + j] = 1.0;
@@ -88,8 +89,8 @@ impl<E: Element> ParallelRobot<E> {
                 pivot: 0.0,
                 scale: 0.0,
             })?;
-            for (i, row) in c.iter_mut().enumerate() {
-                row[j] = col[x0 + i];
+            for i in 0..3 {
+                c[(i, j)] = col[x0 + i];
             }
         }
         Ok(c)
@@ -112,7 +113,7 @@ impl<E: Element> ParallelRobot<E> {
     /// let loaded = robot.solve(&robot.loads(&[], [0.0, 0.0, -0.0981], [0.0; 3])?, None)?;
     /// let x = robot.platform_pose(loaded.q.as_slice())?;
     /// let start = robot.solve(&robot.loads(&[], [0.0; 3], [0.0; 3])?, None)?;
-    /// let e = robot.estimate_payload(&[], [x[0], x[1], x[2]], &start)?;
+    /// let e = robot.estimate_payload(&[], x.fixed_rows::<3>(0).into_owned(), &start)?;
     /// // to the position tolerance (1.2e-10 m) over the compliance (1.4e-4 m/N): 1e-7 kg
     /// assert!((e.mass_kg - 0.01).abs() < 1e-6);
     /// # Ok::<(), softrod::Error>(())
@@ -143,24 +144,20 @@ impl<E: Element> ParallelRobot<E> {
                     0.0
                 };
                 return Ok(PayloadEstimate {
-                    force_n: f,
+                    force_n: Vector3::from(f),
                     mass_kg: mass,
                     iterations: it,
                     residual_m: rn,
                 });
             }
             let c = self.platform_compliance(&eq, &loads)?;
-            let cm = DMatrix::from_fn(3, 3, |i, j| c[i][j]);
-            let df = cm
-                .lu()
-                .solve(&DVector::from_column_slice(&r))
-                .ok_or_else(|| {
-                    Error::invalid(
-                        "target_m",
-                        format!("{target_m:?}"),
-                        "the platform's compliance is singular",
-                    )
-                })?;
+            let df = c.lu().solve(&Vector3::from(r)).ok_or_else(|| {
+                Error::invalid(
+                    "target_m",
+                    format!("{target_m:?}"),
+                    "the platform's compliance is singular",
+                )
+            })?;
             for i in 0..3 {
                 f[i] += df[i];
             }
@@ -255,7 +252,7 @@ pub fn mass_experiment<E: Element, P: Element>(
 ) -> Result<Vec<MassTrial>> {
     let mut noise = Gaussian::new(measurement.seed);
     let frames = measurement.frames.max(1);
-    let mut measure = |x: [f64; 6]| -> [f64; 3] {
+    let mut measure = |x: Vector6<f64>| -> [f64; 3] {
         let mut m = [0.0; 3];
         for _ in 0..frames {
             for (mi, xi) in m.iter_mut().zip(&x) {

@@ -15,6 +15,7 @@
 //! `parallel` key ([`ParallelScene::is_parallel`]); `softrod solve` and
 //! `softrod estimate` then take this path.
 
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use crate::element::Element;
@@ -65,7 +66,9 @@ pub struct ParallelScene {
     pub platform_moment_nm: Vec<f64>,
 }
 
-/// What a solve of a parallel scene gives.
+/// What a solve of a parallel scene gives (written to JSON; typed by
+/// [`ParallelSolution::platform_position`],
+/// [`ParallelSolution::platform_rotation`] and [`ParallelSolution::leg`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ParallelSolution {
     /// The platform's pose: position of its centre (m), rotation vector (rad).
@@ -74,6 +77,47 @@ pub struct ParallelSolution {
     pub legs_m: Vec<Vec<[f64; 3]>>,
     /// Newton iterations.
     pub iterations: usize,
+}
+
+impl ParallelSolution {
+    /// The position of the platform's centre (m).
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector3;
+    /// use softrod::scene::parallel::ParallelSolution;
+    /// let s = ParallelSolution {
+    ///     platform_pose: [0.0, 0.0, -0.11, 0.0, 0.0, 0.01],
+    ///     legs_m: vec![vec![[0.06, 0.0, 0.0], [0.04, 0.0, -0.11]]],
+    ///     iterations: 4,
+    /// };
+    /// assert_eq!(s.platform_position(), Vector3::new(0.0, 0.0, -0.11));
+    /// assert_eq!(s.platform_rotation(), Vector3::new(0.0, 0.0, 0.01));
+    /// assert_eq!(s.leg(0).unwrap()[1], Vector3::new(0.04, 0.0, -0.11));
+    /// assert!(s.leg(1).is_none());
+    /// ```
+    pub fn platform_position(&self) -> Vector3<f64> {
+        Vector3::from_column_slice(&self.platform_pose[..3])
+    }
+
+    /// The platform's rotation vector (rad).
+    ///
+    /// # Example
+    /// See [`ParallelSolution::platform_position`].
+    pub fn platform_rotation(&self) -> Vector3<f64> {
+        Vector3::from_column_slice(&self.platform_pose[3..])
+    }
+
+    /// Leg `i`'s node positions (m), base to platform; `None` past the last
+    /// leg.
+    ///
+    /// # Example
+    /// See [`ParallelSolution::platform_position`].
+    pub fn leg(&self, i: usize) -> Option<Vec<Vector3<f64>>> {
+        self.legs_m
+            .get(i)
+            .map(|nodes| nodes.iter().map(|p| Vector3::from(*p)).collect())
+    }
 }
 
 impl ParallelScene {
@@ -238,7 +282,13 @@ impl ParallelScene {
     /// # Errors
     /// As [`ParallelScene::solve`] and
     /// [`ParallelRobot::estimate_payload`].
-    pub fn estimate(&self, unloaded_m: [f64; 3], loaded_m: [f64; 3]) -> Result<PayloadEstimate> {
+    pub fn estimate(
+        &self,
+        unloaded_m: impl Into<Vector3<f64>>,
+        loaded_m: impl Into<Vector3<f64>>,
+    ) -> Result<PayloadEstimate> {
+        let unloaded_m: [f64; 3] = unloaded_m.into().into();
+        let loaded_m: [f64; 3] = loaded_m.into().into();
         self.validate()?;
         check_all_finite("unloaded_m", &unloaded_m)?;
         check_all_finite("loaded_m", &loaded_m)?;
@@ -284,7 +334,7 @@ fn solution<E: Element>(robot: &ParallelRobot<E>, eq: &Equilibrium) -> Result<Pa
         legs.push(nodes);
     }
     Ok(ParallelSolution {
-        platform_pose: robot.platform_pose(eq.q.as_slice())?,
+        platform_pose: robot.platform_pose(eq.q.as_slice())?.into(),
         legs_m: legs,
         iterations: eq.report.iterations,
     })
