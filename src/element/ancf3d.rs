@@ -89,7 +89,7 @@ mod kinematics;
 
 use jet::{Dual, Jet, Scalar};
 use kinematics::{line_density, node_frame, node_penalty, rotation_vector, strains, LineStiffness};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::{hermite, Element, NodeKinematics, DEFAULT_GAUSS_POINTS};
 use crate::error::{check_positive, Error, Result};
@@ -362,12 +362,12 @@ impl Ancf3d {
     /// let mut qe = Ancf3d::straight_node(&[0.0; 3], &[0.0, 0.0, 1.0]).as_slice().to_vec();
     /// qe.extend(Ancf3d::straight_node(&[0.0, 0.0, 0.1], &[0.0, 0.0, 1.0]).iter());
     /// let p = e.material_point(&qe, 0.5, 0.01, 0.0);
-    /// assert!((p[2] - 0.05).abs() < 1e-15 && (p[1] - 0.01).abs() < 1e-15);
+    /// assert!((p - nalgebra::Vector3::new(0.0, 0.01, 0.05)).norm() < 1e-15);
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    pub fn material_point(&self, qe: &[f64], xi: f64, y_m: f64, z_m: f64) -> [f64; 3] {
+    pub fn material_point(&self, qe: &[f64], xi: f64, y_m: f64, z_m: f64) -> Vector3<f64> {
         let Ok(qe) = <&[f64; ED]>::try_from(qe) else {
-            return [f64::NAN; 3];
+            return Vector3::repeat(f64::NAN);
         };
         let s = Self::shape_functions(xi * self.le, y_m, z_m, self.le);
         let mut r = [0.0; 3];
@@ -376,7 +376,7 @@ impl Ancf3d {
                 *ri += sk * qe[3 * k + i];
             }
         }
-        r
+        Vector3::from(r)
     }
 
     /// Axial strain `ε`, bending curvatures `κ_Y`, `κ_Z` (1/m) and twist

@@ -40,7 +40,7 @@
 use super::DEFAULT_GAUSS_POINTS;
 use super::{check_cable, gauss_points, hermite, Element, GaussPoint, NodeKinematics};
 use crate::error::Result;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Vector3};
 
 /// Spatial ANCF cable element (3-D, 6 coordinates per node,
 /// `q_i = [x, y, z, x', y', z']`).
@@ -144,15 +144,15 @@ impl SpatialCable {
     /// assert!((eps - 1.0).abs() < 1e-14 && kappa.iter().all(|k| k.abs() < 1e-14));
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    pub fn strains(&self, qe: &[f64], xi: f64) -> (f64, [f64; 3]) {
+    pub fn strains(&self, qe: &[f64], xi: f64) -> (f64, Vector3<f64>) {
         let Ok(qe) = <&[f64; 12]>::try_from(qe) else {
-            return (f64::NAN, [f64::NAN; 3]);
+            return (f64::NAN, Vector3::repeat(f64::NAN));
         };
         let (_, d1, d2) = hermite(xi, self.le);
         let (a, b) = derivs(qe, &d1, &d2);
         let d = dot(a, a);
         let c = cross(a, b);
-        (d.sqrt() - 1.0, [c[0] / d, c[1] / d, c[2] / d])
+        (d.sqrt() - 1.0, Vector3::new(c[0] / d, c[1] / d, c[2] / d))
     }
 
     /// Axial stiffness EA (N).
