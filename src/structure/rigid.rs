@@ -33,32 +33,23 @@
 
 mod spatial;
 
+use nalgebra::Vector2;
+
+#[cfg(test)]
+pub(crate) use spatial::frame_of_columns;
 pub(crate) use spatial::resolve_spatial;
 pub use spatial::{
     rotate_3d, rotate_back_3d, rotation_vector_of, SpatialAttachment, SPATIAL_END_COLUMNS,
 };
 
 /// `R(θ) v` for the planar rotation by `theta` (rad).
-///
-/// # Example
-/// ```
-/// let v = softrod::structure::rigid::rotate(std::f64::consts::FRAC_PI_2, [1.0, 0.0]);
-/// assert!(v[0].abs() < 1e-15 && (v[1] - 1.0).abs() < 1e-15);
-/// ```
-pub fn rotate(theta: f64, v: [f64; 2]) -> [f64; 2] {
+pub(crate) fn rotate(theta: f64, v: [f64; 2]) -> [f64; 2] {
     let (s, c) = theta.sin_cos();
     [c * v[0] - s * v[1], s * v[0] + c * v[1]]
 }
 
 /// `Rᵀ(θ) v`: world components to body components.
-///
-/// # Example
-/// ```
-/// use softrod::structure::rigid::{rotate, rotate_back};
-/// let v = rotate_back(0.3, rotate(0.3, [0.2, -0.7]));
-/// assert!((v[0] - 0.2).abs() < 1e-15 && (v[1] + 0.7).abs() < 1e-15);
-/// ```
-pub fn rotate_back(theta: f64, v: [f64; 2]) -> [f64; 2] {
+pub(crate) fn rotate_back(theta: f64, v: [f64; 2]) -> [f64; 2] {
     let (s, c) = theta.sin_cos();
     [c * v[0] + s * v[1], -s * v[0] + c * v[1]]
 }
@@ -69,39 +60,47 @@ fn quarter(v: [f64; 2]) -> [f64; 2] {
 }
 
 /// A cable end fixed to a planar rigid body: the body-frame point `p` (m)
-/// and unit direction `d` of the joint.
+/// and unit direction `d` of the joint (a [`BlockRule::PlanarRigidEnd`]).
 ///
 /// # Example
 /// ```
-/// use softrod::structure::rigid::PlanarAttachment;
-/// let a = PlanarAttachment { point_m: [0.05, 0.0], direction: [0.0, 1.0] };
-/// // a body at (0, 0.2) turned by 90°: the end sits at (0, 0.25), pointing along −x
-/// let node = a.node([0.0, 0.2, std::f64::consts::FRAC_PI_2], 0.0);
-/// assert!((node[1] - 0.25).abs() < 1e-15 && (node[2] + 1.0).abs() < 1e-15);
+/// use nalgebra::Vector2;
+/// use softrod::structure::{rigid::PlanarAttachment, BlockRule, DofMap};
+/// // a body pose (x, y, θ) and a cable node fixed to it 5 cm along its x axis
+/// let a = PlanarAttachment { point_m: Vector2::new(0.05, 0.0), direction: Vector2::y() };
+/// let map = DofMap::new(vec![
+///     BlockRule::Free { len: 3 },
+///     BlockRule::PlanarRigidEnd { body_block: 0, attachment: a },
+/// ])?;
+/// // the pose's three coordinates and the joint's stretch are free
+/// assert_eq!(map.n_u(), 4);
+/// # Ok::<(), softrod::Error>(())
 /// ```
+///
+/// [`BlockRule::PlanarRigidEnd`]: crate::structure::BlockRule::PlanarRigidEnd
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlanarAttachment {
     /// The joint's point in the body frame (m).
-    pub point_m: [f64; 2],
+    pub point_m: Vector2<f64>,
     /// The rod's tangent direction at the joint in the body frame (unit).
-    pub direction: [f64; 2],
+    pub direction: Vector2<f64>,
 }
 
 impl PlanarAttachment {
     /// The cable node `[r, r']` for the body pose `(x, y, θ)` (m, m, rad) and
     /// the stretch `σ`: `r = x + R(θ) p`, `r' = (1 + σ) R(θ) d`.
-    pub fn node(&self, pose: [f64; 3], stretch: f64) -> [f64; 4] {
-        let n = rotate(pose[2], self.point_m);
-        let e = rotate(pose[2], self.direction);
+    pub(crate) fn node(&self, pose: [f64; 3], stretch: f64) -> [f64; 4] {
+        let n = rotate(pose[2], self.point_m.into());
+        let e = rotate(pose[2], self.direction.into());
         let l = 1.0 + stretch;
         [pose[0] + n[0], pose[1] + n[1], l * e[0], l * e[1]]
     }
 
     /// The Jacobian of [`PlanarAttachment::node`] with respect to
     /// `(x, y, θ, σ)`: row `i` is `∂node_i/∂(x, y, θ, σ)`.
-    pub fn jacobian(&self, pose: [f64; 3], stretch: f64) -> [[f64; 4]; 4] {
-        let jn = quarter(rotate(pose[2], self.point_m));
-        let e = rotate(pose[2], self.direction);
+    pub(crate) fn jacobian(&self, pose: [f64; 3], stretch: f64) -> [[f64; 4]; 4] {
+        let jn = quarter(rotate(pose[2], self.point_m.into()));
+        let e = rotate(pose[2], self.direction.into());
         let je = quarter(e);
         let l = 1.0 + stretch;
         [
@@ -115,9 +114,9 @@ impl PlanarAttachment {
     /// `Σ_i g_i ∂²node_i/∂(θ, σ)²` for a vector `g` over the node's four
     /// coordinates: `[[h_θθ, h_θσ], [h_θσ, 0]]` (the second derivatives in
     /// `x`, `y` vanish).
-    pub fn curvature(&self, pose: [f64; 3], stretch: f64, g: [f64; 4]) -> [[f64; 2]; 2] {
-        let n = rotate(pose[2], self.point_m);
-        let e = rotate(pose[2], self.direction);
+    pub(crate) fn curvature(&self, pose: [f64; 3], stretch: f64, g: [f64; 4]) -> [[f64; 2]; 2] {
+        let n = rotate(pose[2], self.point_m.into());
+        let e = rotate(pose[2], self.direction.into());
         let je = quarter(e);
         let l = 1.0 + stretch;
         let h_tt = -(g[0] * n[0] + g[1] * n[1]) - l * (g[2] * e[0] + g[3] * e[1]);
@@ -128,7 +127,7 @@ impl PlanarAttachment {
     /// The wrench about the body's reference point of a generalized force
     /// `f` on the node's four coordinates (`Jᵀ f` restricted to the pose):
     /// force `f_r` (N) and moment `n × f_r + (1 + σ) e × f_r'` (N·m).
-    pub fn wrench(&self, pose: [f64; 3], stretch: f64, f: [f64; 4]) -> [f64; 3] {
+    pub(crate) fn wrench(&self, pose: [f64; 3], stretch: f64, f: [f64; 4]) -> [f64; 3] {
         let jac = self.jacobian(pose, stretch);
         let mut w = [0.0; 3];
         for (k, wk) in w.iter_mut().enumerate() {
@@ -152,12 +151,27 @@ mod tests {
     use super::*;
 
     const A: PlanarAttachment = PlanarAttachment {
-        point_m: [0.07, -0.03],
-        direction: [0.6, 0.8],
+        point_m: Vector2::new(0.07, -0.03),
+        direction: Vector2::new(0.6, 0.8),
     };
 
     fn node(v: [f64; 4]) -> [f64; 4] {
         A.node([v[0], v[1], v[2]], v[3])
+    }
+
+    #[test]
+    fn a_turned_body_carries_its_end() {
+        let a = PlanarAttachment {
+            point_m: Vector2::new(0.05, 0.0),
+            direction: Vector2::new(0.0, 1.0),
+        };
+        // a body at (0, 0.2) turned by 90°: the end sits at (0, 0.25), pointing along −x
+        let node = a.node([0.0, 0.2, std::f64::consts::FRAC_PI_2], 0.0);
+        assert!((node[1] - 0.25).abs() < 1e-15 && (node[2] + 1.0).abs() < 1e-15);
+        let v = rotate(std::f64::consts::FRAC_PI_2, [1.0, 0.0]);
+        assert!(v[0].abs() < 1e-15 && (v[1] - 1.0).abs() < 1e-15);
+        let v = rotate_back(0.3, rotate(0.3, [0.2, -0.7]));
+        assert!((v[0] - 0.2).abs() < 1e-15 && (v[1] + 0.7).abs() < 1e-15);
     }
 
     /// Jacobian and contracted second derivative against central

@@ -725,8 +725,8 @@ impl StructureSpec {
             }
         };
         Ok(PlanarAttachment {
-            point_m: point,
-            direction,
+            point_m: point.into(),
+            direction: direction.into(),
         })
     }
 

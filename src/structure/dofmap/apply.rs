@@ -75,7 +75,7 @@ impl DofMap {
             match &b.rule {
                 BlockRule::PlanarRigidEnd { attachment, .. } => {
                     let theta = u.get(b.pose_u + 2).copied().unwrap_or(0.0);
-                    let e = crate::structure::rigid::rotate(theta, attachment.direction);
+                    let e = crate::structure::rigid::rotate(theta, attachment.direction.into());
                     let slope = &q[b.q0 + 2..b.q0 + 4];
                     u[b.u0] = e[0] * slope[0] + e[1] * slope[1] - 1.0;
                 }
@@ -339,7 +339,7 @@ impl DofMap {
     /// // stiffens the body's turn by −g·n (n = R(θ) p)
     /// let map = DofMap::new(vec![
     ///     BlockRule::PlanarRigidEnd { body_block: 1,
-    ///         attachment: PlanarAttachment { point_m: [0.1, 0.0], direction: [0.0, 1.0] } },
+    ///         attachment: PlanarAttachment { point_m: nalgebra::Vector2::new(0.1, 0.0), direction: nalgebra::Vector2::y() } },
     ///     BlockRule::Free { len: 3 },
     /// ]).unwrap();
     /// let u = [0.0, 0.0, 0.0, 0.0]; // stretch, x, y, θ

@@ -222,8 +222,8 @@ impl DofMap {
                             "must be a free block of 3 coordinates (x, y, θ)",
                         ));
                     }
-                    check_all_finite(&p(".attachment.point_m"), &attachment.point_m)?;
-                    check_all_finite(&p(".attachment.direction"), &attachment.direction)?;
+                    check_all_finite(&p(".attachment.point_m"), attachment.point_m.as_slice())?;
+                    check_all_finite(&p(".attachment.direction"), attachment.direction.as_slice())?;
                 }
                 BlockRule::SpatialRigidEnd {
                     body_block,

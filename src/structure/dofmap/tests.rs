@@ -15,8 +15,8 @@ fn map() -> DofMap {
         BlockRule::PlanarRigidEnd {
             body_block: 4,
             attachment: PlanarAttachment {
-                point_m: [0.1, -0.02],
-                direction: [0.0, 1.0],
+                point_m: nalgebra::Vector2::new(0.1, -0.02),
+                direction: nalgebra::Vector2::new(0.0, 1.0),
             },
         },
         BlockRule::Affine {
@@ -63,7 +63,14 @@ fn spatial_map() -> DofMap {
     let d = [0.36, 0.48, 0.8];
     let a2 = [0.8, -0.6, 0.0];
     let a3 = [0.48, 0.64, -0.6]; // d × a2
-    let at = |nd| SpatialAttachment::new([0.05, -0.02, 0.01], [d, a2, a3], nd).unwrap();
+    let at = |nd| {
+        SpatialAttachment::new(
+            nalgebra::Vector3::new(0.05, -0.02, 0.01),
+            crate::structure::rigid::frame_of_columns([d, a2, a3]),
+            nd,
+        )
+        .unwrap()
+    };
     DofMap::new(vec![
         BlockRule::Affine {
             offset: vec![0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
@@ -107,8 +114,8 @@ fn spatial_rigid_ends_match_finite_differences() {
         BlockRule::SpatialRigidEnd {
             body_block: 0,
             attachment: SpatialAttachment::new(
-                [0.0; 3],
-                [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                nalgebra::Vector3::zeros(),
+                nalgebra::Matrix3::identity(),
                 6,
             )
             .unwrap(),
@@ -200,8 +207,8 @@ fn bad_rules_are_refused_with_their_field() {
     let e = DofMap::new(vec![BlockRule::PlanarRigidEnd {
         body_block: 3,
         attachment: PlanarAttachment {
-            point_m: [0.0; 2],
-            direction: [1.0, 0.0],
+            point_m: nalgebra::Vector2::zeros(),
+            direction: nalgebra::Vector2::x(),
         },
     }])
     .unwrap_err();
@@ -211,8 +218,8 @@ fn bad_rules_are_refused_with_their_field() {
         BlockRule::PlanarRigidEnd {
             body_block: 0,
             attachment: PlanarAttachment {
-                point_m: [0.0; 2],
-                direction: [1.0, 0.0],
+                point_m: nalgebra::Vector2::zeros(),
+                direction: nalgebra::Vector2::x(),
             },
         },
     ])

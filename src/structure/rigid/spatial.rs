@@ -26,6 +26,8 @@
 //! (the exact derivatives by the chain rule); the second derivatives in `x`
 //! vanish (the node is affine in `x`).
 
+use nalgebra::{Matrix3, Vector3};
+
 use crate::element::jet::{cross, Jet, Scalar};
 use crate::error::{Error, Result};
 
@@ -70,45 +72,62 @@ fn rotate_generic<T: Scalar>(psi: &[T; 3], v: [f64; 3]) -> [T; 3] {
     std::array::from_fn(|i| vt[i] + f1 * pv[i] + f2 * ppv[i])
 }
 
+/// `R(ψ) v` on arrays (the kernels' form of [`rotate_3d`]).
+pub(crate) fn rot3(psi: [f64; 3], v: [f64; 3]) -> [f64; 3] {
+    rotate_generic(&psi, v)
+}
+
+/// `Rᵀ(ψ) v` on arrays (the kernels' form of [`rotate_back_3d`]).
+pub(crate) fn rot3_back(psi: [f64; 3], v: [f64; 3]) -> [f64; 3] {
+    rotate_generic(&psi.map(|x| -x), v)
+}
+
 /// `R(ψ) v`: the rotation by the rotation vector `psi` (rad) of `v`.
 ///
 /// # Example
 /// ```
+/// use nalgebra::Vector3;
 /// use softrod::structure::rigid::rotate_3d;
 /// // a quarter turn about z takes x to y
-/// let v = rotate_3d([0.0, 0.0, std::f64::consts::FRAC_PI_2], [1.0, 0.0, 0.0]);
-/// assert!(v[0].abs() < 1e-15 && (v[1] - 1.0).abs() < 1e-15);
+/// let v = rotate_3d(Vector3::new(0.0, 0.0, std::f64::consts::FRAC_PI_2), Vector3::x());
+/// assert!((v - Vector3::y()).norm() < 1e-15);
 /// ```
-pub fn rotate_3d(psi: [f64; 3], v: [f64; 3]) -> [f64; 3] {
-    rotate_generic(&psi, v)
+pub fn rotate_3d(psi: Vector3<f64>, v: Vector3<f64>) -> Vector3<f64> {
+    rot3(psi.into(), v.into()).into()
 }
 
 /// `Rᵀ(ψ) v = R(−ψ) v`: world components to body components.
 ///
 /// # Example
 /// ```
+/// use nalgebra::Vector3;
 /// use softrod::structure::rigid::{rotate_3d, rotate_back_3d};
-/// let psi = [0.3, -0.2, 0.5];
-/// let v = rotate_back_3d(psi, rotate_3d(psi, [0.2, -0.7, 0.1]));
-/// assert!((v[0] - 0.2).abs() < 1e-15 && (v[1] + 0.7).abs() < 1e-15);
+/// let psi = Vector3::new(0.3, -0.2, 0.5);
+/// let v = rotate_back_3d(psi, rotate_3d(psi, Vector3::new(0.2, -0.7, 0.1)));
+/// assert!((v - Vector3::new(0.2, -0.7, 0.1)).norm() < 1e-15);
 /// ```
-pub fn rotate_back_3d(psi: [f64; 3], v: [f64; 3]) -> [f64; 3] {
-    rotate_generic(&psi.map(|x| -x), v)
+pub fn rotate_back_3d(psi: Vector3<f64>, v: Vector3<f64>) -> Vector3<f64> {
+    rot3_back(psi.into(), v.into()).into()
 }
 
-/// The rotation vector of a rotation matrix given by its columns (the
-/// inverse of [`rotate_3d`] for angles below π; the axis from the skew
-/// part, the angle from the trace).
+/// The rotation vector of a rotation matrix (the inverse of [`rotate_3d`]
+/// for angles below π; the axis from the skew part, the angle from the
+/// trace).
 ///
 /// # Example
 /// ```
+/// use nalgebra::{Matrix3, Vector3};
 /// use softrod::structure::rigid::{rotate_3d, rotation_vector_of};
-/// let psi = [0.1, -0.4, 0.25];
-/// let cols = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].map(|e| rotate_3d(psi, e));
-/// let back = rotation_vector_of(cols);
-/// assert!((0..3).all(|i| (back[i] - psi[i]).abs() < 1e-14));
+/// let psi = Vector3::new(0.1, -0.4, 0.25);
+/// let r = Matrix3::from_columns(&[Vector3::x(), Vector3::y(), Vector3::z()].map(|e| rotate_3d(psi, e)));
+/// assert!((rotation_vector_of(&r) - psi).norm() < 1e-14);
 /// ```
-pub fn rotation_vector_of(cols: [[f64; 3]; 3]) -> [f64; 3] {
+pub fn rotation_vector_of(r: &Matrix3<f64>) -> Vector3<f64> {
+    rotvec_of(std::array::from_fn(|j| [r[(0, j)], r[(1, j)], r[(2, j)]])).into()
+}
+
+/// [`rotation_vector_of`] on the matrix's columns.
+fn rotvec_of(cols: [[f64; 3]; 3]) -> [f64; 3] {
     // R[i][j] = cols[j][i]
     let r = |i: usize, j: usize| cols[j][i];
     let w = [r(2, 1) - r(1, 2), r(0, 2) - r(2, 0), r(1, 0) - r(0, 1)];
@@ -125,19 +144,24 @@ pub fn rotation_vector_of(cols: [[f64; 3]; 3]) -> [f64; 3] {
 ///
 /// # Example
 /// ```
+/// use nalgebra::{Matrix3, Vector3};
 /// use softrod::structure::rigid::SpatialAttachment;
-/// let a = SpatialAttachment::new([0.05, 0.0, 0.0], [[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]], 12).unwrap();
-/// // the body at (0, 0, 0.2), turned by 90° about z: the end sits at (0, 0.05, 0.2)
-/// let node = a.node([0.0, 0.0, 0.2, 0.0, 0.0, std::f64::consts::FRAC_PI_2], 0.0);
-/// assert!((node[1] - 0.05).abs() < 1e-15 && (node[5] + 1.0).abs() < 1e-15);
+/// // a rod end 5 cm along the body's x axis, its tangent along the body's −z
+/// let frame = Matrix3::from_columns(&[-Vector3::z(), Vector3::y(), Vector3::x()]);
+/// let a = SpatialAttachment::new(Vector3::new(0.05, 0.0, 0.0), frame, 12)?;
+/// assert_eq!(a.frame.column(0), -Vector3::z());
+/// // a left-handed frame is refused
+/// let bad = Matrix3::from_columns(&[-Vector3::z(), Vector3::y(), -Vector3::x()]);
+/// assert_eq!(SpatialAttachment::new(Vector3::zeros(), bad, 12).unwrap_err().field(), Some("frame"));
+/// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SpatialAttachment {
     /// The joint's point in the body frame (m).
-    pub point_m: [f64; 3],
-    /// The section frame at the joint in the body frame: the rod's tangent
-    /// `d`, then the section axes `a₂`, `a₃`.
-    pub frame: [[f64; 3]; 3],
+    pub point_m: Vector3<f64>,
+    /// The section frame at the joint in the body frame, by columns: the
+    /// rod's tangent `d`, then the section axes `a₂`, `a₃`.
+    pub frame: Matrix3<f64>,
     /// Coordinates of the joined node (6 or 12).
     pub node_dofs: usize,
 }
@@ -151,7 +175,10 @@ impl SpatialAttachment {
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] naming `point_m`, `frame` or `node_dofs`.
-    pub fn new(point_m: [f64; 3], frame: [[f64; 3]; 3], node_dofs: usize) -> Result<Self> {
+    ///
+    /// # Example
+    /// See [`SpatialAttachment`].
+    pub fn new(point_m: Vector3<f64>, frame: Matrix3<f64>, node_dofs: usize) -> Result<Self> {
         let a = SpatialAttachment {
             point_m,
             frame,
@@ -165,6 +192,16 @@ impl SpatialAttachment {
     ///
     /// # Errors
     /// As [`SpatialAttachment::new`].
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::{Matrix3, Vector3};
+    /// use softrod::structure::rigid::SpatialAttachment;
+    /// let mut a = SpatialAttachment::new(Vector3::zeros(), Matrix3::identity(), 6)?;
+    /// a.point_m.x = f64::NAN;
+    /// assert_eq!(a.check().unwrap_err().field(), Some("point_m"));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
     pub fn check(&self) -> Result<()> {
         if !self.point_m.iter().all(|v| v.is_finite()) {
             return Err(Error::invalid(
@@ -180,7 +217,7 @@ impl SpatialAttachment {
                 "a rigid end joins a 6-coordinate (spatial cable) or 12-coordinate (full 3-D) node",
             ));
         }
-        let f = &self.frame;
+        let f = [self.axis(0), self.axis(1), self.axis(2)];
         let dot = |a: &[f64; 3], b: &[f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
         let mut off = 0.0f64;
         for i in 0..3 {
@@ -201,20 +238,30 @@ impl SpatialAttachment {
         Ok(())
     }
 
+    /// The body-frame point as an array.
+    fn point(&self) -> [f64; 3] {
+        self.point_m.into()
+    }
+
+    /// Column `k` of the section frame as an array.
+    fn axis(&self, k: usize) -> [f64; 3] {
+        [self.frame[(0, k)], self.frame[(1, k)], self.frame[(2, k)]]
+    }
+
     /// The node and its derivatives in `(ψ, σ)` as jets.
     fn node_jet(&self, pose: [f64; 6], stretch: f64) -> [Jet<4>; 12] {
         let psi: [Jet<4>; 3] = std::array::from_fn(|i| Jet::var(pose[3 + i], i));
         let l = Jet::var(1.0 + stretch, 3);
-        let n = rotate_generic(&psi, self.point_m);
-        let e = rotate_generic(&psi, self.frame[0]);
+        let n = rotate_generic(&psi, self.point());
+        let e = rotate_generic(&psi, self.axis(0));
         let mut out = [Jet::cst(0.0); 12];
         for i in 0..3 {
             out[i] = n[i] + Jet::cst(pose[i]);
             out[3 + i] = l * e[i];
         }
         if self.node_dofs == 12 {
-            let a2 = rotate_generic(&psi, self.frame[1]);
-            let a3 = rotate_generic(&psi, self.frame[2]);
+            let a2 = rotate_generic(&psi, self.axis(1));
+            let a3 = rotate_generic(&psi, self.axis(2));
             out[6..9].copy_from_slice(&a2);
             out[9..12].copy_from_slice(&a3);
         }
@@ -223,10 +270,10 @@ impl SpatialAttachment {
 
     /// The node (`node_dofs` coordinates; the rest zero) for the body pose
     /// `(x, ψ)` (m, rad) and the stretch `σ`.
-    pub fn node(&self, pose: [f64; 6], stretch: f64) -> [f64; 12] {
+    pub(crate) fn node(&self, pose: [f64; 6], stretch: f64) -> [f64; 12] {
         let psi = [pose[3], pose[4], pose[5]];
-        let n = rotate_3d(psi, self.point_m);
-        let e = rotate_3d(psi, self.frame[0]);
+        let n = rot3(psi, self.point());
+        let e = rot3(psi, self.axis(0));
         let l = 1.0 + stretch;
         let mut out = [0.0; 12];
         for i in 0..3 {
@@ -234,8 +281,8 @@ impl SpatialAttachment {
             out[3 + i] = l * e[i];
         }
         if self.node_dofs == 12 {
-            let a2 = rotate_3d(psi, self.frame[1]);
-            let a3 = rotate_3d(psi, self.frame[2]);
+            let a2 = rot3(psi, self.axis(1));
+            let a3 = rot3(psi, self.axis(2));
             out[6..9].copy_from_slice(&a2);
             out[9..12].copy_from_slice(&a3);
         }
@@ -245,7 +292,11 @@ impl SpatialAttachment {
     /// The Jacobian of [`SpatialAttachment::node`] with respect to
     /// `(x, ψ, σ)`: row `i` is `∂node_i/∂(x₁, x₂, x₃, ψ₁, ψ₂, ψ₃, σ)` (rows
     /// past `node_dofs` zero).
-    pub fn jacobian(&self, pose: [f64; 6], stretch: f64) -> [[f64; SPATIAL_END_COLUMNS]; 12] {
+    pub(crate) fn jacobian(
+        &self,
+        pose: [f64; 6],
+        stretch: f64,
+    ) -> [[f64; SPATIAL_END_COLUMNS]; 12] {
         let jet = self.node_jet(pose, stretch);
         let mut jac = [[0.0; SPATIAL_END_COLUMNS]; 12];
         for (i, (row, j)) in jac.iter_mut().zip(&jet).enumerate().take(self.node_dofs) {
@@ -259,7 +310,7 @@ impl SpatialAttachment {
 
     /// `Σ_i g_i ∂²node_i/∂(ψ, σ)²` (4 × 4) for a vector `g` over the node's
     /// coordinates (the second derivatives in `x` vanish).
-    pub fn curvature(&self, pose: [f64; 6], stretch: f64, g: &[f64]) -> [[f64; 4]; 4] {
+    pub(crate) fn curvature(&self, pose: [f64; 6], stretch: f64, g: &[f64]) -> [[f64; 4]; 4] {
         let jet = self.node_jet(pose, stretch);
         let mut c = [[0.0; 4]; 4];
         for (j, gi) in jet.iter().zip(g).take(self.node_dofs) {
@@ -277,7 +328,7 @@ impl SpatialAttachment {
     /// (`Jᵀ f` restricted to `(x, ψ)`): the force (N) and the moment
     /// conjugate to `ψ` (N·m; at `ψ = 0` the moment about the reference
     /// point in world axes).
-    pub fn wrench(&self, pose: [f64; 6], stretch: f64, f: &[f64]) -> [f64; 6] {
+    pub(crate) fn wrench(&self, pose: [f64; 6], stretch: f64, f: &[f64]) -> [f64; 6] {
         let jac = self.jacobian(pose, stretch);
         let mut w = [0.0; 6];
         for (k, wk) in w.iter_mut().enumerate() {
@@ -293,8 +344,8 @@ impl SpatialAttachment {
 
     /// The stretch `σ = (R(ψ) d)·r' − 1` of a node `node` at the body's
     /// rotation `psi` (the nearest on the map; exact on it).
-    pub fn stretch_of(&self, psi: [f64; 3], node: &[f64]) -> f64 {
-        let e = rotate_3d(psi, self.frame[0]);
+    pub(crate) fn stretch_of(&self, psi: [f64; 3], node: &[f64]) -> f64 {
+        let e = rot3(psi, self.axis(0));
         match node.get(3..6) {
             Some(s) => e[0] * s[0] + e[1] * s[1] + e[2] * s[2] - 1.0,
             None => f64::NAN,
@@ -309,6 +360,11 @@ impl SpatialAttachment {
 /// `tol`). The section axes are those a straight full 3-D rod carries
 /// along `dir` (the element's `straight_node`), in the body frame. Errors
 /// name `{path}point_m` / `{path}direction`.
+/// The matrix whose columns are `cols`.
+pub(crate) fn frame_of_columns(cols: [[f64; 3]; 3]) -> Matrix3<f64> {
+    Matrix3::from_fn(|i, j| cols[j][i])
+}
+
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn resolve_spatial(
     path: &str,
@@ -328,11 +384,11 @@ pub(crate) fn resolve_spatial(
         end_m[1] - body_m[1],
         end_m[2] - body_m[2],
     ];
-    let reference_point = rotate_back_3d(body_psi, rel);
+    let reference_point = rot3_back(body_psi, rel);
     let node = Ancf3d::straight_node(&end_m, &dir);
     let axis = |k: usize| -> [f64; 3] {
         let v = [node[k], node[k + 1], node[k + 2]];
-        rotate_back_3d(body_psi, v)
+        rot3_back(body_psi, v)
     };
     let frame = [axis(3), axis(6), axis(9)];
     let point = match point_m {
@@ -380,7 +436,8 @@ pub(crate) fn resolve_spatial(
             ));
         }
     }
-    SpatialAttachment::new(point, frame, node_dofs).map_err(|e| e.with_prefix(path))
+    SpatialAttachment::new(Vector3::from(point), frame_of_columns(frame), node_dofs)
+        .map_err(|e| e.with_prefix(path))
 }
 
 #[cfg(test)]
@@ -392,7 +449,12 @@ mod tests {
         let d = [0.36, 0.48, 0.8];
         let a2 = [0.8, -0.6, 0.0];
         let a3 = cross(&d, &a2);
-        SpatialAttachment::new([0.07, -0.03, 0.02], [d, a2, a3], nd).unwrap()
+        SpatialAttachment::new(
+            Vector3::new(0.07, -0.03, 0.02),
+            frame_of_columns([d, a2, a3]),
+            nd,
+        )
+        .unwrap()
     }
 
     /// Jacobian and contracted second derivative of both node kinds against
@@ -462,36 +524,47 @@ mod tests {
         let axis = [0.6, 0.0, 0.8];
         let angle = 2.5;
         let psi = axis.map(|x| x * angle);
-        let r = rotate_3d(psi, axis);
+        let r = rot3(psi, axis);
         assert!((0..3).all(|i| (r[i] - axis[i]).abs() < 1e-14));
         let n = [0.0, 1.0, 0.0];
-        let rn = rotate_3d(psi, n);
+        let rn = rot3(psi, n);
         let c = rn[1];
         assert!((c - angle.cos()).abs() < 1e-14);
         let w = cross(&axis, &n);
         let s: f64 = (0..3).map(|i| rn[i] * w[i]).sum();
         assert!((s - angle.sin()).abs() < 1e-14);
-        let back = rotation_vector_of(
-            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].map(|e| rotate_3d(psi, e)),
-        );
+        let back =
+            rotvec_of([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].map(|e| rot3(psi, e)));
         assert!((0..3).all(|i| (back[i] - psi[i]).abs() < 1e-12));
+    }
+
+    #[test]
+    fn a_turned_body_carries_its_end() {
+        let a = SpatialAttachment::new(
+            Vector3::new(0.05, 0.0, 0.0),
+            frame_of_columns([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]),
+            12,
+        )
+        .unwrap();
+        // the body at (0, 0, 0.2), turned by 90° about z: the end sits at (0, 0.05, 0.2)
+        let node = a.node([0.0, 0.0, 0.2, 0.0, 0.0, std::f64::consts::FRAC_PI_2], 0.0);
+        assert!((node[1] - 0.05).abs() < 1e-15 && (node[5] + 1.0).abs() < 1e-15);
+        // and back: R^T R v = v
+        let psi = [0.3, -0.2, 0.5];
+        let v = rot3_back(psi, rot3(psi, [0.2, -0.7, 0.1]));
+        assert!((v[0] - 0.2).abs() < 1e-15 && (v[1] + 0.7).abs() < 1e-15);
     }
 
     #[test]
     fn bad_frames_are_refused() {
         let e = SpatialAttachment::new(
-            [0.0; 3],
-            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]],
+            Vector3::zeros(),
+            frame_of_columns([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]]),
             12,
         )
         .unwrap_err();
         assert_eq!(e.field(), Some("frame"));
-        let e = SpatialAttachment::new(
-            [0.0; 3],
-            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-            4,
-        )
-        .unwrap_err();
+        let e = SpatialAttachment::new(Vector3::zeros(), Matrix3::identity(), 4).unwrap_err();
         assert_eq!(e.field(), Some("node_dofs"));
     }
 }
