@@ -39,7 +39,14 @@ pub const PRESSURE_MAX_PA: f64 = 100.0e3;
 pub const ELEMENTS_PER_SECTION: usize = 10;
 
 /// Gravity (m/s²), the base horizontal so that the weight bends the robot.
-pub const GRAVITY_M_PER_S2: [f64; 2] = [0.0, -9.81];
+///
+/// # Example
+/// ```
+/// let g = softrod::params::GRAVITY_M_PER_S2;
+/// assert_eq!(g, nalgebra::Vector2::new(0.0, -9.81));
+/// assert_eq!(g.norm(), 9.81);
+/// ```
+pub const GRAVITY_M_PER_S2: nalgebra::Vector2<f64> = nalgebra::Vector2::new(0.0, -9.81);
 
 /// Pressures of the built-in default scene (Pa): the first section's upper
 /// chamber at 60 kPa lifts the robot against its weight, the second

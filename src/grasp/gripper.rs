@@ -91,7 +91,7 @@ impl Default for GripperSpec {
             gain_nm_per_pa: p::ACTUATION_GAIN_NM_PER_PA,
             pressure_max_pa: p::PRESSURE_MAX_PA,
             elements_per_segment: p::ELEMENTS_PER_SEGMENT,
-            gravity_m_per_s2: crate::params::GRAVITY_M_PER_S2,
+            gravity_m_per_s2: crate::params::GRAVITY_M_PER_S2.into(),
         }
     }
 }

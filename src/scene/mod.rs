@@ -120,7 +120,7 @@ fn gauss() -> usize {
     DEFAULT_GAUSS_POINTS
 }
 fn gravity() -> Vec<f64> {
-    params::GRAVITY_M_PER_S2.to_vec()
+    params::GRAVITY_M_PER_S2.as_slice().to_vec()
 }
 
 /// A marker: a tracked point of the backbone at a node or at an arc coordinate.

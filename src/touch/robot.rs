@@ -45,7 +45,7 @@ pub fn five_section_scene(elements_per_section: usize) -> Scene {
         angle_rad: -std::f64::consts::FRAC_PI_2,
         ..Base::default()
     };
-    scene.gravity_m_per_s2 = params::GRAVITY_M_PER_S2.to_vec();
+    scene.gravity_m_per_s2 = params::GRAVITY_M_PER_S2.as_slice().to_vec();
     scene.pressures_pa = vec![0.0; 2 * SECTIONS];
     scene.markers = marker_arcs(6)
         .iter()
