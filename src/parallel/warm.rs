@@ -258,7 +258,7 @@ impl<E: Element> WarmStatics<E> {
     /// assert_eq!(s.jacobian_m_per_pa.shape(), (3, 18));
     /// // the same compliance as the payload estimation's dense one
     /// let c = robot.platform_compliance(&eq, &loads)?;
-    /// assert!((s.compliance_m_per_n[(2, 2)] - c[2][2]).abs() < 1e-9 * c[2][2]);
+    /// assert!((s.compliance_m_per_n[(2, 2)] - c[(2, 2)]).abs() < 1e-9 * c[(2, 2)]);
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn sensitivities(&self, u: &[f64]) -> Result<PlatformSensitivities> {
