@@ -318,7 +318,7 @@ fn constructed_failures_are_classified() {
         markers: (1..=5)
             .map(|j| {
                 let s = 0.048 * j as f64;
-                MarkerObservation::at_arc(s, r.position_at(s).to_vec())
+                MarkerObservation::at_arc(s, r.position_at(s).as_slice().to_vec())
             })
             .collect(),
     };

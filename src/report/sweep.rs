@@ -453,7 +453,7 @@ pub fn observe(reference: &Reference, arcs: &[f64], sigma: f64, seed: u64) -> Ob
     let obs = Observation {
         markers: arcs
             .iter()
-            .map(|&s| MarkerObservation::at_arc(s, reference.position_at(s).to_vec()))
+            .map(|&s| MarkerObservation::at_arc(s, reference.position_at(s).as_slice().to_vec()))
             .collect(),
     };
     if sigma > 0.0 {
