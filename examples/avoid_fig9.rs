@@ -32,10 +32,10 @@ fn main() -> softrod::Result<()> {
             settings.alpha_rule = serde_json::from_str(&format!("\"{v}\"")).expect("a rule");
         } else if let Some(v) = a.strip_prefix("--disk=") {
             let n = numbers(v);
-            disks.push(([n[0], n[1]], n[2]));
+            disks.push((nalgebra::Vector2::new(n[0], n[1]), n[2]));
         } else if let Some(v) = a.strip_prefix("--goal=") {
             let n = numbers(v);
-            goals.push([n[0], n[1]]);
+            goals.push(nalgebra::Vector2::new(n[0], n[1]));
         } else if let Some(v) = a.strip_prefix("--duration=") {
             settings.duration_s = v.parse().expect("seconds");
         } else {
@@ -69,7 +69,11 @@ fn main() -> softrod::Result<()> {
             {
                 Ok(mut r) => r.remove(0),
                 Err(e) => {
-                    println!("{disk:?} {goal:?}: error {e}");
+                    println!(
+                        "{:?} {:?}: error {e}",
+                        (disk.0.as_slice(), disk.1),
+                        goal.as_slice()
+                    );
                     continue;
                 }
             };

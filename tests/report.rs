@@ -321,7 +321,7 @@ fn constructed_failures_are_classified() {
         markers: (1..=5)
             .map(|j| {
                 let s = 0.048 * j as f64;
-                MarkerObservation::at_arc(s, nalgebra::Vector2::from(r.position_at(s)))
+                MarkerObservation::at_arc(s, r.position_at(s))
             })
             .collect(),
     };

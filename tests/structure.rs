@@ -166,8 +166,8 @@ fn loaded_platform() -> (Structure<PlanarCable>, StructureLoads, Vec<f64>) {
     let pose = s.body_coordinates(0).unwrap();
     s.add_force_field(Arc::new(
         PointSpring::new(
-            vec![pose.start, pose.start + 1],
-            vec![0.05, 0.3],
+            [pose.start, pose.start + 1],
+            nalgebra::Vector2::new(0.05, 0.3),
             40.0,
             0.02,
         )

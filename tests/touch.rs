@@ -6,6 +6,7 @@
 //! noise σ = 0.05 mm).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+use nalgebra::Vector2;
 use softrod::contact::{ContactSettings, Obstacle, Obstacles};
 use softrod::loads::PointForce;
 use softrod::plant::{Plant, PlantContact, PlantSettings, SimulatedPlant};
@@ -256,9 +257,10 @@ fn point_search_locates_contacts_within_5_mm_with_six_markers() {
 fn repulsive_gradient_is_the_exact_gradient_of_38_not_the_printed_39() {
     use softrod::touch::{repulsive, FieldParams};
     let p = FieldParams::default();
-    let obs = [0.01, -0.02];
+    let obs = Vector2::new(0.01, -0.02);
     let h = 1e-7;
     for x in [[0.05, 0.0], [0.02, -0.05], [-0.03, 0.01], [0.011, -0.019]] {
+        let x = Vector2::from(x);
         let (_, g) = repulsive(&p, x, obs);
         let d = (x[0] - obs[0]).hypot(x[1] - obs[1]);
         for k in 0..2 {
@@ -292,9 +294,9 @@ fn field_gradient_in_the_shape_matches_finite_differences() {
         .unwrap()
         .q;
     let p = FieldParams::default();
-    let goal = [0.15, -0.40];
+    let goal = Vector2::new(0.15, -0.40);
     // two obstacle points within Q0 of several elements
-    let obs = [[0.09, -0.33], [0.02, -0.2]];
+    let obs = [Vector2::new(0.09, -0.33), Vector2::new(0.02, -0.2)];
     let (_, g) = field_gradient(&robot, q.as_slice(), &p, goal, &obs).unwrap();
     let h = 1e-7;
     let scale = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -341,7 +343,7 @@ fn avoid(
         touch_feedback: feedback,
         ..AvoidSettings::default()
     };
-    run_avoidance(&scene, &cal, arcs, &mut plant, goal, &settings)
+    run_avoidance(&scene, &cal, arcs, &mut plant, goal.into(), &settings)
 }
 
 #[test]

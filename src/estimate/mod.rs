@@ -214,6 +214,27 @@ pub struct LoadBound {
     pub max_n_per_m: Option<f64>,
 }
 
+impl LoadBound {
+    /// [`LoadBound::direction`] as a `D`-vector (`D` the robot's dimension).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `direction` if it has another
+    /// number of components.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::estimate::{BoundFrame, LoadBound};
+    /// let b = LoadBound { s_m: 0.16, frame: BoundFrame::Local, direction: vec![0.0, 1.0],
+    ///                     min_n_per_m: Some(0.0), max_n_per_m: None };
+    /// assert_eq!(b.direction_vector::<2>()?, nalgebra::Vector2::y());
+    /// assert!(b.direction_vector::<3>().is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn direction_vector<const D: usize>(&self) -> Result<nalgebra::SVector<f64, D>> {
+        crate::numeric::fixed("direction", &self.direction)
+    }
+}
+
 /// Settings of the estimators; every field has a documented default. They
 /// serialize, so a scene can carry them (`solver.estimator`).
 ///

@@ -14,7 +14,9 @@
 //! a dense matrix), one `(row, column, value)` at a time, so a field that
 //! couples distant coordinates (a contact between two rods) needs no band.
 
-use crate::error::{check_all_finite, check_index, check_len, Error, Result};
+use nalgebra::SVector;
+
+use crate::error::{check_all_finite, check_index, Error, Result};
 
 /// Where stiffness entries go: `add(i, j, v)` adds `v` to entry `(i, j)`.
 ///
@@ -75,7 +77,7 @@ impl StiffnessSink for crate::linsolve::SymmetricMatrix {
 /// ```
 /// use softrod::loads::force_field::{ForceField, PointSpring};
 /// // a zero-length spring of 10 N/m from the point (q[0], q[1]) to the origin
-/// let s = PointSpring::new(vec![0, 1], vec![0.0, 0.0], 10.0, 0.0).unwrap();
+/// let s = PointSpring::new([0, 1], nalgebra::Vector2::zeros(), 10.0, 0.0).unwrap();
 /// let q = [0.3, -0.4];
 /// assert!((s.energy(&q) - 0.5 * 10.0 * 0.25).abs() < 1e-15);
 /// let mut f = [0.0; 2];
@@ -109,7 +111,7 @@ pub trait ForceField: std::fmt::Debug + Send + Sync {
 /// ```
 /// use softrod::loads::force_field::{ForceField, PointSpring};
 /// // a spring of rest length 0.1 m stretched to 0.3 m along x
-/// let s = PointSpring::new(vec![4, 5], vec![0.0, 0.0], 2.0, 0.1).unwrap();
+/// let s = PointSpring::new([4, 5], nalgebra::Vector2::zeros(), 2.0, 0.1).unwrap();
 /// let mut q = vec![0.0; 8];
 /// q[4] = 0.3;
 /// let mut f = vec![0.0; 8];
@@ -133,29 +135,32 @@ impl PointSpring {
     /// and rest length `rest_length_m` (m).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] unless `anchor_m` has as many entries as
-    /// `dofs` (1 to 3); [`Error::InvalidParameter`] for a non-finite anchor,
-    /// a negative or non-finite stiffness or rest length.
+    /// [`Error::InvalidParameter`] for a point of 0 or more than 3
+    /// coordinates (`spring.dofs`), a non-finite anchor, a negative or
+    /// non-finite stiffness or rest length.
     ///
     /// # Example
     /// ```
+    /// use nalgebra::Vector3;
     /// use softrod::loads::force_field::PointSpring;
-    /// assert!(PointSpring::new(vec![0, 1], vec![0.0], 1.0, 0.0).is_err());
+    /// assert!(PointSpring::new([0, 1, 2], Vector3::new(0.0, 0.0, 0.1), 5.0, 0.0).is_ok());
+    /// let bad = PointSpring::new([0, 1], nalgebra::Vector2::zeros(), -1.0, 0.0).unwrap_err();
+    /// assert_eq!(bad.field(), Some("spring.stiffness_n_per_m"));
     /// ```
-    pub fn new(
-        dofs: Vec<usize>,
-        anchor_m: Vec<f64>,
+    pub fn new<const D: usize>(
+        dofs: [usize; D],
+        anchor_m: SVector<f64, D>,
         stiffness_n_per_m: f64,
         rest_length_m: f64,
     ) -> Result<Self> {
-        if dofs.is_empty() || dofs.len() > MAX_DIM {
+        if D == 0 || D > MAX_DIM {
             return Err(Error::invalid(
                 "spring.dofs",
-                format!("{} coordinates", dofs.len()),
+                format!("{D} coordinates"),
                 "a point has 1 to 3 coordinates",
             ));
         }
-        check_len("spring.anchor_m", dofs.len(), anchor_m.len())?;
+        let (dofs, anchor_m) = (dofs.to_vec(), anchor_m.as_slice().to_vec());
         check_all_finite("spring.anchor_m", &anchor_m)?;
         for (name, v) in [
             ("spring.stiffness_n_per_m", stiffness_n_per_m),
@@ -250,7 +255,13 @@ mod tests {
     #[test]
     fn force_and_stiffness_are_the_derivatives_of_the_energy() {
         let n_q = 7;
-        let s = PointSpring::new(vec![5, 1, 3], vec![0.1, -0.2, 0.05], 7.0, 0.15).unwrap();
+        let s = PointSpring::new(
+            [5, 1, 3],
+            nalgebra::Vector3::new(0.1, -0.2, 0.05),
+            7.0,
+            0.15,
+        )
+        .unwrap();
         s.check(n_q).unwrap();
         for q in [
             [0.3, 0.2, -0.1, 0.4, 0.0, -0.3, 9.0],
@@ -292,7 +303,7 @@ mod tests {
 
     #[test]
     fn a_spring_on_its_anchor_is_finite_and_a_bad_index_is_refused() {
-        let s = PointSpring::new(vec![0, 1], vec![0.5, 0.5], 3.0, 0.2).unwrap();
+        let s = PointSpring::new([0, 1], nalgebra::Vector2::new(0.5, 0.5), 3.0, 0.2).unwrap();
         let q = [0.5, 0.5];
         assert!((s.energy(&q) - 0.5 * 3.0 * 0.04).abs() < 1e-15);
         let mut f = [0.0; 2];
@@ -303,7 +314,8 @@ mod tests {
         assert_eq!(k, nalgebra::DMatrix::identity(2, 2) * 3.0);
         let err = s.check(1).unwrap_err();
         assert_eq!(err.field(), Some("spring.dofs[1]"));
-        assert!(PointSpring::new(vec![0], vec![0.0], -1.0, 0.0).is_err());
-        assert!(PointSpring::new(vec![], vec![], 1.0, 0.0).is_err());
+        assert!(PointSpring::new([0], nalgebra::Vector1::new(0.0), -1.0, 0.0).is_err());
+        assert!(PointSpring::new([], nalgebra::SVector::<f64, 0>::zeros(), 1.0, 0.0).is_err());
+        assert!(PointSpring::new([0, 1], nalgebra::Vector2::new(f64::NAN, 0.0), 1.0, 0.0).is_err());
     }
 }

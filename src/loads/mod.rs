@@ -24,6 +24,7 @@ pub mod force_field;
 mod load;
 pub(crate) mod point_moment;
 
+use nalgebra::{DVector, SVector};
 use serde::{Deserialize, Serialize};
 
 pub use follower::FollowerLoad;
@@ -251,6 +252,40 @@ pub struct PointForce {
     pub force_n: Vec<f64>,
 }
 
+impl PointForce {
+    /// A force `force_n` (N, world axes; two components on a planar robot,
+    /// three on a spatial one) at the arc coordinate `s_m` (m).
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use softrod::loads::PointForce;
+    /// let tip = PointForce::new(0.24, Vector2::new(0.0, -0.1));
+    /// assert_eq!(tip, PointForce { s_m: 0.24, force_n: vec![0.0, -0.1] });
+    /// assert_eq!(tip.force::<2>()?, Vector2::new(0.0, -0.1));
+    /// assert!(tip.force::<3>().is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn new<const D: usize>(s_m: f64, force_n: SVector<f64, D>) -> Self {
+        PointForce {
+            s_m,
+            force_n: force_n.as_slice().to_vec(),
+        }
+    }
+
+    /// The force as a `D`-vector (N, world axes).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `force_n` if it has another number
+    /// of components.
+    ///
+    /// # Example
+    /// See [`PointForce::new`].
+    pub fn force<const D: usize>(&self) -> Result<SVector<f64, D>> {
+        crate::numeric::fixed("force_n", &self.force_n)
+    }
+}
+
 /// A concentrated moment at a node; it does the work `M · θ` (θ the node's
 /// rotation, `atan2(r'_y, r'_x)` in 2-D).
 ///
@@ -265,6 +300,40 @@ pub struct NodeMoment {
     pub node: usize,
     /// Moment (N·m; one component in 2-D).
     pub moment_nm: Vec<f64>,
+}
+
+impl NodeMoment {
+    /// A moment `moment_nm` (N·m; one component on a planar robot, three in
+    /// world axes on a spatial one) at node `node`.
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::{Vector1, Vector3};
+    /// use softrod::loads::NodeMoment;
+    /// let m = NodeMoment::new(20, Vector1::new(0.01));
+    /// assert_eq!(m, NodeMoment { node: 20, moment_nm: vec![0.01] });
+    /// assert_eq!(m.moment::<1>()?.x, 0.01);
+    /// assert!(NodeMoment::new(3, Vector3::z()).moment::<1>().is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn new<const D: usize>(node: usize, moment_nm: SVector<f64, D>) -> Self {
+        NodeMoment {
+            node,
+            moment_nm: moment_nm.as_slice().to_vec(),
+        }
+    }
+
+    /// The moment as a `D`-vector (N·m; `D = 1` planar, 3 spatial).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `moment_nm` if it has another
+    /// number of components.
+    ///
+    /// # Example
+    /// See [`NodeMoment::new`].
+    pub fn moment<const D: usize>(&self) -> Result<SVector<f64, D>> {
+        crate::numeric::fixed("moment_nm", &self.moment_nm)
+    }
 }
 
 /// A dead concentrated moment at an arc position of the backbone.
@@ -296,6 +365,40 @@ pub struct PointMoment {
     /// Moment (N·m; one component in 2-D, counter-clockwise positive; three
     /// in world axes in 3-D).
     pub moment_nm: Vec<f64>,
+}
+
+impl PointMoment {
+    /// A moment `moment_nm` (N·m; one component on a planar robot, three in
+    /// world axes on a spatial one) at the arc coordinate `s_m` (m).
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector3;
+    /// use softrod::loads::PointMoment;
+    /// let m = PointMoment::new(0.1, Vector3::new(0.0, 0.0, 0.01));
+    /// assert_eq!(m.moment_nm, vec![0.0, 0.0, 0.01]);
+    /// assert_eq!(m.moment::<3>()?, Vector3::new(0.0, 0.0, 0.01));
+    /// assert!(m.moment::<1>().is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn new<const D: usize>(s_m: f64, moment_nm: SVector<f64, D>) -> Self {
+        PointMoment {
+            s_m,
+            moment_nm: moment_nm.as_slice().to_vec(),
+        }
+    }
+
+    /// The moment as a `D`-vector (N·m; `D = 1` planar, 3 spatial).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `moment_nm` if it has another
+    /// number of components.
+    ///
+    /// # Example
+    /// See [`PointMoment::new`].
+    pub fn moment<const D: usize>(&self) -> Result<SVector<f64, D>> {
+        crate::numeric::fixed("moment_nm", &self.moment_nm)
+    }
 }
 
 /// Everything that loads the robot in one static solve besides its weight.
@@ -335,6 +438,27 @@ pub struct Loads {
 }
 
 impl Loads {
+    /// [`Loads::pressures_pa`] as a vector (Pa).
+    ///
+    /// # Example
+    /// ```
+    /// let loads = softrod::loads::Loads { pressures_pa: vec![20e3, 0.0], ..Default::default() };
+    /// assert_eq!(loads.pressures(), nalgebra::dvector![20e3, 0.0]);
+    /// assert_eq!(loads.distributed().len(), 0); // no distributed field
+    /// ```
+    pub fn pressures(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.pressures_pa)
+    }
+
+    /// [`Loads::distributed_f`] as a vector (`n_q` parameters of the
+    /// distributed load field, or empty).
+    ///
+    /// # Example
+    /// See [`Loads::pressures`].
+    pub fn distributed(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.distributed_f)
+    }
+
     /// Multiplies every load and pressure by `factor`.
     pub fn scaled(&self, factor: f64) -> Loads {
         let sc = |v: &[f64]| v.iter().map(|x| x * factor).collect::<Vec<_>>();

@@ -26,6 +26,7 @@
 
 use std::path::{Path, PathBuf};
 
+use nalgebra::Vector2;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use rayon::prelude::*;
@@ -113,6 +114,39 @@ pub struct TrialOutcome {
     pub status: String,
     /// Whether it converged.
     pub converged: bool,
+}
+
+impl TrialOutcome {
+    /// [`TrialOutcome::truth_n`] as a vector (N).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::report::coverage::{Family, TrialOutcome};
+    /// let o = TrialOutcome { family: Family::Smooth, backend: softrod::estimate::Backend::Newton,
+    ///     seed: 1, markers: 4, noise_sigma_m: 1e-5, truth_n: [0.02, -0.1], estimate_n: [0.021, -0.098],
+    ///     std_n: [0.002, 0.004], d2: 0.5, covered: true, covered_components: [true; 2], alpha: 1e-6,
+    ///     status: "converged".into(), converged: true };
+    /// assert!((o.estimate() - o.truth()).norm() < 3e-3 && o.std().x == 0.002);
+    /// ```
+    pub fn truth(&self) -> Vector2<f64> {
+        Vector2::from(self.truth_n)
+    }
+
+    /// [`TrialOutcome::estimate_n`] as a vector (N).
+    ///
+    /// # Example
+    /// See [`TrialOutcome::truth`].
+    pub fn estimate(&self) -> Vector2<f64> {
+        Vector2::from(self.estimate_n)
+    }
+
+    /// [`TrialOutcome::std_n`] as a vector (N, per component).
+    ///
+    /// # Example
+    /// See [`TrialOutcome::truth`].
+    pub fn std(&self) -> Vector2<f64> {
+        Vector2::from(self.std_n)
+    }
 }
 
 /// Coverage of one family and backend.
@@ -251,7 +285,17 @@ pub(crate) fn trial_spec(family: Family, seed: u64, length_m: f64) -> TrialSpec 
 
 /// The true resultant of the spec's unknown load (N): the table integrated
 /// exactly (linear between entries), or the force.
-pub fn true_resultant(spec: &TrialSpec) -> [f64; 2] {
+///
+/// # Example
+/// ```
+/// use softrod::loads::PointForce;
+/// use softrod::report::coverage::{true_resultant, Family, TrialSpec};
+/// let spec = TrialSpec { family: Family::Point, seed: 1, line_load: None,
+///     point_force: Some(PointForce { s_m: 0.2, force_n: vec![0.01, -0.02] }),
+///     marker_s_m: vec![0.12, 0.24], noise_sigma_m: 1e-5 };
+/// assert_eq!(true_resultant(&spec), nalgebra::Vector2::new(0.01, -0.02));
+/// ```
+pub fn true_resultant(spec: &TrialSpec) -> Vector2<f64> {
     let mut r = [0.0; 2];
     if let Some(LineLoad::Tabulated { s_m, w_n_per_m }) = &spec.line_load {
         for k in 1..s_m.len() {
@@ -265,7 +309,7 @@ pub fn true_resultant(spec: &TrialSpec) -> [f64; 2] {
         r[0] += p.force_n[0];
         r[1] += p.force_n[1];
     }
-    r
+    Vector2::from(r)
 }
 
 /// The real robot's markers for `spec`: the fine mesh's static solution
@@ -306,7 +350,7 @@ pub fn run_trial(
         seed: spec.seed,
         markers: spec.marker_s_m.len(),
         noise_sigma_m: spec.noise_sigma_m,
-        truth_n,
+        truth_n: truth_n.into(),
         estimate_n: [f64::NAN; 2],
         std_n: [f64::NAN; 2],
         d2: f64::NAN,

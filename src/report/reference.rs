@@ -9,6 +9,7 @@
 //! The files the report uses are compiled into the binary, so `softrod report`
 //! runs from any directory.
 
+use nalgebra::Vector2;
 use serde_json::Value;
 
 use crate::element::ArcPoint;
@@ -198,12 +199,26 @@ impl Reference {
 
     /// Position `r(s)` (m) by the reference's own cubic Hermite interpolation
     /// (14) of its nodes; `s` is clamped to `[0, L]`.
-    pub fn position_at(&self, s: f64) -> [f64; 2] {
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::report::reference::{embedded_names, Reference};
+    /// let r = Reference::embedded(embedded_names()[0])?;
+    /// assert_eq!(r.position_at(0.0), nalgebra::Vector2::zeros()); // the clamp
+    /// assert!((r.slope_at(0.0) - nalgebra::Vector2::x()).norm() < 1e-9);
+    /// let w = r.load_at(0.5 * r.length_m);
+    /// assert!(w.norm() > 0.0 && r.resultant_force_n().norm() > 0.0);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn position_at(&self, s: f64) -> Vector2<f64> {
         self.interpolate(s, ArcPoint::value_into)
     }
 
     /// Slope `r'(s)` (dimensionless) by the same interpolation.
-    pub fn slope_at(&self, s: f64) -> [f64; 2] {
+    ///
+    /// # Example
+    /// See [`Reference::position_at`].
+    pub fn slope_at(&self, s: f64) -> Vector2<f64> {
         self.interpolate(s, ArcPoint::slope_into)
     }
 
@@ -213,7 +228,7 @@ impl Reference {
         &self,
         s: f64,
         how: fn(&ArcPoint, &[f64], &mut [f64]) -> Result<()>,
-    ) -> [f64; 2] {
+    ) -> Vector2<f64> {
         let (e, xi, le) = self.locate(s);
         let (a, b) = (&self.nodes[e], &self.nodes[e + 1]);
         let mut fe = [f64::NAN; 8];
@@ -224,27 +239,32 @@ impl Reference {
         if how(&ArcPoint::new(0, xi, le), &fe, &mut out).is_err() {
             out = [f64::NAN; 2];
         }
-        out
+        Vector2::from(out)
     }
 
     /// The applied load per undeformed length at `s` (N/m, world axes).
-    pub fn load_at(&self, s: f64) -> [f64; 2] {
-        self.loads.iter().fold([0.0, 0.0], |acc, l| {
+    ///
+    /// # Example
+    /// See [`Reference::position_at`].
+    pub fn load_at(&self, s: f64) -> Vector2<f64> {
+        self.loads.iter().fold(Vector2::zeros(), |acc, l| {
             let w = l.at(s, self.length_m);
-            [
-                acc[0] + w.as_slice().first().copied().unwrap_or(0.0),
-                acc[1] + w.as_slice().get(1).copied().unwrap_or(0.0),
-            ]
+            acc + Vector2::new(
+                w.as_slice().first().copied().unwrap_or(0.0),
+                w.as_slice().get(1).copied().unwrap_or(0.0),
+            )
         })
     }
 
     /// Resultant force of the applied load (N), midpoint rule on 4800 cells.
-    pub fn resultant_force_n(&self) -> [f64; 2] {
+    ///
+    /// # Example
+    /// See [`Reference::position_at`].
+    pub fn resultant_force_n(&self) -> Vector2<f64> {
         let k = 4800;
         let ds = self.length_m / k as f64;
-        (0..k).fold([0.0, 0.0], |acc, i| {
-            let w = self.load_at((i as f64 + 0.5) * ds);
-            [acc[0] + w[0] * ds, acc[1] + w[1] * ds]
+        (0..k).fold(Vector2::zeros(), |acc, i| {
+            acc + self.load_at((i as f64 + 0.5) * ds) * ds
         })
     }
 }

@@ -453,9 +453,7 @@ pub fn observe(reference: &Reference, arcs: &[f64], sigma: f64, seed: u64) -> Ob
     let obs = Observation {
         markers: arcs
             .iter()
-            .map(|&s| {
-                MarkerObservation::at_arc(s, nalgebra::Vector2::from(reference.position_at(s)))
-            })
+            .map(|&s| MarkerObservation::at_arc(s, reference.position_at(s)))
             .collect(),
     };
     if sigma > 0.0 {

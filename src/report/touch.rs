@@ -28,7 +28,7 @@ use crate::touch::{
 /// The avoidance run's disk (centre, radius; m) and goal (m).
 pub(crate) const AVOID_DISK: ([f64; 2], f64) = ([0.08, -0.465], 0.01);
 /// The avoidance run's goal (m).
-pub(crate) const AVOID_GOAL: [f64; 2] = [0.15, -0.40];
+pub(crate) const AVOID_GOAL: nalgebra::Vector2<f64> = nalgebra::Vector2::new(0.15, -0.40);
 
 /// What the part measured.
 #[derive(Debug, Clone, Serialize)]
@@ -48,6 +48,22 @@ pub struct TouchReport {
     /// The avoidance table: every placement × goal by touch and the
     /// baseline (quick: the first placement and goal only).
     pub table: Vec<AvoidRow>,
+}
+
+impl TouchReport {
+    /// [`TouchReport::disk_m`] with its centre as a vector: `(centre, radius)` (m).
+    ///
+    /// # Example
+    /// ```no_run
+    /// let opts = softrod::report::ReportOptions { quick: true, ..softrod::report::ReportOptions::new("target/report") };
+    /// let (report, _files) = softrod::report::touch::run(&opts)?;
+    /// let (centre, radius) = report.disk();
+    /// assert!(radius > 0.0 && centre.y < 0.0);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn disk(&self) -> (nalgebra::Vector2<f64>, f64) {
+        (nalgebra::Vector2::from(self.disk_m.0), self.disk_m.1)
+    }
 }
 
 /// Runs the sweep (contact at 0.15 … 0.45 m, intrusion 5 and 10 mm; quick:

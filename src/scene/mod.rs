@@ -242,6 +242,32 @@ impl From<SceneFile> for Scene {
 }
 
 impl Scene {
+    /// [`Scene::gravity_m_per_s2`] as a `D`-vector (m/s²).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] named `gravity_m_per_s2` if it has
+    /// another number of components.
+    ///
+    /// # Example
+    /// ```
+    /// let scene = softrod::scene::Scene::two_section();
+    /// assert_eq!(scene.gravity::<2>()?, nalgebra::Vector2::new(0.0, -9.81));
+    /// assert!(scene.gravity::<3>().is_err());
+    /// assert_eq!(scene.pressures().len(), scene.pressures_pa.len());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn gravity<const D: usize>(&self) -> Result<nalgebra::SVector<f64, D>> {
+        crate::numeric::fixed("gravity_m_per_s2", &self.gravity_m_per_s2)
+    }
+
+    /// [`Scene::pressures_pa`] as a vector (Pa, one per chamber).
+    ///
+    /// # Example
+    /// See [`Scene::gravity`].
+    pub fn pressures(&self) -> nalgebra::DVector<f64> {
+        nalgebra::DVector::from_column_slice(&self.pressures_pa)
+    }
+
     /// Parses and validates a scene.
     ///
     /// # Errors

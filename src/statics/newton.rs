@@ -39,19 +39,19 @@ const DESCENT_SHIFTS: [f64; 19] = [
 
 /// The buffers and counters of one solve.
 pub(super) struct Work<'a> {
-    pub k: SymmetricMatrix,
+    pub(super) k: SymmetricMatrix,
     /// Analyzed on the model's tangent pattern.
-    pub solver: &'a mut AutoSolver,
+    pub(super) solver: &'a mut AutoSolver,
     /// The residual at the current iterate (offset subtracted).
-    pub r: Vec<f64>,
+    pub(super) r: Vec<f64>,
     /// `φ(u)` at the current iterate.
-    pub q: Vec<f64>,
-    pub iterations: usize,
-    pub floor: f64,
-    pub last_step: f64,
+    pub(super) q: Vec<f64>,
+    pub(super) iterations: usize,
+    pub(super) floor: f64,
+    pub(super) last_step: f64,
     /// Whether the last tangent [`StaticSolver::newton`] factored was
     /// positive definite.
-    pub definite: bool,
+    pub(super) definite: bool,
     /// Whether the last Newton run ended at an equilibrium of its target's
     /// full problem (`Target::full`) whose tangent it had factored, positive definite and
     /// unshifted, at a point that already met the convergence test to the

@@ -31,11 +31,11 @@ const FINE_ITERATIONS: usize = 8;
 pub(super) struct CoarseStart {
     /// The fine free coordinates of the coarse equilibrium (`None`: the
     /// coarse solve failed).
-    pub u: Option<Vec<f64>>,
+    pub(super) u: Option<Vec<f64>>,
     /// Newton iterations the coarse solve took (counted in the report).
-    pub iterations: usize,
+    pub(super) iterations: usize,
     /// Its load steps.
-    pub load_steps: usize,
+    pub(super) load_steps: usize,
 }
 
 impl StaticSolver {

@@ -423,9 +423,9 @@ impl<E: Element> Structure<E> {
     /// );
     /// let mut s = spec.build_planar().unwrap();
     /// let pose = s.body_coordinates(0).unwrap();
-    /// let spring = PointSpring::new(vec![pose.start, pose.start + 1], vec![0.0, 0.3], 5.0, 0.0).unwrap();
+    /// let spring = PointSpring::new([pose.start, pose.start + 1], nalgebra::Vector2::new(0.0, 0.3), 5.0, 0.0).unwrap();
     /// s.add_force_field(Arc::new(spring)).unwrap();
-    /// let outside = PointSpring::new(vec![99, 100], vec![0.0, 0.0], 5.0, 0.0).unwrap();
+    /// let outside = PointSpring::new([99, 100], nalgebra::Vector2::zeros(), 5.0, 0.0).unwrap();
     /// assert!(s.add_force_field(Arc::new(outside)).is_err());
     /// ```
     pub fn add_force_field(&mut self, field: Arc<dyn ForceField>) -> Result<()> {

@@ -24,6 +24,7 @@
 //! Without touch feedback (the baseline) step 3 is skipped: the field has
 //! no repulsion and the robot pushes into the obstacle.
 
+use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
 use crate::contact::Obstacles;
@@ -176,6 +177,29 @@ pub struct TouchedPoint {
     pub force_n: [f64; 2],
 }
 
+impl TouchedPoint {
+    /// [`TouchedPoint::point_m`] as a vector (m).
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector2;
+    /// let p = softrod::touch::TouchedPoint { time_s: 3.0, s_m: 0.4, point_m: [0.1, -0.45],
+    ///     force_n: [0.0, 0.03] };
+    /// assert_eq!((p.point(), p.force()), (Vector2::new(0.1, -0.45), Vector2::new(0.0, 0.03)));
+    /// ```
+    pub fn point(&self) -> Vector2<f64> {
+        Vector2::from(self.point_m)
+    }
+
+    /// [`TouchedPoint::force_n`] as a vector (N).
+    ///
+    /// # Example
+    /// See [`TouchedPoint::point`].
+    pub fn force(&self) -> Vector2<f64> {
+        Vector2::from(self.force_n)
+    }
+}
+
 /// One control instant.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AvoidSample {
@@ -193,6 +217,31 @@ pub struct AvoidSample {
     pub touch_chi2: f64,
     /// Commanded pressures for the next interval (Pa).
     pub pressures_pa: Vec<f64>,
+}
+
+impl AvoidSample {
+    /// [`AvoidSample::tip_true_m`] as a vector (m).
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector2;
+    /// let s = softrod::touch::AvoidSample { time_s: 0.05, tip_true_m: [0.1, -0.4],
+    ///     tip_estimated_m: [0.1, -0.401], contact_force_n: 0.0, known_points: 0,
+    ///     touch_chi2: 0.0, pressures_pa: vec![0.0; 10] };
+    /// assert_eq!(s.tip_true(), Vector2::new(0.1, -0.4));
+    /// assert!((s.tip_estimated() - s.tip_true()).norm() < 1.1e-3);
+    /// ```
+    pub fn tip_true(&self) -> Vector2<f64> {
+        Vector2::from(self.tip_true_m)
+    }
+
+    /// [`AvoidSample::tip_estimated_m`] as a vector (m).
+    ///
+    /// # Example
+    /// See [`AvoidSample::tip_true`].
+    pub fn tip_estimated(&self) -> Vector2<f64> {
+        Vector2::from(self.tip_estimated_m)
+    }
 }
 
 /// A whole run.
@@ -218,6 +267,27 @@ pub struct AvoidRun {
     pub samples: Vec<AvoidSample>,
     /// True shapes (node positions, m) every `shape_interval_s`: `(t, nodes)`.
     pub shapes: Vec<(f64, Vec<[f64; 2]>)>,
+}
+
+impl AvoidRun {
+    /// [`AvoidRun::goal_m`] as a vector (m).
+    ///
+    /// # Example
+    /// See [`run_avoidance`].
+    pub fn goal(&self) -> Vector2<f64> {
+        Vector2::from(self.goal_m)
+    }
+
+    /// The shape kept at index `i` of [`AvoidRun::shapes`]: its time (s) and
+    /// node positions as vectors (m); `None` past the last one.
+    ///
+    /// # Example
+    /// See [`run_avoidance`].
+    pub fn shape(&self, i: usize) -> Option<(f64, Vec<Vector2<f64>>)> {
+        self.shapes
+            .get(i)
+            .map(|(t, nodes)| (*t, nodes.iter().map(|&p| Vector2::from(p)).collect()))
+    }
 }
 
 /// Calibrates the nominal scene on an obstacle-free copy of the plant:
@@ -262,19 +332,38 @@ pub fn calibrate_on_free_plant(
 /// [`Error::InvalidParameter`] for invalid settings or a non-finite goal
 /// (`goal_m`); the plant's errors (a contact solve that does not converge);
 /// the model's static solve failing.
+///
+/// # Example
+/// Half a second towards a goal below the hanging robot, with no obstacle:
+/// ```
+/// use nalgebra::Vector2;
+/// use softrod::plant::{PlantSettings, SimulatedPlant};
+/// use softrod::touch::{calibrate_on_free_plant, five_section_scene, marker_arcs, run_avoidance, AvoidSettings};
+/// let scene = five_section_scene(4);
+/// let arcs = marker_arcs(6);
+/// let cal = calibrate_on_free_plant(&scene, arcs.as_slice(), &PlantSettings::default())?;
+/// let mut plant = SimulatedPlant::new(&scene, arcs.as_slice(), PlantSettings::default())?;
+/// let settings = AvoidSettings { duration_s: 0.5, ..AvoidSettings::default() };
+/// let goal = Vector2::new(0.12, -0.4);
+/// let run = run_avoidance(&scene, &cal, arcs.as_slice(), &mut plant, goal, &settings)?;
+/// assert_eq!((run.goal(), run.samples.len()), (goal, 10));
+/// let (t, nodes) = run.shape(0).unwrap();
+/// assert!(t > 0.0 && nodes.len() > 2);
+/// # Ok::<(), softrod::Error>(())
+/// ```
 pub fn run_avoidance(
     nominal: &Scene,
     calibration: &Calibration,
     marker_s_m: &[f64],
     plant: &mut SimulatedPlant,
-    goal_m: [f64; 2],
+    goal_m: Vector2<f64>,
     settings: &AvoidSettings,
 ) -> Result<AvoidRun> {
     settings.validate()?;
     if !goal_m.iter().all(|v| v.is_finite()) {
         return Err(Error::invalid(
             "goal_m",
-            format!("{goal_m:?}"),
+            format!("[{}, {}]", goal_m.x, goal_m.y),
             "must be finite",
         ));
     }
@@ -290,7 +379,7 @@ pub fn run_avoidance(
         status: AvoidStatus::NotReached {
             distance_m: f64::NAN,
         },
-        goal_m,
+        goal_m: goal_m.into(),
         final_error_m: f64::NAN,
         max_force_before_n: 0.0,
         max_force_after_n: 0.0,
@@ -302,7 +391,8 @@ pub fn run_avoidance(
     };
     // an unreachable goal is said so, not chased
     let mut ik = InverseKinematics::new(model.clone(), base_loads.clone(), IkSettings::default())?;
-    if let IkStatus::Unreachable { distance_m } = ik.solve(&goal_m, &vec![0.0; model.n_q()])?.status
+    if let IkStatus::Unreachable { distance_m } =
+        ik.solve(goal_m.as_slice(), &vec![0.0; model.n_q()])?.status
     {
         if distance_m > settings.goal_tolerance_m {
             run.status = AvoidStatus::GoalUnreachable { distance_m };
@@ -327,7 +417,7 @@ pub fn run_avoidance(
     };
     let sigma2 = settings.noise_sigma_m * settings.noise_sigma_m;
     let mut pending: Vec<TouchedPoint> = Vec::new();
-    let mut points: Vec<[f64; 2]> = Vec::new();
+    let mut points: Vec<Vector2<f64>> = Vec::new();
     let mut next_shape = 0.0;
     let tip_s = model.length();
     let nq = model.n_q();
@@ -356,8 +446,8 @@ pub fn run_avoidance(
         // 3. touch
         let mut chi2_now = 0.0;
         if settings.touch_feedback {
-            let c =
-                locate_point_force(&model, &known, marker_s_m, &frame.positions_m, &[], &search)?;
+            let markers = super::planar_points("markers", &frame.positions_m)?;
+            let c = locate_point_force(&model, &known, marker_s_m, &markers, &[], &search)?;
             let chi2 = (c.misfit_free_m2 - c.misfit_m2) / sigma2;
             let f = c.force_n[0].hypot(c.force_n[1]);
             chi2_now = chi2;
@@ -371,13 +461,13 @@ pub fn run_avoidance(
                     point_m: point,
                     force_n: c.force_n,
                 };
-                let near = |a: &[f64; 2], b: &[f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < 0.02;
-                pending.retain(|x| near(&x.point_m, &cand.point_m));
+                let near = |a: Vector2<f64>, b: Vector2<f64>| (a - b).norm() < 0.02;
+                pending.retain(|x| near(x.point(), cand.point()));
                 pending.push(cand.clone());
                 if pending.len() >= 3 {
-                    match points.iter().position(|x| near(x, &cand.point_m)) {
-                        Some(i) => points[i] = cand.point_m,
-                        None => points.push(cand.point_m),
+                    match points.iter().position(|x| near(*x, cand.point())) {
+                        Some(i) => points[i] = cand.point(),
+                        None => points.push(cand.point()),
                     }
                     run.touched.push(cand);
                     pending.clear();
@@ -425,7 +515,7 @@ pub fn run_avoidance(
             pressures_pa: p.clone(),
         });
     }
-    let err = |s: &AvoidSample| (s.tip_true_m[0] - goal_m[0]).hypot(s.tip_true_m[1] - goal_m[1]);
+    let err = |s: &AvoidSample| (s.tip_true() - goal_m).norm();
     let last = run.samples.last().map_or(f64::NAN, err);
     run.final_error_m = last;
     run.final_force_n = run.samples.last().map_or(0.0, |s| s.contact_force_n);

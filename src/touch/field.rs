@@ -17,7 +17,7 @@
 //! to second order only (at an interior minimum) and the gradient at fixed
 //! `X` is the total one.
 
-use nalgebra::DVector;
+use nalgebra::{DVector, Vector2};
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
@@ -77,22 +77,23 @@ impl FieldParams {
 ///
 /// # Example
 /// ```
+/// use nalgebra::Vector2;
 /// use softrod::touch::{repulsive, FieldParams};
 /// let p = FieldParams::default();
-/// let (u, g) = repulsive(&p, [0.05, 0.0], [0.0, 0.0]);
+/// let (u, g) = repulsive(&p, Vector2::new(0.05, 0.0), Vector2::zeros());
 /// assert!((u - 0.02 * (20.0f64 - 10.0).powi(2)).abs() < 1e-12);
-/// assert!(g[0] < 0.0); // the potential falls away from the obstacle
-/// assert_eq!(repulsive(&p, [0.2, 0.0], [0.0, 0.0]), (0.0, [0.0, 0.0]));
+/// assert!(g.x < 0.0); // the potential falls away from the obstacle
+/// assert_eq!(repulsive(&p, Vector2::new(0.2, 0.0), Vector2::zeros()), (0.0, Vector2::zeros()));
 /// ```
-pub fn repulsive(p: &FieldParams, x: [f64; 2], x_obs: [f64; 2]) -> (f64, [f64; 2]) {
-    let r = [x[0] - x_obs[0], x[1] - x_obs[1]];
-    let d = r[0].hypot(r[1]);
+pub fn repulsive(p: &FieldParams, x: Vector2<f64>, x_obs: Vector2<f64>) -> (f64, Vector2<f64>) {
+    let r = x - x_obs;
+    let d = r.x.hypot(r.y);
     if d.is_nan() || d >= p.q0_m || d <= 0.0 {
-        return (0.0, [0.0; 2]);
+        return (0.0, Vector2::zeros());
     }
     let a = 1.0 / d - 1.0 / p.q0_m;
     let c = -2.0 * p.alpha_r * a / (d * d * d);
-    (p.alpha_r * a * a, [c * r[0], c * r[1]])
+    (p.alpha_r * a * a, r * c)
 }
 
 /// The closest point of element `e` of the shape `q` to `x`: `(ξ, point,
@@ -165,7 +166,8 @@ pub(crate) fn closest_on_element(
 /// let robot = five_section_scene(4).robot()?;
 /// let q = robot.reference_configuration();
 /// let tip = robot.position_at(q.as_slice(), robot.length())?;
-/// let (u, g) = field_gradient(&robot, q.as_slice(), &FieldParams::default(), [tip[0], tip[1] + 0.01], &[])?;
+/// let goal = nalgebra::Vector2::new(tip[0], tip[1] + 0.01);
+/// let (u, g) = field_gradient(&robot, q.as_slice(), &FieldParams::default(), goal, &[])?;
 /// assert!((u - 200.0 * 0.01).abs() < 1e-9 && g.len() == robot.n_q());
 /// # Ok::<(), softrod::Error>(())
 /// ```
@@ -173,20 +175,20 @@ pub fn field_gradient(
     robot: &Robot<PlanarCable>,
     q: &[f64],
     p: &FieldParams,
-    goal_m: [f64; 2],
-    obstacles_m: &[[f64; 2]],
+    goal_m: Vector2<f64>,
+    obstacles_m: &[Vector2<f64>],
 ) -> Result<(f64, DVector<f64>)> {
     p.validate()?;
     check_len("q", robot.n_q(), q.len())?;
     if !goal_m.iter().all(|v| v.is_finite()) {
         return Err(Error::invalid(
             "goal_m",
-            format!("{goal_m:?}"),
+            format!("[{}, {}]", goal_m.x, goal_m.y),
             "must be finite",
         ));
     }
     let mut g = DVector::zeros(q.len());
-    let add = |g: &mut DVector<f64>, p: &ArcPoint, dx: [f64; 2]| {
+    let add = |g: &mut DVector<f64>, p: &ArcPoint, dx: Vector2<f64>| {
         for k in 0..4 {
             let node = p.element + k / 2;
             for (d, v) in dx.iter().enumerate() {
@@ -203,16 +205,20 @@ pub fn field_gradient(
     let dist = r[0].hypot(r[1]);
     let mut u = p.zeta * dist;
     if dist > 0.0 {
-        add(&mut g, &tip, [p.zeta * r[0] / dist, p.zeta * r[1] / dist]);
+        add(
+            &mut g,
+            &tip,
+            Vector2::new(p.zeta * r[0] / dist, p.zeta * r[1] / dist),
+        );
     }
     // (38) with its exact gradient
     for x_obs in obstacles_m {
         for e in 0..n_el {
-            let (xi, xc, d) = closest_on_element(robot, q, e, *x_obs)?;
+            let (xi, xc, d) = closest_on_element(robot, q, e, (*x_obs).into())?;
             if d >= p.q0_m {
                 continue;
             }
-            let (ur, gr) = repulsive(p, xc, *x_obs);
+            let (ur, gr) = repulsive(p, Vector2::from(xc), *x_obs);
             u += ur;
             add(
                 &mut g,

@@ -61,3 +61,19 @@ pub use table::{avoidance_table, AvoidRow, AvoidSummary, FIG9_GOALS, FIG9_PLACEM
 /// assert_eq!(softrod::touch::AvoidSettings::default().alpha_rule, AlphaRule::Discrepancy);
 /// ```
 pub const ALPHA_RULE: crate::estimate::AlphaRule = crate::estimate::AlphaRule::Discrepancy;
+
+/// Planar marker positions (m) as vectors, each checked to have two
+/// components; `name` is the field named in the error.
+pub(crate) fn planar_points(
+    name: &str,
+    points: &[Vec<f64>],
+) -> crate::Result<Vec<nalgebra::Vector2<f64>>> {
+    points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            crate::error::check_len(&format!("{name}[{i}]"), 2, p.len())?;
+            Ok(nalgebra::Vector2::new(p[0], p[1]))
+        })
+        .collect()
+}

@@ -21,6 +21,28 @@ pub struct PeakContact {
     pub resultant_n: [f64; 2],
 }
 
+impl PeakContact {
+    /// [`PeakContact::peak_n_per_m`] as a vector (N/m).
+    ///
+    /// # Example
+    /// ```
+    /// let p = softrod::touch::PeakContact { s_m: 0.3, peak_n_per_m: [0.0, 3.0], resultant_n: [0.0, 0.1] };
+    /// assert_eq!(p.peak(), nalgebra::Vector2::new(0.0, 3.0));
+    /// assert_eq!(p.resultant(), nalgebra::Vector2::new(0.0, 0.1));
+    /// ```
+    pub fn peak(&self) -> nalgebra::Vector2<f64> {
+        nalgebra::Vector2::from(self.peak_n_per_m)
+    }
+
+    /// [`PeakContact::resultant_n`] as a vector (N).
+    ///
+    /// # Example
+    /// See [`PeakContact::peak`].
+    pub fn resultant(&self) -> nalgebra::Vector2<f64> {
+        nalgebra::Vector2::from(self.resultant_n)
+    }
+}
+
 /// Samples per element when searching the peak of a Hermite field.
 const SAMPLES_PER_ELEMENT: usize = 50;
 

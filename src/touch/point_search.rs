@@ -65,6 +65,20 @@ pub struct PointContact {
     pub misfit_free_m2: f64,
 }
 
+impl PointContact {
+    /// [`PointContact::force_n`] as a vector (N, world axes).
+    ///
+    /// # Example
+    /// ```
+    /// let c = softrod::touch::PointContact { s_m: 0.1, force_n: [0.0, -0.02],
+    ///     misfit_m2: 0.0, misfit_free_m2: 1e-6 };
+    /// assert_eq!(c.force(), nalgebra::Vector2::new(0.0, -0.02));
+    /// ```
+    pub fn force(&self) -> Vector2<f64> {
+        Vector2::from(self.force_n)
+    }
+}
+
 /// The point force on `robot` (under the known loads `known`, the virtual
 /// payload in `known.distributed_f`) that best explains the marker
 /// positions `markers_m` at the arc coordinates `marker_s_m` (see the
@@ -84,7 +98,7 @@ pub fn locate_point_force(
     robot: &Robot<PlanarCable>,
     known: &Loads,
     marker_s_m: &[f64],
-    markers_m: &[Vec<f64>],
+    markers_m: &[Vector2<f64>],
     offset_m: &[Vector2<f64>],
     settings: &PointSearchSettings,
 ) -> Result<PointContact> {
@@ -96,8 +110,7 @@ pub fn locate_point_force(
     if settings.passes == 0 {
         return Err(Error::invalid("passes", 0, "must be >= 1"));
     }
-    let mut y: Vec<f64> = markers_m.iter().flatten().copied().collect();
-    check_len("markers_m", 2 * marker_s_m.len(), y.len())?;
+    let mut y: Vec<f64> = markers_m.iter().flat_map(|v| v.iter().copied()).collect();
     if !offset_m.is_empty() {
         let o: Vec<f64> = offset_m.iter().flat_map(|v| v.iter().copied()).collect();
         check_len("offset_m", y.len(), o.len())?;
@@ -169,9 +182,9 @@ pub fn locate_point_force(
 /// let (robot, loads) = (scene.robot()?, scene.loads()?);
 /// let arcs = marker_arcs(6);
 /// let q = StaticSolver::default().solve(&robot, &loads, None)?.q;
-/// let free: Vec<Vec<f64>> = arcs
+/// let free: Vec<nalgebra::Vector2<f64>> = arcs
 ///     .iter()
-///     .map(|&s| Ok(robot.position_at(q.as_slice(), s)?.as_slice().to_vec()))
+///     .map(|&s| robot.position_at_fixed(q.as_slice(), s))
 ///     .collect::<softrod::Result<_>>()?;
 /// let offset = marker_offset(&robot, &loads, arcs.as_slice(), &free)?;
 /// assert!(offset.len() == 6 && offset.iter().all(|o| o.norm() < 1e-12));
@@ -181,7 +194,7 @@ pub fn marker_offset(
     robot: &Robot<PlanarCable>,
     known: &Loads,
     marker_s_m: &[f64],
-    free_markers_m: &[Vec<f64>],
+    free_markers_m: &[Vector2<f64>],
 ) -> Result<Vec<Vector2<f64>>> {
     check_len("markers", marker_s_m.len(), free_markers_m.len())?;
     let q = StaticSolver::default().solve(robot, known, None)?.q;
@@ -190,8 +203,7 @@ pub fn marker_offset(
         .zip(free_markers_m)
         .map(|(&s, y)| {
             let p: Vector2<f64> = robot.position_at_fixed(q.as_slice(), s)?;
-            check_len("free_markers_m", 2, y.len())?;
-            Ok(Vector2::new(y[0] - p[0], y[1] - p[1]))
+            Ok(y - p)
         })
         .collect()
 }

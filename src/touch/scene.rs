@@ -133,6 +133,18 @@ impl AvoidScene {
         let cal = calibrate_on_free_plant(&scene, arcs, &self.plant)?;
         let mut plant = SimulatedPlant::new(&scene, arcs, self.plant.clone())?
             .with_obstacles(self.checked_obstacles()?)?;
-        run_avoidance(&scene, &cal, arcs, &mut plant, self.goal_m, &self.avoid)
+        run_avoidance(&scene, &cal, arcs, &mut plant, self.goal(), &self.avoid)
+    }
+
+    /// [`AvoidScene::goal_m`] as a vector (m).
+    ///
+    /// # Example
+    /// ```
+    /// let s = softrod::touch::AvoidScene::from_json(r#"{"obstacles": [], "goal_m": [0.15, -0.4]}"#)?;
+    /// assert_eq!(s.goal(), nalgebra::Vector2::new(0.15, -0.4));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn goal(&self) -> nalgebra::Vector2<f64> {
+        nalgebra::Vector2::from(self.goal_m)
     }
 }

@@ -3,6 +3,7 @@
 //! the model) bends into a disk placed at a chosen arc position and depth;
 //! both localization methods see its noisy markers only.
 
+use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
 use crate::contact::{Obstacle, Obstacles};
@@ -125,8 +126,42 @@ impl LocalizationResult {
 
     /// Force errors `|f̂ − f|` of the peak and point methods (N).
     pub fn force_errors_n(&self) -> (f64, f64) {
-        let e = |f: [f64; 2]| (f[0] - self.true_force_n[0]).hypot(f[1] - self.true_force_n[1]);
-        (e(self.peak_force_n), e(self.point_force_n))
+        let e = |f: Vector2<f64>| (f - self.true_force()).norm();
+        (e(self.peak_force()), e(self.point_force()))
+    }
+
+    /// [`LocalizationResult::true_force_n`] as a vector (N).
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use softrod::touch::{Calibration, LocalizationCase, LocalizationResult};
+    /// let r = LocalizationResult { case: LocalizationCase::new(0.3, 0.006, 6, 1),
+    ///     true_s_m: 0.3, true_force_n: [0.0, 0.02], peak_s_m: 0.31, peak_force_n: [0.0, 0.018],
+    ///     point_s_m: 0.3, point_force_n: [0.001, 0.02],
+    ///     calibration: Calibration { ei_factor: 1.0, gain_factor: 1.0, rms_before_m: 0.0, rms_after_m: 0.0 } };
+    /// assert_eq!(r.true_force(), Vector2::new(0.0, 0.02));
+    /// assert!((r.force_errors_n().0 - (r.peak_force() - r.true_force()).norm()).abs() < 1e-15);
+    /// assert!((r.force_errors_n().1 - (r.point_force() - r.true_force()).norm()).abs() < 1e-15);
+    /// ```
+    pub fn true_force(&self) -> Vector2<f64> {
+        Vector2::from(self.true_force_n)
+    }
+
+    /// [`LocalizationResult::peak_force_n`] as a vector (N).
+    ///
+    /// # Example
+    /// See [`LocalizationResult::true_force`].
+    pub fn peak_force(&self) -> Vector2<f64> {
+        Vector2::from(self.peak_force_n)
+    }
+
+    /// [`LocalizationResult::point_force_n`] as a vector (N).
+    ///
+    /// # Example
+    /// See [`LocalizationResult::true_force`].
+    pub fn point_force(&self) -> Vector2<f64> {
+        Vector2::from(self.point_force_n)
     }
 }
 
@@ -233,12 +268,13 @@ pub fn run_localization(
     let vp = est.step(&frame_free.observation(arcs)?)?.converged()?;
     let mut with_vp = known;
     with_vp.distributed_f = vp.f.as_slice().to_vec();
-    let offset = marker_offset(&model, &with_vp, arcs, &frame_free.positions_m)?;
+    let free_markers = super::planar_points("markers", &frame_free.positions_m)?;
+    let offset = marker_offset(&model, &with_vp, arcs, &free_markers)?;
     let point = locate_point_force(
         &model,
         &with_vp,
         arcs,
-        &frame.positions_m,
+        &super::planar_points("markers", &frame.positions_m)?,
         &offset,
         &PointSearchSettings::default(),
     )?;

@@ -10,6 +10,7 @@
 
 use std::time::Instant;
 
+use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
 use crate::contact::{Obstacle, Obstacles};
@@ -23,16 +24,27 @@ use super::{
 
 /// The obstacle placements of the table: disks (centre, radius; m) that
 /// the baseline's path to both [`FIG9_GOALS`] meets.
-pub const FIG9_PLACEMENTS: [([f64; 2], f64); 5] = [
-    ([0.08, -0.465], 0.01),
-    ([0.10, -0.455], 0.01),
-    ([0.06, -0.475], 0.015),
-    ([0.12, -0.45], 0.01),
-    ([0.09, -0.48], 0.02),
+///
+/// # Example
+/// ```
+/// let (center, radius) = softrod::touch::FIG9_PLACEMENTS[0];
+/// assert_eq!((center, radius), (nalgebra::Vector2::new(0.08, -0.465), 0.01));
+/// ```
+pub const FIG9_PLACEMENTS: [(Vector2<f64>, f64); 5] = [
+    (Vector2::new(0.08, -0.465), 0.01),
+    (Vector2::new(0.10, -0.455), 0.01),
+    (Vector2::new(0.06, -0.475), 0.015),
+    (Vector2::new(0.12, -0.45), 0.01),
+    (Vector2::new(0.09, -0.48), 0.02),
 ];
 
 /// The goals of the end effector (m).
-pub const FIG9_GOALS: [[f64; 2]; 2] = [[0.15, -0.40], [0.12, -0.36]];
+///
+/// # Example
+/// ```
+/// assert_eq!(softrod::touch::FIG9_GOALS[1], nalgebra::Vector2::new(0.12, -0.36));
+/// ```
+pub const FIG9_GOALS: [Vector2<f64>; 2] = [Vector2::new(0.15, -0.40), Vector2::new(0.12, -0.36)];
 
 /// What one run did, without its samples.
 ///
@@ -73,6 +85,19 @@ pub struct AvoidSummary {
     pub pressures_at_bounds: usize,
 }
 
+impl AvoidSummary {
+    /// [`AvoidSummary::final_tip_m`] as a vector (m).
+    ///
+    /// # Example
+    /// ```
+    /// let s = softrod::touch::AvoidSummary { final_tip_m: [0.15, -0.4], ..Default::default() };
+    /// assert_eq!(s.final_tip(), nalgebra::Vector2::new(0.15, -0.4));
+    /// ```
+    pub fn final_tip(&self) -> Vector2<f64> {
+        Vector2::from(self.final_tip_m)
+    }
+}
+
 impl Default for AvoidSummary {
     fn default() -> Self {
         AvoidSummary {
@@ -99,8 +124,8 @@ impl AvoidSummary {
     /// The summary of `run`, which took `wall_s`, the chambers' bounds
     /// `bounds` (Pa).
     pub fn of(run: &AvoidRun, wall_s: f64, bounds: &[(f64, f64)]) -> Self {
-        let g = run.goal_m;
-        let dist = |t: [f64; 2]| (t[0] - g[0]).hypot(t[1] - g[1]);
+        let g = run.goal();
+        let dist = |t: [f64; 2]| (Vector2::from(t) - g).norm();
         let touching = |s: &&super::AvoidSample| s.contact_force_n > 1e-3;
         let last = run.samples.last();
         AvoidSummary {
@@ -153,6 +178,28 @@ pub struct AvoidRow {
 }
 
 impl AvoidRow {
+    /// [`AvoidRow::center_m`] as a vector (m).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::touch::{AvoidRow, AvoidSummary};
+    /// let row = AvoidRow { center_m: [0.08, -0.465], radius_m: 0.01, goal_m: [0.15, -0.4],
+    ///     touch: AvoidSummary::default(), baseline: AvoidSummary::default() };
+    /// assert_eq!(row.center(), nalgebra::Vector2::new(0.08, -0.465));
+    /// assert_eq!(row.goal(), nalgebra::Vector2::new(0.15, -0.4));
+    /// ```
+    pub fn center(&self) -> Vector2<f64> {
+        Vector2::from(self.center_m)
+    }
+
+    /// [`AvoidRow::goal_m`] as a vector (m).
+    ///
+    /// # Example
+    /// See [`AvoidRow::center`].
+    pub fn goal(&self) -> Vector2<f64> {
+        Vector2::from(self.goal_m)
+    }
+
     /// Whether the baseline met the obstacle (the placement rule).
     pub fn baseline_met_obstacle(&self) -> bool {
         self.baseline.max_force_before_n > 1e-3
@@ -179,8 +226,8 @@ impl AvoidRow {
 /// As [`calibrate_on_free_plant`], [`Obstacles::new`] and
 /// [`run_avoidance`].
 pub fn avoidance_table(
-    placements: &[([f64; 2], f64)],
-    goals: &[[f64; 2]],
+    placements: &[(Vector2<f64>, f64)],
+    goals: &[Vector2<f64>],
     plant: &PlantSettings,
     settings: &AvoidSettings,
 ) -> Result<Vec<AvoidRow>> {
@@ -193,8 +240,13 @@ pub fn avoidance_table(
     for &(center_m, radius_m) in placements {
         for &goal_m in goals {
             let summary = |feedback: bool| -> Result<AvoidSummary> {
-                let obstacles =
-                    Obstacles::new(vec![Obstacle::Circle { center_m, radius_m }], ROD_RADIUS_M)?;
+                let obstacles = Obstacles::new(
+                    vec![Obstacle::Circle {
+                        center_m: center_m.into(),
+                        radius_m,
+                    }],
+                    ROD_RADIUS_M,
+                )?;
                 let mut p =
                     SimulatedPlant::new(&scene, arcs, plant.clone())?.with_obstacles(obstacles)?;
                 let s = AvoidSettings {
@@ -212,9 +264,9 @@ pub fn avoidance_table(
             let touch = summary(true)?;
             let baseline = summary(false)?;
             rows.push(AvoidRow {
-                center_m,
+                center_m: center_m.into(),
                 radius_m,
-                goal_m,
+                goal_m: goal_m.into(),
                 touch,
                 baseline,
             });
