@@ -204,7 +204,7 @@ impl Reference {
     /// ```
     /// use softrod::report::reference::{embedded_names, Reference};
     /// let r = Reference::embedded(embedded_names()[0])?;
-    /// assert_eq!(r.position_at(0.0), nalgebra::Vector2::zeros()); // the clamp
+    /// assert!(r.position_at(0.0).norm() < 1e-12); // the clamp
     /// assert!((r.slope_at(0.0) - nalgebra::Vector2::x()).norm() < 1e-9);
     /// let w = r.load_at(0.5 * r.length_m);
     /// assert!(w.norm() > 0.0 && r.resultant_force_n().norm() > 0.0);
