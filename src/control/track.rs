@@ -139,6 +139,91 @@ pub struct PressuresSpec {
     pub pressures_pa: Vec<Vec<f64>>,
 }
 
+impl CircleSpec {
+    /// The centre (m) as a vector, if the file gives one.
+    ///
+    /// ```
+    /// use softrod::control::CircleSpec;
+    /// let c = CircleSpec { center_m: Some(vec![0.19, 0.12]), radius_m: 0.005,
+    ///                      period_s: 15.0, duration_s: 15.0, hold_s: 3.0 };
+    /// assert_eq!(c.center().unwrap()[1], 0.12);
+    /// ```
+    pub fn center(&self) -> Option<DVector<f64>> {
+        self.center_m.as_deref().map(DVector::from_column_slice)
+    }
+}
+
+impl FigureEightSpec {
+    /// The centre (m) as a vector, if the file gives one.
+    ///
+    /// ```
+    /// use softrod::control::FigureEightSpec;
+    /// let c = FigureEightSpec { center_m: None, size_m: 0.01,
+    ///                           period_s: 15.0, duration_s: 15.0, hold_s: 3.0 };
+    /// assert!(c.center().is_none());
+    /// ```
+    pub fn center(&self) -> Option<DVector<f64>> {
+        self.center_m.as_deref().map(DVector::from_column_slice)
+    }
+}
+
+impl LineSpec {
+    /// The first end (`from_m`, m) as a vector.
+    ///
+    /// ```
+    /// use softrod::control::LineSpec;
+    /// let l = LineSpec { from_m: vec![0.18, 0.12], to_m: vec![0.20, 0.12],
+    ///                    period_s: 10.0, duration_s: 10.0, hold_s: 3.0 };
+    /// assert_eq!((l.end() - l.start()).norm(), 0.020000000000000018);
+    /// ```
+    pub fn start(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.from_m)
+    }
+
+    /// The other end (`to_m`, m) as a vector.
+    ///
+    /// ```
+    /// use softrod::control::LineSpec;
+    /// let l = LineSpec { from_m: vec![0.18, 0.12], to_m: vec![0.20, 0.13],
+    ///                    period_s: 10.0, duration_s: 10.0, hold_s: 3.0 };
+    /// assert_eq!(l.end()[1], 0.13);
+    /// ```
+    pub fn end(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.to_m)
+    }
+}
+
+impl SamplesSpec {
+    /// Sample `i`'s position (m) as a vector; `None` past the last sample.
+    ///
+    /// ```
+    /// use softrod::control::SamplesSpec;
+    /// let s = SamplesSpec { times_s: vec![0.0, 1.0],
+    ///                       points_m: vec![vec![0.19, 0.12], vec![0.19, 0.13]] };
+    /// assert_eq!(s.point(1).unwrap()[1], 0.13);
+    /// assert!(s.point(2).is_none());
+    /// ```
+    pub fn point(&self, i: usize) -> Option<DVector<f64>> {
+        self.points_m.get(i).map(|p| DVector::from_column_slice(p))
+    }
+}
+
+impl PressuresSpec {
+    /// The chamber pressures (Pa) at time `times_s[i]`; `None` past the
+    /// last time.
+    ///
+    /// ```
+    /// use softrod::control::PressuresSpec;
+    /// let p = PressuresSpec { times_s: vec![0.0], pressures_pa: vec![vec![5e4, 0.0]] };
+    /// assert_eq!(p.pressures(0).unwrap()[0], 5e4);
+    /// ```
+    pub fn pressures(&self, i: usize) -> Option<DVector<f64>> {
+        self.pressures_pa
+            .get(i)
+            .map(|p| DVector::from_column_slice(p))
+    }
+}
+
 impl TrajectorySpec {
     /// The hold at the start (s; 0 for samples and pressure schedules).
     pub fn hold_s(&self) -> f64 {
