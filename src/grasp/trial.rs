@@ -575,7 +575,7 @@ fn start(
     let table_y = -(gripper.finger_length_m() + r + settings.table_clearance_m);
     let pose = resting_pose(object, placement, table_y);
     let b = object.bounds(&pose);
-    if !(b[1] - b[0] < gripper.opening_m()) {
+    if b[1] - b[0] >= gripper.opening_m() {
         // a disc's width is its radius's; other shapes' their sizes together
         let field = match object.shape {
             crate::grasp::object::Shape::Circle { .. } => "object.shape.radius_m",
