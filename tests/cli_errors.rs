@@ -121,6 +121,7 @@ fn pressures_take_negatives_spaces_and_reach_estimate() {
     }
     // a negative pressure is read as a number (not as a flag) and checked
     // against the chamber's bounds, which this scene's chambers put at 0
+    let mut messages = Vec::new();
     for sub in ["solve", "estimate"] {
         let (code, _, stderr) = run(&[sub, example, "--pressures", "-5e3, 0 0 0"]);
         assert_ne!(code, 0);
@@ -128,7 +129,11 @@ fn pressures_take_negatives_spaces_and_reach_estimate() {
             stderr.contains("`pressures_pa[0]` = -5000: must lie in [0, 100000] Pa"),
             "{sub}: {stderr}"
         );
+        messages.push(stderr);
     }
+    // one wording for both subcommands (the bounds' fields named)
+    assert_eq!(messages[0], messages[1]);
+    assert!(messages[0].contains("pressure_min_pa"), "{}", messages[0]);
 }
 
 /// A solve that converges outside the model's validity (a −1e4 N tip force

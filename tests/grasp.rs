@@ -109,10 +109,10 @@ fn bad_input_names_the_field() {
         field(&disc(0.03, -1.0, 0.5), p).as_deref(),
         Some("object.mass_kg")
     );
-    // wider than the 94 mm opening
+    // wider than the 94 mm opening: a disc's width is its radius's
     assert_eq!(
         field(&disc(0.05, 0.1, 0.5), p).as_deref(),
-        Some("object.shape")
+        Some("object.shape.radius_m")
     );
     // overlapping the left finger at the start
     let off = Placement {

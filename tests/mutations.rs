@@ -398,3 +398,125 @@ fn every_refused_avoid_mutation_names_its_field() {
         wrong.join("\n")
     );
 }
+
+/// The example files whose name starts with `prefix` (sorted).
+fn example_files(prefix: &str) -> Vec<std::path::PathBuf> {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|f| {
+            f.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with(prefix))
+                && f.extension().is_some_and(|e| e == "json")
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+/// Sweeps the mutants of `files` through `check` (the parse-and-validate
+/// function the command line calls for that input): the file itself is
+/// accepted, and every refusal names the field the user wrote. Returns
+/// (mutations, refusals) after asserting 0 wrong names.
+fn sweep_inputs(
+    what: &str,
+    files: &[std::path::PathBuf],
+    check: impl Fn(&str) -> Result<(), softrod::Error>,
+) -> (usize, usize) {
+    let (mut total, mut refused, mut wrong) = (0, 0, Vec::new());
+    for file in files {
+        let name = file.file_name().unwrap().to_string_lossy();
+        let base: Value = serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+        if let Err(e) = check(&base.to_string()) {
+            panic!("{name} itself is refused: {e}");
+        }
+        for (path, x, v) in mutants(&base) {
+            total += 1;
+            if let Err(e) = check(&v.to_string()) {
+                refused += 1;
+                let m = e.to_string();
+                if !names(&m, &path) {
+                    wrong.push(format!("{name}: {path} = {x:e}: {m}"));
+                }
+            }
+        }
+    }
+    println!(
+        "{what}: {} files, {total} mutations: {refused} refused, {} wrong",
+        files.len(),
+        wrong.len()
+    );
+    assert!(
+        wrong.is_empty(),
+        "{what}: {} of {refused} refusals name the wrong field:\n{}",
+        wrong.len(),
+        wrong.join("\n")
+    );
+    (total, refused)
+}
+
+/// `softrod track`'s inputs on the planar robot of `examples/track_scene.json`:
+/// the trajectory files (`TrackFile::from_json`, then `check_track`, the
+/// checks `run_track` makes before it runs) and the payload files
+/// (`payloads_from_json`, then `check_track` with the circle's file).
+#[test]
+fn every_refused_track_mutation_names_its_field() {
+    use softrod::control::{check_track, payloads_from_json, TrackFile};
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
+    let scene =
+        Scene::from_json(&std::fs::read_to_string(format!("{dir}/track_scene.json")).unwrap())
+            .unwrap();
+    let trajectories = example_files("trajectory_");
+    let (total, _) = sweep_inputs("trajectory files", &trajectories, |text| {
+        check_track(&scene, &TrackFile::from_json(text)?, None).map(|_| ())
+    });
+    assert!(trajectories.len() >= 3 && total >= 200, "{total}");
+    let circle = TrackFile::from_json(
+        &std::fs::read_to_string(format!("{dir}/trajectory_circle.json")).unwrap(),
+    )
+    .unwrap();
+    let payloads = example_files("payload_");
+    let (total, _) = sweep_inputs("payload files", &payloads, |text| {
+        check_track(&scene, &circle, Some(&payloads_from_json(text)?)).map(|_| ())
+    });
+    assert!(payloads.len() >= 3 && total >= 50, "{total}");
+}
+
+/// The parallel robot's inputs besides its scenes: the tracking settings
+/// (`TrackSettings::from_json`) and the platform markers
+/// (`PlatformMarkers::from_json` against `examples/parallel_estimate.json`).
+#[test]
+fn every_refused_parallel_input_mutation_names_its_field() {
+    use softrod::control::parallel::TrackSettings;
+    use softrod::scene::parallel::{ParallelScene, PlatformMarkers};
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
+    let (total, _) = sweep_inputs(
+        "parallel tracking settings",
+        &example_files("parallel_track_settings"),
+        |text| TrackSettings::from_json(text).map(|_| ()),
+    );
+    assert!(total >= 50, "{total}");
+    let scene = ParallelScene::from_json(
+        &std::fs::read_to_string(format!("{dir}/parallel_estimate.json")).unwrap(),
+    )
+    .unwrap();
+    let (total, _) = sweep_inputs(
+        "platform markers",
+        &example_files("parallel_markers"),
+        |text| PlatformMarkers::from_json(text, &scene).map(|_| ()),
+    );
+    assert!(total >= 30, "{total}");
+}
+
+/// `softrod grasp`'s scene files (`GraspScene::from_json`: the checks
+/// `run_trial` makes before it simulates).
+#[test]
+fn every_refused_grasp_mutation_names_its_field() {
+    use softrod::grasp::scene::GraspScene;
+    let files = example_files("grasp_");
+    let (total, _) = sweep_inputs("grasp scenes", &files, |text| {
+        GraspScene::from_json(text).map(|_| ())
+    });
+    assert!(!files.is_empty() && total >= 30, "{total}");
+}

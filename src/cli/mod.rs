@@ -418,6 +418,12 @@ struct EstimateOut {
     max_load_parameter_std: f64,
     /// The marker noise the covariances are stated for (m).
     noise_sigma_m: f64,
+    /// Load directions the markers determine (the evidence's effective
+    /// number of parameters; null if it could not be computed).
+    determined_directions: f64,
+    /// Fewer than 0.5 load directions determined: the markers barely see
+    /// the load, `force_std_n` is a prior's width, not knowledge (also on stderr).
+    weakly_informed: bool,
     report: EstimateReport,
     /// The estimated configuration (not written).
     #[serde(skip)]
@@ -470,6 +476,8 @@ fn estimate_out<E: Element>(
             .collect(),
         max_load_parameter_std: e.std_f().iter().copied().fold(0.0, f64::max),
         noise_sigma_m: e.noise_sigma_m,
+        determined_directions: e.determined_directions,
+        weakly_informed: e.weakly_informed(),
         report: e.report.clone(),
         q: e.q.as_slice().to_vec(),
         warnings: robot.validity(e.q.as_slice()).unwrap_or_default(),
@@ -610,9 +618,12 @@ pub fn run() -> Result<()> {
                 return parallel::solve(ps, pressures, out.as_ref());
             }
             let mut scene = Scene::from_file(&scene)?;
-            if let (true, Some(p)) = (scene.has_auto_elements(), &pressures) {
-                // the refinement solves with the pressures the result is for
+            if let Some(p) = &pressures {
+                // the pressures the result is for (and the refinement
+                // solves with), checked like the scene's own: the same
+                // message as `estimate`'s
                 scene.pressures_pa = p.clone();
+                scene.validate()?;
             }
             let (scene, refinement) = refine(scene, None)?;
             let mut result = solve(&scene, pressures)?;
@@ -656,6 +667,13 @@ pub fn run() -> Result<()> {
                 eprintln!("softrod: no markers file: {}", result.observation);
             }
             warn_all(&result.warnings);
+            if result.weakly_informed && result.report.status.is_converged() {
+                eprintln!(
+                    "softrod: warning: the markers determine {:.3} load directions (fewer than {}): they barely see the load; the estimate stays near zero and `force_std_n` is the width of a prior fitted to markers that show no load, not knowledge of the load",
+                    result.determined_directions,
+                    softrod::estimate::WEAKLY_INFORMED_DIRECTIONS
+                );
+            }
             write_json(&result, out.as_ref())?;
             // the last iterate is written (its report says how it ended); the
             // exit status says that it is not an estimate

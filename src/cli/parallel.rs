@@ -5,9 +5,9 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use softrod::parallel::payload::PayloadEstimate;
-use softrod::scene::parallel::{ParallelScene, ParallelSolution};
+use softrod::scene::parallel::{ParallelScene, ParallelSolution, PlatformMarkers};
 
 /// The scene at `path` if it is a parallel-robot scene.
 pub(super) fn read(path: &Path) -> Result<Option<ParallelScene>> {
@@ -53,15 +53,6 @@ pub(super) fn solve(
     )
 }
 
-/// The markers file of a parallel estimate: the platform marker unloaded
-/// and loaded (m, world axes).
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct PlatformMarkers {
-    unloaded_m: [f64; 3],
-    loaded_m: [f64; 3],
-}
-
 #[derive(Serialize)]
 struct EstimateOut {
     scene: String,
@@ -90,7 +81,7 @@ pub(super) fn estimate(
         Some(path) => {
             let text = std::fs::read_to_string(path)
                 .with_context(|| format!("cannot read {}", path.display()))?;
-            let m: PlatformMarkers = serde_json::from_str(&text)
+            let m = PlatformMarkers::from_json(&text, &scene)
                 .with_context(|| format!("{}: not a platform markers file", path.display()))?;
             (m, format!("markers file {}", path.display()))
         }
@@ -162,7 +153,7 @@ pub(super) fn track(
         Some(path) => {
             let text = std::fs::read_to_string(path)
                 .with_context(|| format!("cannot read {}", path.display()))?;
-            serde_json::from_str(&text)
+            track::TrackSettings::from_json(&text)
                 .with_context(|| format!("{}: not a parallel tracking file", path.display()))?
         }
         None => track::TrackSettings::default(),

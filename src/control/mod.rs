@@ -47,8 +47,9 @@ pub use ik::{IkSolution, InverseKinematics, RESTART_RADIUS_M};
 pub use ik_settings::{IkSettings, IkStatus, PressureBound};
 pub use mass::{MassEstimate, MassEstimator, MassForce, MassReference, MassSettings};
 pub use track::{
-    build_trajectory, payloads_from_json, run_track, CircleSpec, FigureEightSpec, LineSpec,
-    PressuresSpec, SamplesSpec, TrackFile, TrackRun, TrackSample, TrackSummary, TrajectorySpec,
+    build_trajectory, check_track, payloads_from_json, run_track, CircleSpec, FigureEightSpec,
+    LineSpec, PressuresSpec, SamplesSpec, TrackFile, TrackRun, TrackSample, TrackSummary,
+    TrajectorySpec,
 };
 pub use trajectory::Trajectory;
 pub use updater::{ParameterUpdater, UpdaterGains};

@@ -136,6 +136,45 @@ impl Default for TrackSettings {
 }
 
 impl TrackSettings {
+    /// Parses and checks a parallel tracking file (the `--trajectory` file
+    /// of `softrod track` on a parallel-robot scene; every field optional).
+    /// A refusal names the field as written in the file (`control_rate_hz`,
+    /// `gains.k_p_per_s`), not [`TrackSettings::validate`]'s `track.` and
+    /// `updater.` names.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for malformed JSON, unknown fields,
+    /// wrong types and the checks of [`TrackSettings::validate`].
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::control::parallel::TrackSettings;
+    /// let s = TrackSettings::from_json(r#"{"payload_kg": 0.05}"#)?;
+    /// assert_eq!(s.control_rate_hz, 10.0);
+    /// let e = TrackSettings::from_json(r#"{"gains": {"k_p_per_s": -1}}"#).unwrap_err();
+    /// assert_eq!(e.field(), Some("gains.k_p_per_s"), "{e}");
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn from_json(text: &str) -> Result<Self> {
+        let s: TrackSettings = super::track::parse_json(text)?;
+        s.validate().map_err(|e| match e {
+            Error::InvalidParameter {
+                name,
+                value,
+                reason,
+            } => Error::InvalidParameter {
+                name: match name.strip_prefix("track.") {
+                    Some(n) => n.to_string(),
+                    None => name.replacen("updater.", "gains.", 1),
+                },
+                value,
+                reason,
+            },
+            e => e,
+        })?;
+        Ok(s)
+    }
+
     /// Checks every field.
     ///
     /// # Errors
@@ -172,10 +211,16 @@ impl TrackSettings {
             }
         }
         if self.duration_s + self.hold_s > 600.0 {
+            // the larger of the two is blamed, the other named
+            let (name, v, other) = if self.hold_s > self.duration_s {
+                ("hold_s", self.hold_s, "duration_s")
+            } else {
+                ("duration_s", self.duration_s, "hold_s")
+            };
             return Err(Error::invalid(
-                f("duration_s"),
-                self.duration_s,
-                "hold and duration together at most 600 s",
+                f(name),
+                v,
+                format!("with `{other}` at most 600 s in all"),
             ));
         }
         if self.model_elements_per_section == 0 {

@@ -557,8 +557,9 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
         }
     };
     let arr = |v: &[f64]| nalgebra::Vector2::new(v[0], v.get(1).copied().unwrap_or(0.0));
-    // (the trajectory, the field a point out of reach is blamed on)
-    let (traj, blame) = match spec {
+    // (the trajectory, the field a point out of reach is blamed on, the
+    // other field that places the path, named in the message)
+    let (traj, blame, with) = match spec {
         TrajectorySpec::Circle(CircleSpec {
             center_m,
             radius_m,
@@ -571,6 +572,7 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
             (
                 Trajectory::circle(arr(&c), *radius_m, *period_s, *duration_s, *hold_s)?,
                 "trajectory.radius_m".to_string(),
+                center_m.as_ref().map(|_| "trajectory.center_m"),
             )
         }
         TrajectorySpec::FigureEight(FigureEightSpec {
@@ -585,6 +587,7 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
             (
                 Trajectory::figure_eight(arr(&c), *size_m, *period_s, *duration_s, *hold_s)?,
                 "trajectory.size_m".to_string(),
+                center_m.as_ref().map(|_| "trajectory.center_m"),
             )
         }
         TrajectorySpec::Line(LineSpec {
@@ -599,6 +602,7 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
             (
                 Trajectory::line(arr(from_m), arr(to_m), *period_s, *duration_s, *hold_s)?,
                 "trajectory.to_m".to_string(),
+                Some("trajectory.from_m"),
             )
         }
         TrajectorySpec::Samples(SamplesSpec { times_s, points_m }) => {
@@ -611,7 +615,7 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
                     length,
                 )?;
             }
-            (t, "trajectory.points_m".to_string())
+            (t, "trajectory.points_m".to_string(), None)
         }
         TrajectorySpec::Pressures(PressuresSpec {
             times_s,
@@ -646,6 +650,7 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
             (
                 Trajectory::from_rows(times_s.clone(), points)?,
                 "trajectory.pressures_pa".to_string(),
+                None,
             )
         }
     };
@@ -660,7 +665,11 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
             } => Error::InvalidParameter {
                 name,
                 value,
-                reason: format!("{reason} (the path's point {i}, at {} s)", traj.times_s[i]),
+                reason: format!(
+                    "{reason} (the path's point {i}, at {} s){}",
+                    traj.times_s[i],
+                    placed_by(with)
+                ),
             },
             other => other,
         })?;
@@ -674,8 +683,9 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
                 blame.clone(),
                 format!("{:?}", traj.points_m[i]),
                 format!(
-                    "out of reach at {} s: the inverse kinematics found no pose ({e})",
-                    traj.times_s[i]
+                    "out of reach at {} s: the inverse kinematics found no pose ({e}){}",
+                    traj.times_s[i],
+                    placed_by(with)
                 ),
             )
         })?;
@@ -684,14 +694,21 @@ pub fn build_trajectory(scene: &Scene, spec: &TrajectorySpec) -> Result<Trajecto
                 blame,
                 format!("{:?}", traj.points_m[i]),
                 format!(
-                    "out of reach at {} s: the closest pose within the pressure bounds is {:.2} mm away",
+                    "out of reach at {} s: the closest pose within the pressure bounds is {:.2} mm away{}",
                     traj.times_s[i],
-                    sol.status.error_m() * 1e3
+                    sol.status.error_m() * 1e3,
+                    placed_by(with)
                 ),
             ));
         }
     }
     Ok(traj)
+}
+
+/// The note of a reach error on a path that another field places too.
+fn placed_by(with: Option<&str>) -> String {
+    with.map(|w| format!("; the path is placed by `{w}` too"))
+        .unwrap_or_default()
 }
 
 /// Checks the file's settings with the paths of the file.
@@ -704,6 +721,35 @@ fn validate_file(file: &TrackFile, payloads: &PayloadSchedule, length_m: f64) ->
         }
     }
     payloads.validate(length_m)
+}
+
+/// Checks a trajectory file (and a payload schedule replacing the plant's,
+/// if given) against `scene` as [`run_track`] does before it runs: the
+/// settings, the payloads and the trajectory (every point within reach),
+/// without running the loop. A refusal names the field as written in the
+/// file.
+///
+/// # Errors
+/// As [`run_track`]'s checks.
+///
+/// # Example
+/// ```
+/// use softrod::control::{check_track, TrackFile};
+/// let scene = softrod::scene::Scene::two_section();
+/// let file = TrackFile::from_json(r#"{"trajectory": {"kind": "circle", "radius_m": 0.005, "period_s": 15, "duration_s": 15},
+///   "loop": {"control_rate_hz": -30}}"#)?;
+/// let e = check_track(&scene, &file, None).unwrap_err();
+/// assert_eq!(e.field(), Some("loop.control_rate_hz"), "{e}");
+/// # Ok::<(), softrod::Error>(())
+/// ```
+pub fn check_track(
+    scene: &Scene,
+    file: &TrackFile,
+    payloads: Option<&PayloadSchedule>,
+) -> Result<Trajectory> {
+    let length = scene.robot()?.length();
+    validate_file(file, payloads.unwrap_or(&file.plant.payloads), length)?;
+    build_trajectory(scene, &file.trajectory)
 }
 
 /// Runs `file` on `scene` with `payloads` (replacing the plant's, if
@@ -727,9 +773,8 @@ pub fn run_track(
 ) -> Result<TrackRun> {
     let robot = scene.robot()?;
     let length = robot.length();
+    let trajectory = check_track(scene, file, payloads)?;
     let payloads = payloads.unwrap_or(&file.plant.payloads).clone();
-    validate_file(file, &payloads, length)?;
-    let trajectory = build_trajectory(scene, &file.trajectory)?;
     let arcs: Vec<f64> = scene
         .markers
         .iter()

@@ -7,6 +7,8 @@ use crate::error::{Error, Result};
 
 /// Sampling interval of the built-in trajectories (s).
 const SAMPLE_S: f64 = 0.01;
+/// The longest sampled path, hold included (s): an hour of closed loop.
+const MAX_DURATION_S: f64 = 3600.0;
 
 /// A desired end-effector path `x_d(t)`: positions at increasing times,
 /// linear in between, held before the first and after the last.
@@ -182,6 +184,19 @@ impl Trajectory {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(Error::invalid(name, v, "must be finite and >= 0"));
             }
+        }
+        if hold_s + duration_s > MAX_DURATION_S {
+            // the larger of the two is blamed, the other named
+            let (name, v, other) = if hold_s > duration_s {
+                ("trajectory.hold_s", hold_s, "trajectory.duration_s")
+            } else {
+                ("trajectory.duration_s", duration_s, "trajectory.hold_s")
+            };
+            return Err(Error::invalid(
+                name,
+                v,
+                format!("with `{other}` at most {MAX_DURATION_S} s in all"),
+            ));
         }
         let n = (duration_s / SAMPLE_S).ceil().min(1e7) as usize;
         let mut times = vec![0.0];

@@ -144,6 +144,21 @@ impl<E: Element> Stream<E> {
         if !informative {
             report.status = super::EstimateStatus::NoInformation;
         }
+        // how many load directions the markers determine (the evidence's γ)
+        let determined_directions = if informative {
+            let pen = problem.penalty(&f)?;
+            super::evidence::evidence(
+                problem.load(),
+                dv,
+                op.weights(),
+                report.objective,
+                pen,
+                report.alpha,
+            )
+            .map_or(f64::NAN, |ev| ev.gamma)
+        } else {
+            0.0
+        };
         let (n_f, n_ob, d) = (f.len(), op.len(), resultant_force_n.len());
         Ok(Estimate {
             q: DVector::from_vec(q),
@@ -157,6 +172,7 @@ impl<E: Element> Stream<E> {
             marker_cov: DMatrix::from_row_slice(n_ob, n_ob, &marker_cov),
             noise_sigma_m: problem.settings().noise_sigma_m,
             report,
+            determined_directions,
             node_s: problem.robot().node_arc().to_vec(),
             dim: E::DIM,
             node_dofs: E::NODE_DOFS,

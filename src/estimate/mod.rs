@@ -480,12 +480,50 @@ pub struct Estimate {
     pub noise_sigma_m: f64,
     /// What the estimator did.
     pub report: EstimateReport,
+    /// How many load directions the markers determine at the chosen `α`:
+    /// the evidence's effective number of parameters `γ` (see
+    /// [`AlphaRule`]; between 0, markers that see nothing of the load, and
+    /// the number of observed components; `NaN` if it could not be
+    /// computed). See [`Estimate::weakly_informed`].
+    pub determined_directions: f64,
     node_s: Vec<f64>,
     dim: usize,
     node_dofs: usize,
 }
 
+/// Fewer determined load directions than this
+/// ([`Estimate::determined_directions`]) make an estimate weakly informed
+/// ([`Estimate::weakly_informed`]).
+pub const WEAKLY_INFORMED_DIRECTIONS: f64 = 0.5;
+
 impl Estimate {
+    /// Whether the markers barely see the load: fewer than
+    /// [`WEAKLY_INFORMED_DIRECTIONS`] load directions determined. The
+    /// estimate is then close to the prior's (zero load), and its standard
+    /// deviations are the width of a prior the evidence made narrow because
+    /// the markers showed no load: they say that these markers cannot tell
+    /// the load from zero, not that the load is known to be zero. (Markers
+    /// that see nothing at all end as [`EstimateStatus::NoInformation`].)
+    ///
+    /// # Example
+    /// A tip marker that moves less than its noise under any load the
+    /// prior allows:
+    /// ```
+    /// use softrod::estimate::{EstimatorSettings, Observation};
+    /// use softrod::{scene::Scene, statics::StaticSolver};
+    /// let scene = Scene::two_section();
+    /// let (robot, loads) = (scene.robot()?, scene.loads()?);
+    /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+    /// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[20])?;
+    /// let settings = EstimatorSettings { noise_sigma_m: 1e-5, ..Default::default() };
+    /// let e = settings.build_for(&robot, &loads)?.step(&obs.with_noise(1e-5, 1))?;
+    /// println!("{} directions, weakly informed: {}", e.determined_directions, e.weakly_informed());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn weakly_informed(&self) -> bool {
+        self.determined_directions < WEAKLY_INFORMED_DIRECTIONS
+    }
+
     /// The estimated load per undeformed length at arc coordinate `s` (N/m,
     /// world axes, `DIM` entries), `w(s) = S(s) F` (8). Zero for a
     /// concentrated load (see [`Estimate::f`]) and outside the robot; see

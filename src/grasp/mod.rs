@@ -16,6 +16,7 @@
 //! - `slip` (internal): the lifted object as a planar rigid body that
 //!   settles in the fingers (Gauss's principle of least constraint).
 //! - [`trial`]: one quasi-static grasp trial and its success criterion.
+//! - [`scene`]: the grasp scene file of `softrod grasp`, parsed and checked.
 //! - [`table`]: Table I's nine objects and the seeded runner.
 
 pub mod friction;
@@ -23,6 +24,7 @@ pub mod gripper;
 pub mod object;
 pub mod plant;
 mod rest;
+pub mod scene;
 mod slip;
 pub mod strategy;
 pub mod table;

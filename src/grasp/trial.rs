@@ -515,6 +515,100 @@ fn table_at(y: f64) -> Obstacle {
     }
 }
 
+/// Checks a trial's inputs as [`run_trial`] does before it simulates: the
+/// gripper, the object (fields `object.…`), the settings (`settings.…`),
+/// the placement (finite; the object narrower than the opening and clear
+/// of the fingers at the start), without running the trial.
+///
+/// # Errors
+/// As [`run_trial`]'s checks.
+///
+/// # Example
+/// ```
+/// use softrod::grasp::gripper::GripperSpec;
+/// use softrod::grasp::object::{GraspObject, Shape};
+/// use softrod::grasp::trial::{check_trial, GraspSettings, Placement};
+/// let apple = GraspObject { name: "apple".into(), shape: Shape::Circle { radius_m: 0.035 }, mass_kg: -0.15, mu: 0.6 };
+/// let e = check_trial(&GripperSpec::default(), &apple, &Placement::default(), &GraspSettings::default()).unwrap_err();
+/// assert_eq!(e.field(), Some("object.mass_kg"), "{e}");
+/// ```
+pub fn check_trial(
+    gripper: &GripperSpec,
+    object: &GraspObject,
+    placement: &Placement,
+    settings: &GraspSettings,
+) -> Result<()> {
+    start(gripper, object, placement, settings).map(|_| ())
+}
+
+/// How far from the gripper's centreline an object may be put (m): a
+/// kilometre, far beyond any grasp, but a number the geometry can hold.
+const MAX_OFFSET_M: f64 = 1e3;
+
+/// The checked start of a trial: the table's height, the object's resting
+/// pose on it and its contact cover.
+fn start(
+    gripper: &GripperSpec,
+    object: &GraspObject,
+    placement: &Placement,
+    settings: &GraspSettings,
+) -> Result<(f64, Pose, Vec<Obstacle>)> {
+    gripper.validate()?;
+    object.validate("object")?;
+    settings.validate()?;
+    for (n, v) in [
+        ("placement.offset_m", placement.offset_m),
+        ("placement.angle_rad", placement.angle_rad),
+    ] {
+        if !v.is_finite() {
+            return Err(Error::invalid(n, v, "must be finite"));
+        }
+    }
+    if placement.offset_m.abs() > MAX_OFFSET_M {
+        return Err(Error::invalid(
+            "placement.offset_m",
+            placement.offset_m,
+            format!("must be within {MAX_OFFSET_M} m of the gripper's centreline"),
+        ));
+    }
+    let r = gripper.finger_radius_m;
+    let table_y = -(gripper.finger_length_m() + r + settings.table_clearance_m);
+    let pose = resting_pose(object, placement, table_y);
+    let b = object.bounds(&pose);
+    if b[1] - b[0] >= gripper.opening_m() {
+        // a disc's width is its radius's; other shapes' their sizes together
+        let field = match object.shape {
+            crate::grasp::object::Shape::Circle { .. } => "object.shape.radius_m",
+            _ => "object.shape",
+        };
+        return Err(Error::invalid(
+            field,
+            format!("{:.4e} m wide", b[1] - b[0]),
+            format!(
+                "wider than the gripper's opening ({:.4} m)",
+                gripper.opening_m()
+            ),
+        ));
+    }
+    let cover = object.contact_cover(&pose)?;
+    let obstacles = Obstacles::new(cover.clone(), r)?;
+    for side in [Side::Left, Side::Right] {
+        let f = gripper.finger(side)?;
+        let overlap = obstacles
+            .gaps(&f, f.reference_configuration().as_slice())?
+            .iter()
+            .any(|g| g.gap_m < 0.0);
+        if overlap {
+            return Err(Error::invalid(
+                "placement.offset_m",
+                placement.offset_m,
+                format!("the object overlaps the {side:?} finger at the start"),
+            ));
+        }
+    }
+    Ok((table_y, pose, cover))
+}
+
 /// Runs one trial of `strategy` on `object` at `placement` (see the module
 /// docs); `seed` seeds the marker noise.
 ///
@@ -542,48 +636,8 @@ pub fn run_trial(
     settings: &GraspSettings,
     seed: u64,
 ) -> Result<TrialOutcome> {
-    gripper.validate()?;
-    object.validate("object")?;
-    settings.validate()?;
-    for (n, v) in [
-        ("placement.offset_m", placement.offset_m),
-        ("placement.angle_rad", placement.angle_rad),
-    ] {
-        if !v.is_finite() {
-            return Err(Error::invalid(n, v, "must be finite"));
-        }
-    }
-    let r = gripper.finger_radius_m;
-    let table_y = -(gripper.finger_length_m() + r + settings.table_clearance_m);
-    let pose = resting_pose(object, &placement, table_y);
-    let b = object.bounds(&pose);
-    if b[1] - b[0] >= gripper.opening_m() {
-        return Err(Error::invalid(
-            "object.shape",
-            format!("{:.4} m wide", b[1] - b[0]),
-            format!(
-                "wider than the gripper's opening ({:.4} m)",
-                gripper.opening_m()
-            ),
-        ));
-    }
+    let (table_y, pose, cover) = start(gripper, object, &placement, settings)?;
     let outline = object.obstacle(&pose);
-    let cover = object.contact_cover(&pose)?;
-    let obstacles = Obstacles::new(cover.clone(), r)?;
-    for side in [Side::Left, Side::Right] {
-        let f = gripper.finger(side)?;
-        let overlap = obstacles
-            .gaps(&f, f.reference_configuration().as_slice())?
-            .iter()
-            .any(|g| g.gap_m < 0.0);
-        if overlap {
-            return Err(Error::invalid(
-                "placement.offset_m",
-                placement.offset_m,
-                format!("the object overlaps the {side:?} finger at the start"),
-            ));
-        }
-    }
     let table = table_at(table_y);
     let mut plant = GripperPlant::new(
         gripper,

@@ -114,6 +114,15 @@ pub struct TrialOutcome {
     pub status: String,
     /// Whether it converged.
     pub converged: bool,
+    /// Load directions the markers determine
+    /// ([`crate::estimate::Estimate::determined_directions`]; `NaN` if the
+    /// estimation failed).
+    #[serde(default)]
+    pub determined_directions: f64,
+    /// The estimate said the markers barely see the load
+    /// ([`crate::estimate::Estimate::weakly_informed`]).
+    #[serde(default)]
+    pub weakly_informed: bool,
 }
 
 impl TrialOutcome {
@@ -359,6 +368,8 @@ pub fn run_trial(
         alpha: f64::NAN,
         status: String::new(),
         converged: false,
+        determined_directions: f64::NAN,
+        weakly_informed: false,
     };
     let settings = EstimatorSettings {
         backend,
@@ -390,6 +401,8 @@ pub fn run_trial(
     out.covered = out.converged && out.d2 <= CHI2_2_95;
     out.covered_components = [0, 1].map(|a| out.converged && dx[a].abs() <= 1.96 * out.std_n[a]);
     out.alpha = e.report.alpha;
+    out.determined_directions = e.determined_directions;
+    out.weakly_informed = e.weakly_informed();
     out.status = e.report.status.to_string();
     out
 }

@@ -290,8 +290,11 @@ impl ParallelScene {
         let unloaded_m: [f64; 3] = unloaded_m.into().into();
         let loaded_m: [f64; 3] = loaded_m.into().into();
         self.validate()?;
-        check_all_finite("unloaded_m", &unloaded_m)?;
-        check_all_finite("loaded_m", &loaded_m)?;
+        PlatformMarkers {
+            unloaded_m,
+            loaded_m,
+        }
+        .check(self)?;
         match self.element {
             LegElement::Ancf3d => {
                 self.estimate_with(&self.parallel.build_full()?, unloaded_m, loaded_m)
@@ -338,4 +341,124 @@ fn solution<E: Element>(robot: &ParallelRobot<E>, eq: &Equilibrium) -> Result<Pa
         legs_m: legs,
         iterations: eq.report.iterations,
     })
+}
+
+/// The markers file of a parallel estimate (`softrod estimate SCENE
+/// --markers FILE` on a parallel scene): the platform marker unloaded and
+/// loaded (m, world axes). Only their difference is used; it is applied to
+/// the model's unloaded platform.
+///
+/// # Example
+/// ```
+/// use softrod::scene::parallel::{ParallelScene, PlatformMarkers};
+/// let scene = ParallelScene::from_json(&std::fs::read_to_string("examples/parallel_estimate.json")?)?;
+/// let m = PlatformMarkers::from_json(r#"{"unloaded_m": [0, 0, -0.118], "loaded_m": [0, 0, -0.1182]}"#, &scene)?;
+/// assert!((m.loaded() - m.unloaded()).norm() < 1e-3);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlatformMarkers {
+    /// The platform marker without the payload (m).
+    pub unloaded_m: [f64; 3],
+    /// The platform marker with the payload (m).
+    pub loaded_m: [f64; 3],
+}
+
+impl PlatformMarkers {
+    /// Parses a platform markers file and checks it against `scene`
+    /// (see [`PlatformMarkers::check`]); a refusal names the field as
+    /// written (`loaded_m[2]`; `(file)` when the JSON itself is broken).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the field.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::scene::parallel::{ParallelScene, PlatformMarkers};
+    /// let scene = ParallelScene::from_json(&std::fs::read_to_string("examples/parallel_estimate.json")?)?;
+    /// let e = PlatformMarkers::from_json(r#"{"unloaded_m": [0, 0, -0.118], "loaded_m": [0, 0]}"#, &scene).unwrap_err();
+    /// assert_eq!(e.field(), Some("loaded_m"), "{e}");
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn from_json(text: &str, scene: &ParallelScene) -> Result<PlatformMarkers> {
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let m: PlatformMarkers = serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let name = if path.is_empty() || path == "." {
+                "(file)".to_string()
+            } else {
+                path
+            };
+            Error::invalid(name, "as written", e.into_inner().to_string())
+        })?;
+        m.check(scene)?;
+        Ok(m)
+    }
+
+    /// Checks the markers: every coordinate finite and within 1e12 leg
+    /// lengths of the origin, and the loaded marker within one leg length
+    /// of the unloaded one (a payload cannot move the platform further).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `unloaded_m[i]` or `loaded_m[i]`.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::scene::parallel::{ParallelScene, PlatformMarkers};
+    /// let scene = ParallelScene::from_json(&std::fs::read_to_string("examples/parallel_estimate.json")?)?;
+    /// let m = PlatformMarkers { unloaded_m: [0.0, 0.0, -0.118], loaded_m: [0.0, 0.0, -1.0] };
+    /// assert_eq!(m.check(&scene).unwrap_err().field(), Some("loaded_m[2]"));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn check(&self, scene: &ParallelScene) -> Result<()> {
+        let leg = scene.parallel.leg_length_m;
+        for (name, p) in [
+            ("unloaded_m", &self.unloaded_m),
+            ("loaded_m", &self.loaded_m),
+        ] {
+            check_all_finite(name, p)?;
+            if let Some(i) = p.iter().position(|v| v.abs() > 1e12 * leg) {
+                return Err(Error::invalid(
+                    format!("{name}[{i}]"),
+                    p[i],
+                    format!("is more than 1e12 leg lengths ({leg} m) from the origin"),
+                ));
+            }
+        }
+        if let Some(i) = (0..3).find(|&i| (self.loaded_m[i] - self.unloaded_m[i]).abs() > leg) {
+            return Err(Error::invalid(
+                format!("loaded_m[{i}]"),
+                self.loaded_m[i],
+                format!(
+                    "is {:.4e} m from `unloaded_m[{i}]` = {}: a payload moves the platform by less than a leg's length ({leg} m)",
+                    self.loaded_m[i] - self.unloaded_m[i],
+                    self.unloaded_m[i]
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The unloaded marker (m).
+    ///
+    /// # Example
+    /// ```
+    /// let m = softrod::scene::parallel::PlatformMarkers { unloaded_m: [0.0, 0.0, -0.1], loaded_m: [0.0, 0.0, -0.11] };
+    /// assert_eq!(m.unloaded().z, -0.1);
+    /// ```
+    pub fn unloaded(&self) -> nalgebra::Vector3<f64> {
+        self.unloaded_m.into()
+    }
+
+    /// The loaded marker (m).
+    ///
+    /// # Example
+    /// ```
+    /// let m = softrod::scene::parallel::PlatformMarkers { unloaded_m: [0.0, 0.0, -0.1], loaded_m: [0.0, 0.0, -0.11] };
+    /// assert_eq!(m.loaded().z, -0.11);
+    /// ```
+    pub fn loaded(&self) -> nalgebra::Vector3<f64> {
+        self.loaded_m.into()
+    }
 }
