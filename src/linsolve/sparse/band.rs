@@ -71,7 +71,7 @@ impl Band {
         matrix: &SymmetricMatrix,
         d: &[f64],
         shift: f64,
-    ) -> Result<Result<(BandFactors, f64), (usize, f64)>, LinsolveError> {
+    ) -> Result<Banded, LinsolveError> {
         let values = matrix.values();
         let mut bad = 0.0f64;
         for &v in values {
@@ -154,8 +154,7 @@ fn factor_rows<R: AsRef<[f64]> + AsMut<[f64]>>(
         for tp in 0..b {
             s -= v[tp] * row[tp];
         }
-        // `s > tol`, false for a NaN
-        if !(s > rel * scale.abs()) {
+        if !super::exceeds(s, rel * scale.abs()) {
             return Err((r - b, s));
         }
         min_ratio = min_ratio.min(s / scale.abs());
@@ -164,6 +163,10 @@ fn factor_rows<R: AsRef<[f64]> + AsMut<[f64]>>(
     }
     Ok(min_ratio)
 }
+
+/// A band factorization: the factors and the smallest pivot ratio, or the
+/// first row whose pivot is not clearly positive and that pivot.
+pub(super) type Banded = Result<(BandFactors, f64), (usize, f64)>;
 
 /// The factors of a band `L D Lᵀ` (unit lower `L` by rows, `D` its pivots).
 #[derive(Debug, Clone)]
