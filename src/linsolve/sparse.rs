@@ -1,7 +1,10 @@
 //! The sparse solver (faer): `L D Lᵀ` or Cholesky with a fill-reducing
 //! ordering whose symbolic analysis every factorization reuses, and a
 //! sparse LU with partial pivoting for tangents that are not positive
-//! definite.
+//! definite. A pattern that is a band with little fill in its own order
+//! (a robot's chain) is factored first by a band `L D Lᵀ` in that order
+//! (`band.rs`); a matrix that is not positive definite then goes on to the
+//! faer path.
 //!
 //! All faer calls run sequentially (`Par::Seq` is passed to each of them,
 //! so the process-wide setting is left to the application): the tangents
@@ -30,8 +33,10 @@ use super::{
     SymmetricPattern, TangentSolver,
 };
 
+mod band;
 mod factors;
 mod kept;
+use band::Band;
 use factors::Numeric;
 pub use factors::SparseFactors;
 use kept::{keep_analysis, kept_analysis, Analysis};
@@ -111,6 +116,9 @@ struct Permuted {
     /// each of its entries the stored entry it copies: built when an LU of
     /// this pattern is first needed, then shared by every solver of it.
     full: OnceLock<(SymbolicSparseColMat<usize>, Vec<usize>)>,
+    /// The band `L D Lᵀ` in the natural order tried first, for a band
+    /// pattern with little fill and the `L D Lᵀ` setting (see `band.rs`).
+    band: Option<Band>,
 }
 
 /// The faer sparse solver behind [`TangentSolver`], for any pattern.
@@ -286,6 +294,10 @@ impl SparseSolver {
             })
             .collect();
         let tri = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        let band = match settings.cholesky {
+            CholeskyKind::Ldlt => Band::of(pattern, symbolic.len_val()),
+            CholeskyKind::Llt => None,
+        };
         Ok((
             symbolic,
             Permuted {
@@ -296,6 +308,7 @@ impl SparseSolver {
                 diag,
                 identity: (0..n).collect(),
                 full: OnceLock::new(),
+                band,
             },
         ))
     }
@@ -587,21 +600,41 @@ impl TangentSolver for SparseSolver {
         super::work::count_factorization();
         let n = matrix.n();
         // the Jacobi scaling |k_ii|^-1/2 (1 for a zero or non-finite
-        // diagonal), in the permuted order
+        // diagonal)
         let (values, diag) = (matrix.values(), self.pattern.diagonal_slots());
-        let d_perm: Vec<f64> = self
-            .perm
-            .fwd
-            .iter()
-            .map(|&i| {
-                let a = values[diag[i]].abs();
-                if a > 0.0 && a.is_finite() {
-                    1.0 / a.sqrt()
-                } else {
-                    1.0
-                }
-            })
-            .collect();
+        let jacobi = |i: usize| {
+            let a = values[diag[i]].abs();
+            if a > 0.0 && a.is_finite() {
+                1.0 / a.sqrt()
+            } else {
+                1.0
+            }
+        };
+        let all_positive = Some(Inertia {
+            positive: n,
+            negative: 0,
+        });
+        if let Some(band) = &self.perm.band {
+            // a positive definite band matrix: its band L D Lᵀ in the
+            // natural order; anything else goes on to the general path
+            let d: Vec<f64> = (0..n).map(jacobi).collect();
+            if let Ok((f, ratio)) = band.factor(matrix, &d, options.shift)? {
+                return Ok(SparseFactors {
+                    n,
+                    symbolic: self.symbolic.clone(),
+                    perm: self.perm.clone(),
+                    numeric: Numeric::Band(f),
+                    scaling: Arc::new(d),
+                    inertia: all_positive,
+                    min_pivot: ratio,
+                });
+            }
+            // (a pivot the natural order leaves below the test may pass in
+            // the fill-reducing order: the general path decides, so that
+            // the band path never refuses what the general path factors)
+        }
+        // in the permuted order
+        let d_perm: Vec<f64> = self.perm.fwd.iter().map(|&i| jacobi(i)).collect();
         self.scale_and_permute(matrix, &d_perm, options.shift)?;
         let d_perm = Arc::new(d_perm);
         let (symbolic, perm) = (self.symbolic.clone(), self.perm.clone());
@@ -615,10 +648,6 @@ impl TangentSolver for SparseSolver {
             min_pivot,
         };
         let llt_first = self.settings.cholesky == CholeskyKind::Llt;
-        let all_positive = Some(Inertia {
-            positive: n,
-            negative: 0,
-        });
         let mut outcome = self.cholesky(llt_first)?;
         if llt_first {
             if let CholeskyOutcome::Done { values } = outcome {

@@ -127,15 +127,19 @@ impl StaticSettings {
                 format!("{path}.{name}")
             }
         };
+        // (the field names are formatted only for an error: this runs on
+        // every solve)
         if self.max_iterations == 0 {
             return Err(Error::invalid(f("max_iterations"), 0, "must be >= 1"));
         }
-        crate::error::check_at_most(&f("max_iterations"), self.max_iterations, MAX_ITERATIONS)?;
-        crate::error::check_at_most(
-            &f("max_total_iterations"),
-            self.max_total_iterations,
-            MAX_ITERATIONS,
-        )?;
+        for (name, v) in [
+            ("max_iterations", self.max_iterations),
+            ("max_total_iterations", self.max_total_iterations),
+        ] {
+            if crate::error::check_at_most("", v, MAX_ITERATIONS).is_err() {
+                crate::error::check_at_most(&f(name), v, MAX_ITERATIONS)?;
+            }
+        }
         if self.max_total_iterations < self.max_iterations {
             return Err(Error::invalid(
                 f("max_total_iterations"),
@@ -149,7 +153,9 @@ impl StaticSettings {
             ("max_step_rotation", self.max_step_rotation),
             ("min_load_step", self.min_load_step),
         ] {
-            crate::error::check_positive(&f(name), v)?;
+            if crate::error::check_positive("", v).is_err() {
+                crate::error::check_positive(&f(name), v)?;
+            }
         }
         for (name, v) in [
             ("residual_tolerance", self.residual_tolerance),

@@ -12,12 +12,16 @@ use faer::sparse::linalg::lu::simplicial::{
 };
 use faer::{Conj, MatMut, Par};
 
+use super::band::BandFactors;
 use super::Permuted;
 use crate::linsolve::{check_rhs, FactorMethod, Factorization, Inertia, LinsolveError};
 
 /// The numeric factors.
 #[derive(Debug, Clone)]
 pub(super) enum Numeric {
+    /// The band `L D Lᵀ` in the natural order (`scaling` then in the
+    /// natural order too).
+    Band(BandFactors),
     Llt(Vec<f64>),
     Ldlt(Vec<f64>),
     Lu {
@@ -79,6 +83,19 @@ impl SparseFactors {
         x: &mut Vec<f64>,
     ) -> Result<(), LinsolveError> {
         let n = self.n;
+        if let Numeric::Band(f) = &self.numeric {
+            // natural order: no permutation, no workspace
+            for bc in b.chunks_exact_mut(n) {
+                bc.iter_mut()
+                    .zip(self.scaling.iter())
+                    .for_each(|(v, d)| *v *= d);
+                f.solve_in_place(bc);
+                bc.iter_mut()
+                    .zip(self.scaling.iter())
+                    .for_each(|(v, d)| *v *= d);
+            }
+            return Ok(());
+        }
         let fwd = &self.perm.fwd;
         x.clear();
         x.try_reserve(n * k)
@@ -88,6 +105,8 @@ impl SparseFactors {
         }
         let rhs = MatMut::from_column_major_slice_mut(&mut x[..], n, k);
         match (&self.numeric, self.symbolic.raw()) {
+            // solved above, in the natural order
+            (Numeric::Band(_), _) => {}
             // the simplicial factors solve in place without a workspace
             (Numeric::Llt(values), SymbolicCholeskyRaw::Simplicial(s)) => {
                 SimplicialLltRef::new(s, values).solve_in_place_with_conj(
@@ -165,7 +184,7 @@ impl Factorization for SparseFactors {
     fn method(&self) -> FactorMethod {
         match self.numeric {
             Numeric::Llt(_) => FactorMethod::Llt,
-            Numeric::Ldlt(_) => FactorMethod::Ldlt,
+            Numeric::Ldlt(_) | Numeric::Band(_) => FactorMethod::Ldlt,
             Numeric::Lu { .. } => FactorMethod::Lu,
         }
     }
