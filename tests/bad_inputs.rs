@@ -73,7 +73,12 @@ fn estimate(
     let mut obs = Observation {
         markers: [4usize, 8, 12, 16, 20]
             .iter()
-            .map(|&n| MarkerObservation::at_node(n, nalgebra::Vector2::from_column_slice(&q.as_slice()[4 * n..4 * n + 2])))
+            .map(|&n| {
+                MarkerObservation::at_node(
+                    n,
+                    nalgebra::Vector2::from_column_slice(&q.as_slice()[4 * n..4 * n + 2]),
+                )
+            })
             .collect(),
     };
     fo(&mut obs);
@@ -141,7 +146,12 @@ fn estimate_spatial(
     let mut obs = Observation {
         markers: [4usize, 8, 12, 16]
             .iter()
-            .map(|&n| MarkerObservation::at_node(n, nalgebra::Vector3::from_column_slice(&q.as_slice()[6 * n..6 * n + 3])))
+            .map(|&n| {
+                MarkerObservation::at_node(
+                    n,
+                    nalgebra::Vector3::from_column_slice(&q.as_slice()[6 * n..6 * n + 3]),
+                )
+            })
             .collect(),
     };
     fo(&mut obs);
