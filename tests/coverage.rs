@@ -131,7 +131,7 @@ fn a_marker_at_the_clamped_base_is_no_information() {
                 EstimateStatus::NoInformation,
                 "{backend:?} {rule:?}"
             );
-            assert!(e.resultant_force_cov[0] > 0.0 && e.resultant_force_cov[3] > 0.0);
+            assert!(e.resultant_force_cov()[0] > 0.0 && e.resultant_force_cov()[3] > 0.0);
             assert!(matches!(
                 e.converged(),
                 Err(Error::EstimateNotConverged { .. })

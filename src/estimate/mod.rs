@@ -115,7 +115,7 @@ pub use sqp::SqpEstimator;
 pub use crate::observe::{MarkerObservation, Observation};
 pub use crate::outcome::{EstimateCriterion, EstimateStatus};
 
-use nalgebra::{DMatrix, DVector, SVector};
+use nalgebra::{DVector, SVector};
 use serde::{Deserialize, Serialize};
 
 use crate::element::ArcPoint;
@@ -438,23 +438,8 @@ pub struct Estimate {
     /// Moment of the estimated load about the base position in the
     /// estimated (deformed) shape, `∫ (r − r_0) × w dX` (N·m).
     pub resultant_moment_nm: DVector<f64>,
-    /// Posterior covariance of the resultant force (N², `DIM × DIM`): the
-    /// spread of the stated marker noise plus the bias of the penalty, with
-    /// the penalty read as a Gaussian prior (see [`AlphaRule`]).
-    pub resultant_force_cov: DMatrix<f64>,
     /// Marker residuals `A q − y` in observation order (m; tangents dimensionless).
     pub marker_residuals: DVector<f64>,
-    /// Covariance factor `L` (`n_F × n_ob`) of the noise alone
-    /// (no bias): `Cov(F̂) = L Lᵀ`, see
-    /// [`Estimate::covariance_f`]. Like the other covariances it is taken at
-    /// the last linearization (see [`EstimateReport::gradient_norm`]; after
-    /// an unconfirmed last step the two points differ by that step, whose
-    /// predicted decrease is below `1e-3 tolerance`: the covariances then
-    /// differ by about the square root of that, relatively).
-    pub cov_factor: DMatrix<f64>,
-    /// Posterior covariance of the estimated marker-space shape `A q`
-    /// (`n_ob × n_ob`; m²).
-    pub marker_cov: DMatrix<f64>,
     /// The stated marker noise the covariances are for (m).
     pub noise_sigma_m: f64,
     /// What the estimator did.
@@ -462,6 +447,10 @@ pub struct Estimate {
     node_s: Vec<f64>,
     dim: usize,
     node_dofs: usize,
+    /// The covariances ([`Estimate::resultant_force_cov`],
+    /// [`Estimate::marker_cov`], [`Estimate::cov_factor`]), formed on
+    /// request.
+    cov: covariance::LazyCovariances,
 }
 
 impl Estimate {

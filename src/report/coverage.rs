@@ -332,7 +332,7 @@ pub fn run_trial(
         }
     };
     let f = &e.resultant_force_n;
-    let c = &e.resultant_force_cov;
+    let c = e.resultant_force_cov();
     let dx = [truth_n[0] - f[0], truth_n[1] - f[1]];
     let det = c[0] * c[3] - c[1] * c[2];
     out.d2 = if det > 0.0 {
