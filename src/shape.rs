@@ -402,8 +402,12 @@ impl Estimate {
     /// # Example
     /// See [`Estimate::resultant`].
     pub fn resultant_cov<const D: usize>(&self) -> Result<SMatrix<f64, D, D>> {
-        check_len("resultant_force_cov", D * D, self.resultant_force_cov.len())?;
-        Ok(SMatrix::from_fn(|i, j| self.resultant_force_cov[(i, j)]))
+        check_len(
+            "resultant_force_cov",
+            D * D,
+            self.resultant_force_cov().len(),
+        )?;
+        Ok(SMatrix::from_fn(|i, j| self.resultant_force_cov()[(i, j)]))
     }
 
     /// The estimated load per undeformed length at arc position `s_m` (m)

@@ -57,7 +57,7 @@ fn estimate(obs: &Observation, settings: EstimatorSettings) -> [Estimate; 2] {
 }
 
 fn std(e: &Estimate, a: usize) -> f64 {
-    e.resultant_force_cov[a * 3 + a].sqrt()
+    e.resultant_force_cov()[a * 3 + a].sqrt()
 }
 
 /// A tip force `(0, P_y, P_z)` estimated as a point load at the tip from

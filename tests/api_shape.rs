@@ -160,12 +160,12 @@ fn the_estimate_views_are_its_fields() {
         let f = e.resultant::<2>().unwrap();
         assert_eq!(f.as_slice(), e.resultant_force_n.as_slice());
         let c = e.resultant_cov::<2>().unwrap();
-        assert_eq!(c[(0, 1)], e.resultant_force_cov[1]);
-        assert_eq!(c[(1, 0)], e.resultant_force_cov[2]);
-        assert_eq!(c[(1, 1)], e.resultant_force_cov[3]);
-        let mc = e.marker_cov.clone();
+        assert_eq!(c[(0, 1)], e.resultant_force_cov()[1]);
+        assert_eq!(c[(1, 0)], e.resultant_force_cov()[2]);
+        assert_eq!(c[(1, 1)], e.resultant_force_cov()[3]);
+        let mc = e.marker_cov().clone();
         assert_eq!(mc.shape(), (8, 8));
-        assert_eq!(mc[(2, 5)], e.marker_cov[2 * 8 + 5]);
+        assert_eq!(mc[(2, 5)], e.marker_cov()[2 * 8 + 5]);
         for s in [0.0, 0.05, 0.12, 0.2399, 0.24] {
             let w = e.load_vector_at::<2>(s).unwrap();
             assert_eq!(w.as_slice(), e.load_at(s).as_slice());

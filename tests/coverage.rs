@@ -152,7 +152,7 @@ fn a_marker_at_the_clamped_base_is_no_information() {
                 EstimateStatus::NoInformation,
                 "{backend:?} {rule:?}"
             );
-            assert!(e.resultant_force_cov[0] > 0.0 && e.resultant_force_cov[3] > 0.0);
+            assert!(e.resultant_force_cov()[0] > 0.0 && e.resultant_force_cov()[3] > 0.0);
             assert!(matches!(
                 e.converged(),
                 Err(Error::EstimateNotConverged { .. })
@@ -207,7 +207,7 @@ fn markers_that_barely_see_the_load_say_so() {
         .unwrap();
         assert!(e.report.status.is_converged(), "{backend:?}: {}", e.report);
         assert!(
-            e.weakly_informed() && e.determined_directions < 0.5,
+            e.weakly_informed() && e.determined_directions() < 0.5,
             "{backend:?}: {} directions",
             e.determined_directions
         );

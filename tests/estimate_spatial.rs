@@ -96,8 +96,8 @@ fn both(
         );
         assert_eq!(e.q.len(), robot.n_q());
         assert_eq!(e.resultant_force_n.len(), 3);
-        assert_eq!(e.resultant_force_cov.len(), 9);
-        assert!(e.resultant_force_cov.iter().all(|c| c.is_finite()));
+        assert_eq!(e.resultant_force_cov().len(), 9);
+        assert!(e.resultant_force_cov().iter().all(|c| c.is_finite()));
         e
     })
 }

@@ -71,7 +71,7 @@ fn estimation_demo() -> Result<()> {
         let e = est.step(&obs)?.converged()?;
         let (ex, ey) = tip(e.q.as_slice());
         let sd: Vec<f64> = (0..2)
-            .map(|a| e.resultant_force_cov[(a, a)].max(0.0).sqrt())
+            .map(|a| e.resultant_force_cov()[(a, a)].max(0.0).sqrt())
             .collect();
         outln!(
             "  {:<6}    tip ({:+.5}, {:+.5}) m (error {:.3} mm), resultant ({:+.4} ± {:.4}, {:+.4} ± {:.4}) N, moment {:+.4} N·m; {} iterations, alpha {:.3e}, first step {:.1} ms",

@@ -466,17 +466,17 @@ fn estimate_out<E: Element>(
         resultant: ResultantOut {
             force_n: e.resultant_force_n.as_slice().to_vec(),
             force_std_n: (0..d)
-                .map(|a| e.resultant_force_cov[(a, a)].max(0.0).sqrt())
+                .map(|a| e.resultant_force_cov()[(a, a)].max(0.0).sqrt())
                 .collect(),
             moment_nm: e.resultant_moment_nm.as_slice().to_vec(),
         },
         marker_residuals_m: e.marker_residuals.as_slice().to_vec(),
         marker_std_m: (0..m)
-            .map(|i| e.marker_cov[(i, i)].max(0.0).sqrt())
+            .map(|i| e.marker_cov()[(i, i)].max(0.0).sqrt())
             .collect(),
         max_load_parameter_std: e.std_f().iter().copied().fold(0.0, f64::max),
         noise_sigma_m: e.noise_sigma_m,
-        determined_directions: e.determined_directions,
+        determined_directions: e.determined_directions(),
         weakly_informed: e.weakly_informed(),
         report: e.report.clone(),
         q: e.q.as_slice().to_vec(),

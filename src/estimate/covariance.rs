@@ -10,70 +10,193 @@
 //!   the linearized estimator `F̂ ≈ (JᵀWJ + αH)⁻¹ JᵀW y` with `Cov(y) =
 //!   σ² I`, `Cov(F̂) = L Lᵀ`, is the noise spread alone (no bias).
 
+use std::sync::{Arc, OnceLock};
+
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
-use crate::element::Element;
-use crate::observe::ObservationOperator;
+use super::problem::{jittered_cholesky, weighted_columns, Derivs, GnFactor};
+use super::{Estimate, LoadModel};
 
-use super::problem::{jittered_cholesky, weighted_columns, Derivs, GnFactor, Problem};
-use super::{AlphaRule, Estimate, LoadModel};
-
-/// The covariance factor `L = σ (JᵀWJ + αH)⁻¹ JᵀW` (`n_F × n_ob`,
-/// row-major) from the factor of [`Problem::gn_solve`] at the same
-/// derivatives: `σ Z S⁻¹` for the distributed load (the representer form,
-/// `S = α W⁻¹ + Zᵀ B Z`), `σ N⁻¹ JᵀW` for a concentrated one.
-pub(crate) fn cov_factor<E: Element>(
-    problem: &Problem<E>,
+/// The covariance factor `L = σ (JᵀWJ + αH)⁻¹ JᵀW` (`n_F × n_ob`), from
+/// the Gauss–Newton system's factor at the same derivatives when it was
+/// formed at `alpha` (else anew): `σ Z S⁻¹` for the distributed load (the
+/// representer form, `S = α W⁻¹ + Zᵀ B Z`), `σ N⁻¹ JᵀW` for a concentrated
+/// one. `None` if that system cannot be factored.
+fn cov_factor(
+    load: LoadModel,
+    sigma: f64,
     dv: &Derivs,
-    op: &ObservationOperator,
-    fac: &GnFactor,
-) -> Vec<f64> {
-    let sigma = problem.settings().noise_sigma_m;
-    let l = match problem.load() {
-        // σ Z S⁻¹: the small inverse, then one product
-        LoadModel::Distributed => &dv.z * (fac.chol.inverse() * sigma),
-        LoadModel::Concentrated { .. } => {
-            fac.chol.solve(&weighted_columns(&dv.jt, op.weights())) * sigma
-        }
-    };
-    row_major(&l)
-}
-
-/// The posterior covariances of the resultant force (`DIM × DIM`) and of
-/// the marker-space shape `A q` (`n_ob × n_ob`), both row-major, for the
-/// linearized model with the penalty as prior (see [`super::evidence`]):
-/// `Cov(F | y) = (JᵀWJ + αH)⁻¹`, the spread the noise causes plus the bias
-/// the penalty puts in. With the map `C: F → ∫ w dX` (`fw`, row-major
-/// `DIM × n_F`):
-///
-/// - distributed (`H = B`, `J = Zᵀ B`; representer form, no `n_q³` work):
-///   `Cov(F | y) = (B⁻¹ − Z S⁻¹ Zᵀ)/α`, `S = α W⁻¹ + Zᵀ B Z`; since
-///   `C = E_dᵀ B` (`E_d` the coordinates of a constant unit field),
-///   `C B⁻¹ Cᵀ = C E_d` and `Cov(∫w) = (C E_d − (CZ) S⁻¹ (CZ)ᵀ)/α`,
-///   `Cov(Aq) = Zᵀ B Z S⁻¹ W⁻¹`;
-/// - concentrated (`H = I`): `Cov(F | y) = N⁻¹`, `N = JᵀWJ + αI`,
-///   `Cov(A q) = J N⁻¹ Jᵀ`.
-///
-/// `None` if the Gauss–Newton matrix is not positive definite. `gn`: the
-/// factor of the Gauss–Newton system at the same derivatives, if at hand
-/// (used when formed at this `α`).
-pub(crate) fn posterior_cov<E: Element>(
-    problem: &Problem<E>,
-    fw: &[f64],
-    dv: &Derivs,
-    op: &ObservationOperator,
+    w: &[f64],
     alpha: f64,
     gn: Option<&GnFactor>,
-) -> Option<(Vec<f64>, Vec<f64>)> {
-    posterior(
-        problem.load(),
-        E::NODE_DOFS,
-        fw,
-        dv,
-        op.weights(),
-        alpha,
-        gn,
-    )
+) -> Option<DMatrix<f64>> {
+    Some(match load {
+        // σ Z S⁻¹: the small inverse, then one product
+        LoadModel::Distributed => {
+            let (_, chol) = representer_system(dv, w, alpha, gn)?;
+            &dv.z * (chol.inverse() * sigma)
+        }
+        LoadModel::Concentrated { .. } => {
+            concentrated_system(dv, w, alpha, gn)?.solve(&weighted_columns(&dv.jt, w)) * sigma
+        }
+    })
+}
+
+/// What the covariances of an estimate are formed from: the derivatives
+/// and the Gauss–Newton factor of its last linearization, with what the
+/// formulas need besides. An [`Estimate`] keeps them and forms its
+/// covariances when first asked ([`LazyCovariances`]): a stream of
+/// estimates that reads no covariance pays for none.
+#[derive(Debug, Clone)]
+pub(crate) struct CovarianceInputs {
+    /// The load model.
+    pub(crate) load: LoadModel,
+    /// Coordinates per node (the first `DIM` of them the position).
+    pub(crate) nd: usize,
+    /// Load slots per node that carry a load (`2 DIM`): the rows of `L`
+    /// beyond them in each node's are zero, like those entries of `F`.
+    pub(crate) used_slots: usize,
+    /// The stated marker noise (m).
+    pub(crate) sigma: f64,
+    /// The map `C: F → ∫ w dX` (row-major `DIM × n_F`).
+    pub(crate) fw: Vec<f64>,
+    /// The derivatives of the last linearization.
+    pub(crate) dv: Derivs,
+    /// The diagonal of `W`.
+    pub(crate) weights: Vec<f64>,
+    /// The `α` of the estimate.
+    pub(crate) alpha: f64,
+    /// When `α` is the evidence's and the markers see the load: the
+    /// estimate `F̂` and its penalty `F̂ᵀ H F̂` (the covariances are then
+    /// averaged over `α`, [`posterior_alpha_marginal`]).
+    pub(crate) evidence: Option<(Vec<f64>, f64)>,
+    /// When the markers see the load: the objective `Φ` and the penalty
+    /// `F̂ᵀ H F̂` at the estimate, for the evidence's `γ`
+    /// ([`LazyCovariances::determined_directions`]; `None`: `γ` = 0).
+    pub(crate) gamma: Option<(f64, f64)>,
+    /// The Gauss–Newton system's factor at `dv`, if at hand.
+    pub(crate) gn: Option<GnFactor>,
+}
+
+impl CovarianceInputs {
+    /// The covariance factor `L` (`n_F × n_ob`; NaN if the Gauss–Newton
+    /// matrix cannot be factored, which an estimate whose step solved that
+    /// system never meets).
+    fn factor(&self) -> DMatrix<f64> {
+        let (nf, m) = (self.dv.jt.nrows(), self.weights.len());
+        let Some(mut l) = cov_factor(
+            self.load,
+            self.sigma,
+            &self.dv,
+            &self.weights,
+            self.alpha,
+            self.gn.as_ref(),
+        ) else {
+            return DMatrix::from_element(nf, m, f64::NAN);
+        };
+        if self.load == LoadModel::Distributed && self.nd > self.used_slots {
+            for i in 0..l.nrows() {
+                if i % self.nd >= self.used_slots {
+                    l.row_mut(i).fill(0.0);
+                }
+            }
+        }
+        l
+    }
+
+    /// `Cov(resultant force)` (`DIM × DIM`) and `Cov(A q)` (`n_ob ×
+    /// n_ob`): the posterior's ([`posterior`], averaged over `α` when it is
+    /// the evidence's), or, when its matrix cannot be factored, the spread
+    /// the noise alone causes, from the covariance factor `l()`.
+    fn posterior(&self, l: impl FnOnce() -> DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64>) {
+        let (load, nd, fw, dv, w, alpha) = (
+            self.load,
+            self.nd,
+            &self.fw[..],
+            &self.dv,
+            &self.weights[..],
+            self.alpha,
+        );
+        let gn = self.gn.as_ref();
+        let d = fw.len().checked_div(dv.jt.nrows()).unwrap_or(0);
+        let m = w.len();
+        let typed = |(r, mk): (Vec<f64>, Vec<f64>)| {
+            (
+                DMatrix::from_row_slice(d, d, &r),
+                DMatrix::from_row_slice(m, m, &mk),
+            )
+        };
+        if let Some((f, pen)) = &self.evidence {
+            if let Some(c) = posterior_alpha_marginal(load, nd, fw, dv, w, alpha, f, *pen, gn) {
+                return typed(c);
+            }
+        }
+        if let Some(c) = posterior(load, nd, fw, dv, w, alpha, gn) {
+            return typed(c);
+        }
+        noise_cov(&l(), fw, dv)
+    }
+}
+
+/// The covariances of an [`Estimate`], formed from its
+/// [`CovarianceInputs`] on the first request and kept. Two are equal when
+/// their covariances are (comparing forms both).
+#[derive(Debug, Clone)]
+pub(crate) struct LazyCovariances {
+    inputs: Arc<CovarianceInputs>,
+    factor: OnceLock<DMatrix<f64>>,
+    posterior: OnceLock<(DMatrix<f64>, DMatrix<f64>)>,
+    gamma: OnceLock<f64>,
+}
+
+impl LazyCovariances {
+    /// Covariances to be formed from `inputs`.
+    pub(crate) fn new(inputs: CovarianceInputs) -> Self {
+        LazyCovariances {
+            inputs: Arc::new(inputs),
+            factor: OnceLock::new(),
+            posterior: OnceLock::new(),
+            gamma: OnceLock::new(),
+        }
+    }
+
+    /// How many load directions the markers determine at the estimate's
+    /// `α`: the evidence's effective number of parameters `γ` (0 when the
+    /// markers see nothing of the load, `NaN` if it cannot be formed).
+    pub(crate) fn determined_directions(&self) -> f64 {
+        *self.gamma.get_or_init(|| {
+            let i = &self.inputs;
+            match i.gamma {
+                Some((objective, pen)) => super::evidence::evidence(
+                    i.load,
+                    &i.dv,
+                    &i.weights,
+                    objective,
+                    pen,
+                    i.alpha,
+                )
+                .map_or(f64::NAN, |ev| ev.gamma),
+                None => 0.0,
+            }
+        })
+    }
+
+    /// The covariance factor `L`.
+    fn factor(&self) -> &DMatrix<f64> {
+        self.factor.get_or_init(|| self.inputs.factor())
+    }
+
+    /// The posterior covariances of the resultant force and of `A q`.
+    fn posterior(&self) -> &(DMatrix<f64>, DMatrix<f64>) {
+        self.posterior
+            .get_or_init(|| self.inputs.posterior(|| self.factor().clone()))
+    }
+}
+
+impl PartialEq for LazyCovariances {
+    fn eq(&self, other: &Self) -> bool {
+        self.factor() == other.factor() && self.posterior() == other.posterior()
+    }
 }
 
 /// `Zᵀ B Z` (symmetric) and the factor of `S = Zᵀ B Z + α W⁻¹` for the
@@ -128,8 +251,25 @@ fn concentrated_system(
     jittered_cholesky(n)
 }
 
-/// [`posterior_cov`] for the load model `load`, `nd` coordinates per node
-/// (the first `DIM` of them the position) and the weights `w`.
+/// The posterior covariances of the resultant force (`DIM × DIM`) and of
+/// the marker-space shape `A q` (`n_ob × n_ob`), both row-major, for the
+/// linearized model with the penalty as prior (see [`super::evidence`]):
+/// `Cov(F | y) = (JᵀWJ + αH)⁻¹`, the spread the noise causes plus the bias
+/// the penalty puts in. With the map `C: F → ∫ w dX` (`fw`, row-major
+/// `DIM × n_F`):
+///
+/// - distributed (`H = B`, `J = Zᵀ B`; representer form, no `n_q³` work):
+///   `Cov(F | y) = (B⁻¹ − Z S⁻¹ Zᵀ)/α`, `S = α W⁻¹ + Zᵀ B Z`; since
+///   `C = E_dᵀ B` (`E_d` the coordinates of a constant unit field),
+///   `C B⁻¹ Cᵀ = C E_d` and `Cov(∫w) = (C E_d − (CZ) S⁻¹ (CZ)ᵀ)/α`,
+///   `Cov(Aq) = Zᵀ B Z S⁻¹ W⁻¹`;
+/// - concentrated (`H = I`): `Cov(F | y) = N⁻¹`, `N = JᵀWJ + αI`,
+///   `Cov(A q) = J N⁻¹ Jᵀ`.
+///
+/// `None` if the Gauss–Newton matrix is not positive definite. `load`:
+/// the load model, `nd` coordinates per node (the first `DIM` of them the
+/// position), `w` the weights; `gn`: the factor of the Gauss–Newton system
+/// at the same derivatives, if at hand (used when formed at this `α`).
 fn posterior(
     load: LoadModel,
     nd: usize,
@@ -321,61 +461,17 @@ pub(crate) fn posterior_alpha_marginal(
     Some((row_major(&r), row_major(&mk)))
 }
 
-/// `Cov(resultant force)` and `Cov(A q)` (row-major) of the estimate at
-/// `alpha`: the posterior's ([`posterior_cov`]), or, when its matrix cannot
-/// be factored, the spread the noise alone causes, from the covariance
-/// factor `L`: `(C L)(C L)ᵀ` and `(J L)(J L)ᵀ`. Also whether the markers
-/// see the load at all ([`super::evidence::informative`]). `gn`: the
-/// Gauss–Newton system's factor at `dv`, if at hand.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn estimate_cov<E: Element>(
-    problem: &Problem<E>,
-    cov_factor: &[f64],
-    fw: &[f64],
-    dv: &Derivs,
-    op: &ObservationOperator,
-    alpha: f64,
-    f: &[f64],
-    gn: Option<&GnFactor>,
-) -> (Vec<f64>, Vec<f64>, bool) {
-    let informative = super::evidence::informative(dv);
-    let settings = problem.settings();
-    let by_evidence = settings.alpha.is_none() && settings.alpha_rule == AlphaRule::Evidence;
-    if by_evidence && informative {
-        if let Ok(pen) = problem.penalty(f) {
-            let load = problem.load();
-            let w = op.weights();
-            if let Some(c) =
-                posterior_alpha_marginal(load, E::NODE_DOFS, fw, dv, w, alpha, f, pen, gn)
-            {
-                return (c.0, c.1, informative);
-            }
-        }
-    }
-    if let Some((r, mk)) = posterior_cov(problem, fw, dv, op, alpha, gn) {
-        return (r, mk, informative);
-    }
-    let (r, mk) = noise_cov(cov_factor, fw, dv);
-    (r, mk, informative)
-}
-
 /// `Cov(resultant force)` (`DIM × DIM`) and `Cov(A q)` (`n_ob × n_ob`) of
-/// the noise alone, both row-major, from the covariance factor `L`
-/// (row-major `n_F × n_ob`), the map `C: F → ∫ w dX` (row-major `DIM ×
-/// n_F`) and the marker Jacobian: `(C L)(C L)ᵀ` and `(J L)(J L)ᵀ`.
-pub(crate) fn noise_cov(cov_factor: &[f64], fw: &[f64], dv: &Derivs) -> (Vec<f64>, Vec<f64>) {
+/// the noise alone, from the covariance factor `L` (`n_F × n_ob`), the map
+/// `C: F → ∫ w dX` (row-major `DIM × n_F`) and the marker Jacobian:
+/// `(C L)(C L)ᵀ` and `(J L)(J L)ᵀ`.
+fn noise_cov(l: &DMatrix<f64>, fw: &[f64], dv: &Derivs) -> (DMatrix<f64>, DMatrix<f64>) {
     let nf = dv.jt.nrows();
-    let m = dv.jt.ncols();
     let d = fw.len().checked_div(nf).unwrap_or(0);
-    let lt = DMatrix::from_column_slice(m, nf, cov_factor);
-    // (C L)ᵀ = Lᵀ Cᵀ, Cᵀ column-major is C row-major
-    let cl_t = &lt * DMatrix::from_column_slice(nf, d, fw);
-    // (J L)ᵀ = Lᵀ Jᵀ
-    let jl_t = &lt * &dv.jt;
-    (
-        row_major(&cl_t.tr_mul(&cl_t)),
-        row_major(&jl_t.tr_mul(&jl_t)),
-    )
+    let cl = DMatrix::from_row_slice(d, nf, fw) * l;
+    // J L = Jtᵀ L
+    let jl = dv.jt.tr_mul(l);
+    (&cl * cl.transpose(), &jl * jl.transpose())
 }
 
 /// The entries of `a` row by row.
@@ -408,7 +504,8 @@ impl Estimate {
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn covariance_f(&self) -> DMatrix<f64> {
-        &self.cov_factor * self.cov_factor.transpose()
+        let l = self.cov_factor();
+        l * l.transpose()
     }
 
     /// Standard deviations of the entries of `F` (square roots of the
@@ -417,10 +514,70 @@ impl Estimate {
     /// # Example
     /// See [`Estimate::covariance_f`].
     pub fn std_f(&self) -> DVector<f64> {
-        DVector::from_iterator(
-            self.cov_factor.nrows(),
-            self.cov_factor.row_iter().map(|r| r.norm()),
-        )
+        let l = self.cov_factor();
+        DVector::from_iterator(l.nrows(), l.row_iter().map(|r| r.norm()))
+    }
+
+    /// Posterior covariance of the resultant force (N², `DIM × DIM`): the
+    /// spread of the stated marker noise plus the bias of the penalty, with
+    /// the penalty read as a Gaussian prior (see [`super::AlphaRule`]); when
+    /// `α` is the evidence's, averaged over `α`'s own uncertainty. Taken at
+    /// the last linearization (see [`super::EstimateReport::gradient_norm`];
+    /// after an unconfirmed last step the two points differ by that step,
+    /// whose predicted decrease is below `1e-3 tolerance`: the covariances
+    /// then differ by about the square root of that, relatively).
+    ///
+    /// Formed on the first call of this, [`Estimate::marker_cov`],
+    /// [`Estimate::cov_factor`], [`Estimate::covariance_f`] or
+    /// [`Estimate::std_f`] from the derivatives the estimate keeps, and
+    /// kept: an estimator does not form covariances nobody reads (a
+    /// stream of warm steps spends about a tenth of its time on them).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::estimate::{EstimatorSettings, Observation};
+    /// use softrod::{scene::Scene, statics::StaticSolver};
+    /// let scene = Scene::two_section();
+    /// let (robot, loads) = (scene.robot()?, scene.loads()?);
+    /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+    /// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[10, 20])?.with_noise(1e-5, 1);
+    /// let settings = EstimatorSettings { alpha: Some(1.0), ..Default::default() };
+    /// let e = settings.build_for(&robot, &loads)?.step(&obs)?;
+    /// let c: &nalgebra::DMatrix<f64> = e.resultant_force_cov();
+    /// assert_eq!(c.shape(), (2, 2));
+    /// assert!(c[(0, 0)] > 0.0 && c[(1, 1)] > 0.0);
+    /// assert_eq!(c[(0, 1)], c[(1, 0)]);
+    /// let m: &nalgebra::DMatrix<f64> = e.marker_cov();
+    /// assert_eq!(m.shape(), (4, 4)); // two markers, two components each
+    /// assert_eq!(e.cov_factor().shape(), (robot.n_q(), 4));
+    /// // the marker noise (0.01 mm) bounds the posterior spread of the shape
+    /// assert!(m[(3, 3)].sqrt() < 1e-5);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn resultant_force_cov(&self) -> &DMatrix<f64> {
+        &self.cov.posterior().0
+    }
+
+    /// Posterior covariance of the estimated marker-space shape `A q`
+    /// (`n_ob × n_ob`; m², tangents dimensionless), in observation order;
+    /// formed on request like [`Estimate::resultant_force_cov`].
+    ///
+    /// # Example
+    /// See [`Estimate::resultant_force_cov`].
+    pub fn marker_cov(&self) -> &DMatrix<f64> {
+        &self.cov.posterior().1
+    }
+
+    /// Covariance factor `L` (`n_F × n_ob`) of the noise alone (no bias):
+    /// `Cov(F̂) = L Lᵀ` ([`Estimate::covariance_f`]) for the linearized
+    /// estimator `F̂ ≈ (JᵀWJ + αH)⁻¹ JᵀW y`, `L = σ (JᵀWJ + αH)⁻¹ JᵀW`;
+    /// taken at the last linearization and formed on request like
+    /// [`Estimate::resultant_force_cov`].
+    ///
+    /// # Example
+    /// See [`Estimate::resultant_force_cov`].
+    pub fn cov_factor(&self) -> &DMatrix<f64> {
+        self.cov.factor()
     }
 }
 

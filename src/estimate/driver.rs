@@ -5,13 +5,14 @@
 
 use std::time::Instant;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 use crate::element::Element;
 use crate::error::{Error, Result};
 use crate::linsolve::LinearWork;
 use crate::observe::{Observation, ObservationOperator};
 
+use super::covariance::{CovarianceInputs, LazyCovariances};
 use super::problem::{Derivs, GnFactor, Problem};
 use super::{AlphaRule, Backend, Estimate, EstimateReport};
 
@@ -35,9 +36,8 @@ pub(crate) struct Solved {
     pub(crate) f: Vec<f64>,
     pub(crate) q: Vec<f64>,
     pub(crate) derivs: Derivs,
-    pub(crate) cov_factor: Vec<f64>,
-    /// The Gauss–Newton system's factor at `derivs` (the posterior
-    /// covariances are formed from it), if at hand.
+    /// The Gauss–Newton system's factor at `derivs` (the covariances are
+    /// formed from it, on request), if at hand.
     pub(crate) gn: Option<GnFactor>,
     pub(crate) e: Vec<f64>,
     pub(crate) report: EstimateReport,
@@ -113,69 +113,67 @@ impl<E: Element> Stream<E> {
             .collect()
     }
 
-    /// Assembles the [`Estimate`] at `(q, F)`.
+    /// Assembles the [`Estimate`] at `(q, F)`; its covariances are formed
+    /// from `dv` and `gn` when first asked for.
     #[allow(clippy::too_many_arguments)]
     fn finish(
         &self,
         q: Vec<f64>,
         f: Vec<f64>,
         op: &ObservationOperator,
-        dv: &Derivs,
-        cov_factor: Vec<f64>,
-        gn: Option<&GnFactor>,
+        dv: Derivs,
+        gn: Option<GnFactor>,
         e: Vec<f64>,
         report: EstimateReport,
     ) -> Result<Estimate> {
         let problem = &self.problem;
-        let (mut f, mut cov_factor) = (f, cov_factor);
-        unused_load_slots_zeroed::<E>(problem.load(), &mut f, &mut cov_factor, op.len());
+        let mut f = f;
+        unused_load_slots_zeroed::<E>(problem.load(), &mut f);
         let (resultant_force_n, resultant_moment_nm, fw) = problem.resultants(&q, &f)?;
-        let (resultant_force_cov, marker_cov, informative) = super::covariance::estimate_cov(
-            problem,
-            &cov_factor,
-            &fw,
-            dv,
-            op,
-            report.alpha,
-            &f,
-            gn,
-        );
+        let informative = super::evidence::informative(&dv);
         let mut report = report;
         if !informative {
             report.status = super::EstimateStatus::NoInformation;
         }
-        // how many load directions the markers determine (the evidence's γ)
-        let determined_directions = if informative {
-            let pen = problem.penalty(&f)?;
-            super::evidence::evidence(
-                problem.load(),
-                dv,
-                op.weights(),
-                report.objective,
-                pen,
-                report.alpha,
-            )
-            .map_or(f64::NAN, |ev| ev.gamma)
+        let settings = problem.settings();
+        let by_evidence = settings.alpha.is_none() && settings.alpha_rule == AlphaRule::Evidence;
+        let evidence = if by_evidence && informative {
+            problem.penalty(&f).ok().map(|pen| (f.clone(), pen))
         } else {
-            0.0
+            None
         };
-        let (n_f, n_ob, d) = (f.len(), op.len(), resultant_force_n.len());
+        let cov = LazyCovariances::new(CovarianceInputs {
+            load: problem.load(),
+            nd: E::NODE_DOFS,
+            used_slots: 2 * E::DIM,
+            sigma: settings.noise_sigma_m,
+            fw,
+            dv,
+            weights: op.weights().to_vec(),
+            alpha: report.alpha,
+            evidence,
+            // how many load directions the markers determine (the
+            // evidence's γ), formed on request like the covariances
+            gamma: if informative {
+                Some((report.objective, problem.penalty(&f)?))
+            } else {
+                None
+            },
+            gn,
+        });
         Ok(Estimate {
             q: DVector::from_vec(q),
             f: DVector::from_vec(f),
             load_model: problem.load(),
             resultant_force_n: DVector::from_vec(resultant_force_n),
             resultant_moment_nm: DVector::from_vec(resultant_moment_nm),
-            resultant_force_cov: DMatrix::from_row_slice(d, d, &resultant_force_cov),
             marker_residuals: DVector::from_vec(e),
-            cov_factor: DMatrix::from_row_slice(n_f, n_ob, &cov_factor),
-            marker_cov: DMatrix::from_row_slice(n_ob, n_ob, &marker_cov),
-            noise_sigma_m: problem.settings().noise_sigma_m,
+            noise_sigma_m: settings.noise_sigma_m,
             report,
-            determined_directions,
             node_s: problem.robot().node_arc().to_vec(),
             dim: E::DIM,
             node_dofs: E::NODE_DOFS,
+            cov,
         })
     }
 }
@@ -184,14 +182,9 @@ impl<E: Element> Stream<E> {
 /// `[w, w']` in the first `2 DIM` numbers of each node's; a node of the
 /// full 3-D element holds `r_Y, r_Z` after them, numbers no load is made
 /// of (`G F` and the penalty ignore them). The representer steps leave
-/// values there that mean nothing: zeroed, with their rows of the
-/// covariance factor (`n_F × n_ob`, row-major).
-fn unused_load_slots_zeroed<E: Element>(
-    load: super::LoadModel,
-    f: &mut [f64],
-    cov_factor: &mut [f64],
-    n_ob: usize,
-) {
+/// values there that mean nothing: zeroed (and so are their rows of the
+/// covariance factor, see [`CovarianceInputs::used_slots`]).
+fn unused_load_slots_zeroed<E: Element>(load: super::LoadModel, f: &mut [f64]) {
     let (nd, d) = (E::NODE_DOFS, E::DIM);
     if load != super::LoadModel::Distributed || nd <= 2 * d {
         return;
@@ -199,11 +192,6 @@ fn unused_load_slots_zeroed<E: Element>(
     for (i, v) in f.iter_mut().enumerate() {
         if i % nd >= 2 * d {
             *v = 0.0;
-        }
-    }
-    for (i, row) in cov_factor.chunks_mut(n_ob.max(1)).enumerate() {
-        if i % nd >= 2 * d {
-            row.iter_mut().for_each(|v| *v = 0.0);
         }
     }
 }
@@ -335,7 +323,7 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
     let start = Instant::now();
     let work = LinearWork::now();
     let backend = M::BACKEND;
-    let op = method.stream().problem.operator(observation)?;
+    let op = method.stream().problem.operator_of_frame(observation)?;
     let rule = method.stream().problem.settings().alpha_rule;
     let alpha = match method.stream().alpha {
         Some(a) => {
@@ -378,13 +366,20 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
     let n_sub = targets.len();
     let mut iterations = 0;
     let mut last: Option<Solved> = None;
-    for y in targets {
+    for (k, y) in targets.into_iter().enumerate() {
         let (f0, q0) = match &last {
             Some(s) => (s.f.clone(), s.q.clone()),
             None => method.stream().start()?,
         };
-        let sub = op.with_measurements(y)?;
-        let s = method.solve_one(&sub, f0, q0, alpha)?;
+        // the last target is the observation itself
+        let sub_op;
+        let sub = if k + 1 == n_sub {
+            &op
+        } else {
+            sub_op = op.with_measurements(y)?;
+            &sub_op
+        };
+        let s = method.solve_one(sub, f0, q0, alpha)?;
         iterations += s.report.iterations;
         if !s.report.status.is_converged() {
             // the last iterate, with its status; its objective and marker
@@ -400,8 +395,7 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
             report.weighted_residual = wr;
             report.wall_time_s = start.elapsed().as_secs_f64();
             report.linear_work = LinearWork::now().since(work);
-            let gn = s.gn.as_ref();
-            return stream.finish(s.q, s.f, &op, &s.derivs, s.cov_factor, gn, e, report);
+            return stream.finish(s.q, s.f, &op, s.derivs, s.gn, e, report);
         }
         last = Some(s);
     }
@@ -420,14 +414,5 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
     report.backend = backend;
     report.wall_time_s = start.elapsed().as_secs_f64();
     report.linear_work = LinearWork::now().since(work);
-    stream.finish(
-        s.q,
-        s.f,
-        &op,
-        &s.derivs,
-        s.cov_factor,
-        s.gn.as_ref(),
-        s.e,
-        report,
-    )
+    stream.finish(s.q, s.f, &op, s.derivs, s.gn, s.e, report)
 }

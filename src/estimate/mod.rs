@@ -115,7 +115,7 @@ pub use sqp::SqpEstimator;
 pub use crate::observe::{MarkerObservation, Observation};
 pub use crate::outcome::{EstimateCriterion, EstimateStatus};
 
-use nalgebra::{DMatrix, DVector, SVector};
+use nalgebra::{DVector, SVector};
 use serde::{Deserialize, Serialize};
 
 use crate::element::ArcPoint;
@@ -459,36 +459,19 @@ pub struct Estimate {
     /// Moment of the estimated load about the base position in the
     /// estimated (deformed) shape, `∫ (r − r_0) × w dX` (N·m).
     pub resultant_moment_nm: DVector<f64>,
-    /// Posterior covariance of the resultant force (N², `DIM × DIM`): the
-    /// spread of the stated marker noise plus the bias of the penalty, with
-    /// the penalty read as a Gaussian prior (see [`AlphaRule`]).
-    pub resultant_force_cov: DMatrix<f64>,
     /// Marker residuals `A q − y` in observation order (m; tangents dimensionless).
     pub marker_residuals: DVector<f64>,
-    /// Covariance factor `L` (`n_F × n_ob`) of the noise alone
-    /// (no bias): `Cov(F̂) = L Lᵀ`, see
-    /// [`Estimate::covariance_f`]. Like the other covariances it is taken at
-    /// the last linearization (see [`EstimateReport::gradient_norm`]; after
-    /// an unconfirmed last step the two points differ by that step, whose
-    /// predicted decrease is below `1e-3 tolerance`: the covariances then
-    /// differ by about the square root of that, relatively).
-    pub cov_factor: DMatrix<f64>,
-    /// Posterior covariance of the estimated marker-space shape `A q`
-    /// (`n_ob × n_ob`; m²).
-    pub marker_cov: DMatrix<f64>,
     /// The stated marker noise the covariances are for (m).
     pub noise_sigma_m: f64,
     /// What the estimator did.
     pub report: EstimateReport,
-    /// How many load directions the markers determine at the chosen `α`:
-    /// the evidence's effective number of parameters `γ` (see
-    /// [`AlphaRule`]; between 0, markers that see nothing of the load, and
-    /// the number of observed components; `NaN` if it could not be
-    /// computed). See [`Estimate::weakly_informed`].
-    pub determined_directions: f64,
     node_s: Vec<f64>,
     dim: usize,
     node_dofs: usize,
+    /// The covariances ([`Estimate::resultant_force_cov`],
+    /// [`Estimate::marker_cov`], [`Estimate::cov_factor`]), formed on
+    /// request.
+    cov: covariance::LazyCovariances,
 }
 
 /// Fewer determined load directions than this
@@ -517,11 +500,34 @@ impl Estimate {
     /// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[20])?;
     /// let settings = EstimatorSettings { noise_sigma_m: 1e-5, ..Default::default() };
     /// let e = settings.build_for(&robot, &loads)?.step(&obs.with_noise(1e-5, 1))?;
-    /// println!("{} directions, weakly informed: {}", e.determined_directions, e.weakly_informed());
+    /// println!("{} directions, weakly informed: {}", e.determined_directions(), e.weakly_informed());
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn weakly_informed(&self) -> bool {
-        self.determined_directions < WEAKLY_INFORMED_DIRECTIONS
+        self.determined_directions() < WEAKLY_INFORMED_DIRECTIONS
+    }
+
+    /// How many load directions the markers determine at the chosen `α`:
+    /// the evidence's effective number of parameters `γ` (see
+    /// [`AlphaRule`]; between 0, markers that see nothing of the load, and
+    /// the number of observed components; `NaN` if it could not be
+    /// computed). Formed on the first request, like the covariances. See
+    /// [`Estimate::weakly_informed`].
+    ///
+    /// ```
+    /// use softrod::estimate::{EstimatorSettings, Observation};
+    /// use softrod::{scene::Scene, statics::StaticSolver};
+    /// let scene = Scene::two_section();
+    /// let (robot, loads) = (scene.robot()?, scene.loads()?);
+    /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+    /// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[5, 10, 15, 20])?;
+    /// let settings = EstimatorSettings { noise_sigma_m: 1e-4, ..Default::default() };
+    /// let e = settings.build_for(&robot, &loads)?.step(&obs.with_noise(1e-4, 1))?;
+    /// assert!(e.determined_directions() >= 0.0);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn determined_directions(&self) -> f64 {
+        self.cov.determined_directions()
     }
 
     /// The estimated load per undeformed length at arc coordinate `s` (N/m,

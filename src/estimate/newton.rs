@@ -63,7 +63,6 @@ use crate::observe::{ObsRow, ObservationOperator};
 use crate::sensitivity::Sensitivity;
 use nalgebra::{DMatrix, DVector};
 
-use super::covariance::cov_factor;
 use super::driver::{run_step, Method, Solved, Stream};
 use super::problem::{step_cap, Derivs, Problem};
 use super::sqp::SqpEstimator;
@@ -92,9 +91,13 @@ use super::{
 #[derive(Debug, Clone)]
 pub struct NewtonEstimator<E: Element> {
     stream: Stream<E>,
-    /// The derivatives at the last converged estimate's shape for its
-    /// observation rows: a warm step's first iteration starts there.
-    derivs_cache: Option<(Vec<f64>, Vec<ObsRow>, Derivs)>,
+    /// The derivatives at the last converged estimate's shape for the
+    /// observation rows `cache_rows`: a warm step's first iteration starts
+    /// there.
+    derivs_cache: Option<(Vec<f64>, Derivs)>,
+    /// The observation rows of `derivs_cache` (kept between steps: a
+    /// stream's frames share them).
+    cache_rows: Vec<ObsRow>,
     /// The full-space iterations of a far start (made when first needed;
     /// see [`full_space`]).
     full_space: Option<Box<SqpEstimator<E>>>,
@@ -146,6 +149,7 @@ impl<E: Element> NewtonEstimator<E> {
                 settings.clone(),
             )?),
             derivs_cache: None,
+            cache_rows: Vec::new(),
             full_space: None,
         })
     }
@@ -254,6 +258,7 @@ impl<E: Element> NewtonEstimator<E> {
         let NewtonEstimator {
             stream,
             derivs_cache,
+            cache_rows,
             full_space: inner,
         } = self;
         let core = &mut stream.problem;
@@ -266,13 +271,21 @@ impl<E: Element> NewtonEstimator<E> {
         let kappa2 = settings.statistical_tolerance.powi(2);
         let mut iterations = 0;
         let mut prev_dec = f64::INFINITY;
+        // the objective at the accepted trial point, which the next
+        // iteration starts from
+        let mut at_trial: Option<(f64, f64, Vec<f64>)> = None;
         loop {
-            let (wr, pen, e) = core.objective(op, q.as_slice(), &f, alpha)?;
+            let (wr, pen, e) = match at_trial.take() {
+                Some(x) => x,
+                None => core.objective(op, q.as_slice(), &f, alpha)?,
+            };
             let obj = wr + pen;
             // (a warm step starts where the last one converged: the
             // derivatives there are cached)
             let cached = match derivs_cache.take() {
-                Some((qc, rows, dv)) if iterations == 0 && qc == q && rows == op.rows() => Some(dv),
+                Some((qc, dv)) if iterations == 0 && qc == q && cache_rows[..] == *op.rows() => {
+                    Some(dv)
+                }
                 _ => None,
             };
             let dv = match cached {
@@ -280,7 +293,7 @@ impl<E: Element> NewtonEstimator<E> {
                 None => core.derivs(&lu, op)?,
             };
             let g = core.gradient(&dv, op, &e, &f, alpha)?;
-            // the step only: the covariance factor is formed once, at the end
+            // the step (the covariances are formed on request, from `fac`)
             let (mut step, fac) = core.gn_solve(&dv, op, &e, &f, alpha)?;
             let dec = -0.5 * dot(&g, &step);
             let scale = obj.max(n_ob);
@@ -318,25 +331,24 @@ impl<E: Element> NewtonEstimator<E> {
                 None
             };
             if let Some(criterion) = criterion {
-                let l = cov_factor(core, &dv, op, &fac);
-                *derivs_cache = Some((q.clone(), op.rows().to_vec(), dv.clone()));
+                if cache_rows[..] != *op.rows() {
+                    *cache_rows = op.rows().to_vec();
+                }
+                *derivs_cache = Some((q.clone(), dv.clone()));
                 return Ok(Solved {
                     f,
                     q,
                     derivs: dv,
-                    cov_factor: l,
                     gn: Some(fac),
                     e,
                     report: report(EstimateStatus::Converged(criterion), iterations),
                 });
             }
             if iterations >= settings.max_iterations {
-                let l = cov_factor(core, &dv, op, &fac);
                 return Ok(Solved {
                     f,
                     q,
                     derivs: dv,
-                    cov_factor: l,
                     gn: Some(fac),
                     e,
                     report: report(EstimateStatus::IterationLimit { iterations }, iterations),
@@ -381,7 +393,6 @@ impl<E: Element> NewtonEstimator<E> {
                 let load = core.load();
                 if let Some((qt, res_t)) = core.tracker().solve_chord(&load, &ft, q.as_slice())? {
                     let (wr_t, pen_t, e_t) = core.objective(op, qt.as_slice(), &ft, alpha)?;
-                    let l = cov_factor(core, &dv, op, &fac);
                     let mut rep = report(
                         EstimateStatus::Converged(EstimateCriterion::UnconfirmedLastStep),
                         iterations,
@@ -393,7 +404,6 @@ impl<E: Element> NewtonEstimator<E> {
                         f: ft,
                         q: qt.data.into(),
                         derivs: dv,
-                        cov_factor: l,
                         gn: Some(fac),
                         e: e_t,
                         report: rep,
@@ -432,35 +442,34 @@ impl<E: Element> NewtonEstimator<E> {
                             if let Ok(eq) = core.equilibrium(&fs, &qs) {
                                 *used = true;
                                 iterations += its;
-                                accepted = Some((fs, eq));
+                                accepted = Some((fs, eq, None));
                                 break;
                             }
                         }
                     }
                 }
                 if let Some(eq) = trial {
-                    let (wr_t, pen_t, _) = core.objective(op, eq.q.as_slice(), &ft, alpha)?;
+                    let (wr_t, pen_t, e_t) = core.objective(op, eq.q.as_slice(), &ft, alpha)?;
                     if wr_t + pen_t <= obj + 1e-4 * t * slope || dec <= 1e-8 * scale {
-                        accepted = Some((ft, eq));
+                        accepted = Some((ft, eq, Some((wr_t, pen_t, e_t))));
                         break;
                     }
                 }
                 t *= 0.5;
             }
             match accepted {
-                Some((ft, eq)) => {
+                Some((ft, eq, objective)) => {
+                    at_trial = objective;
                     f = ft;
                     q = eq.q.data.into();
                     lu = eq.factors;
                     res_n = eq.residual_n;
                 }
                 None => {
-                    let l = cov_factor(core, &dv, op, &fac);
                     return Ok(Solved {
                         f,
                         q,
                         derivs: dv,
-                        cov_factor: l,
                         gn: Some(fac),
                         e,
                         report: report(

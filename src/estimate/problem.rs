@@ -20,7 +20,7 @@ use crate::error::{check_len, Error, Result};
 use crate::linsolve::AutoFactors;
 use crate::loads::{Loads, PointForce};
 use crate::numeric::dot;
-use crate::observe::{Observation, ObservationOperator};
+use crate::observe::{MarkerObservation, Observation, ObservationOperator, MAX_MARKER_SCALE};
 use crate::sensitivity::Sensitivity;
 use crate::statics::tracker::FactoredTangent;
 use crate::statics::{EquilibriumTracker, LinearLoad, StaticSolver, TrackedEquilibrium};
@@ -121,6 +121,9 @@ pub(crate) struct Problem<E: Element> {
     tracker: EquilibriumTracker<E>,
     settings: EstimatorSettings,
     n_f: usize,
+    /// The last observation's markers and their operator: the next frame
+    /// of the same markers reuses it ([`Problem::operator_of_frame`]).
+    last_operator: Option<(Vec<MarkerObservation>, ObservationOperator)>,
 }
 
 impl<E: Element> Problem<E> {
@@ -170,6 +173,7 @@ impl<E: Element> Problem<E> {
             tracker,
             settings,
             n_f,
+            last_operator: None,
         })
     }
 
@@ -211,6 +215,26 @@ impl<E: Element> Problem<E> {
             self.settings.noise_sigma_m,
             self.settings.tangent_sigma,
         )
+    }
+
+    /// [`Problem::operator`] for a frame of a stream: when `obs` has the
+    /// markers of the last frame (the same nodes or arc positions, the same
+    /// kinds and weights; only the measured values differ), the last
+    /// operator with the new measurements, which pass the same checks
+    /// (finite, not beyond [`MAX_MARKER_SCALE`] robot lengths, tangents of
+    /// a length in `(0, MAX_MARKER_SCALE]`); otherwise, or when a value
+    /// fails them, built anew (with its error naming the field), and kept.
+    pub(crate) fn operator_of_frame(&mut self, obs: &Observation) -> Result<ObservationOperator> {
+        if let Some((markers, op)) = &self.last_operator {
+            if let Some(y) = same_markers_values(markers, obs, self.robot().length(), E::DIM) {
+                if let Ok(op) = op.with_measurements(y) {
+                    return Ok(op);
+                }
+            }
+        }
+        let op = self.operator(obs)?;
+        self.last_operator = Some((obs.markers.clone(), op.clone()));
+        Ok(op)
     }
 
     /// `G F` over all coordinates (N).
@@ -311,22 +335,6 @@ impl<E: Element> Problem<E> {
             g.iter_mut().zip(ji).for_each(|(a, b)| *a += c * b);
         }
         Ok(g)
-    }
-
-    /// The Gauss–Newton step (30) for `F`, the covariance factor there
-    /// and the system's factor: see [`Problem::gn_solve`] and
-    /// [`super::covariance::cov_factor`].
-    pub(crate) fn gn_step(
-        &self,
-        dv: &Derivs,
-        op: &ObservationOperator,
-        e: &[f64],
-        f: &[f64],
-        alpha: f64,
-    ) -> Result<(Vec<f64>, Vec<f64>, GnFactor)> {
-        let (step, fac) = self.gn_solve(dv, op, e, f, alpha)?;
-        let l = super::covariance::cov_factor(self, dv, op, &fac);
-        Ok((step, l, fac))
     }
 
     /// The Gauss–Newton step (30): solves `(JᵀWJ + αH) dF = −(JᵀWe + αHF)`,
@@ -590,4 +598,48 @@ pub fn direct_solution<E: Element>(
         context: format!("direct solution (24): {m}"),
     })?;
     Ok(f)
+}
+
+/// The measurements of `obs` in the operator's order (each marker's
+/// position, then its tangent if observed), if its markers are those of
+/// `last` but for the measured values and every value passes the checks of
+/// [`ObservationOperator::new`] (`dim` components, finite, positions within
+/// [`MAX_MARKER_SCALE`] robot lengths `len`, tangents of a length in
+/// `(0, MAX_MARKER_SCALE]`); `None` otherwise.
+fn same_markers_values(
+    last: &[MarkerObservation],
+    obs: &Observation,
+    len: f64,
+    dim: usize,
+) -> Option<Vec<f64>> {
+    if last.len() != obs.markers.len() {
+        return None;
+    }
+    let far = MAX_MARKER_SCALE * len;
+    let mut y = Vec::with_capacity(last.len() * 2 * dim);
+    for (a, b) in last.iter().zip(&obs.markers) {
+        let same = a.node == b.node
+            && a.s_m == b.s_m
+            && a.tangent.is_some() == b.tangent.is_some()
+            && a.position_weight == b.position_weight
+            && a.tangent_weight == b.tangent_weight;
+        let position_ok = b.position_m.len() == dim
+            && b.position_m.iter().all(|v| v.is_finite() && v.abs() <= far);
+        if !(same && position_ok) {
+            return None;
+        }
+        y.extend_from_slice(&b.position_m);
+        if let Some(t) = &b.tangent {
+            let norm = t.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let ok = t.len() == dim
+                && t.iter().all(|v| v.is_finite())
+                && norm > 0.0
+                && norm <= MAX_MARKER_SCALE;
+            if !ok {
+                return None;
+            }
+            y.extend_from_slice(t);
+        }
+    }
+    Some(y)
 }

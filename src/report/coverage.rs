@@ -387,7 +387,7 @@ pub fn run_trial(
         }
     };
     let f = &e.resultant_force_n;
-    let c = &e.resultant_force_cov;
+    let c = e.resultant_force_cov();
     let dx = [truth_n[0] - f[0], truth_n[1] - f[1]];
     let det = c[0] * c[3] - c[1] * c[2];
     out.d2 = if det > 0.0 {
@@ -401,7 +401,7 @@ pub fn run_trial(
     out.covered = out.converged && out.d2 <= CHI2_2_95;
     out.covered_components = [0, 1].map(|a| out.converged && dx[a].abs() <= 1.96 * out.std_n[a]);
     out.alpha = e.report.alpha;
-    out.determined_directions = e.determined_directions;
+    out.determined_directions = e.determined_directions();
     out.weakly_informed = e.weakly_informed();
     out.status = e.report.status.to_string();
     out

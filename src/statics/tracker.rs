@@ -13,8 +13,9 @@
 //!   plain Newton steps, and only then falls back to the globalized
 //!   [`StaticSolver`] (line search, homotopy).
 //!
-//! Every converged solve ends with a step below `1e-10 L` and returns the
-//! factors of `K` at its solution (fresh, unless the solution did not move
+//! Every converged solve ends with a step below `1e-10 L` (or, in chord
+//! steps, with one after which the contraction so far predicts less than
+//! that to go) and returns the factors of `K` at its solution (fresh, unless the solution did not move
 //! from the point the kept factors belong to), which the sensitivities
 //! ([`crate::sensitivity`]) of that equilibrium use.
 //!
@@ -405,6 +406,7 @@ impl<E: Element> EquilibriumTracker<E> {
         let known_residual = self.residual_from_state(load, f, q0, &mut r)?;
         let mut q = q0.to_vec();
         let mut prev = f64::INFINITY;
+        let mut path = 0.0;
         let mut done = false;
         for it in 0..12 {
             if it > 0 || !known_residual {
@@ -414,8 +416,10 @@ impl<E: Element> EquilibriumTracker<E> {
             let Some(step) = self.plain_step(&mut q, &lu, &r, &mut du, &mut dq, 0.5 * prev)? else {
                 break;
             };
+            path += step;
+            let converged = chord_converged(step, prev, path, len);
             prev = step;
-            if step <= 1e-10 * len {
+            if converged {
                 done = true;
                 break;
             }
@@ -503,6 +507,7 @@ impl<E: Element> EquilibriumTracker<E> {
         if let Some((q_lu, lu)) = self.factors.take() {
             let mut q = q0.to_vec();
             let mut prev = f64::INFINITY;
+            let mut path = 0.0;
             let mut done = false;
             let mut moved = false;
             for it in 0..12 {
@@ -514,12 +519,14 @@ impl<E: Element> EquilibriumTracker<E> {
                 else {
                     break;
                 };
+                path += step;
+                let converged = chord_converged(step, prev, path, len);
+                moved |= step > 1e-10 * len;
                 prev = step;
-                if step <= 1e-10 * len {
+                if converged {
                     done = true;
                     break;
                 }
-                moved = true;
             }
             if done {
                 // the kept factors are exact if q has not left their point
@@ -644,5 +651,78 @@ impl<E: Element> EquilibriumTracker<E> {
             factors: lu,
             residual_n,
         }
+    }
+}
+
+/// Whether chord steps have converged after a step of `step` (m) that
+/// followed one of `prev` (m; infinite for the first), all of them
+/// together `path` long (m, this one included), on a robot of length `len`
+/// (m): the step itself is below `1e-10 len`, or, while the steps have
+/// moved the shape by no more than `1e-4 len` (where the chord iteration
+/// is linear: its contraction `ρ` is set by how far the kept factors' point
+/// lies, and changes by about `1e-4` relative along so short a path; a
+/// warm estimator step's steps move it by about `1e-5 len`, a far start's
+/// by much more), the distance left to
+/// the solution that the contraction so far predicts, `ρ step / (1 − ρ)`
+/// with `ρ = step / prev ≤ 1/2`, is. The second saves the residual and the
+/// solve that would only confirm a step below the bound (one in three or
+/// four of a warm estimator step's).
+pub(crate) fn chord_converged(step: f64, prev: f64, path: f64, len: f64) -> bool {
+    let tol = 1e-10 * len;
+    if step <= tol {
+        return true;
+    }
+    if !prev.is_finite() || path > 1e-4 * len {
+        return false;
+    }
+    let rho = step / prev;
+    rho <= 0.5 && rho * step <= tol * (1.0 - rho)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::chord_converged;
+
+    /// Chord steps contracting at a constant rate `ρ` from an error of
+    /// `7e-4 L` (a short path: its length is not what is tested here): the test stops where the distance left is below
+    /// `1e-10 L` (never above it), for `ρ` up to 1/2, and at ρ = 0.1 one
+    /// step before the step itself falls below the bound (what it saves);
+    /// a first step, or a slower contraction, stops only below the bound.
+    #[test]
+    fn chord_steps_stop_where_the_contraction_predicts_the_bound() {
+        let len = 0.24;
+        let tol = 1e-10 * len;
+        for rho in [0.01, 0.1, 0.3, 0.5] {
+            let mut err: f64 = 7e-4 * len;
+            let mut prev = f64::INFINITY;
+            let mut steps = 0;
+            loop {
+                let step = err * (1.0 - rho);
+                err *= rho;
+                steps += 1;
+                if chord_converged(step, prev, 0.0, len) {
+                    break;
+                }
+                prev = step;
+                assert!(steps < 100);
+            }
+            assert!(err <= tol * (1.0 + 1e-12), "rho {rho}: {err:e} left");
+            // the plain test would take the step after, below the bound
+            let plain = (1..100)
+                .find(|&k| 7e-4 * len * rho.powi(k - 1) * (1.0 - rho) <= tol)
+                .unwrap_or(100);
+            if rho == 0.1 {
+                assert_eq!(steps + 1, plain, "rho {rho}");
+            }
+            assert!(steps <= plain);
+        }
+        // a first step is taken on its own size only
+        assert!(!chord_converged(2.0 * tol, f64::INFINITY, 0.0, len));
+        assert!(chord_converged(0.5 * tol, f64::INFINITY, 0.0, len));
+        // a contraction slower than 1/2 is not trusted
+        assert!(!chord_converged(1.1 * tol, 1.9 * tol, 0.0, len));
+        assert!(chord_converged(1.1 * tol, 40.0 * tol, 0.0, len));
+        // nor one along a path longer than 1e-4 L (far from the solution)
+        assert!(!chord_converged(1.1 * tol, 40.0 * tol, 2e-4 * len, len));
     }
 }

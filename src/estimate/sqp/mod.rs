@@ -79,13 +79,13 @@ use crate::outcome::NonFiniteAt;
 use crate::statics::residual_floor;
 use crate::statics::tracker::FactoredTangent;
 
-use super::covariance::cov_factor;
 use super::driver::{run_step, Method, Solved, Stream};
 use super::problem::{columns, Derivs, GnFactor, Problem};
 use super::{
     Backend, Estimate, EstimateCriterion, EstimateReport, EstimateStatus, Estimator,
     EstimatorSettings, LoadModel, Observation,
 };
+use crate::statics::tracker::chord_converged;
 
 /// Why an SQP subproblem was not solved: clarabel's status, or an error of
 /// the linear algebra around it.
@@ -615,6 +615,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
             let mut qc = q.clone();
             let mut rc = r.clone();
             let mut moved = 0.0;
+            let mut prev = f64::INFINITY;
             let mut done = false;
             for _ in 0..4 {
                 let mut w = rc.clone();
@@ -631,34 +632,35 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                     .residual(&qc, &dead, problem.known())?
                     .data
                     .into();
-                if step <= 1e-10 * len {
+                // below 1e-10 L, or predicted so by the contraction so far
+                if chord_converged(step, prev, moved, len) {
                     done = true;
                     break;
                 }
+                prev = step;
             }
             if done {
                 q = qc;
                 let residual_n = norm2(&rc);
-                let l = cov_factor(problem, &dv, op, &fac);
                 warm_qp = Some(WarmQp {
                     q: q.clone(),
                     rows: op.rows().to_vec(),
                     tangent,
                     dv: dv.clone(),
                 });
-                finish = Some((q.clone(), dv, l, Some(fac), residual_n));
+                finish = Some((q.clone(), dv, Some(fac), residual_n));
             }
         }
         self.warm_qp = warm_qp;
-        let (q, dv, l, gn, residual_n) = match finish {
+        let (q, dv, gn, residual_n) = match finish {
             Some(x) => x,
             None => {
                 let problem = &mut self.stream.problem;
                 let eq = problem.equilibrium(&f, &q)?;
                 let dv = problem.derivs(&eq.factors, op)?;
                 let e = op.residual(eq.q.as_slice());
-                let (_, l, gn) = problem.gn_step(&dv, op, &e, &f, alpha)?;
-                (eq.q.data.into(), dv, l, Some(gn), eq.residual_n)
+                let (_, gn) = problem.gn_solve(&dv, op, &e, &f, alpha)?;
+                (eq.q.data.into(), dv, Some(gn), eq.residual_n)
             }
         };
         let problem = &self.stream.problem;
@@ -668,7 +670,6 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
             f,
             q,
             derivs: dv,
-            cov_factor: l,
             gn,
             e,
             report: EstimateReport {
