@@ -392,6 +392,18 @@ impl ContactRecord {
     pub fn force(&self) -> nalgebra::Vector2<f64> {
         nalgebra::Vector2::from(self.normal) * self.force_n
     }
+
+    /// The unit normal into the object as a vector (the field `normal`).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::grasp::{gripper::Side, trial::ContactRecord};
+    /// let c = ContactRecord { side: Side::Right, point_m: [0.03, -0.08], normal: [-1.0, 0.0], force_n: 0.5 };
+    /// assert_eq!(c.unit_normal(), -nalgebra::Vector2::x());
+    /// ```
+    pub fn unit_normal(&self) -> nalgebra::Vector2<f64> {
+        self.normal.into()
+    }
 }
 
 /// The state after one control interval.
@@ -413,6 +425,69 @@ pub struct Frame {
     pub object_position_m: [f64; 2],
     /// The object's rotation (rad, counter-clockwise; it turns after the lift).
     pub object_angle_rad: f64,
+}
+
+impl Frame {
+    /// The finger's index in the per-finger fields (left 0, right 1).
+    fn index(side: Side) -> usize {
+        match side {
+            Side::Left => 0,
+            Side::Right => 1,
+        }
+    }
+
+    /// The object's centre of mass as a vector (m; the field `object_position_m`).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::grasp::{gripper::Side, trial::{Frame, Phase}};
+    /// let f = Frame {
+    ///     time_s: 0.05,
+    ///     phases: [Phase::Approach; 2],
+    ///     pressures_pa: [vec![1e3, 0.0, 0.0, 0.0], vec![2e3, 0.0, 0.0, 0.0]],
+    ///     centreline_m: [vec![[-0.055, 0.0], [-0.055, -0.1]], vec![[0.055, 0.0], [0.055, -0.1]]],
+    ///     contacts: vec![],
+    ///     contact_pose: [Some([-0.05, -0.1, 0.01]), None],
+    ///     object_position_m: [0.001, -0.09],
+    ///     object_angle_rad: 0.0,
+    /// };
+    /// assert_eq!(f.object_position(), nalgebra::Vector2::new(0.001, -0.09));
+    /// assert_eq!(f.pressures(Side::Right), nalgebra::dvector![2e3, 0.0, 0.0, 0.0]);
+    /// assert_eq!(f.centreline(Side::Left)[1], nalgebra::Vector2::new(-0.055, -0.1));
+    /// assert_eq!(f.contact_pose(Side::Left), Some(nalgebra::Vector3::new(-0.05, -0.1, 0.01)));
+    /// assert_eq!(f.contact_pose(Side::Right), None);
+    /// ```
+    pub fn object_position(&self) -> nalgebra::Vector2<f64> {
+        self.object_position_m.into()
+    }
+
+    /// One finger's pressures (Pa; the field `pressures_pa`).
+    ///
+    /// # Example
+    /// See [`Frame::object_position`].
+    pub fn pressures(&self, side: Side) -> nalgebra::DVector<f64> {
+        nalgebra::DVector::from_column_slice(&self.pressures_pa[Self::index(side)])
+    }
+
+    /// One finger's centreline points (m; the field `centreline_m`).
+    ///
+    /// # Example
+    /// See [`Frame::object_position`].
+    pub fn centreline(&self, side: Side) -> Vec<nalgebra::Vector2<f64>> {
+        self.centreline_m[Self::index(side)]
+            .iter()
+            .map(|p| nalgebra::Vector2::from(*p))
+            .collect()
+    }
+
+    /// One finger's contact pose `[p_x, p_y, θ]` (m, m, rad; the field
+    /// `contact_pose`), if its controller computed one.
+    ///
+    /// # Example
+    /// See [`Frame::object_position`].
+    pub fn contact_pose(&self, side: Side) -> Option<nalgebra::Vector3<f64>> {
+        self.contact_pose[Self::index(side)].map(nalgebra::Vector3::from)
+    }
 }
 
 /// Why a trial failed.
