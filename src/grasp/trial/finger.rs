@@ -429,6 +429,7 @@ pub(super) fn calibrate(
 
 #[cfg(test)]
 mod tests {
+    #![allow(clippy::panic)]
     use super::*;
 
     /// Calibrates on seed `seed`, then runs the payload-free approach again
