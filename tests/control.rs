@@ -412,7 +412,7 @@ fn virtual_payload_recorded_without_payload_leaves_the_real_one() {
         (lp, ts)
     };
     let (_, free) = run(PayloadSchedule::none());
-    let mut vp = VirtualPayload::new(4);
+    let mut vp = VirtualPayload::new(4).unwrap();
     for s in free.samples.iter().filter(|s| s.time_s >= 1.0) {
         vp.record(&s.desired_m, &s.f_bar).unwrap();
     }

@@ -15,7 +15,7 @@ use crate::error::{check_all_finite, check_len, Error, Result};
 /// # Example
 /// ```
 /// use softrod::control::VirtualPayload;
-/// let mut v = VirtualPayload::new(4);
+/// let mut v = VirtualPayload::new(4)?;
 /// v.record(&[0.0], &[1.0])?;
 /// v.record(&[1.0], &[3.0])?;
 /// assert_eq!(v.at(&[0.0])?, nalgebra::dvector![1.0]);
@@ -33,12 +33,32 @@ pub struct VirtualPayload {
 impl VirtualPayload {
     /// An empty record interpolating between `neighbours` (≥ 1) recorded
     /// configurations.
-    pub fn new(neighbours: usize) -> Self {
-        VirtualPayload {
-            neighbours: neighbours.max(1),
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `virtual_payload.neighbours` for 0
+    /// (no configuration to interpolate from).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::control::VirtualPayload;
+    /// assert!(VirtualPayload::new(3)?.is_empty());
+    /// let e = VirtualPayload::new(0).unwrap_err();
+    /// assert!(e.to_string().contains("virtual_payload.neighbours"));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn new(neighbours: usize) -> Result<Self> {
+        if neighbours == 0 {
+            return Err(Error::invalid(
+                "virtual_payload.neighbours",
+                neighbours,
+                "must be at least 1",
+            ));
+        }
+        Ok(VirtualPayload {
+            neighbours,
             keys: Vec::new(),
             values: Vec::new(),
-        }
+        })
     }
 
     /// Number of records.

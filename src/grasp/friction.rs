@@ -48,7 +48,7 @@ use clarabel::solver::{
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_all_finite, Error, Result};
+use crate::error::{check_all_finite, check_len, Error, Result};
 
 /// The largest weight factor the program looks for: an object in a cup of
 /// contacts that can carry any weight reports this value.
@@ -114,6 +114,39 @@ impl HoldCheck {
     /// `weight_factor · mass_kg`.
     pub fn holding_mass_kg(&self, mass_kg: f64) -> f64 {
         self.weight_factor * mass_kg
+    }
+
+    /// The force on the object at each of `contacts` (the check's input,
+    /// same order) as a vector (N): `λ_i n_i + τ_i t_i` with the fields
+    /// `normal_forces_n` and `friction_forces_n`, `t = (−n_y, n_x)`.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `contacts` is not the check's list.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::grasp::friction::{hold_check, FrictionContact};
+    /// use nalgebra::Vector2;
+    /// let jaws = [
+    ///     FrictionContact { point_m: [-0.01, 0.0], normal: [1.0, 0.0], max_normal_force_n: 5.0 },
+    ///     FrictionContact { point_m: [0.01, 0.0], normal: [-1.0, 0.0], max_normal_force_n: 5.0 },
+    /// ];
+    /// let h = hold_check(&jaws, 0.1, Vector2::zeros(), 0.5, Vector2::new(0.0, -9.81))?;
+    /// let total: Vector2<f64> = h.forces(&jaws)?.iter().sum();
+    /// // at the largest weight the contacts carry `weight_factor` times the weight
+    /// assert!((total.y - h.weight_factor * 0.1 * 9.81).abs() < 1e-4 * total.y);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn forces(&self, contacts: &[FrictionContact]) -> Result<Vec<Vector2<f64>>> {
+        check_len("contacts", self.normal_forces_n.len(), contacts.len())?;
+        Ok(contacts
+            .iter()
+            .zip(self.normal_forces_n.iter().zip(&self.friction_forces_n))
+            .map(|(c, (l, t))| {
+                let n = c.unit_normal();
+                n * *l + Vector2::new(-n.y, n.x) * *t
+            })
+            .collect())
     }
 }
 

@@ -13,6 +13,7 @@
 //! balance its weight (Gauss's least constraint inside the friction
 //! cones): it may slide, turn in the pinch, or drop.
 
+use nalgebra::{DVector, Vector2};
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
@@ -95,7 +96,7 @@ impl GripperPlantSettings {
 #[derive(Debug, Clone, PartialEq)]
 pub struct FingerState {
     /// The plant's coordinates.
-    pub q: Vec<f64>,
+    pub q: DVector<f64>,
     /// Contacts with the object.
     pub object_contacts: Vec<ContactForce>,
     /// Contacts with the table, if it is there.
@@ -103,7 +104,7 @@ pub struct FingerState {
     /// The noisy marker observation.
     pub markers: Observation,
     /// Centreline points at the plant's nodes (m), for drawings.
-    pub centreline_m: Vec<[f64; 2]>,
+    pub centreline_m: Vec<Vector2<f64>>,
 }
 
 /// The result of one plant solve: both fingers, or why it failed.
@@ -303,7 +304,7 @@ impl GripperPlant {
             let centreline_m = robot
                 .node_positions(sol.q.as_slice())
                 .column_iter()
-                .map(|p| [p[0], p[1]])
+                .map(|p| Vector2::new(p[0], p[1]))
                 .collect();
             let (object_contacts, table_contacts) = sol
                 .contacts
@@ -313,7 +314,7 @@ impl GripperPlant {
             self.warm[k] = Some(sol.q.as_slice().to_vec());
             self.touching[k] = !sol.contacts.is_empty();
             out.push(FingerState {
-                q: sol.q.data.into(),
+                q: sol.q.clone(),
                 object_contacts,
                 table_contacts,
                 markers,

@@ -53,7 +53,7 @@ pub(super) fn lifted_grip(
             .max_by(|a, b| a.force_n.total_cmp(&b.force_n))
         {
             // the surface point faces the object: −normal from the centreline
-            let a = robot.angle_at(&f.q, c.s_m)?;
+            let a = robot.angle_at(f.q.as_slice(), c.s_m)?;
             let side = (-a.sin() * -c.normal[0] + a.cos() * -c.normal[1]).signum();
             let d = r + c.gap_m;
             touches[i] = Some(Touch {
@@ -63,12 +63,12 @@ pub(super) fn lifted_grip(
                     c.point_m[0] - d * c.normal[0],
                     c.point_m[1] - d * c.normal[1],
                 ],
-                finger_point_m: surface(robot, &f.q, c.s_m, side)?,
+                finger_point_m: surface(robot, f.q.as_slice(), c.s_m, side)?,
                 normal: [-c.normal[0], -c.normal[1]],
             });
         }
         if let Some(t) = before[i] {
-            followed_m[i] = Some(surface(robot, &f.q, t.s_m, t.side)?);
+            followed_m[i] = Some(surface(robot, f.q.as_slice(), t.s_m, t.side)?);
         }
     }
     Ok(Grip {

@@ -35,10 +35,7 @@ pub(super) fn frame(
         time_s,
         phases,
         pressures_pa: [pressures[0].to_vec(), pressures[1].to_vec()],
-        centreline_m: [
-            fingers[0].centreline_m.clone(),
-            fingers[1].centreline_m.clone(),
-        ],
+        centreline_m: [0, 1].map(|i| fingers[i].centreline_m.iter().map(|p| [p.x, p.y]).collect()),
         contacts: contact_records(fingers, radius),
         contact_pose: poses,
         object_position_m: object.position_m,

@@ -131,21 +131,21 @@ pub(super) fn simulate(
         }
         Strategy::Adaptive => {
             let noise = settings.plant.marker_noise_m;
-            let vp = calibrate(gripper, settings, seed)?;
+            let [cal_left, cal_right] = calibrate(gripper, settings, seed)?;
             let mut ctrl = [
                 FingerController::new(
                     gripper,
                     Side::Left,
                     noise,
                     settings.estimator_alpha,
-                    Some(vp[0].clone()),
+                    Some(cal_left),
                 )?,
                 FingerController::new(
                     gripper,
                     Side::Right,
                     noise,
                     settings.estimator_alpha,
-                    Some(vp[1].clone()),
+                    Some(cal_right),
                 )?,
             ];
             let n = (settings.max_time_s / dt).ceil() as usize;
@@ -243,4 +243,43 @@ pub(super) fn simulate(
     };
     out.hold = Some(settled.first);
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::panic)]
+    use super::*;
+    use crate::contact::faults::NO_POLISH;
+    use crate::grasp::object::Shape;
+
+    #[test]
+    fn a_failed_plant_solve_is_a_failed_trial_with_its_cause() {
+        // the contact solves' polish made to fail (the fault the contact
+        // module's tests inject): the first solve with a finger on the disc
+        // does not converge, and the trial ends failed with the plant's
+        // status, never as a success
+        let disc = GraspObject {
+            name: "disc".into(),
+            shape: Shape::Circle { radius_m: 0.03 },
+            mass_kg: 0.1,
+            mu: 0.5,
+        };
+        NO_POLISH.with(|f| f.set(true));
+        let out = run_trial(
+            &GripperSpec::default(),
+            &disc,
+            Placement::default(),
+            Strategy::OpenLoop,
+            &GraspSettings::default(),
+            1,
+        );
+        NO_POLISH.with(|f| f.set(false));
+        let out = out.unwrap();
+        assert!(!out.success);
+        assert!(
+            matches!(&out.failure, Some(Failure::PlantSolve { status, .. }) if !status.is_empty()),
+            "{:?}",
+            out.failure
+        );
+    }
 }
