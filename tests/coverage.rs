@@ -194,7 +194,10 @@ fn markers_that_barely_see_the_load_say_so() {
         .q;
     let p: Vec<f64> = robot.position_at(q.as_slice(), 0.003).unwrap().data.into();
     let obs = Observation {
-        markers: vec![MarkerObservation::at_arc(0.003, nalgebra::DVector::from_column_slice(&p))],
+        markers: vec![MarkerObservation::at_arc(
+            0.003,
+            nalgebra::DVector::from_column_slice(&p),
+        )],
     };
     for backend in [Backend::Newton, Backend::Sqp] {
         let e = EstimatorSettings {
@@ -209,7 +212,7 @@ fn markers_that_barely_see_the_load_say_so() {
         assert!(
             e.weakly_informed() && e.determined_directions() < 0.5,
             "{backend:?}: {} directions",
-            e.determined_directions
+            e.determined_directions()
         );
     }
     let dir = std::env::temp_dir().join(format!("softrod_weak_{}", std::process::id()));

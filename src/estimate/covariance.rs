@@ -167,15 +167,10 @@ impl LazyCovariances {
         *self.gamma.get_or_init(|| {
             let i = &self.inputs;
             match i.gamma {
-                Some((objective, pen)) => super::evidence::evidence(
-                    i.load,
-                    &i.dv,
-                    &i.weights,
-                    objective,
-                    pen,
-                    i.alpha,
-                )
-                .map_or(f64::NAN, |ev| ev.gamma),
+                Some((objective, pen)) => {
+                    super::evidence::evidence(i.load, &i.dv, &i.weights, objective, pen, i.alpha)
+                        .map_or(f64::NAN, |ev| ev.gamma)
+                }
                 None => 0.0,
             }
         })
