@@ -134,7 +134,7 @@ impl TrialOutcome {
     /// let o = TrialOutcome { family: Family::Smooth, backend: softrod::estimate::Backend::Newton,
     ///     seed: 1, markers: 4, noise_sigma_m: 1e-5, truth_n: [0.02, -0.1], estimate_n: [0.021, -0.098],
     ///     std_n: [0.002, 0.004], d2: 0.5, covered: true, covered_components: [true; 2], alpha: 1e-6,
-    ///     status: "converged".into(), converged: true };
+    ///     status: "converged".into(), converged: true, determined_directions: 1.8, weakly_informed: false };
     /// assert!((o.estimate() - o.truth()).norm() < 3e-3 && o.std().x == 0.002);
     /// ```
     pub fn truth(&self) -> Vector2<f64> {
