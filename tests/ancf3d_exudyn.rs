@@ -98,8 +98,8 @@ fn solve(r: &Value, n: usize) -> ([f64; 3], Vec<f64>) {
     stiffness.ei_z_nm2 = f(&p["ei_z_nm2"]);
     let rod = RodSpec::clamped(
         vec![Section::uniform(l, stiffness.ea_n, stiffness.ei_y_nm2, n)],
-        vec![0.0; 3],
-        vec![1.0, 0.0, 0.0],
+        nalgebra::Vector3::repeat(0.0),
+        nalgebra::Vector3::new(1.0, 0.0, 0.0),
     );
     let mut spec = StructureSpec::new(vec![rod], vec![], vec![]);
     spec.gravity_m_per_s2 = vec![0.0; 3];

@@ -345,8 +345,8 @@ fn a_structure_refuses_moments_at_arc_positions() {
     let s = StructureSpec::new(
         vec![RodSpec::clamped(
             vec![Section::uniform(0.2, EA, EI, 4)],
-            vec![0.0, 0.0],
-            vec![1.0, 0.0],
+            nalgebra::Vector2::new(0.0, 0.0),
+            nalgebra::Vector2::new(1.0, 0.0),
         )],
         vec![],
         vec![],

@@ -110,8 +110,8 @@ fn ten_thousand_elements_are_refused_in_3d_structures_and_parallel_robots() {
     let rod = |k: usize| {
         RodSpec::clamped(
             vec![Section::uniform(0.2, 300.0, 0.02, k)],
-            vec![0.0, 0.0],
-            vec![0.0, 1.0],
+            nalgebra::Vector2::new(0.0, 0.0),
+            nalgebra::Vector2::new(0.0, 1.0),
         )
     };
     let spec = StructureSpec::new(vec![rod(5000), rod(5000)], vec![], vec![]);

@@ -80,8 +80,8 @@ fn one_clamped_rod_is_the_single_chain() {
     let mut s = StructureSpec::new(
         vec![RodSpec::clamped(
             spec.sections.clone(),
-            spec.base.position_m.clone(),
-            vec![a.cos(), a.sin()],
+            nalgebra::Vector2::from_column_slice(&spec.base.position_m),
+            nalgebra::Vector2::new(a.cos(), a.sin()),
         )],
         vec![],
         vec![],

@@ -10,12 +10,14 @@
 //!   the linearized estimator `F̂ ≈ (JᵀWJ + αH)⁻¹ JᵀW y` with `Cov(y) =
 //!   σ² I`, `Cov(F̂) = L Lᵀ`, is the noise spread alone (no bias).
 
-use std::sync::{Arc, OnceLock};
 
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use super::problem::{jittered_cholesky, weighted_columns, Derivs, GnFactor};
 use super::{Estimate, LoadModel};
+
+mod lazy;
+pub(crate) use lazy::{CovarianceInputs, LazyCovariances};
 
 /// The covariance factor `L = σ (JᵀWJ + αH)⁻¹ JᵀW` (`n_F × n_ob`), from
 /// the Gauss–Newton system's factor at the same derivatives when it was
@@ -40,158 +42,6 @@ fn cov_factor(
             concentrated_system(dv, w, alpha, gn)?.solve(&weighted_columns(&dv.jt, w)) * sigma
         }
     })
-}
-
-/// What the covariances of an estimate are formed from: the derivatives
-/// and the Gauss–Newton factor of its last linearization, with what the
-/// formulas need besides. An [`Estimate`] keeps them and forms its
-/// covariances when first asked ([`LazyCovariances`]): a stream of
-/// estimates that reads no covariance pays for none.
-#[derive(Debug, Clone)]
-pub(crate) struct CovarianceInputs {
-    /// The load model.
-    pub(crate) load: LoadModel,
-    /// Coordinates per node (the first `DIM` of them the position).
-    pub(crate) nd: usize,
-    /// Load slots per node that carry a load (`2 DIM`): the rows of `L`
-    /// beyond them in each node's are zero, like those entries of `F`.
-    pub(crate) used_slots: usize,
-    /// The stated marker noise (m).
-    pub(crate) sigma: f64,
-    /// The map `C: F → ∫ w dX` (row-major `DIM × n_F`).
-    pub(crate) fw: Vec<f64>,
-    /// The derivatives of the last linearization.
-    pub(crate) dv: Derivs,
-    /// The diagonal of `W`.
-    pub(crate) weights: Vec<f64>,
-    /// The `α` of the estimate.
-    pub(crate) alpha: f64,
-    /// When `α` is the evidence's and the markers see the load: the
-    /// estimate `F̂` and its penalty `F̂ᵀ H F̂` (the covariances are then
-    /// averaged over `α`, [`posterior_alpha_marginal`]).
-    pub(crate) evidence: Option<(Vec<f64>, f64)>,
-    /// When the markers see the load: the objective `Φ` and the penalty
-    /// `F̂ᵀ H F̂` at the estimate, for the evidence's `γ`
-    /// ([`LazyCovariances::determined_directions`]; `None`: `γ` = 0).
-    pub(crate) gamma: Option<(f64, f64)>,
-    /// The Gauss–Newton system's factor at `dv`, if at hand.
-    pub(crate) gn: Option<GnFactor>,
-}
-
-impl CovarianceInputs {
-    /// The covariance factor `L` (`n_F × n_ob`; NaN if the Gauss–Newton
-    /// matrix cannot be factored, which an estimate whose step solved that
-    /// system never meets).
-    fn factor(&self) -> DMatrix<f64> {
-        let (nf, m) = (self.dv.jt.nrows(), self.weights.len());
-        let Some(mut l) = cov_factor(
-            self.load,
-            self.sigma,
-            &self.dv,
-            &self.weights,
-            self.alpha,
-            self.gn.as_ref(),
-        ) else {
-            return DMatrix::from_element(nf, m, f64::NAN);
-        };
-        if self.load == LoadModel::Distributed && self.nd > self.used_slots {
-            for i in 0..l.nrows() {
-                if i % self.nd >= self.used_slots {
-                    l.row_mut(i).fill(0.0);
-                }
-            }
-        }
-        l
-    }
-
-    /// `Cov(resultant force)` (`DIM × DIM`) and `Cov(A q)` (`n_ob ×
-    /// n_ob`): the posterior's ([`posterior`], averaged over `α` when it is
-    /// the evidence's), or, when its matrix cannot be factored, the spread
-    /// the noise alone causes, from the covariance factor `l()`.
-    fn posterior(&self, l: impl FnOnce() -> DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64>) {
-        let (load, nd, fw, dv, w, alpha) = (
-            self.load,
-            self.nd,
-            &self.fw[..],
-            &self.dv,
-            &self.weights[..],
-            self.alpha,
-        );
-        let gn = self.gn.as_ref();
-        let d = fw.len().checked_div(dv.jt.nrows()).unwrap_or(0);
-        let m = w.len();
-        let typed = |(r, mk): (Vec<f64>, Vec<f64>)| {
-            (
-                DMatrix::from_row_slice(d, d, &r),
-                DMatrix::from_row_slice(m, m, &mk),
-            )
-        };
-        if let Some((f, pen)) = &self.evidence {
-            if let Some(c) = posterior_alpha_marginal(load, nd, fw, dv, w, alpha, f, *pen, gn) {
-                return typed(c);
-            }
-        }
-        if let Some(c) = posterior(load, nd, fw, dv, w, alpha, gn) {
-            return typed(c);
-        }
-        noise_cov(&l(), fw, dv)
-    }
-}
-
-/// The covariances of an [`Estimate`], formed from its
-/// [`CovarianceInputs`] on the first request and kept. Two are equal when
-/// their covariances are (comparing forms both).
-#[derive(Debug, Clone)]
-pub(crate) struct LazyCovariances {
-    inputs: Arc<CovarianceInputs>,
-    factor: OnceLock<DMatrix<f64>>,
-    posterior: OnceLock<(DMatrix<f64>, DMatrix<f64>)>,
-    gamma: OnceLock<f64>,
-}
-
-impl LazyCovariances {
-    /// Covariances to be formed from `inputs`.
-    pub(crate) fn new(inputs: CovarianceInputs) -> Self {
-        LazyCovariances {
-            inputs: Arc::new(inputs),
-            factor: OnceLock::new(),
-            posterior: OnceLock::new(),
-            gamma: OnceLock::new(),
-        }
-    }
-
-    /// How many load directions the markers determine at the estimate's
-    /// `α`: the evidence's effective number of parameters `γ` (0 when the
-    /// markers see nothing of the load, `NaN` if it cannot be formed).
-    pub(crate) fn determined_directions(&self) -> f64 {
-        *self.gamma.get_or_init(|| {
-            let i = &self.inputs;
-            match i.gamma {
-                Some((objective, pen)) => {
-                    super::evidence::evidence(i.load, &i.dv, &i.weights, objective, pen, i.alpha)
-                        .map_or(f64::NAN, |ev| ev.gamma)
-                }
-                None => 0.0,
-            }
-        })
-    }
-
-    /// The covariance factor `L`.
-    fn factor(&self) -> &DMatrix<f64> {
-        self.factor.get_or_init(|| self.inputs.factor())
-    }
-
-    /// The posterior covariances of the resultant force and of `A q`.
-    fn posterior(&self) -> &(DMatrix<f64>, DMatrix<f64>) {
-        self.posterior
-            .get_or_init(|| self.inputs.posterior(|| self.factor().clone()))
-    }
-}
-
-impl PartialEq for LazyCovariances {
-    fn eq(&self, other: &Self) -> bool {
-        self.factor() == other.factor() && self.posterior() == other.posterior()
-    }
 }
 
 /// `Zᵀ B Z` (symmetric) and the factor of `S = Zᵀ B Z + α W⁻¹` for the

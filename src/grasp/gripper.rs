@@ -261,8 +261,8 @@ impl GripperSpec {
         let rod = |side| {
             RodSpec::clamped(
                 self.finger_sections(side, 1.0, 1.0, 1),
-                self.base_m(side).as_slice().to_vec(),
-                vec![0.0, -1.0],
+                self.base_m(side),
+                nalgebra::Vector2::new(0.0, -1.0),
             )
         };
         let mut spec = StructureSpec::new(vec![rod(Side::Left), rod(Side::Right)], vec![], vec![]);

@@ -353,8 +353,8 @@ impl ParallelSpec {
                 .collect();
             rods.push(RodSpec::clamped(
                 sections,
-                vec![self.base_radius_m * c, self.base_radius_m * s, 0.0],
-                t.to_vec(),
+                nalgebra::Vector3::new(self.base_radius_m * c, self.base_radius_m * s, 0.0),
+                nalgebra::Vector3::from(t),
             ));
             joints.push(JointSpec::RodToBody {
                 rod: i,

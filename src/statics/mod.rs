@@ -258,7 +258,7 @@ impl StaticSolver {
     /// use softrod::assembly::Section;
     /// use softrod::statics::StaticSolver;
     /// use softrod::structure::{BodyLoad, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec};
-    /// let leg = |x: f64| RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 6)], vec![x, 0.0], vec![0.0, 1.0]);
+    /// let leg = |x: f64| RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 6)], nalgebra::Vector2::new(x, 0.0), nalgebra::Vector2::new(0.0, 1.0));
     /// let joint = |rod| JointSpec::RodToBody { rod, end: RodEnd::End, body: 0, point_m: None, direction: None };
     /// let s = StructureSpec::new(
     ///     vec![leg(-0.05), leg(0.05)],

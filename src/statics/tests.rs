@@ -46,8 +46,8 @@ fn leg_and_body() -> (
     let spec = StructureSpec::new(
         vec![RodSpec::clamped(
             vec![Section::uniform(0.2, 300.0, 0.02, 6)],
-            vec![0.0, 0.0],
-            vec![0.0, 1.0],
+            nalgebra::Vector2::new(0.0, 0.0),
+            nalgebra::Vector2::new(0.0, 1.0),
         )],
         vec![RigidBodySpec {
             mass_kg: 0.05,

@@ -123,7 +123,7 @@ impl<E: Element> Structure<E> {
     /// use softrod::assembly::Section;
     /// use softrod::structure::{BodyLoad, RodSpec, StructureLoads, StructureSpec};
     /// let s = StructureSpec::new(vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)],
-    ///     vec![0.0, 0.0], vec![1.0, 0.0])], vec![], vec![]).build_planar().unwrap();
+    ///     nalgebra::Vector2::new(0.0, 0.0), nalgebra::Vector2::new(1.0, 0.0))], vec![], vec![]).build_planar().unwrap();
     /// let bad = StructureLoads { bodies: vec![BodyLoad { body: 0, force_n: vec![], moment_nm: vec![] }], ..Default::default() };
     /// assert_eq!(s.validate_loads(&bad).unwrap_err().field(), Some("loads.bodies[0].body"));
     /// ```
@@ -368,7 +368,7 @@ impl<E: Element> Structure<E> {
     /// use softrod::assembly::Section;
     /// use softrod::structure::{BodyLoad, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec};
     /// let spec = StructureSpec::new(
-    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(0.0, 0.0), nalgebra::Vector2::new(0.0, 1.0))],
     ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
     ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
     /// );
@@ -431,7 +431,7 @@ impl<E: Element> Structure<E> {
     /// use softrod::assembly::Section;
     /// use softrod::structure::{BodyLoad, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec};
     /// let spec = StructureSpec::new(
-    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(0.0, 0.0), nalgebra::Vector2::new(0.0, 1.0))],
     ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
     ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
     /// );
@@ -469,7 +469,7 @@ impl<E: Element> Structure<E> {
     /// use softrod::assembly::Section;
     /// use softrod::structure::{BodyLoad, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec};
     /// let spec = StructureSpec::new(
-    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(0.0, 0.0), nalgebra::Vector2::new(0.0, 1.0))],
     ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
     ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
     /// );
@@ -546,7 +546,7 @@ impl<E: Element> Structure<E> {
     /// use softrod::loads::{Loads, PointForce};
     /// use softrod::structure::{RodSpec, StructureLoads, StructureSpec};
     /// let mut spec = StructureSpec::new(
-    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![1.0, 0.0])],
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(0.0, 0.0), nalgebra::Vector2::new(1.0, 0.0))],
     ///     vec![], vec![],
     /// );
     /// spec.gravity_m_per_s2 = vec![0.0, 0.0];
@@ -610,7 +610,7 @@ impl<E: Element> Structure<E> {
     /// use softrod::assembly::Section;
     /// use softrod::structure::{BodyLoad, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec};
     /// let spec = StructureSpec::new(
-    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(0.0, 0.0), nalgebra::Vector2::new(0.0, 1.0))],
     ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
     ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
     /// );
@@ -647,7 +647,7 @@ impl<E: Element> Structure<E> {
     /// use softrod::assembly::Section;
     /// use softrod::structure::{BodyLoad, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads, StructureSpec};
     /// let spec = StructureSpec::new(
-    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(0.0, 0.0), nalgebra::Vector2::new(0.0, 1.0))],
     ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
     ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
     /// );

@@ -71,7 +71,7 @@ struct ElementRef {
 /// use softrod::assembly::Section;
 /// use softrod::structure::{RodSpec, StructureSpec};
 /// let spec = StructureSpec::new(
-///     vec![RodSpec::clamped(vec![Section::uniform(0.24, 300.0, 0.025, 8)], vec![0.0, 0.0], vec![1.0, 0.0])],
+///     vec![RodSpec::clamped(vec![Section::uniform(0.24, 300.0, 0.025, 8)], nalgebra::Vector2::new(0.0, 0.0), nalgebra::Vector2::new(1.0, 0.0))],
 ///     vec![], vec![]);
 /// let s = spec.build_planar().unwrap();
 /// // one clamped rod is the single chain: base stretch + nodes 1 … 8
@@ -285,7 +285,7 @@ impl<E: Element> Structure<E> {
     /// use softrod::assembly::Section;
     /// use softrod::structure::{JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureSpec};
     /// let spec = StructureSpec::new(
-    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(0.0, 0.0), nalgebra::Vector2::new(0.0, 1.0))],
     ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
     ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
     /// );
@@ -307,7 +307,7 @@ impl<E: Element> Structure<E> {
     /// use softrod::assembly::Section;
     /// use softrod::structure::{JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureSpec};
     /// let spec = StructureSpec::new(
-    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(0.0, 0.0), nalgebra::Vector2::new(0.0, 1.0))],
     ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
     ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
     /// );
@@ -332,7 +332,7 @@ impl<E: Element> Structure<E> {
     /// use softrod::assembly::Section;
     /// use softrod::structure::{JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureSpec};
     /// let spec = StructureSpec::new(
-    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(0.0, 0.0), nalgebra::Vector2::new(0.0, 1.0))],
     ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
     ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
     /// );
@@ -358,7 +358,7 @@ impl<E: Element> Structure<E> {
     /// use softrod::assembly::Section;
     /// use softrod::structure::{JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureSpec};
     /// let spec = StructureSpec::new(
-    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(0.0, 0.0), nalgebra::Vector2::new(0.0, 1.0))],
     ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
     ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
     /// );
@@ -383,7 +383,7 @@ impl<E: Element> Structure<E> {
     /// use softrod::assembly::Section;
     /// use softrod::structure::{JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureSpec};
     /// let spec = StructureSpec::new(
-    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(0.0, 0.0), nalgebra::Vector2::new(0.0, 1.0))],
     ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
     ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
     /// );
@@ -417,7 +417,7 @@ impl<E: Element> Structure<E> {
     /// use softrod::assembly::Section;
     /// use softrod::structure::{JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureSpec};
     /// let spec = StructureSpec::new(
-    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.0, 0.0], vec![0.0, 1.0])],
+    ///     vec![RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(0.0, 0.0), nalgebra::Vector2::new(0.0, 1.0))],
     ///     vec![RigidBodySpec { mass_kg: 0.1, position_m: vec![0.0, 0.2], orientation_rad: vec![0.0] }],
     ///     vec![JointSpec::RodToBody { rod: 0, end: RodEnd::End, body: 0, point_m: None, direction: None }],
     /// );

@@ -58,7 +58,7 @@ pub enum EndSupport {
 /// ```
 /// use softrod::assembly::Section;
 /// use softrod::structure::{EndSupport, RodSpec};
-/// let leg = RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.05, 0.0], vec![0.0, 1.0]);
+/// let leg = RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(0.05, 0.0), nalgebra::Vector2::new(0.0, 1.0));
 /// assert!(matches!(leg.start, EndSupport::Clamped { .. }));
 /// assert_eq!(leg.end, EndSupport::Free);
 /// ```
@@ -80,12 +80,18 @@ pub struct RodSpec {
 }
 
 impl RodSpec {
-    /// A rod clamped at its start (position and direction), free at its end.
-    pub fn clamped(sections: Vec<Section>, start_m: Vec<f64>, direction: Vec<f64>) -> Self {
+    /// A rod clamped at its start (position `start_m` in m and `direction`:
+    /// `Vector2`s for a planar rod, `Vector3`s for a spatial one), free at its
+    /// end (example: [`RodSpec`]).
+    pub fn clamped<const D: usize>(
+        sections: Vec<Section>,
+        start_m: SVector<f64, D>,
+        direction: SVector<f64, D>,
+    ) -> Self {
         RodSpec {
             sections,
-            start_m,
-            direction,
+            start_m: start_m.as_slice().to_vec(),
+            direction: direction.as_slice().to_vec(),
             start: EndSupport::Clamped {
                 clamp: Clamp::PositionAndDirection,
             },
@@ -108,7 +114,7 @@ impl RodSpec {
     /// # Example
     /// ```
     /// use softrod::{assembly::Section, structure::RodSpec};
-    /// let leg = RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![0.05, 0.0], vec![0.0, 2.0]);
+    /// let leg = RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(0.05, 0.0), nalgebra::Vector2::new(0.0, 2.0));
     /// assert_eq!(leg.start_point::<2>()?, nalgebra::Vector2::new(0.05, 0.0));
     /// assert_eq!(leg.unit_direction::<2>()?, nalgebra::Vector2::y());
     /// assert!(leg.start_point::<3>().is_err());
@@ -343,7 +349,7 @@ impl StructureLoads {
 /// use softrod::assembly::Section;
 /// use softrod::structure::{JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureSpec};
 /// // two legs clamped at x = ±0.05 m, their tips joined to a platform
-/// let leg = |x: f64| RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], vec![x, 0.0], vec![0.0, 1.0]);
+/// let leg = |x: f64| RodSpec::clamped(vec![Section::uniform(0.2, 300.0, 0.02, 4)], nalgebra::Vector2::new(x, 0.0), nalgebra::Vector2::new(0.0, 1.0));
 /// let joint = |rod| JointSpec::RodToBody { rod, end: RodEnd::End, body: 0, point_m: None, direction: None };
 /// let spec = StructureSpec::new(
 ///     vec![leg(-0.05), leg(0.05)],

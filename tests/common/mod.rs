@@ -29,8 +29,8 @@ pub fn two_legs(n: usize, mass_kg: f64, gravity: bool) -> StructureSpec {
     let leg = |x: f64| {
         RodSpec::clamped(
             vec![Section::uniform(LEG_L, LEG_EA, LEG_EI, n)],
-            vec![x, 0.0],
-            vec![0.0, 1.0],
+            nalgebra::Vector2::new(x, 0.0),
+            nalgebra::Vector2::new(0.0, 1.0),
         )
     };
     let joint = |rod| JointSpec::RodToBody {
