@@ -46,7 +46,7 @@
 //! updater acts as an integral action on the position through the model.
 
 use nalgebra::Vector3;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use super::{ControllerKind, ParameterUpdater, Trajectory, UpdaterGains};
 use crate::element::{Ancf3d, Element};
@@ -606,7 +606,6 @@ pub fn run_track(
     summary.plant_solves = plant_warm.counts();
     Ok(TrackRun { summary, samples })
 }
-
 
 impl<E: Element> ParallelController<E> {
     /// The feedforward command towards `x_d` with the updater's current

@@ -43,7 +43,6 @@ use super::{IkSettings, InverseKinematics};
 mod spec;
 pub use spec::{CircleSpec, FigureEightSpec, LineSpec, PressuresSpec, SamplesSpec, TrajectorySpec};
 
-
 /// A trajectory file (see the [module documentation](crate::control)); read it with
 /// [`TrackFile::from_json`], which names the path of a bad field.
 #[derive(Debug, Clone, PartialEq, Serialize)]

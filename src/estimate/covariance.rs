@@ -10,7 +10,6 @@
 //!   the linearized estimator `F̂ ≈ (JᵀWJ + αH)⁻¹ JᵀW y` with `Cov(y) =
 //!   σ² I`, `Cov(F̂) = L Lᵀ`, is the noise spread alone (no bias).
 
-
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use super::problem::{jittered_cholesky, weighted_columns, Derivs, GnFactor};

@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::super::{ControllerKind, UpdaterGains};
-use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::error::{Error, Result};
 
 /// The settings of a tracking run; every field has a default.
 ///
@@ -93,7 +93,7 @@ impl TrackSettings {
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn from_json(text: &str) -> Result<Self> {
-        let s: TrackSettings = super::track::parse_json(text)?;
+        let s: TrackSettings = super::super::track::parse_json(text)?;
         s.validate().map_err(|e| match e {
             Error::InvalidParameter {
                 name,

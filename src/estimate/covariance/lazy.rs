@@ -135,22 +135,22 @@ impl LazyCovariances {
         *self.gamma.get_or_init(|| {
             let i = &self.inputs;
             match i.gamma {
-                Some((objective, pen)) => {
-                    super::super::evidence::evidence(i.load, &i.dv, &i.weights, objective, pen, i.alpha)
-                        .map_or(f64::NAN, |ev| ev.gamma)
-                }
+                Some((objective, pen)) => super::super::evidence::evidence(
+                    i.load, &i.dv, &i.weights, objective, pen, i.alpha,
+                )
+                .map_or(f64::NAN, |ev| ev.gamma),
                 None => 0.0,
             }
         })
     }
 
     /// The covariance factor `L`.
-    fn factor(&self) -> &DMatrix<f64> {
+    pub(super) fn factor(&self) -> &DMatrix<f64> {
         self.factor.get_or_init(|| self.inputs.factor())
     }
 
     /// The posterior covariances of the resultant force and of `A q`.
-    fn posterior(&self) -> &(DMatrix<f64>, DMatrix<f64>) {
+    pub(super) fn posterior(&self) -> &(DMatrix<f64>, DMatrix<f64>) {
         self.posterior
             .get_or_init(|| self.inputs.posterior(|| self.factor().clone()))
     }
