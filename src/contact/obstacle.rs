@@ -166,6 +166,78 @@ fn from_segment(x: &[f64; 2], a: &[f64; 2], b: &[f64; 2], radius: f64) -> Signed
 }
 
 impl Obstacle {
+    /// A disk of centre `center_m` (m) and radius `radius_m` (m), from a
+    /// typed point (unchecked, like the variant: see [`Obstacle::validate`]).
+    ///
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use softrod::contact::Obstacle;
+    /// let o = Obstacle::circle(Vector2::new(0.1, 0.0), 0.02);
+    /// assert_eq!(o, Obstacle::Circle { center_m: [0.1, 0.0], radius_m: 0.02 });
+    /// assert!((o.signed_distance(Vector2::new(0.1, 0.05)).distance_m - 0.03).abs() < 1e-15);
+    /// ```
+    pub fn circle(center_m: Vector2<f64>, radius_m: f64) -> Obstacle {
+        Obstacle::Circle {
+            center_m: center_m.into(),
+            radius_m,
+        }
+    }
+
+    /// A capsule (stadium) around the segment from `start_m` to `end_m`
+    /// (m), radius `radius_m` (m), from typed points.
+    ///
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use softrod::contact::Obstacle;
+    /// let o = Obstacle::capsule(Vector2::zeros(), Vector2::new(1.0, 0.0), 0.1);
+    /// assert_eq!(o.points()[1], Vector2::new(1.0, 0.0));
+    /// ```
+    pub fn capsule(start_m: Vector2<f64>, end_m: Vector2<f64>, radius_m: f64) -> Obstacle {
+        Obstacle::Capsule {
+            start_m: start_m.into(),
+            end_m: end_m.into(),
+            radius_m,
+        }
+    }
+
+    /// A convex polygon from its vertices, counter-clockwise (m).
+    ///
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use softrod::contact::Obstacle;
+    /// let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(Vector2::from);
+    /// let o = Obstacle::polygon(&square);
+    /// o.validate("obstacles[0]")?;
+    /// assert_eq!(o.points().len(), 4);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn polygon(vertices_m: &[Vector2<f64>]) -> Obstacle {
+        Obstacle::Polygon {
+            vertices_m: vertices_m.iter().map(|&v| v.into()).collect(),
+        }
+    }
+
+    /// The points that place the obstacle, as vectors (m): a disk's centre,
+    /// a capsule's two ends, a polygon's vertices.
+    ///
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use softrod::contact::Obstacle;
+    /// let o = Obstacle::Circle { center_m: [0.1, 0.2], radius_m: 0.01 };
+    /// assert_eq!(o.points(), vec![Vector2::new(0.1, 0.2)]);
+    /// ```
+    pub fn points(&self) -> Vec<Vector2<f64>> {
+        match self {
+            Obstacle::Circle { center_m, .. } => vec![Vector2::from(*center_m)],
+            Obstacle::Capsule { start_m, end_m, .. } => {
+                vec![Vector2::from(*start_m), Vector2::from(*end_m)]
+            }
+            Obstacle::Polygon { vertices_m } => {
+                vertices_m.iter().map(|&v| Vector2::from(v)).collect()
+            }
+        }
+    }
+
     /// Checks the obstacle; errors name `path.field` (`path` is where the
     /// obstacle sits, e.g. `obstacles[2]`).
     ///
