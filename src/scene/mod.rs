@@ -2,8 +2,7 @@
 //! markers and solver settings.
 //!
 //! Unknown fields and missing required ones are errors that name the field.
-//! See `README.md` for the format and `examples/two_section.json` for the
-//! paper's two-section robot.
+//! Format: `README.md`; the paper's two-section robot: `examples/two_section.json`.
 
 mod ladder;
 mod load;

@@ -80,9 +80,8 @@ pub struct RodSpec {
 }
 
 impl RodSpec {
-    /// A rod clamped at its start (position `start_m` in m and `direction`:
-    /// `Vector2`s for a planar rod, `Vector3`s for a spatial one), free at its
-    /// end (example: [`RodSpec`]).
+    /// A rod clamped at its start (`start_m` in m, `direction`: `Vector2`s for
+    /// a planar rod, `Vector3`s for a spatial one), free at its end ([`RodSpec`]).
     pub fn clamped<const D: usize>(
         sections: Vec<Section>,
         start_m: SVector<f64, D>,
