@@ -137,8 +137,14 @@ impl<E: Element> Stream<E> {
         }
         let settings = problem.settings();
         let by_evidence = settings.alpha.is_none() && settings.alpha_rule == AlphaRule::Evidence;
-        let evidence = if by_evidence && informative {
-            problem.penalty(&f).ok().map(|pen| (f.clone(), pen))
+        // the penalty `F̂ᵀ H F̂`, for the evidence's covariances and its γ
+        let pen = if informative {
+            Some(problem.penalty(&f)?)
+        } else {
+            None
+        };
+        let evidence = if by_evidence {
+            pen.map(|pen| (f.clone(), pen))
         } else {
             None
         };
@@ -154,11 +160,7 @@ impl<E: Element> Stream<E> {
             evidence,
             // how many load directions the markers determine (the
             // evidence's γ), formed on request like the covariances
-            gamma: if informative {
-                Some((report.objective, problem.penalty(&f)?))
-            } else {
-                None
-            },
+            gamma: pen.map(|pen| (report.objective, pen)),
             gn,
         });
         Ok(Estimate {
