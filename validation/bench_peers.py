@@ -139,6 +139,13 @@ def exudyn_forward(cases, elements):
                 row[key] = float(np.median(times))
                 if not write_file:
                     row.update({"converged": ok, "tip_m": tip, "runs": len(times)})
+                    # the Newton steps and Jacobians of one more (untimed)
+                    # solve, by the solver object SolveStatic wraps
+                    _, mbs, _ = X.build(ne, loads)
+                    solver = exu.MainSolverStatic()
+                    solver.SolveSystem(mbs, s)
+                    row["newton_steps"] = int(solver.it.newtonStepsCount)
+                    row["jacobians"] = int(solver.it.newtonJacobiCount)
                 else:
                     row["converged"] = row["converged"] and ok
             rows.append(row)
@@ -307,6 +314,20 @@ def table(doc):
                 cells.append(f"{r['ratio']:.0f}x ({r['ratio_default_settings']:.0f}x){flag}")
         lines.append(f"| {case} | " + " | ".join(cells) + " |")
     lines.append("")
+    lines.append("Newton iterations, exudyn / softrod, and the time ratio per iteration:")
+    lines.append("")
+    lines.append("| case | " + " | ".join(f"{n} el" for n in ELEMENTS) + " |")
+    lines.append("|---|" + "---|" * len(ELEMENTS))
+    for case in CASES:
+        cells = []
+        for n in ELEMENTS:
+            r = next((r for r in doc["forward"] if r["case"] == case and r["elements"] == n), None)
+            if r is None or not r.get("ratio_per_iteration"):
+                cells.append("")
+            else:
+                cells.append(f"{r['exudyn_newton_steps']} / {r['softrod_newton_iterations']}: {r['ratio_per_iteration']:.0f}x")
+        lines.append(f"| {case} | " + " | ".join(cells) + " |")
+    lines.append("")
     lines.append("| first estimate (20 el, 5 markers) | alpha | CasADi/IPOPT | softrod newton | softrod sqp | ratio newton | ratio sqp | max rel. diff of F (newton) |")
     lines.append("|---|---|---|---|---|---|---|---|")
     for p in doc["estimate"]:
@@ -345,6 +366,12 @@ def main(argv=None):
                 "exudyn_default_settings_s": r["default_settings_s"],
                 "softrod_s": s["median_s"],
                 "softrod_newton_iterations": s["newton_iterations"],
+                "exudyn_newton_steps": r["newton_steps"],
+                "exudyn_jacobians": r["jacobians"],
+                # time per Newton iteration, exudyn's over softrod's: what the
+                # ratio would be at equal iteration counts
+                "ratio_per_iteration": (r["median_s"] / max(r["newton_steps"], 1))
+                / (s["median_s"] / max(s["newton_iterations"], 1)),
                 "ratio": r["median_s"] / s["median_s"],
                 "ratio_default_settings": r["default_settings_s"] / s["median_s"],
                 "converged_both": bool(r["converged"] and s["converged"]),
