@@ -301,32 +301,30 @@ def chart(doc, path):
     fig.savefig(path, dpi=110)
 
 
-def table(doc):
+def grid(doc, key, cell):
+    """A case x elements table of `cell(row)` over the forward rows that have `key`."""
     lines = ["| case | " + " | ".join(f"{n} el" for n in ELEMENTS) + " |", "|---|" + "---|" * len(ELEMENTS)]
     for case in CASES:
         cells = []
         for n in ELEMENTS:
             r = next((r for r in doc["forward"] if r["case"] == case and r["elements"] == n), None)
-            if r is None or not r.get("ratio"):
-                cells.append("")
-            else:
-                flag = "" if r["converged_both"] else " (!)"
-                cells.append(f"{r['ratio']:.0f}x ({r['ratio_default_settings']:.0f}x){flag}")
+            cells.append(cell(r) if r is not None and r.get(key) else "")
         lines.append(f"| {case} | " + " | ".join(cells) + " |")
-    lines.append("")
-    lines.append("Newton iterations, exudyn / softrod, and the time ratio per iteration:")
-    lines.append("")
-    lines.append("| case | " + " | ".join(f"{n} el" for n in ELEMENTS) + " |")
-    lines.append("|---|" + "---|" * len(ELEMENTS))
-    for case in CASES:
-        cells = []
-        for n in ELEMENTS:
-            r = next((r for r in doc["forward"] if r["case"] == case and r["elements"] == n), None)
-            if r is None or not r.get("ratio_per_iteration"):
-                cells.append("")
-            else:
-                cells.append(f"{r['exudyn_newton_steps']} / {r['softrod_newton_iterations']}: {r['ratio_per_iteration']:.0f}x")
-        lines.append(f"| {case} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def table(doc):
+    lines = grid(
+        doc,
+        "ratio",
+        lambda r: f"{r['ratio']:.0f}x ({r['ratio_default_settings']:.0f}x)" + ("" if r["converged_both"] else " (!)"),
+    )
+    lines += ["", "Newton iterations, exudyn / softrod, and the time ratio per iteration:", ""]
+    lines += grid(
+        doc,
+        "ratio_per_iteration",
+        lambda r: f"{r['exudyn_newton_steps']} / {r['softrod_newton_iterations']}: {r['ratio_per_iteration']:.0f}x",
+    )
     lines.append("")
     lines.append("| first estimate (20 el, 5 markers) | alpha | CasADi/IPOPT | softrod newton | softrod sqp | ratio newton | ratio sqp | max rel. diff of F (newton) |")
     lines.append("|---|---|---|---|---|---|---|---|")
