@@ -290,8 +290,10 @@ pub struct EstimatorSettings {
     pub statistical_tolerance: f64,
     /// Largest marker jump (m) between successive observations handled in
     /// one go; larger jumps are split into a sequence of intermediate
-    /// observations; also the trust radius of one step's predicted node motion
-    /// (default 0.02 m).
+    /// observations (a stream's first observation, which has none before
+    /// it, is taken in one go); also the trust radius of one step's
+    /// predicted node motion (the sqp backend's starting radius, which
+    /// grows while its full steps hold) (default 0.02 m).
     pub max_observation_jump_m: f64,
     /// Inequalities on the load (SQP backend only; default none).
     pub bounds: Vec<LoadBound>,
