@@ -71,7 +71,7 @@ impl<E: Element> Stream<E> {
 
     /// The starting point of a step: the warm state, else zero load and the
     /// shape of the known loads.
-    pub(crate) fn start(&self) -> Result<(Vec<f64>, Vec<f64>)> {
+    pub(crate) fn start(&mut self) -> Result<(Vec<f64>, Vec<f64>)> {
         if let Some(w) = &self.warm {
             return Ok((w.f.clone(), w.q.clone()));
         }

@@ -88,6 +88,8 @@
 //! - `problem`: the problem (25) and what it computes at a point: the load
 //!   model, the objective, the marker Jacobian (28), the gradient (29) and
 //!   the Gauss–Newton step (30); the direct solution (24).
+//! - `triplets`: the constant matrices of the load over the free
+//!   coordinates (the sqp backend's), probed.
 //! - `covariance`: the covariances of an estimate.
 //! - `evidence`: `α` by the evidence.
 //! - `driver`: the stream of observations, `α` by the discrepancy principle,
@@ -105,6 +107,7 @@ mod evidence;
 pub mod newton;
 mod problem;
 pub mod sqp;
+mod triplets;
 
 pub use driver::ALPHA_CONTINUATION_START;
 pub use evidence::AlphaRule;

@@ -70,6 +70,7 @@
 //! so a warm step of a stream factors once (the second QP's tangent).
 
 mod bounded;
+mod trust;
 
 use clarabel::solver::SolverStatus;
 
@@ -197,26 +198,18 @@ impl<E: Element> SqpEstimator<E> {
                 "SqpEstimator runs the sqp backend (build the one the settings name with EstimatorSettings::build_for)",
             ));
         }
-        let problem = Problem::new(robot.clone(), known.clone(), settings.clone())?;
-        let nf = problem.n_f();
-        let mut g_free = Vec::new();
-        let mut h_upper = Vec::new();
-        for j in 0..nf {
-            let mut ej = vec![0.0; nf];
-            ej[j] = 1.0;
-            let col = problem.robot().restrict(&problem.gen_force(&ej)?)?;
-            for (i, v) in col.iter().enumerate() {
-                if *v != 0.0 {
-                    g_free.push((i, j, *v));
-                }
-            }
-            let hcol = problem.penalty_grad(&ej)?;
-            for (i, v) in hcol.iter().enumerate().take(j + 1) {
-                if *v != 0.0 {
-                    h_upper.push((i, j, *v));
-                }
-            }
-        }
+        Self::over(Problem::new(
+            robot.clone(),
+            known.clone(),
+            settings.clone(),
+        )?)
+    }
+
+    /// The estimator over `problem` (its settings naming the sqp backend):
+    /// the constant triplets of `Mᵀ G` and `H` and, for bounds on a
+    /// distributed load, the factored load Gram matrix.
+    pub(crate) fn over(problem: Problem<E>) -> Result<Self> {
+        let (g_free, h_upper) = problem.load_triplets()?;
         let gram_lu = match problem.load() {
             LoadModel::Distributed if !problem.settings().bounds.is_empty() => Some(gram_factors(
                 problem.robot(),
@@ -237,6 +230,17 @@ impl<E: Element> SqpEstimator<E> {
     /// The robot.
     pub fn robot(&self) -> &Robot<E> {
         self.stream.problem.robot()
+    }
+
+    /// The last QP's factored tangent and derivatives (kept for the next
+    /// warm step), taken out, if they were taken at `q` for `op`'s rows.
+    pub(crate) fn take_final_qp(
+        &mut self,
+        q: &[f64],
+        op: &ObservationOperator,
+    ) -> Option<(FactoredTangent, Derivs)> {
+        let w = self.warm_qp.take()?;
+        (w.q == q && w.rows == op.rows()).then_some((w.tangent, w.dv))
     }
 
     /// One QP at `(q, F)`: the tangent `K` assembled and factored at `q`,
@@ -265,7 +269,11 @@ impl<E: Element> SqpEstimator<E> {
             .filter(|w| w.q == q && w.rows == op.rows());
         let (tangent, cached) = match warm {
             Some(w) => (w.tangent, Some(w.dv)),
-            None => (self.stream.problem.factor_tangent(q)?, None),
+            None => match self.stream.problem.unloaded_tangent(q) {
+                // a cold start's first QP, at the unloaded shape
+                Some(t) => (t, None),
+                None => (self.stream.problem.factor_tangent(q)?, None),
+            },
         };
         let (k, lu) = (&tangent.matrix, &tangent.factors);
         let c = self.linear_term(op, f, e, alpha)?;
@@ -595,7 +603,8 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                     (wr, pen, e) = (wr_t, pen_t, e_t);
                     at_q = None;
                     accepted = true;
-                    radius = next_radius(radius, t, cut, settings.max_observation_jump_m, len);
+                    radius =
+                        trust::next_radius(radius, t, cut, settings.max_observation_jump_m, len);
                     break;
                 }
                 t *= 0.5;
@@ -703,24 +712,6 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
     }
 }
 
-/// The trust radius after a step accepted at `t` (the fraction of the QP
-/// step taken), of radius `radius` (m), which cut the step if `cut`: twice
-/// as large after a full step it cut (the linearization held over the whole
-/// radius), up to the robot's length `len`; after a backtracked step the
-/// step's own length, at least a quarter of the radius and never below the
-/// start `start` (`max_observation_jump_m`); unchanged otherwise.
-fn next_radius(radius: f64, t: f64, cut: bool, start: f64, len: f64) -> f64 {
-    if t == 1.0 {
-        if cut {
-            (2.0 * radius).min(len.max(start))
-        } else {
-            radius
-        }
-    } else {
-        (radius * t.max(0.25)).max(start)
-    }
-}
-
 /// The factors of the load Gram matrix `B = ∫ Sᵀ S dX` (22) over all
 /// `n_q` coordinates: element `e` couples the coordinates of its two nodes.
 fn gram_factors<E: Element>(robot: &Robot<E>, kind: SolverKind) -> Result<AutoFactors> {
@@ -800,7 +791,7 @@ impl<E: Element + 'static> Estimator for SqpEstimator<E> {
     }
 
     fn set_known_loads(&mut self, known: Loads) -> Result<()> {
-        self.stream.problem.tracker().set_known(known)?;
+        self.stream.problem.set_known(known)?;
         self.warm_qp = None;
         Ok(())
     }
