@@ -351,7 +351,24 @@ impl<E: Element> Problem<E> {
     pub(crate) fn derivs(&self, lu: &AutoFactors, op: &ObservationOperator) -> Result<Derivs> {
         let s = Sensitivity::new(self.robot(), lu)?;
         let adj = s.adjoints(op.rows().iter().map(|r| r.entries()))?;
-        let jt = s.load_gradients(&self.load(), &adj)?;
+        let jt = match self.load() {
+            // J_i = B z_i straight into the columns (the numbers of
+            // `load_gradients`, without a vector per column)
+            LoadModel::Distributed => {
+                let (nq, m) = adj.full.shape();
+                let mut jt = DMatrix::zeros(nq, m);
+                for (z, out) in adj
+                    .full
+                    .as_slice()
+                    .chunks_exact(nq.max(1))
+                    .zip(jt.as_mut_slice().chunks_exact_mut(nq.max(1)))
+                {
+                    self.robot().apply_load_gram_into(z, out)?;
+                }
+                jt
+            }
+            LoadModel::Concentrated { .. } => s.load_gradients(&self.load(), &adj)?,
+        };
         Ok(Derivs { z: adj.full, jt })
     }
 
