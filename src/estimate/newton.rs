@@ -273,12 +273,41 @@ impl<E: Element> NewtonEstimator<E> {
         // the objective at the accepted trial point, which the next
         // iteration starts from
         let mut at_trial: Option<(f64, f64, Vec<f64>)> = None;
+        let mut eager = far.is_some() && f.iter().all(|v| *v == 0.0);
         loop {
             let (wr, pen, e) = match at_trial.take() {
                 Some(x) => x,
                 None => core.objective(op, q.as_slice(), &f, alpha)?,
             };
             let obj = wr + pen;
+            // a cold solve from zero load (a stream's first, from the
+            // unloaded shape) takes the far start at once: its first
+            // linearization would only measure how far the start is
+            if eager {
+                eager = false;
+                if let Some(used) = far.take() {
+                    let fs = far_start(
+                        inner,
+                        derivs_cache,
+                        cache_rows,
+                        core,
+                        op,
+                        &f,
+                        &q,
+                        alpha,
+                        obj,
+                    )?;
+                    if let Some((fs, eq, its)) = fs {
+                        *used = true;
+                        iterations += its;
+                        f = fs;
+                        q = eq.q.data.into();
+                        lu = eq.factors;
+                        res_n = eq.residual_n;
+                        continue;
+                    }
+                }
+            }
             // (a warm step starts where the last one converged: the
             // derivatives there are cached)
             let cached = match derivs_cache.take() {
@@ -416,26 +445,21 @@ impl<E: Element> NewtonEstimator<E> {
             // `full_space`), once per solve
             if cap < 1.0 {
                 if let Some(used) = far.take() {
-                    let (fs, qs, its) = match full_space(inner, core, op, &f, &q, alpha, obj) {
-                        Some((fs, qs, its, last)) => {
-                            // its last factored tangent and derivatives, at
-                            // its estimate: the equilibrium there needs no
-                            // factorization, the next iteration no adjoints
-                            if let Some((tangent, dv)) = last {
-                                core.tracker().keep_factors(&qs, tangent.factors)?;
-                                *cache_rows = op.rows().to_vec();
-                                *derivs_cache = Some((qs.clone(), dv));
-                            }
-                            (fs, qs, its)
-                        }
-                        None => (Vec::new(), Vec::new(), 0),
-                    };
-                    if !fs.is_empty() {
-                        if let Ok(eq) = core.equilibrium(&fs, &qs) {
-                            *used = true;
-                            iterations += its;
-                            accepted = Some((fs, eq, None));
-                        }
+                    let fs = far_start(
+                        inner,
+                        derivs_cache,
+                        cache_rows,
+                        core,
+                        op,
+                        &f,
+                        &q,
+                        alpha,
+                        obj,
+                    )?;
+                    if let Some((fs, eq, its)) = fs {
+                        *used = true;
+                        iterations += its;
+                        accepted = Some((fs, eq, None));
                     }
                 }
             }
@@ -524,6 +548,48 @@ impl<E: Element + 'static> Estimator for NewtonEstimator<E> {
         self.full_space = None;
         Ok(())
     }
+}
+
+/// The far start from `(f, q)` (objective `obj`): the full-space
+/// iterations ([`full_space`]) and the equilibrium at their estimate,
+/// with the iterations they took; `None` if they did not converge below
+/// `obj` or the equilibrium failed. Their last factored tangent is kept in
+/// the tracker (the equilibrium there is then a chord step without a
+/// factorization) and their derivatives cached for the next iteration, at
+/// the equilibrium's shape when that stayed within `1e-10 L` of theirs
+/// (the tracker then returns the same factors, from which the derivatives
+/// are the same numbers).
+#[allow(clippy::too_many_arguments)]
+fn far_start<E: Element>(
+    inner: &mut Option<Box<SqpEstimator<E>>>,
+    derivs_cache: &mut Option<(Vec<f64>, Derivs)>,
+    cache_rows: &mut Vec<ObsRow>,
+    core: &mut Problem<E>,
+    op: &ObservationOperator,
+    f: &[f64],
+    q: &[f64],
+    alpha: f64,
+    obj: f64,
+) -> Result<Option<(Vec<f64>, crate::statics::TrackedEquilibrium, usize)>> {
+    let Some((fs, qs, its, last)) = full_space(inner, core, op, f, q, alpha, obj) else {
+        return Ok(None);
+    };
+    let mut cached = None;
+    if let Some((tangent, dv)) = last {
+        core.tracker().keep_factors(&qs, tangent.factors)?;
+        cached = Some(dv);
+    }
+    let Ok(eq) = core.equilibrium(&fs, &qs) else {
+        return Ok(None);
+    };
+    if let Some(dv) = cached {
+        let tol = 1e-10 * core.robot().length();
+        if eq.q.iter().zip(&qs).all(|(a, b)| (a - b).abs() <= tol) {
+            *cache_rows = op.rows().to_vec();
+            *derivs_cache = Some((eq.q.as_slice().to_vec(), dv));
+        }
+    }
+    Ok(Some((fs, eq, its)))
 }
 
 /// The full-space iterations of a far start: from `(f, q)`, an
