@@ -16,9 +16,8 @@ use super::covariance::{CovarianceInputs, LazyCovariances};
 use super::problem::{Derivs, GnFactor, Problem};
 use super::{AlphaRule, Backend, Estimate, EstimateReport};
 
-/// Where the cold start of the `newton` backend at a given small `α` begins
-/// its continuation (m/N² with whitened weights; the discrepancy search
-/// starts there too).
+/// Where the searches for `α` (the evidence's, the discrepancy principle's)
+/// begin their continuation in `α` (m/N² with whitened weights).
 pub const ALPHA_CONTINUATION_START: f64 = 100.0;
 
 /// The state a backend keeps between steps: the last converged estimate and
@@ -72,7 +71,7 @@ impl<E: Element> Stream<E> {
 
     /// The starting point of a step: the warm state, else zero load and the
     /// shape of the known loads.
-    pub(crate) fn start(&self) -> Result<(Vec<f64>, Vec<f64>)> {
+    pub(crate) fn start(&mut self) -> Result<(Vec<f64>, Vec<f64>)> {
         if let Some(w) = &self.warm {
             return Ok((w.f.clone(), w.q.clone()));
         }
@@ -265,8 +264,7 @@ pub(crate) fn discrepancy_alpha(
     Ok(10f64.powf(0.5 * (lo + hi)))
 }
 
-/// One solve of a continuation path in `α` (the discrepancy search, the
-/// cold start at a small `α`): from `(f0, q0)` at `alpha`; a converged solve
+/// One solve of a continuation path in `α` (the discrepancy search): from `(f0, q0)` at `alpha`; a converged solve
 /// becomes the next start. Its weighted residual, or `None` when the solve
 /// failed.
 fn path_solve<E: Element, M: Method<E>>(
@@ -284,35 +282,6 @@ fn path_solve<E: Element, M: Method<E>>(
     Some(s.report.weighted_residual)
 }
 
-/// The cold start of the reduced Gauss–Newton method at a small fixed `α`:
-/// from the unloaded start, the Gauss–Newton iteration on a nearly
-/// unregularized problem takes many short line-search steps, or stalls (the
-/// stability map's "line search failed" at α ≤ 1 m/N² before this). The
-/// solution is instead followed from [`ALPHA_CONTINUATION_START`] down by
-/// decades to `α`, each solve starting from the last converged one (the path
-/// the discrepancy search takes); the last one becomes the warm start of the
-/// solve at `α`. A solve of the path that fails or does not converge is
-/// skipped (the next one starts from the last converged point), so the
-/// result at `α` is the same minimizer, reached from a closer start.
-fn alpha_continuation<E: Element, M: Method<E>>(
-    method: &mut M,
-    op: &ObservationOperator,
-    alpha: f64,
-) -> Result<()> {
-    let (mut f0, mut q0) = method.stream().start()?;
-    let mut b = ALPHA_CONTINUATION_START;
-    while b > 1.5 * alpha {
-        path_solve(method, op, b, &mut f0, &mut q0);
-        b /= 10.0;
-    }
-    method.stream().warm = Some(Warm {
-        f: f0,
-        q: q0,
-        y: op.measurements().to_vec(),
-    });
-    Ok(())
-}
-
 /// One observation through the backend's method: `α` chosen if not yet, a
 /// large jump split into intermediate observations, each solved from the
 /// last; the estimate with its covariances. A solve that stops short ends
@@ -328,15 +297,7 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
     let op = method.stream().problem.operator_of_frame(observation)?;
     let rule = method.stream().problem.settings().alpha_rule;
     let alpha = match method.stream().alpha {
-        Some(a) => {
-            if backend == Backend::Newton
-                && method.stream().warm.is_none()
-                && a < ALPHA_CONTINUATION_START
-            {
-                alpha_continuation(method, &op, a)?;
-            }
-            a
-        }
+        Some(a) => a,
         None if rule == AlphaRule::Evidence => {
             let (a, warm) = super::evidence::evidence_alpha(method, &op)?;
             let stream = method.stream();
@@ -363,8 +324,16 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
             a
         }
     };
-    let (_, q_start) = method.stream().start()?;
-    let targets = method.stream().sub_targets(&op, &q_start);
+    // a stream's first observation in one go (there is no observation
+    // before it: the solve's own trust region, which grows while its full
+    // steps hold, globalizes the way from the unloaded shape); a later
+    // one's jump from the last split into intermediate observations
+    let targets = if method.stream().warm.is_none() {
+        vec![op.measurements().to_vec()]
+    } else {
+        let (_, q_start) = method.stream().start()?;
+        method.stream().sub_targets(&op, &q_start)
+    };
     let n_sub = targets.len();
     let mut iterations = 0;
     let mut last: Option<Solved> = None;

@@ -88,6 +88,8 @@
 //! - `problem`: the problem (25) and what it computes at a point: the load
 //!   model, the objective, the marker Jacobian (28), the gradient (29) and
 //!   the Gauss–Newton step (30); the direct solution (24).
+//! - `triplets`: the constant matrices of the load over the free
+//!   coordinates (the sqp backend's), probed.
 //! - `covariance`: the covariances of an estimate.
 //! - `evidence`: `α` by the evidence.
 //! - `driver`: the stream of observations, `α` by the discrepancy principle,
@@ -105,6 +107,7 @@ mod evidence;
 pub mod newton;
 mod problem;
 pub mod sqp;
+mod triplets;
 
 pub use driver::ALPHA_CONTINUATION_START;
 pub use evidence::AlphaRule;
@@ -290,8 +293,10 @@ pub struct EstimatorSettings {
     pub statistical_tolerance: f64,
     /// Largest marker jump (m) between successive observations handled in
     /// one go; larger jumps are split into a sequence of intermediate
-    /// observations; also the trust radius of one step's predicted node motion
-    /// (default 0.02 m).
+    /// observations (a stream's first observation, which has none before
+    /// it, is taken in one go); also the trust radius of one step's
+    /// predicted node motion (the sqp backend's starting radius, which
+    /// grows while its full steps hold) (default 0.02 m).
     pub max_observation_jump_m: f64,
     /// Inequalities on the load (SQP backend only; default none).
     pub bounds: Vec<LoadBound>,

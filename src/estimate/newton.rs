@@ -19,9 +19,8 @@
 //!   the last factorization of `K`, then one fresh factorization at the
 //!   solution, which the next iteration's adjoint solves use).
 //! - Far starts of a cold estimate: when the trust region binds (the
-//!   step's predicted node motion is cut to `max_observation_jump_m`) and
-//!   the cheap static solve finds no equilibrium at the full step, the
-//!   reduced method would need many short steps, each a static solve of
+//!   step's predicted node motion is cut to `max_observation_jump_m`),
+//!   the reduced method would need many short steps, each a static solve of
 //!   several factorizations (the first estimate of a large deflection from
 //!   the unloaded shape). The solve then continues with the full-space
 //!   iterations of the sqp backend over `(q, F)`, whose iterates need not
@@ -274,18 +273,45 @@ impl<E: Element> NewtonEstimator<E> {
         // the objective at the accepted trial point, which the next
         // iteration starts from
         let mut at_trial: Option<(f64, f64, Vec<f64>)> = None;
+        let mut eager = far.is_some() && f.iter().all(|v| *v == 0.0);
         loop {
             let (wr, pen, e) = match at_trial.take() {
                 Some(x) => x,
                 None => core.objective(op, q.as_slice(), &f, alpha)?,
             };
             let obj = wr + pen;
+            // a cold solve from zero load (a stream's first, from the
+            // unloaded shape) takes the far start at once: its first
+            // linearization would only measure how far the start is
+            if eager {
+                eager = false;
+                if let Some(used) = far.take() {
+                    let fs = far_start(
+                        inner,
+                        derivs_cache,
+                        cache_rows,
+                        core,
+                        op,
+                        &f,
+                        &q,
+                        alpha,
+                        obj,
+                    )?;
+                    if let Some((fs, eq, its)) = fs {
+                        *used = true;
+                        iterations += its;
+                        f = fs;
+                        q = eq.q.data.into();
+                        lu = eq.factors;
+                        res_n = eq.residual_n;
+                        continue;
+                    }
+                }
+            }
             // (a warm step starts where the last one converged: the
             // derivatives there are cached)
             let cached = match derivs_cache.take() {
-                Some((qc, dv)) if iterations == 0 && qc == q && cache_rows[..] == *op.rows() => {
-                    Some(dv)
-                }
+                Some((qc, dv)) if qc == q && cache_rows[..] == *op.rows() => Some(dv),
                 _ => None,
             };
             let dv = match cached {
@@ -414,7 +440,33 @@ impl<E: Element> NewtonEstimator<E> {
             // step (the objective's round-off would hide the decrease)
             let mut t = 1.0;
             let mut accepted = None;
+            // a far start (the trust region cuts the step of a cold
+            // solve): the full-space iterations take over (see
+            // `full_space`), once per solve
+            if cap < 1.0 {
+                if let Some(used) = far.take() {
+                    let fs = far_start(
+                        inner,
+                        derivs_cache,
+                        cache_rows,
+                        core,
+                        op,
+                        &f,
+                        &q,
+                        alpha,
+                        obj,
+                    )?;
+                    if let Some((fs, eq, its)) = fs {
+                        *used = true;
+                        iterations += its;
+                        accepted = Some((fs, eq, None));
+                    }
+                }
+            }
             for _ in 0..30 {
+                if accepted.is_some() {
+                    break;
+                }
                 let ft: Vec<f64> = f.iter().zip(&step).map(|(a, b)| a + t * b).collect();
                 // the trial's equilibrium starts from the linearized
                 // prediction q + t dq (a predictor–corrector step, as the
@@ -432,22 +484,6 @@ impl<E: Element> NewtonEstimator<E> {
                     let load = core.load();
                     core.tracker().try_solve(&load, &ft, &qp).ok().flatten()
                 };
-                // a far start (the trust region binds) whose full step has
-                // no equilibrium the cheap solve reaches: the full-space
-                // iterations take over (see `full_space`), once per solve
-                if trial.is_none() && t == 1.0 && cap < 1.0 {
-                    if let Some(used) = far.take() {
-                        if let Some((fs, qs, its)) = full_space(inner, core, op, &f, &q, alpha, obj)
-                        {
-                            if let Ok(eq) = core.equilibrium(&fs, &qs) {
-                                *used = true;
-                                iterations += its;
-                                accepted = Some((fs, eq, None));
-                                break;
-                            }
-                        }
-                    }
-                }
                 if let Some(eq) = trial {
                     let (wr_t, pen_t, e_t) = core.objective(op, eq.q.as_slice(), &ft, alpha)?;
                     if wr_t + pen_t <= obj + 1e-4 * t * slope || dec <= 1e-8 * scale {
@@ -507,20 +543,70 @@ impl<E: Element + 'static> Estimator for NewtonEstimator<E> {
     }
 
     fn set_known_loads(&mut self, known: Loads) -> Result<()> {
-        self.stream.problem.tracker().set_known(known)?;
+        self.stream.problem.set_known(known)?;
         self.derivs_cache = None;
         self.full_space = None;
         Ok(())
     }
 }
 
+/// The far start from `(f, q)` (objective `obj`): the full-space
+/// iterations ([`full_space`]) and the equilibrium at their estimate,
+/// with the iterations they took; `None` if they did not converge below
+/// `obj` or the equilibrium failed. Their last factored tangent is kept in
+/// the tracker (the equilibrium there is then a chord step without a
+/// factorization) and their derivatives cached for the next iteration, at
+/// the equilibrium's shape when that stayed within `1e-10 L` of theirs
+/// (the tracker then returns the same factors, from which the derivatives
+/// are the same numbers).
+#[allow(clippy::too_many_arguments)]
+fn far_start<E: Element>(
+    inner: &mut Option<Box<SqpEstimator<E>>>,
+    derivs_cache: &mut Option<(Vec<f64>, Derivs)>,
+    cache_rows: &mut Vec<ObsRow>,
+    core: &mut Problem<E>,
+    op: &ObservationOperator,
+    f: &[f64],
+    q: &[f64],
+    alpha: f64,
+    obj: f64,
+) -> Result<Option<(Vec<f64>, crate::statics::TrackedEquilibrium, usize)>> {
+    let Some((fs, qs, its, last)) = full_space(inner, core, op, f, q, alpha, obj) else {
+        return Ok(None);
+    };
+    let mut cached = None;
+    if let Some((tangent, dv)) = last {
+        core.tracker().keep_factors(&qs, tangent.factors)?;
+        cached = Some(dv);
+    }
+    let Ok(eq) = core.equilibrium(&fs, &qs) else {
+        return Ok(None);
+    };
+    if let Some(dv) = cached {
+        let tol = 1e-10 * core.robot().length();
+        if eq.q.iter().zip(&qs).all(|(a, b)| (a - b).abs() <= tol) {
+            *cache_rows = op.rows().to_vec();
+            *derivs_cache = Some((eq.q.as_slice().to_vec(), dv));
+        }
+    }
+    Ok(Some((fs, eq, its)))
+}
+
 /// The full-space iterations of a far start: from `(f, q)`, an
 /// equilibrium, the estimate at `alpha` for `op` by the sqp backend's
 /// iterations over `(q, F)`, whose iterates need not be equilibria; made
-/// the first time it is needed, kept in `inner`. Its converged estimate,
-/// an equilibrium, with the iterations it took, if it converged below the
-/// objective `obj` at `(f, q)`; `None` otherwise (the reduced iteration
-/// then backtracks on its own).
+/// over a copy of the problem (its analyzed linear solver, its unloaded
+/// start) the first time it is needed, kept in `inner`. Its converged
+/// estimate, an equilibrium, with the iterations it took and its last
+/// QP's factored tangent and derivatives when taken there (the reduced
+/// iteration resumes from them without a factorization or adjoint solves),
+/// if it converged below the objective `obj` at `(f, q)`; `None` otherwise
+/// (the reduced iteration then backtracks on its own).
+///
+/// It is taken as soon as the trust region cuts a step of a cold solve,
+/// without trying the reduced step's equilibrium first: that trial (chord
+/// and plain Newton steps from the linearized prediction) failed on every
+/// large deflection measured and cost factorizations of its own.
 ///
 /// Why: far from the solution (the first estimate of a large deflection,
 /// from the unloaded shape) a step of the reduced method needs the
@@ -541,24 +627,29 @@ fn full_space<E: Element>(
     q: &[f64],
     alpha: f64,
     obj: f64,
-) -> Option<(Vec<f64>, Vec<f64>, usize)> {
+) -> Option<FullSpace> {
     if inner.is_none() {
-        // the same problem, its settings naming the backend that runs it
-        let settings = EstimatorSettings {
-            backend: Backend::Sqp,
-            ..core.settings().clone()
-        };
-        let sqp = SqpEstimator::new(core.robot(), core.known(), &settings);
-        *inner = Some(Box::new(sqp.ok()?));
+        // the same problem (its analysis, its unloaded start)
+        *inner = Some(Box::new(SqpEstimator::over(core.clone()).ok()?));
     }
     let sqp = inner.as_mut()?;
     let s = sqp.solve_one(op, f.to_vec(), q.to_vec(), alpha).ok()?;
-    (s.report.status.is_converged() && s.report.objective < obj).then_some((
-        s.f,
-        s.q,
-        s.report.iterations,
-    ))
+    if !(s.report.status.is_converged() && s.report.objective < obj) {
+        return None;
+    }
+    let last = sqp.take_final_qp(&s.q, op);
+    Some((s.f, s.q, s.report.iterations, last))
 }
+
+/// A converged run of the full-space iterations: the load, the shape, the
+/// iterations, and the last QP's factored tangent and derivatives when they
+/// were taken at that shape.
+type FullSpace = (
+    Vec<f64>,
+    Vec<f64>,
+    usize,
+    Option<(crate::statics::tracker::FactoredTangent, Derivs)>,
+);
 
 #[cfg(test)]
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]

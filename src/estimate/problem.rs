@@ -124,6 +124,9 @@ pub(crate) struct Problem<E: Element> {
     /// The last observation's markers and their operator: the next frame
     /// of the same markers reuses it ([`Problem::operator_of_frame`]).
     last_operator: Option<(Vec<MarkerObservation>, ObservationOperator)>,
+    /// The shape of the known loads alone ([`Problem::unloaded_start`]),
+    /// once solved, with the factored tangent there when it was formed.
+    unloaded: Option<(Vec<f64>, Option<FactoredTangent>)>,
 }
 
 impl<E: Element> Problem<E> {
@@ -174,6 +177,7 @@ impl<E: Element> Problem<E> {
             settings,
             n_f,
             last_operator: None,
+            unloaded: None,
         })
     }
 
@@ -285,12 +289,59 @@ impl<E: Element> Problem<E> {
     }
 
     /// The equilibrium and the free start: zero load and the shape of the
-    /// known loads alone.
-    pub(crate) fn unloaded_start(&self) -> Result<(Vec<f64>, Vec<f64>)> {
+    /// known loads alone (solved once, then kept until the known loads
+    /// change, [`Problem::set_known`]).
+    ///
+    /// Without known loads the static solver's cold start (the robot's
+    /// reference shape) is that shape when its residual is at the round-off
+    /// floor ([`crate::statics::residual_floor`]): taken as it is, its
+    /// tangent factored once and kept for the first solve (the tracker's
+    /// chord step and the sqp backend's first QP start from those factors)
+    /// instead of a static solve (18 residuals on the unloaded exudyn cable
+    /// at 20 elements: a tenth of a first estimate). Otherwise the static
+    /// solve of the known loads.
+    pub(crate) fn unloaded_start(&mut self) -> Result<(Vec<f64>, Vec<f64>)> {
         let f = vec![0.0; self.n_f];
+        if let Some((q, _)) = &self.unloaded {
+            return Ok((f, q.clone()));
+        }
+        if *self.known() == Loads::default() {
+            let q: Vec<f64> = self.robot().reference_configuration().data.into();
+            let r = self.residual(&q, &f)?;
+            let t = self.tracker.factor_tangent(&q)?;
+            let floor = crate::statics::residual_floor(
+                t.matrix.max_abs(),
+                crate::numeric::max_abs(&q),
+                self.robot().n_free(),
+            );
+            if crate::numeric::norm2(&r) <= floor {
+                self.tracker.keep_factors(&q, t.factors.clone())?;
+                self.unloaded = Some((q.clone(), Some(t)));
+                return Ok((f, q));
+            }
+        }
         let solver = StaticSolver::new(self.settings.statics.clone())?;
         let eq = solver.solve(self.robot(), self.tracker.known(), None)?;
-        Ok((f, eq.q.data.into()))
+        let q: Vec<f64> = eq.q.data.into();
+        self.unloaded = Some((q.clone(), None));
+        Ok((f, q))
+    }
+
+    /// The factored tangent at the unloaded start, if `q` is that shape and
+    /// it was formed there ([`Problem::unloaded_start`]).
+    pub(crate) fn unloaded_tangent(&self, q: &[f64]) -> Option<FactoredTangent> {
+        match &self.unloaded {
+            Some((qs, Some(t))) if qs == q => Some(t.clone()),
+            _ => None,
+        }
+    }
+
+    /// Replaces the known loads ([`EquilibriumTracker::set_known`]) and
+    /// forgets the shape of the old ones.
+    pub(crate) fn set_known(&mut self, known: Loads) -> Result<()> {
+        self.tracker.set_known(known)?;
+        self.unloaded = None;
+        Ok(())
     }
 
     /// Adjoint fields and the marker Jacobian (28) at an equilibrium with
@@ -300,7 +351,24 @@ impl<E: Element> Problem<E> {
     pub(crate) fn derivs(&self, lu: &AutoFactors, op: &ObservationOperator) -> Result<Derivs> {
         let s = Sensitivity::new(self.robot(), lu)?;
         let adj = s.adjoints(op.rows().iter().map(|r| r.entries()))?;
-        let jt = s.load_gradients(&self.load(), &adj)?;
+        let jt = match self.load() {
+            // J_i = B z_i straight into the columns (the numbers of
+            // `load_gradients`, without a vector per column)
+            LoadModel::Distributed => {
+                let (nq, m) = adj.full.shape();
+                let mut jt = DMatrix::zeros(nq, m);
+                for (z, out) in adj
+                    .full
+                    .as_slice()
+                    .chunks_exact(nq.max(1))
+                    .zip(jt.as_mut_slice().chunks_exact_mut(nq.max(1)))
+                {
+                    self.robot().apply_load_gram_into(z, out)?;
+                }
+                jt
+            }
+            LoadModel::Concentrated { .. } => s.load_gradients(&self.load(), &adj)?,
+        };
         Ok(Derivs { z: adj.full, jt })
     }
 

@@ -44,7 +44,16 @@
 //!
 //! Globalization: backtracking on the ℓ1 merit function `φ = J + μ |Q|₁`,
 //! `μ` above the largest equality multiplier, each trial pulled back onto
-//! the equilibrium manifold by chord steps (a second-order correction).
+//! the equilibrium manifold by chord steps (a second-order correction),
+//! within a trust region on the step's predicted marker motion. Its radius
+//! starts at `max_observation_jump_m`, doubles after a full step it cut
+//! (up to the robot's length) and shrinks with the step after a
+//! backtracked one (never below the start): a first estimate of a large
+//! deflection from the unloaded shape (18 cm of marker motion on the 24 cm
+//! exudyn cable) then takes 8 QPs where a fixed 2 cm radius took 14, and
+//! its stream's first observation is taken in one go instead of through
+//! ten intermediate observations of 3–6 QPs each (39–48 QPs in all; see
+//! `driver::run_step`).
 //! Convergence is judged on feasibility and on the predicted decrease along
 //! the manifold, `−g̃ᵀ dF` with `g̃` the reduced gradient (29) at the
 //! feasibility-restored residual `e'` (for a step of clarabel's: `−cᵀ d`,
@@ -61,6 +70,7 @@
 //! so a warm step of a stream factors once (the second QP's tangent).
 
 mod bounded;
+mod trust;
 
 use clarabel::solver::SolverStatus;
 
@@ -188,26 +198,18 @@ impl<E: Element> SqpEstimator<E> {
                 "SqpEstimator runs the sqp backend (build the one the settings name with EstimatorSettings::build_for)",
             ));
         }
-        let problem = Problem::new(robot.clone(), known.clone(), settings.clone())?;
-        let nf = problem.n_f();
-        let mut g_free = Vec::new();
-        let mut h_upper = Vec::new();
-        for j in 0..nf {
-            let mut ej = vec![0.0; nf];
-            ej[j] = 1.0;
-            let col = problem.robot().restrict(&problem.gen_force(&ej)?)?;
-            for (i, v) in col.iter().enumerate() {
-                if *v != 0.0 {
-                    g_free.push((i, j, *v));
-                }
-            }
-            let hcol = problem.penalty_grad(&ej)?;
-            for (i, v) in hcol.iter().enumerate().take(j + 1) {
-                if *v != 0.0 {
-                    h_upper.push((i, j, *v));
-                }
-            }
-        }
+        Self::over(Problem::new(
+            robot.clone(),
+            known.clone(),
+            settings.clone(),
+        )?)
+    }
+
+    /// The estimator over `problem` (its settings naming the sqp backend):
+    /// the constant triplets of `Mᵀ G` and `H` and, for bounds on a
+    /// distributed load, the factored load Gram matrix.
+    pub(crate) fn over(problem: Problem<E>) -> Result<Self> {
+        let (g_free, h_upper) = problem.load_triplets()?;
         let gram_lu = match problem.load() {
             LoadModel::Distributed if !problem.settings().bounds.is_empty() => Some(gram_factors(
                 problem.robot(),
@@ -228,6 +230,17 @@ impl<E: Element> SqpEstimator<E> {
     /// The robot.
     pub fn robot(&self) -> &Robot<E> {
         self.stream.problem.robot()
+    }
+
+    /// The last QP's factored tangent and derivatives (kept for the next
+    /// warm step), taken out, if they were taken at `q` for `op`'s rows.
+    pub(crate) fn take_final_qp(
+        &mut self,
+        q: &[f64],
+        op: &ObservationOperator,
+    ) -> Option<(FactoredTangent, Derivs)> {
+        let w = self.warm_qp.take()?;
+        (w.q == q && w.rows == op.rows()).then_some((w.tangent, w.dv))
     }
 
     /// One QP at `(q, F)`: the tangent `K` assembled and factored at `q`,
@@ -256,7 +269,11 @@ impl<E: Element> SqpEstimator<E> {
             .filter(|w| w.q == q && w.rows == op.rows());
         let (tangent, cached) = match warm {
             Some(w) => (w.tangent, Some(w.dv)),
-            None => (self.stream.problem.factor_tangent(q)?, None),
+            None => match self.stream.problem.unloaded_tangent(q) {
+                // a cold start's first QP, at the unloaded shape
+                Some(t) => (t, None),
+                None => (self.stream.problem.factor_tangent(q)?, None),
+            },
         };
         let (k, lu) = (&tangent.matrix, &tangent.factors);
         let c = self.linear_term(op, f, e, alpha)?;
@@ -437,6 +454,8 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
         // the factored tangent of the last QP (the second-order correction,
         // the final chord step)
         let mut last: Option<FactoredTangent> = None;
+        // the trust radius on the predicted marker motion (m)
+        let mut radius = settings.max_observation_jump_m;
         loop {
             let obj = wr + pen;
             let load = norm2(self.stream.problem.robot().restrict(&dead)?.as_slice()).max(1e-12);
@@ -480,8 +499,9 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                 .iter()
                 .map(|row| row.apply(dq.as_slice()).abs())
                 .fold(0.0f64, f64::max);
-            if moved > settings.max_observation_jump_m && moved.is_finite() {
-                let s = settings.max_observation_jump_m / moved;
+            let cut = moved > radius && moved.is_finite();
+            if cut {
+                let s = radius / moved;
                 du.iter_mut()
                     .chain(df.iter_mut())
                     .chain(dm.iter_mut())
@@ -583,6 +603,8 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
                     (wr, pen, e) = (wr_t, pen_t, e_t);
                     at_q = None;
                     accepted = true;
+                    radius =
+                        trust::next_radius(radius, t, cut, settings.max_observation_jump_m, len);
                     break;
                 }
                 t *= 0.5;
@@ -769,7 +791,7 @@ impl<E: Element + 'static> Estimator for SqpEstimator<E> {
     }
 
     fn set_known_loads(&mut self, known: Loads) -> Result<()> {
-        self.stream.problem.tracker().set_known(known)?;
+        self.stream.problem.set_known(known)?;
         self.warm_qp = None;
         Ok(())
     }
