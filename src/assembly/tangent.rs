@@ -31,6 +31,14 @@ pub trait TangentTarget: StiffnessSink {
     /// # Errors
     /// [`crate::Error::DimensionMismatch`] if `h` does not fit the element.
     fn add_chain_block(&mut self, e: usize, off: usize, edof: usize, h: &[f64]) -> Result<()>;
+
+    /// Adds `values`, the values of a [`SymmetricMatrix`] on the robot's
+    /// tangent pattern, if `self` is such a matrix (`true`); `false` (and
+    /// nothing added) otherwise, the default.
+    fn copy_values(&mut self, values: &[f64]) -> bool {
+        let _ = values;
+        false
+    }
 }
 
 impl TangentTarget for BandedMatrix {
@@ -62,5 +70,14 @@ impl TangentTarget for SymmetricMatrix {
     fn add_chain_block(&mut self, e: usize, _off: usize, _edof: usize, h: &[f64]) -> Result<()> {
         // the pattern's element e is the chain's element e (the same dofs)
         self.add_element(e, h)
+    }
+
+    fn copy_values(&mut self, values: &[f64]) -> bool {
+        let own = self.values_mut();
+        if own.len() != values.len() {
+            return false;
+        }
+        own.iter_mut().zip(values).for_each(|(a, b)| *a += b);
+        true
     }
 }
