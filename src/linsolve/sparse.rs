@@ -34,6 +34,7 @@ use super::{
 };
 
 mod band;
+mod band_lu;
 mod factors;
 mod kept;
 use band::Band;
@@ -614,17 +615,22 @@ impl TangentSolver for SparseSolver {
             positive: n,
             negative: 0,
         });
-        if let Some(band) = &self.perm.band {
+        // the natural order's scaling, for the band paths
+        let d_band: Option<Arc<Vec<f64>>> = self
+            .perm
+            .band
+            .as_ref()
+            .map(|_| Arc::new((0..n).map(jacobi).collect()));
+        if let (Some(band), Some(d)) = (&self.perm.band, &d_band) {
             // a positive definite band matrix: its band L D Lᵀ in the
             // natural order; anything else goes on to the general path
-            let d: Vec<f64> = (0..n).map(jacobi).collect();
-            if let Ok((f, ratio)) = band.factor(matrix, &d, options.shift)? {
+            if let Ok((f, ratio)) = band.factor(matrix, d, options.shift)? {
                 return Ok(SparseFactors {
                     n,
                     symbolic: self.symbolic.clone(),
                     perm: self.perm.clone(),
                     numeric: Numeric::Band(f),
-                    scaling: Arc::new(d),
+                    scaling: d.clone(),
                     inertia: all_positive,
                     min_pivot: ratio,
                 });
@@ -679,6 +685,15 @@ impl TangentSolver for SparseSolver {
                 None
             }
         };
+        if let (Some(band), Some(d)) = (&self.perm.band, d_band) {
+            // a band pattern: the band LU in the natural order (see band_lu.rs)
+            let (f, min_pivot) = band.lu(matrix, &d, options.shift)?;
+            return Ok(SparseFactors {
+                scaling: d,
+                numeric: Numeric::BandLu(f),
+                ..factors(Numeric::Llt(Vec::new()), inertia, min_pivot)
+            });
+        }
         let (numeric, min_pivot) = self.lu(&rowmax)?;
         Ok(factors(numeric, inertia, min_pivot))
     }

@@ -58,6 +58,17 @@ impl Band {
         Some(Band { b, slots })
     }
 
+    /// The half-bandwidth.
+    pub(super) fn b(&self) -> usize {
+        self.b
+    }
+
+    /// The row and column of each stored entry of the pattern, in the
+    /// order of its values.
+    pub(super) fn entries(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.slots.iter().map(|&(_, i, j)| (i, j))
+    }
+
     /// Factors `d_i d_j k_ij + μ δ_ij` (`d` the Jacobi scaling in the
     /// natural order). `Ok(Ok((factors, smallest pivot ratio)))` when every
     /// pivot exceeds `n ε` times its diagonal entry (the general path's
