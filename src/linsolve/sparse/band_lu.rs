@@ -85,7 +85,7 @@ impl Band {
             }
             let pivot = u[k * w + b];
             let scale = rowmax[origin[k]];
-            if !(pivot.abs() > rel * scale) {
+            if !super::exceeds(pivot.abs(), rel * scale) {
                 return Err(LinsolveError::Singular {
                     index: origin[k],
                     pivot,
