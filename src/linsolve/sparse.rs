@@ -625,19 +625,15 @@ impl TangentSolver for SparseSolver {
             // a positive definite band matrix: its band L D Lᵀ in the
             // natural order; anything else goes on to the general path
             if let Ok((f, ratio)) = band.factor(matrix, d, options.shift)? {
-                return Ok(SparseFactors {
-                    n,
-                    symbolic: self.symbolic.clone(),
-                    perm: self.perm.clone(),
-                    numeric: Numeric::Band(f),
-                    scaling: d.clone(),
-                    inertia: all_positive,
-                    min_pivot: ratio,
-                });
+                return Ok(self.band_factors(Numeric::Band(f), d, all_positive, ratio));
             }
             // (a pivot the natural order leaves below the test may pass in
             // the fill-reducing order: the general path decides, so that
-            // the band path never refuses what the general path factors)
+            // the band path never refuses what the general path factors);
+            // an indefinite one: its band inertia and LU (band_lu.rs)
+            if let Some((f, inertia, ratio)) = band.indefinite(matrix, d, options)? {
+                return Ok(self.band_factors(Numeric::BandLu(f), d, Some(inertia), ratio));
+            }
         }
         // in the permuted order
         let d_perm: Vec<f64> = self.perm.fwd.iter().map(|&i| jacobi(i)).collect();
@@ -685,17 +681,13 @@ impl TangentSolver for SparseSolver {
                 None
             }
         };
-        if let (Some(band), Some(d)) = (&self.perm.band, d_band) {
-            // a band pattern: the band LU in the natural order (see band_lu.rs)
-            let (f, min_pivot) = band.lu(matrix, &d, options.shift)?;
-            return Ok(SparseFactors {
-                scaling: d,
-                numeric: Numeric::BandLu(f),
-                ..factors(Numeric::Llt(Vec::new()), inertia, min_pivot)
-            });
-        }
-        let (numeric, min_pivot) = self.lu(&rowmax)?;
-        Ok(factors(numeric, inertia, min_pivot))
+        let Some((band, d)) = self.perm.band.as_ref().zip(d_band) else {
+            let (numeric, min_pivot) = self.lu(&rowmax)?;
+            return Ok(factors(numeric, inertia, min_pivot));
+        };
+        // a band pattern: the band LU in the natural order (band_lu.rs)
+        let (f, min_pivot) = band.lu(matrix, &d, options.shift)?;
+        Ok(self.band_factors(Numeric::BandLu(f), &d, inertia, min_pivot))
     }
 }
 

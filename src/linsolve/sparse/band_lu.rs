@@ -9,8 +9,11 @@
 //! ~250 k instructions each); the band elimination is `n b (2b + 1)`
 //! multiply-adds.
 
+use std::sync::Arc;
+
 use super::band::Band;
-use crate::linsolve::{pivot_tolerance, LinsolveError, SymmetricMatrix};
+use super::{Numeric, SparseFactors, SparseSolver};
+use crate::linsolve::{pivot_tolerance, FactorOptions, Inertia, LinsolveError, SymmetricMatrix};
 
 /// The factors `P A = L U` of a band matrix of half-bandwidth `b`: `U` of
 /// upper bandwidth `2b` (the fill of the interchanges), `L` unit lower of
@@ -110,6 +113,107 @@ impl Band {
             }
         }
         Ok((BandLu { n, b, u, l, swap }, min_ratio))
+    }
+}
+
+impl Band {
+    /// A matrix the band `L D Lᵀ` did not find positive definite: its
+    /// inertia from the band `L D Lᵀ` carried through negative pivots
+    /// (natural order, no pivoting: Sylvester's law holds for any
+    /// symmetric order, as for the general path's fill-reducing one) and,
+    /// when it has a negative eigenvalue, its band LU. `Ok(None)` when
+    /// this does not decide (a pivot not clearly nonzero, i.e. not above
+    /// `n ε` times its row's largest scaled entry, the general path's
+    /// test; or no negative pivot): the general path then does.
+    ///
+    /// # Errors
+    /// [`LinsolveError::NotPositiveDefinite`] (the first negative pivot)
+    /// when `options` require a positive definite matrix; the band LU's.
+    pub(super) fn indefinite(
+        &self,
+        matrix: &SymmetricMatrix,
+        d: &[f64],
+        options: FactorOptions,
+    ) -> Result<Option<(BandLu, Inertia, f64)>, LinsolveError> {
+        let (n, b) = (d.len(), self.b());
+        let w = b + 1;
+        // lower band: row i holds columns i − b ..= i at i w + (j + b − i)
+        let mut l = vec![0.0; n * w];
+        for (&v, (i, j)) in matrix.values().iter().zip(self.entries()) {
+            let (hi, lo) = (i.max(j), i.min(j));
+            l[hi * w + lo + b - hi] = v * d[i] * d[j];
+        }
+        let mut rowmax = vec![0.0f64; n];
+        for i in 0..n {
+            l[i * w + b] += options.shift;
+            for t in b.saturating_sub(i)..=b {
+                let (j, a) = (i + t - b, l[i * w + t].abs());
+                rowmax[i] = rowmax[i].max(a);
+                rowmax[j] = rowmax[j].max(a);
+            }
+        }
+        let rel = pivot_tolerance(n);
+        let mut pivots = vec![0.0; n];
+        // v[k − lo] = L_ik D_k along row i
+        let mut v = vec![0.0; w];
+        let mut first_negative = None;
+        for i in 0..n {
+            let lo = i.saturating_sub(b);
+            for j in lo..i {
+                let mut s = l[i * w + j + b - i];
+                for k in lo.max(j.saturating_sub(b))..j {
+                    s -= v[k - lo] * l[j * w + k + b - j];
+                }
+                v[j - lo] = s;
+                l[i * w + j + b - i] = s / pivots[j];
+            }
+            let mut s = l[i * w + b];
+            for k in lo..i {
+                s -= v[k - lo] * l[i * w + k + b - i];
+            }
+            if !super::exceeds(s.abs(), rel * rowmax[i]) {
+                return Ok(None);
+            }
+            if s < 0.0 && first_negative.is_none() {
+                first_negative = Some((i, s));
+            }
+            pivots[i] = s;
+        }
+        let Some((index, pivot)) = first_negative else {
+            return Ok(None);
+        };
+        if options.require_positive_definite {
+            return Err(LinsolveError::NotPositiveDefinite { index, pivot });
+        }
+        let negative = pivots.iter().filter(|p| **p < 0.0).count();
+        let inertia = Inertia {
+            positive: n - negative,
+            negative,
+        };
+        let (f, min_pivot) = self.lu(matrix, d, options.shift)?;
+        Ok(Some((f, inertia, min_pivot)))
+    }
+}
+
+impl SparseSolver {
+    /// The factors of a band path: `numeric` in the natural order, scaled
+    /// by `d`.
+    pub(super) fn band_factors(
+        &self,
+        numeric: Numeric,
+        d: &Arc<Vec<f64>>,
+        inertia: Option<Inertia>,
+        min_pivot: f64,
+    ) -> SparseFactors {
+        SparseFactors {
+            n: d.len(),
+            symbolic: self.symbolic.clone(),
+            perm: self.perm.clone(),
+            numeric,
+            scaling: d.clone(),
+            inertia,
+            min_pivot,
+        }
     }
 }
 
@@ -215,6 +319,13 @@ mod tests {
                 assert_eq!(fo.method(), FactorMethod::Lu);
                 assert_eq!(fb.inertia(), fo.inertia());
                 assert!(fb.inertia().is_some_and(|i| i.negative > 0));
+                // the band inertia refuses what is not positive definite
+                let definite = FactorOptions {
+                    require_positive_definite: true,
+                    ..options
+                };
+                let e = band.factor(&k, definite).unwrap_err();
+                assert!(matches!(e, LinsolveError::NotPositiveDefinite { .. }), "{e:?}");
                 let n = k.n();
                 let rhs: Vec<f64> = (0..2 * n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
                 let (mut xb, mut xo) = (rhs.clone(), rhs.clone());
