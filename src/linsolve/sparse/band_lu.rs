@@ -325,7 +325,10 @@ mod tests {
                     ..options
                 };
                 let e = band.factor(&k, definite).unwrap_err();
-                assert!(matches!(e, LinsolveError::NotPositiveDefinite { .. }), "{e:?}");
+                assert!(
+                    matches!(e, LinsolveError::NotPositiveDefinite { .. }),
+                    "{e:?}"
+                );
                 let n = k.n();
                 let rhs: Vec<f64> = (0..2 * n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
                 let (mut xb, mut xo) = (rhs.clone(), rhs.clone());
