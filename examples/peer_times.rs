@@ -1,7 +1,12 @@
 //! softrod's in-process times for `validation/bench_peers.py`, as JSON on
 //! standard output.
 //!
-//! `cargo run --release --features report --example peer_times [REPO_ROOT]`
+//! `cargo run --release --features report --example peer_times [REPO_ROOT [CASE [ELEMENTS]]]`
+//!
+//! With `CASE` (and optionally `ELEMENTS`), only the forward solves of that
+//! case (at that size) are timed and printed, no estimates: one cell to
+//! profile, e.g. `valgrind --tool=callgrind
+//! ./target/release/examples/peer_times . uniform_small 16`.
 //!
 //! - `forward`: the cold static solve (`StaticSolver::solve` from the
 //!   straight rod) of every exudyn cantilever reference case
@@ -16,7 +21,8 @@
 //!   a peer is compared with), with the data a peer needs to pose the same
 //!   problem (markers, `σ`, `α`) and softrod's answer to compare with.
 //!
-//! Each time is the median of repeated runs (at least 3, until 0.3 s).
+//! Each time is the median of repeated runs (at least 3, until 0.3 s;
+//! exactly `PEER_TIMES_RUNS` runs when that variable is set).
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use std::time::Instant;
@@ -43,17 +49,28 @@ const ESTIMATE_REFERENCES: [&str; 3] = [
     "exudyn_gaussian_large",
 ];
 
-/// Median wall time (s) of `run`, repeated at least 3 times and until 0.3 s.
+/// Median wall time (s) of `run`, repeated at least 3 times and until 0.3 s
+/// (exactly `PEER_TIMES_RUNS` times when that is set: a fixed count for
+/// callgrind).
 fn median_time(mut run: impl FnMut()) -> (f64, usize) {
+    let fixed: Option<usize> = std::env::var("PEER_TIMES_RUNS")
+        .ok()
+        .and_then(|v| v.parse().ok());
     let mut times = Vec::new();
     let start = Instant::now();
-    while times.len() < 3 || (start.elapsed().as_secs_f64() < 0.3 && times.len() < 1000) {
+    while match fixed {
+        Some(k) => times.len() < k,
+        None => times.len() < 3 || (start.elapsed().as_secs_f64() < 0.3 && times.len() < 1000),
+    } {
         let t = Instant::now();
         run();
         times.push(t.elapsed().as_secs_f64());
     }
     times.sort_by(f64::total_cmp);
-    (times[times.len() / 2], times.len())
+    (
+        times.get(times.len() / 2).copied().unwrap_or(0.0),
+        times.len(),
+    )
 }
 
 /// A scene with the reference's sections, base and loads (as
@@ -79,12 +96,18 @@ fn scene(r: &Value, elements: usize) -> Scene {
     s
 }
 
-fn forward(root: &str) -> Vec<Value> {
+fn forward(root: &str, only_case: Option<&str>, only_n: Option<usize>) -> Vec<Value> {
     let mut out = Vec::new();
     for case in CASES {
+        if only_case.is_some_and(|c| c != case) {
+            continue;
+        }
         let path = format!("{root}/reference/exudyn_{case}.json");
         let r: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
         for n in ELEMENTS {
+            if only_n.is_some_and(|m| m != n) {
+                continue;
+            }
             let s = scene(&r, n);
             let robot = s.robot().unwrap();
             let loads = s.loads().unwrap();
@@ -185,12 +208,25 @@ fn estimate() -> Vec<Value> {
 }
 
 fn main() {
-    let root = std::env::args().nth(1).unwrap_or_else(|| ".".into());
-    let doc = json!({
-        "generator": "examples/peer_times.rs",
-        "softrod": env!("CARGO_PKG_VERSION"),
-        "forward": forward(&root),
-        "estimate": estimate(),
-    });
+    let args: Vec<String> = std::env::args().collect();
+    let root = args.get(1).map_or(".", String::as_str);
+    let only_case = args.get(2).map(String::as_str);
+    let only_n = args
+        .get(3)
+        .map(|n| n.parse::<usize>().expect("ELEMENTS: a number"));
+    let doc = if only_case.is_some() {
+        json!({
+            "generator": "examples/peer_times.rs",
+            "softrod": env!("CARGO_PKG_VERSION"),
+            "forward": forward(root, only_case, only_n),
+        })
+    } else {
+        json!({
+            "generator": "examples/peer_times.rs",
+            "softrod": env!("CARGO_PKG_VERSION"),
+            "forward": forward(root, None, None),
+            "estimate": estimate(),
+        })
+    };
     println!("{}", serde_json::to_string_pretty(&doc).unwrap());
 }

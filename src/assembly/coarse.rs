@@ -87,11 +87,13 @@ impl<E: Element> Robot<E> {
             return Ok(None);
         }
         self.validate_loads(loads)?;
-        let mut spec = self.spec.clone();
-        for s in &mut spec.sections {
-            s.elements = (s.elements * COARSE_ELEMENTS).div_ceil(n).max(1);
-        }
-        let coarse = Robot::with_maker(spec, self.make.clone())?;
+        let coarse = self.coarse_robot(|| {
+            let mut spec = self.spec.clone();
+            for s in &mut spec.sections {
+                s.elements = (s.elements * COARSE_ELEMENTS).div_ceil(n).max(1);
+            }
+            Robot::with_maker(spec, self.make.clone())
+        })?;
         let mut carried = loads.clone();
         if !loads.distributed_f.is_empty() {
             carried.distributed_f = self.interpolate_to(&loads.distributed_f, coarse.node_arc())?;

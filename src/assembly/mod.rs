@@ -28,6 +28,7 @@ use crate::structure::rod::MAX_EDOF;
 use crate::structure::{BlockRule, DofMap, Rod};
 
 mod angles;
+mod cache;
 mod coarse;
 mod configuration;
 mod follower;
@@ -69,6 +70,8 @@ pub struct Robot<E: Element> {
     /// through them instead of asking the map for each entry (measured:
     /// a tenth of a 4-element static solve went there).
     first_rows: Vec<(usize, usize, f64)>,
+    /// What the robot computes once and keeps (`cache.rs`).
+    cache: Arc<cache::RobotCache<E>>,
 }
 
 impl<E: Element> Robot<E> {
@@ -140,6 +143,7 @@ impl<E: Element> Robot<E> {
             pattern,
             make,
             first_rows,
+            cache: cache::new_cache(),
         })
     }
 
@@ -396,9 +400,8 @@ impl<E: Element> Robot<E> {
     }
 
     /// The assembly loop behind the residual and the tangent (sizes and
-    /// load structure checked by the callers). Interior elements add their
-    /// gradient and Hessian at a plain offset; the first element's base
-    /// node maps through the clamp's free directions.
+    /// load structure checked by the callers): the elements
+    /// ([`Robot::assemble_elements`]), then the loads' terms.
     fn assemble<K: TangentTarget>(
         &self,
         q: &[f64],
@@ -414,44 +417,20 @@ impl<E: Element> Robot<E> {
         if let Some(k) = k.as_mut() {
             k.reset(self.n_free(), 2 * nd - 1, &self.pattern);
         }
-        let mut g = [0.0; MAX_EDOF];
-        let mut h = vec![0.0; if k.is_some() { edof * edof } else { 0 }];
-        for (e, el) in self.rod.elements().iter().enumerate() {
-            let qe = &q[e * nd..(e + 2) * nd];
-            let g = &mut g[..edof];
-            let h = &mut h[..];
-            g.fill(0.0);
-            match (residual.is_some(), k.is_some()) {
-                (true, true) => {
-                    h.fill(0.0);
-                    el.add_energy_gradient_and_hessian(qe, g, h);
-                }
-                (true, false) => el.add_energy_gradient(qe, g),
-                (false, true) => {
-                    h.fill(0.0);
-                    el.add_energy_hessian(qe, h);
-                }
-                (false, false) => {}
-            }
-            if let Some(off) = self.dofs.contiguous_free(e * nd, edof) {
-                // elements between free nodes: a plain shift
-                if let Some((_, out)) = residual.as_mut() {
-                    for (o, gk) in out[off..off + edof].iter_mut().zip(g.iter()) {
-                        *o -= gk;
-                    }
-                }
-                if let Some(k) = k.as_mut() {
-                    k.add_chain_block(e, off, edof, h)?;
-                }
-                continue;
-            }
-            if let Some((_, out)) = residual.as_mut() {
-                self.scatter_force(e * nd, g, -1.0, out)?;
-            }
-            if let Some(k) = k.as_mut() {
-                self.scatter_stiffness(e * nd, edof, h, 1.0, &mut **k)?;
-            }
-        }
+        // the elements' tangent at the reference configuration is kept
+        // (the first Newton step of every cold solve of an unactuated robot)
+        let kept = match k.as_mut() {
+            Some(k) => self
+                .reference_element_tangent(q)
+                .is_some_and(|values| k.copy_values(values)),
+            None => false,
+        };
+        self.assemble_elements(
+            q,
+            residual.as_mut().map(|(_, out)| &mut **out),
+            k.as_deref_mut(),
+            kept,
+        )?;
         let mut mg = [0.0; MAX_EDOF];
         let mut mh = Vec::new();
         self.rod.for_each_node_moment(loads, |node, m| {
@@ -498,6 +477,67 @@ impl<E: Element> Robot<E> {
             }
             Ok(())
         })
+    }
+
+    /// The elements' part of the assembly: `−∇U` added to `residual` and
+    /// `∇²U` to `k` (already reset), element by element; interior elements
+    /// at a plain offset, the first element's base node through the
+    /// clamp's free directions. With `skip_hessian` (`k` already holds the
+    /// elements' tangent) only the gradients are formed.
+    fn assemble_elements<K: TangentTarget>(
+        &self,
+        q: &[f64],
+        mut residual: Option<&mut [f64]>,
+        mut k: Option<&mut K>,
+        skip_hessian: bool,
+    ) -> Result<()> {
+        let nd = E::NODE_DOFS;
+        let edof = 2 * nd;
+        if skip_hessian {
+            k = None;
+        }
+        if residual.is_none() && k.is_none() {
+            return Ok(());
+        }
+        let mut g = [0.0; MAX_EDOF];
+        let mut h = vec![0.0; if k.is_some() { edof * edof } else { 0 }];
+        for (e, el) in self.rod.elements().iter().enumerate() {
+            let qe = &q[e * nd..(e + 2) * nd];
+            let g = &mut g[..edof];
+            let h = &mut h[..];
+            g.fill(0.0);
+            match (residual.is_some(), k.is_some()) {
+                (true, true) => {
+                    h.fill(0.0);
+                    el.add_energy_gradient_and_hessian(qe, g, h);
+                }
+                (true, false) => el.add_energy_gradient(qe, g),
+                (false, true) => {
+                    h.fill(0.0);
+                    el.add_energy_hessian(qe, h);
+                }
+                (false, false) => {}
+            }
+            if let Some(off) = self.dofs.contiguous_free(e * nd, edof) {
+                // elements between free nodes: a plain shift
+                if let Some(out) = residual.as_mut() {
+                    for (o, gk) in out[off..off + edof].iter_mut().zip(g.iter()) {
+                        *o -= gk;
+                    }
+                }
+                if let Some(k) = k.as_mut() {
+                    k.add_chain_block(e, off, edof, h)?;
+                }
+                continue;
+            }
+            if let Some(out) = residual.as_mut() {
+                self.scatter_force(e * nd, g, -1.0, out)?;
+            }
+            if let Some(k) = k.as_mut() {
+                self.scatter_stiffness(e * nd, edof, h, 1.0, &mut **k)?;
+            }
+        }
+        Ok(())
     }
 
     /// Adds `sign · Tᵀ g` for a vector `g` over the coordinates

@@ -31,6 +31,30 @@ pub trait TangentTarget: StiffnessSink {
     /// # Errors
     /// [`crate::Error::DimensionMismatch`] if `h` does not fit the element.
     fn add_chain_block(&mut self, e: usize, off: usize, edof: usize, h: &[f64]) -> Result<()>;
+
+    /// Adds `values`, the values of a [`SymmetricMatrix`] on the robot's
+    /// tangent pattern, if `self` is such a matrix (`true`); `false` (and
+    /// nothing added) otherwise, the default. (How a robot puts its kept
+    /// element tangent at the reference configuration into a solve's
+    /// matrix.)
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::assembly::{RobotSpec, Section, TangentTarget};
+    /// use softrod::linsolve::{BandedMatrix, SymmetricMatrix};
+    /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 2)]).build_planar()?;
+    /// let mut k = SymmetricMatrix::zeros(robot.tangent_pattern().clone());
+    /// let ones = vec![1.0; k.values().len()];
+    /// assert!(k.copy_values(&ones) && k.copy_values(&ones));
+    /// assert!(k.values().iter().all(|v| *v == 2.0));
+    /// assert!(!k.copy_values(&[1.0]));
+    /// assert!(!BandedMatrix::zeros(1, 0, 0).copy_values(&[1.0]));
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    fn copy_values(&mut self, values: &[f64]) -> bool {
+        let _ = values;
+        false
+    }
 }
 
 impl TangentTarget for BandedMatrix {
@@ -62,5 +86,14 @@ impl TangentTarget for SymmetricMatrix {
     fn add_chain_block(&mut self, e: usize, _off: usize, _edof: usize, h: &[f64]) -> Result<()> {
         // the pattern's element e is the chain's element e (the same dofs)
         self.add_element(e, h)
+    }
+
+    fn copy_values(&mut self, values: &[f64]) -> bool {
+        let own = self.values_mut();
+        if own.len() != values.len() {
+            return false;
+        }
+        own.iter_mut().zip(values).for_each(|(a, b)| *a += b);
+        true
     }
 }

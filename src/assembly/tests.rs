@@ -261,3 +261,64 @@ fn tangent_on_the_connectivity_pattern_equals_the_band() {
         assert!(band.max_abs() > 0.0);
     }
 }
+
+#[test]
+fn kept_reference_tangent_equals_the_assembled_one() {
+    // at the reference configuration the sparse tangent comes from the
+    // robot's kept element tangent (the band matrix is always assembled):
+    // the same entries, with and without load terms, for both clamps,
+    // before and after the cache is filled, and on a clone of the robot
+    for clamp in [Clamp::PositionAndDirection, Clamp::Full] {
+        let mut spec = robot(3).spec().clone();
+        spec.base.clamp = clamp;
+        let r = spec.build_planar().unwrap();
+        let q: Vec<f64> = r.reference_configuration().data.into();
+        let none = Loads {
+            pressures_pa: vec![0.0, 0.0],
+            ..Loads::default()
+        };
+        let moment = Loads {
+            pressures_pa: vec![4e4, 2e4],
+            node_moments: vec![crate::loads::NodeMoment {
+                node: 4,
+                moment_nm: vec![0.01],
+            }],
+            ..Loads::default()
+        };
+        let copy = r.clone();
+        for (pass, loads) in [none, moment.clone(), moment].iter().enumerate() {
+            let robot = if pass == 2 { &copy } else { &r };
+            let mut band = BandedMatrix::zeros(1, 0, 0);
+            robot.tangent_into(&q, loads, &mut band).unwrap();
+            let mut k = crate::linsolve::SymmetricMatrix::zeros(r.tangent_pattern().clone());
+            k.values_mut().fill(3.0);
+            robot.tangent_into(&q, loads, &mut k).unwrap();
+            assert_eq!(k.to_banded().unwrap(), band, "pass {pass}");
+            assert!(r.reference_element_tangent(&q).is_some());
+            // another configuration is assembled, not taken from the cache
+            let mut q2 = q.clone();
+            q2[9] += 1e-3;
+            assert!(r.reference_element_tangent(&q2).is_none());
+            robot.tangent_into(&q2, loads, &mut band).unwrap();
+            robot.tangent_into(&q2, loads, &mut k).unwrap();
+            assert_eq!(k.to_banded().unwrap(), band, "pass {pass}");
+        }
+    }
+}
+
+#[test]
+fn kept_coarse_robot_equals_a_fresh_one() {
+    let fine = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 80)])
+        .build_planar()
+        .unwrap();
+    let (a, _) = fine.coarsened(&Loads::default()).unwrap().unwrap();
+    let (b, _) = fine.clone().coarsened(&Loads::default()).unwrap().unwrap();
+    let fresh = RobotSpec::new(vec![Section::uniform(0.24, 300.0, 0.025, 16)])
+        .build_planar()
+        .unwrap();
+    assert!(fine.cache.coarse.get().is_some());
+    for c in [&a, &b] {
+        assert_eq!(c.spec(), fresh.spec());
+        assert_eq!(c.reference_configuration(), fresh.reference_configuration());
+    }
+}

@@ -338,56 +338,88 @@ fn scatter_gradient(gp: &GaussPoint, gz: &[f64; 4], grad: &mut [f64; 8]) {
     }
 }
 
-/// Adds the upper triangle of `Tᵀ H_z T` to `h` (row-major 8 × 8): `V = H_z
-/// T`, then `Tᵀ V`. An axial-only point maps its `(a, a)` block alone.
+/// The upper 2 × 2 blocks `(k, l)`, `k <= l`, of the element Hessian (node
+/// vectors `q_k = r_0, r_0', r_1, r_1'`), in the order of [`BLOCKS`]; each
+/// block row-major `[h00, h01, h10, h11]`.
+type Blocks = [[f64; 4]; 10];
+
+/// The `(k, l)` of each entry of [`Blocks`].
+const BLOCKS: [(usize, usize); 10] = [
+    (0, 0),
+    (0, 1),
+    (0, 2),
+    (0, 3),
+    (1, 1),
+    (1, 2),
+    (1, 3),
+    (2, 2),
+    (2, 3),
+    (3, 3),
+];
+
+/// `acc += f · x` on a 2 × 2 block.
+#[inline(always)]
+fn axpy4(acc: &mut [f64; 4], f: f64, x: &[f64; 4]) {
+    for (a, v) in acc.iter_mut().zip(x) {
+        *a += f * v;
+    }
+}
+
+/// Adds `Tᵀ H_z T` to the blocks (`T = [d1 ⊗ I; d2 ⊗ I]`): block `(k, l)`
+/// gains `d1_k P_l + d2_k Q_l` with `P_l = d1_l H_aa + d2_l H_ab`,
+/// `Q_l = d1_l H_ba + d2_l H_bb` (the columns of `H_z T`). An axial-only
+/// point has the `(a, a)` block alone: `d1_k d1_l H_aa`.
 #[inline]
-#[allow(clippy::needless_range_loop)]
-fn accumulate_hessian(gp: &GaussPoint, hz: &[[f64; 4]; 4], h: &mut [f64; 64]) {
+fn accumulate_hessian(gp: &GaussPoint, hz: &[[f64; 4]; 4], h: &mut Blocks) {
     let (d1, d2) = (&gp.d1, &gp.d2);
+    let haa = [hz[0][0], hz[0][1], hz[1][0], hz[1][1]];
     if gp.cb == 0.0 {
-        // H[(k,i),(l,j)] += d1_k d1_l H_aa[i][j]
-        for k in 0..4 {
-            for l in k..4 {
-                let f = d1[k] * d1[l];
-                let r0 = (2 * k) * 8 + 2 * l;
-                let r1 = r0 + 8;
-                h[r0] += f * hz[0][0];
-                h[r0 + 1] += f * hz[0][1];
-                h[r1] += f * hz[1][0];
-                h[r1 + 1] += f * hz[1][1];
-            }
+        for (blk, &(k, l)) in h.iter_mut().zip(&BLOCKS) {
+            axpy4(blk, d1[k] * d1[l], &haa);
         }
         return;
     }
-    // V = H_z T: column (l, j) = d1_l H_z[:, j] + d2_l H_z[:, 2 + j]
-    let mut v = [[0.0; 8]; 4];
-    for i in 0..4 {
-        for l in 0..4 {
-            v[i][2 * l] = d1[l] * hz[i][0] + d2[l] * hz[i][2];
-            v[i][2 * l + 1] = d1[l] * hz[i][1] + d2[l] * hz[i][3];
+    let hab = [hz[0][2], hz[0][3], hz[1][2], hz[1][3]];
+    let hba = [hz[2][0], hz[2][1], hz[3][0], hz[3][1]];
+    let hbb = [hz[2][2], hz[2][3], hz[3][2], hz[3][3]];
+    let mut p = [[0.0; 4]; 4];
+    let mut q = [[0.0; 4]; 4];
+    for l in 0..4 {
+        for c in 0..4 {
+            p[l][c] = d1[l] * haa[c] + d2[l] * hab[c];
+            q[l][c] = d1[l] * hba[c] + d2[l] * hbb[c];
         }
     }
-    // Tᵀ V: row (k, i) = d1_k V[i] + d2_k V[2 + i], upper triangle
-    for k in 0..4 {
-        for i in 0..2 {
-            let row = 2 * k + i;
-            let (p, q) = (d1[k], d2[k]);
-            for col in row..8 {
-                h[row * 8 + col] += p * v[i][col] + q * v[2 + i][col];
-            }
+    for (blk, &(k, l)) in h.iter_mut().zip(&BLOCKS) {
+        for c in 0..4 {
+            blk[c] += d1[k] * p[l][c] + d2[k] * q[l][c];
         }
     }
 }
 
-/// Adds the symmetric matrix whose upper triangle `h` holds into `hess`
-/// (the axial-only path also fills the lower halves of the 2 × 2 diagonal
-/// blocks; only the strict upper triangle is read for the lower one).
+/// Adds the symmetric 8 × 8 matrix whose upper blocks are `h` into `hess`
+/// (row-major; block `(l, k)` below the diagonal is block `(k, l)`
+/// transposed; a diagonal block is symmetrized).
 #[inline]
-fn mirror_into(h: &[f64; 64], hess: &mut [f64; 64]) {
-    for r in 0..8 {
-        for c in 0..8 {
-            hess[r * 8 + c] += if c >= r { h[r * 8 + c] } else { h[c * 8 + r] };
+fn mirror_into(h: &Blocks, hess: &mut [f64; 64]) {
+    for (blk, &(k, l)) in h.iter().zip(&BLOCKS) {
+        let (r, c) = (2 * k, 2 * l);
+        if k == l {
+            let off = 0.5 * (blk[1] + blk[2]);
+            hess[r * 8 + c] += blk[0];
+            hess[r * 8 + c + 1] += off;
+            hess[(r + 1) * 8 + c] += off;
+            hess[(r + 1) * 8 + c + 1] += blk[3];
+            continue;
         }
+        hess[r * 8 + c] += blk[0];
+        hess[r * 8 + c + 1] += blk[1];
+        hess[(r + 1) * 8 + c] += blk[2];
+        hess[(r + 1) * 8 + c + 1] += blk[3];
+        hess[c * 8 + r] += blk[0];
+        hess[c * 8 + r + 1] += blk[2];
+        hess[(c + 1) * 8 + r] += blk[1];
+        hess[(c + 1) * 8 + r + 1] += blk[3];
     }
 }
 
@@ -433,7 +465,7 @@ impl Element for PlanarCable {
         else {
             return;
         };
-        let mut h = [0.0; 64];
+        let mut h: Blocks = [[0.0; 4]; 10];
         for (gp, &k0) in self.points.iter().zip(&self.kappa0) {
             let (a, b) = derivs(qe, &gp.d1, &gp.d2);
             let (_, hz) = self.point_derivatives(gp, k0, a, b);
@@ -450,7 +482,7 @@ impl Element for PlanarCable {
         ) else {
             return;
         };
-        let mut h = [0.0; 64];
+        let mut h: Blocks = [[0.0; 4]; 10];
         for (gp, &k0) in self.points.iter().zip(&self.kappa0) {
             let (a, b) = derivs(qe, &gp.d1, &gp.d2);
             let (gz, hz) = self.point_derivatives(gp, k0, a, b);

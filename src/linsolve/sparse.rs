@@ -34,6 +34,7 @@ use super::{
 };
 
 mod band;
+mod band_lu;
 mod factors;
 mod kept;
 use band::Band;
@@ -614,24 +615,25 @@ impl TangentSolver for SparseSolver {
             positive: n,
             negative: 0,
         });
-        if let Some(band) = &self.perm.band {
+        // the natural order's scaling, for the band paths
+        let d_band: Option<Arc<Vec<f64>>> = self
+            .perm
+            .band
+            .as_ref()
+            .map(|_| Arc::new((0..n).map(jacobi).collect()));
+        if let (Some(band), Some(d)) = (&self.perm.band, &d_band) {
             // a positive definite band matrix: its band L D Lᵀ in the
             // natural order; anything else goes on to the general path
-            let d: Vec<f64> = (0..n).map(jacobi).collect();
-            if let Ok((f, ratio)) = band.factor(matrix, &d, options.shift)? {
-                return Ok(SparseFactors {
-                    n,
-                    symbolic: self.symbolic.clone(),
-                    perm: self.perm.clone(),
-                    numeric: Numeric::Band(f),
-                    scaling: Arc::new(d),
-                    inertia: all_positive,
-                    min_pivot: ratio,
-                });
+            if let Ok((f, ratio)) = band.factor(matrix, d, options.shift)? {
+                return Ok(self.band_factors(Numeric::Band(f), d, all_positive, ratio));
             }
             // (a pivot the natural order leaves below the test may pass in
             // the fill-reducing order: the general path decides, so that
-            // the band path never refuses what the general path factors)
+            // the band path never refuses what the general path factors);
+            // an indefinite one: its band inertia and LU (band_lu.rs)
+            if let Some((f, inertia, ratio)) = band.indefinite(matrix, d, options)? {
+                return Ok(self.band_factors(Numeric::BandLu(f), d, Some(inertia), ratio));
+            }
         }
         // in the permuted order
         let d_perm: Vec<f64> = self.perm.fwd.iter().map(|&i| jacobi(i)).collect();
@@ -679,8 +681,13 @@ impl TangentSolver for SparseSolver {
                 None
             }
         };
-        let (numeric, min_pivot) = self.lu(&rowmax)?;
-        Ok(factors(numeric, inertia, min_pivot))
+        let Some((band, d)) = self.perm.band.as_ref().zip(d_band) else {
+            let (numeric, min_pivot) = self.lu(&rowmax)?;
+            return Ok(factors(numeric, inertia, min_pivot));
+        };
+        // a band pattern: the band LU in the natural order (band_lu.rs)
+        let (f, min_pivot) = band.lu(matrix, &d, options.shift)?;
+        Ok(self.band_factors(Numeric::BandLu(f), &d, inertia, min_pivot))
     }
 }
 

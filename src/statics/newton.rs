@@ -256,7 +256,11 @@ impl StaticSolver {
             };
             status = self.newton(model, &full, &mut u, &mut w, scale)?;
         }
+        // whether the last Newton run was on a homotopy's intermediate
+        // problem (see below: `w.r` is then not the full problem's residual)
+        let mut homotopy = false;
         if !status.is_converged() && scale.is_finite() {
+            homotopy = true;
             w.settled = false;
             u.copy_from_slice(&u_start);
             w.q.copy_from_slice(&q_start);
@@ -323,6 +327,13 @@ impl StaticSolver {
         // equilibrium to the floor, see `Work::settled`: then `w.r` is the
         // answer's residual too)
         let settled = status.is_converged() && w.settled && model.conservative(loads);
+        // every Newton run leaves `w.r` the residual of its target at `u`;
+        // the last one's target was the full problem (zero offset) unless
+        // the homotopy ran: that residual is the report's while the
+        // stability test leaves `u` where it is (bit for bit the same
+        // evaluation; a residual less per solve)
+        let kept =
+            (status.is_converged() && !settled && !homotopy).then(|| (u.clone(), w.r.clone()));
         let mut inertia = None;
         if settled {
             inertia = Some(Inertia {
@@ -335,7 +346,10 @@ impl StaticSolver {
         }
         if !settled {
             // final residual for the report
-            model.residual_into(&u, &w.q, &dead, loads, &mut w.r)?;
+            match kept {
+                Some((u_kept, r)) if u_kept == u => w.r = r,
+                _ => model.residual_into(&u, &w.q, &dead, loads, &mut w.r)?,
+            }
         }
         let res = norm2(&w.r);
         // no NaN leaves the library: a "converged" state with a non-finite

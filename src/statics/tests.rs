@@ -275,3 +275,71 @@ fn a_small_load_reads_its_stability_off_the_last_newton_factorization() {
     .unwrap();
     assert_eq!(eq.report.residual_norm_n, crate::numeric::norm2(&r));
 }
+
+/// The report's residual is the residual at the answer, bit for bit,
+/// whichever path reached it: a small load converged by the residual test
+/// (its residual kept from the last Newton run), a large one through the
+/// continuation, a column standing beyond buckling (the saddle left for
+/// the stable branch: `u` moves after the last full Newton run), and a
+/// structure.
+#[test]
+fn the_reported_residual_is_the_residual_at_the_answer() {
+    let scene = |elements: usize, loads: serde_json::Value, base_angle: f64| {
+        let s: crate::scene::Scene = serde_json::from_value(serde_json::json!({
+            "robot": {"sections": [
+                {"length_m": 0.24, "ea_n": 300.0, "ei_nm2": 0.025, "elements": elements}]},
+            "base": {"position_m": [0.0, 0.0], "angle_rad": base_angle},
+            "gravity_m_per_s2": [0.0, 0.0],
+            "loads": loads,
+        }))
+        .unwrap();
+        (s.robot().unwrap(), s.loads().unwrap())
+    };
+    let uniform = |q: f64| serde_json::json!([{"type": "distributed", "profile": "uniform", "w_n_per_m": [0.0, q]}]);
+    let column = uniform(-12.0 * 0.025 / 0.24f64.powi(3));
+    let mut criteria = Vec::new();
+    for (n, loads, angle) in [
+        (4, uniform(-0.01), 0.0),
+        (16, uniform(-0.01), 0.0),
+        (8, uniform(-20.0), 0.0),
+        (8, column, std::f64::consts::FRAC_PI_2 + 0.01),
+    ] {
+        let (robot, loads) = scene(n, loads, angle);
+        let eq = StaticSolver::default().solve(&robot, &loads, None).unwrap();
+        let dead = Assembled::dead_force(&robot, &loads).unwrap();
+        let mut r = vec![0.0; Assembled::n_free(&robot)];
+        Assembled::residual_into(
+            &robot,
+            eq.u.as_slice(),
+            eq.q.as_slice(),
+            dead.as_slice(),
+            &loads,
+            &mut r,
+        )
+        .unwrap();
+        assert_eq!(
+            eq.report.residual_norm_n,
+            crate::numeric::norm2(&r),
+            "{n}: {}",
+            eq.report
+        );
+        assert_eq!(eq.report.negative_eigenvalues, Some(0), "{}", eq.report);
+        criteria.push(eq.report.status);
+    }
+    // the paths above include one that ends on the residual test
+    assert!(criteria.contains(&StaticStatus::Converged(StaticCriterion::Residual)));
+    let (s, loads) = leg_and_body();
+    let eq = StaticSolver::default().solve(&s, &loads, None).unwrap();
+    let dead = s.dead_force(&loads).unwrap();
+    let mut r = vec![0.0; s.n_free()];
+    Assembled::residual_into(
+        &s,
+        eq.u.as_slice(),
+        eq.q.as_slice(),
+        dead.as_slice(),
+        &loads,
+        &mut r,
+    )
+    .unwrap();
+    assert_eq!(eq.report.residual_norm_n, crate::numeric::norm2(&r));
+}

@@ -58,6 +58,17 @@ impl Band {
         Some(Band { b, slots })
     }
 
+    /// The half-bandwidth.
+    pub(super) fn b(&self) -> usize {
+        self.b
+    }
+
+    /// The row and column of each stored entry of the pattern, in the
+    /// order of its values.
+    pub(super) fn entries(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.slots.iter().map(|&(_, i, j)| (i, j))
+    }
+
     /// Factors `d_i d_j k_ij + μ δ_ij` (`d` the Jacobi scaling in the
     /// natural order). `Ok(Ok((factors, smallest pivot ratio)))` when every
     /// pivot exceeds `n ε` times its diagonal entry (the general path's
@@ -182,6 +193,69 @@ pub(super) struct BandFactors {
 impl BandFactors {
     /// Solves `L D Lᵀ x = y` in place (`x` the natural order, scaled).
     pub(super) fn solve_in_place(&self, x: &mut [f64]) {
+        // fixed widths for the elements' bands (see `Band::factor`): the
+        // same arithmetic in the same order, unrolled
+        let done = match self.b {
+            7 => self.solve_fixed::<8>(x),
+            11 => self.solve_fixed::<12>(x),
+            _ => false,
+        };
+        if !done {
+            self.solve_any(x);
+        }
+    }
+
+    /// [`BandFactors::solve_in_place`] for the width `W = b + 1`; `false`
+    /// (nothing done) if the factors are not of that width or `x` is
+    /// shorter than the band.
+    fn solve_fixed<const W: usize>(&self, x: &mut [f64]) -> bool {
+        let b = W - 1;
+        let Some(l) = self.l.get(b * W..) else {
+            return false;
+        };
+        let (rows, _) = l.as_chunks::<W>();
+        let n = x.len();
+        if self.b != b || rows.len() != n || n < b {
+            return false;
+        }
+        for (i, row) in rows.iter().enumerate() {
+            let s = if i >= b {
+                let y = &x[i - b..i];
+                let mut s = row[0] * y[0];
+                for t in 1..b {
+                    s += row[t] * y[t];
+                }
+                s
+            } else {
+                let mut s = -0.0;
+                for (t, y) in x[..i].iter().enumerate() {
+                    s += row[t + b - i] * y;
+                }
+                s
+            };
+            x[i] -= s;
+        }
+        for (xi, d) in x.iter_mut().zip(self.pivots.iter().skip(b)) {
+            *xi /= d;
+        }
+        for (i, row) in rows.iter().enumerate().rev() {
+            let xi = x[i];
+            if i >= b {
+                let y = &mut x[i - b..i];
+                for t in 0..b {
+                    y[t] -= row[t] * xi;
+                }
+            } else {
+                for (t, y) in x[..i].iter_mut().enumerate() {
+                    *y -= row[t + b - i] * xi;
+                }
+            }
+        }
+        true
+    }
+
+    /// [`BandFactors::solve_in_place`] for any width.
+    fn solve_any(&self, x: &mut [f64]) {
         let b = self.b;
         let w = b + 1;
         let l = self.l.get(b * w..).unwrap_or(&[]);
@@ -261,6 +335,26 @@ mod tests {
     /// of the same size; at every width the band path has (7: the planar
     /// cable, 11 and 23: the spatial ones, 5: any other) and on both sides
     /// of the small-size rule (n ≤ 32 always, larger by fill).
+    #[test]
+    fn fixed_width_solves_equal_the_general_solve_bit_for_bit() {
+        use super::Band;
+        // half-bandwidths 7 (4 dofs a node) and 11 (6), short and long
+        for (elements, dofs) in [(1, 4), (2, 4), (30, 4), (1, 6), (12, 6)] {
+            let k = chain(elements, dofs, 0.0);
+            let n = k.n();
+            let band = Band::of(k.pattern(), usize::MAX / 4).unwrap();
+            let d: Vec<f64> = (0..n).map(|i| 1.0 + 0.01 * i as f64).collect();
+            let (f, _) = band.factor(&k, &d, 0.0).unwrap().unwrap();
+            assert_eq!(f.b, 2 * dofs - 1);
+            let rhs: Vec<f64> = (0..n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
+            let (mut a, mut b) = (rhs.clone(), rhs);
+            f.solve_in_place(&mut a);
+            f.solve_any(&mut b);
+            assert_eq!(a, b, "{elements} x {dofs}");
+            assert!(a.iter().all(|v| v.is_finite()));
+        }
+    }
+
     #[test]
     fn band_factors_agree_with_the_general_path() {
         for (elements, dofs) in [(3, 4), (40, 4), (5, 6), (30, 12), (50, 3)] {

@@ -13,6 +13,7 @@ use faer::sparse::linalg::lu::simplicial::{
 use faer::{Conj, MatMut, Par};
 
 use super::band::BandFactors;
+use super::band_lu::BandLu;
 use super::Permuted;
 use crate::linsolve::{check_rhs, FactorMethod, Factorization, Inertia, LinsolveError};
 
@@ -22,6 +23,8 @@ pub(super) enum Numeric {
     /// The band `L D Lᵀ` in the natural order (`scaling` then in the
     /// natural order too).
     Band(BandFactors),
+    /// The band LU with partial pivoting, natural order (`band_lu.rs`).
+    BandLu(BandLu),
     Llt(Vec<f64>),
     Ldlt(Vec<f64>),
     Lu {
@@ -83,13 +86,17 @@ impl SparseFactors {
         x: &mut Vec<f64>,
     ) -> Result<(), LinsolveError> {
         let n = self.n;
-        if let Numeric::Band(f) = &self.numeric {
+        if let Numeric::Band(_) | Numeric::BandLu(_) = &self.numeric {
             // natural order: no permutation, no workspace
             for bc in b.chunks_exact_mut(n) {
                 bc.iter_mut()
                     .zip(self.scaling.iter())
                     .for_each(|(v, d)| *v *= d);
-                f.solve_in_place(bc);
+                match &self.numeric {
+                    Numeric::Band(f) => f.solve_in_place(bc),
+                    Numeric::BandLu(f) => f.solve_in_place(bc),
+                    _ => {}
+                }
                 bc.iter_mut()
                     .zip(self.scaling.iter())
                     .for_each(|(v, d)| *v *= d);
@@ -106,7 +113,7 @@ impl SparseFactors {
         let rhs = MatMut::from_column_major_slice_mut(&mut x[..], n, k);
         match (&self.numeric, self.symbolic.raw()) {
             // solved above, in the natural order
-            (Numeric::Band(_), _) => {}
+            (Numeric::Band(_) | Numeric::BandLu(_), _) => {}
             // the simplicial factors solve in place without a workspace
             (Numeric::Llt(values), SymbolicCholeskyRaw::Simplicial(s)) => {
                 SimplicialLltRef::new(s, values).solve_in_place_with_conj(
@@ -185,7 +192,7 @@ impl Factorization for SparseFactors {
         match self.numeric {
             Numeric::Llt(_) => FactorMethod::Llt,
             Numeric::Ldlt(_) | Numeric::Band(_) => FactorMethod::Ldlt,
-            Numeric::Lu { .. } => FactorMethod::Lu,
+            Numeric::Lu { .. } | Numeric::BandLu(_) => FactorMethod::Lu,
         }
     }
 
