@@ -63,12 +63,16 @@ use crate::sensitivity::Sensitivity;
 use nalgebra::{DMatrix, DVector};
 
 use super::driver::{run_step, Method, Solved, Stream};
-use super::problem::{step_cap, Derivs, Problem};
+use super::problem::{step_cap, Derivs, GnFactor, Problem};
 use super::sqp::SqpEstimator;
 use super::{
     Backend, Estimate, EstimateCriterion, EstimateReport, EstimateStatus, Estimator,
     EstimatorSettings, Observation,
 };
+
+/// The derivatives at a shape `q` (first), with the Gauss–Newton factor
+/// formed from them for the observation weights it holds, if any.
+type DerivsCache = (Vec<f64>, Derivs, Option<(Vec<f64>, GnFactor)>);
 
 /// The reduced Gauss–Newton estimator (backend "newton").
 ///
@@ -93,7 +97,7 @@ pub struct NewtonEstimator<E: Element> {
     /// The derivatives at the last converged estimate's shape for the
     /// observation rows `cache_rows`: a warm step's first iteration starts
     /// there.
-    derivs_cache: Option<(Vec<f64>, Derivs)>,
+    derivs_cache: Option<DerivsCache>,
     /// The observation rows of `derivs_cache` (kept between steps: a
     /// stream's frames share them).
     cache_rows: Vec<ObsRow>,
@@ -310,17 +314,22 @@ impl<E: Element> NewtonEstimator<E> {
             }
             // (a warm step starts where the last one converged: the
             // derivatives there are cached)
+            // (with the Gauss–Newton factor formed there, for the same
+            // weights: the same numbers)
             let cached = match derivs_cache.take() {
-                Some((qc, dv)) if qc == q && cache_rows[..] == *op.rows() => Some(dv),
+                Some((qc, dv, gn)) if qc == q && cache_rows[..] == *op.rows() => {
+                    let gn = gn.and_then(|(w, fac)| (w[..] == *op.weights()).then_some(fac));
+                    Some((dv, gn))
+                }
                 _ => None,
             };
-            let dv = match cached {
-                Some(dv) => dv,
-                None => core.derivs(&lu, op)?,
+            let (dv, gn) = match cached {
+                Some(x) => x,
+                None => (core.derivs(&lu, op)?, None),
             };
             let g = core.gradient(&dv, op, &e, &f, alpha)?;
             // the step (the covariances are formed on request, from `fac`)
-            let (mut step, fac) = core.gn_solve(&dv, op, &e, &f, alpha)?;
+            let (mut step, fac) = core.gn_solve_reusing(&dv, op, &e, &f, alpha, gn)?;
             let dec = -0.5 * dot(&g, &step);
             let scale = obj.max(n_ob);
             // the statistical test: dec = dFᵀ N dF ≤ κ² (see
@@ -360,7 +369,11 @@ impl<E: Element> NewtonEstimator<E> {
                 if cache_rows[..] != *op.rows() {
                     *cache_rows = op.rows().to_vec();
                 }
-                *derivs_cache = Some((q.clone(), dv.clone()));
+                *derivs_cache = Some((
+                    q.clone(),
+                    dv.clone(),
+                    Some((op.weights().to_vec(), fac.clone())),
+                ));
                 return Ok(Solved {
                     f,
                     q,
@@ -562,7 +575,7 @@ impl<E: Element + 'static> Estimator for NewtonEstimator<E> {
 #[allow(clippy::too_many_arguments)]
 fn far_start<E: Element>(
     inner: &mut Option<Box<SqpEstimator<E>>>,
-    derivs_cache: &mut Option<(Vec<f64>, Derivs)>,
+    derivs_cache: &mut Option<DerivsCache>,
     cache_rows: &mut Vec<ObsRow>,
     core: &mut Problem<E>,
     op: &ObservationOperator,
@@ -586,7 +599,7 @@ fn far_start<E: Element>(
         let tol = 1e-10 * core.robot().length();
         if eq.q.iter().zip(&qs).all(|(a, b)| (a - b).abs() <= tol) {
             *cache_rows = op.rows().to_vec();
-            *derivs_cache = Some((eq.q.as_slice().to_vec(), dv));
+            *derivs_cache = Some((eq.q.as_slice().to_vec(), dv, None));
         }
     }
     Ok(Some((fs, eq, its)))

@@ -418,6 +418,24 @@ impl<E: Element> Problem<E> {
         f: &[f64],
         alpha: f64,
     ) -> Result<(Vec<f64>, GnFactor)> {
+        self.gn_solve_reusing(dv, op, e, f, alpha, None)
+    }
+
+    /// As [`Problem::gn_solve`], with the factor `reuse` of the distributed
+    /// load's system when the caller has it: formed by `gn_solve` from the
+    /// same `dv` and the same weights of `op` (a warm step's first
+    /// iteration, at the last estimate's cached derivatives). It is used
+    /// when its `α` is `alpha` (the same numbers: `S` depends on nothing
+    /// else), formed anew otherwise.
+    pub(crate) fn gn_solve_reusing(
+        &self,
+        dv: &Derivs,
+        op: &ObservationOperator,
+        e: &[f64],
+        f: &[f64],
+        alpha: f64,
+        reuse: Option<GnFactor>,
+    ) -> Result<(Vec<f64>, GnFactor)> {
         let w = op.weights();
         let not_spd = || Error::NotPositiveDefinite {
             context: "the Gauss-Newton matrix of the estimator".into(),
@@ -430,19 +448,28 @@ impl<E: Element> Problem<E> {
                 let m = w.len();
                 let z: Vec<&[f64]> = columns(&dv.z).collect();
                 let jt: Vec<&[f64]> = columns(&dv.jt).collect();
-                let mut k = DMatrix::zeros(m, m);
-                for i in 0..m {
-                    for j in i..m {
-                        let v = dot(z[i], jt[j]);
-                        k[(i, j)] = v;
-                        k[(j, i)] = v;
+                let reuse = reuse.and_then(|fac| match fac.gram {
+                    Some(k) if fac.alpha == alpha && k.nrows() == m => Some((fac.chol, k)),
+                    _ => None,
+                });
+                let (chol, k) = match reuse {
+                    Some(x) => x,
+                    None => {
+                        let mut k = DMatrix::zeros(m, m);
+                        for i in 0..m {
+                            for j in i..m {
+                                let v = dot(z[i], jt[j]);
+                                k[(i, j)] = v;
+                                k[(j, i)] = v;
+                            }
+                        }
+                        let mut s = k.clone();
+                        for i in 0..m {
+                            s[(i, i)] += alpha / w[i];
+                        }
+                        (jittered_cholesky(s).ok_or_else(not_spd)?, k)
                     }
-                }
-                let mut s = k.clone();
-                for i in 0..m {
-                    s[(i, i)] += alpha / w[i];
-                }
-                let chol = jittered_cholesky(s).ok_or_else(not_spd)?;
+                };
                 let mut c =
                     DVector::from_iterator(m, jt.iter().zip(e).map(|(j, ei)| dot(j, f) - ei));
                 chol.solve_mut(&mut c);
