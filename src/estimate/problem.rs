@@ -127,6 +127,9 @@ pub(crate) struct Problem<E: Element> {
     /// The shape of the known loads alone ([`Problem::unloaded_start`]),
     /// once solved, with the factored tangent there when it was formed.
     unloaded: Option<(Vec<f64>, Option<FactoredTangent>)>,
+    /// The map `F → ∫ w dX` of the distributed load ([`Problem::resultants`]),
+    /// once formed (it depends on the mesh alone).
+    load_map: std::sync::OnceLock<Vec<f64>>,
 }
 
 impl<E: Element> Problem<E> {
@@ -178,6 +181,7 @@ impl<E: Element> Problem<E> {
             n_f,
             last_operator: None,
             unloaded: None,
+            load_map: std::sync::OnceLock::new(),
         })
     }
 
@@ -510,12 +514,19 @@ impl<E: Element> Problem<E> {
 
     /// Resultant force and moment (about the base position, in the shape
     /// `q`) of the load `F`, and the `DIM × n_F` map `F → ∫ w dX`
-    /// (row-major).
+    /// (row-major). `hf` is `H F` ([`Problem::penalty_grad`]), which for
+    /// the distributed load is `B F` (23): with `r = S q`, `w = S F` and
+    /// `B = ∫ Sᵀ S dX = b ⊗ I` (the scalar shape functions' Gram matrix
+    /// times the identity over the components), `∫ r_i w_j dX = Σ_a q_{a,i}
+    /// (B F)_{a,j}` over the slots `a` (node positions and slopes), so the
+    /// moment `∫ (r − r₀) × w dX` is `Σ_a q_a × (B F)_a − r₀ × ∫ w dX`, and
+    /// the force `∫ w dX` the map times `F`.
     #[allow(clippy::type_complexity)]
     pub(crate) fn resultants(
         &self,
         q: &[f64],
         f: &[f64],
+        hf: &[f64],
     ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
         let d = E::DIM;
         let nd = E::NODE_DOFS;
@@ -523,62 +534,66 @@ impl<E: Element> Problem<E> {
         let r0 = &q[..d];
         let mut force = vec![0.0; d];
         let mut moment = vec![0.0; if d == 2 { 1 } else { 3 }];
-        let mut fw = vec![0.0; d * nf];
         match self.load() {
             LoadModel::Concentrated { node } => {
+                let mut fw = vec![0.0; d * nf];
                 force.copy_from_slice(f);
                 let r: Vec<f64> = (0..d).map(|i| q[node * nd + i] - r0[i]).collect();
                 moment = cross(&r, f);
                 for a in 0..d {
                     fw[a * nf + a] = 1.0;
                 }
+                Ok((force, moment, fw))
             }
             LoadModel::Distributed => {
-                const MAX_DIM: usize = 3;
-                let rule = crate::quadrature::GaussRule::new(5)?;
-                // the shape functions at the rule's points (elements of a
-                // section share a length: recomputed only when it changes)
-                let mut le_prev = f64::NAN;
-                let mut shapes = [[0.0; 4]; 5];
-                for (e, el) in self.robot().elements().iter().enumerate() {
-                    let le = el.length();
-                    if le != le_prev {
-                        for (sh, (xi, _)) in shapes.iter_mut().zip(rule.iter()) {
-                            *sh = el.shape(xi);
-                        }
-                        le_prev = le;
-                    }
-                    for (sh, (_, wt)) in shapes.iter().zip(rule.iter()) {
-                        let mut w = [0.0; MAX_DIM];
-                        let mut r = [0.0; MAX_DIM];
-                        for (k, sk) in sh.iter().enumerate() {
-                            // slot k: node e + k/2, its position (k even)
-                            // or slope (k odd)
-                            let base = (e + k / 2) * nd + (k % 2) * d;
-                            for i in 0..d.min(MAX_DIM) {
-                                w[i] += sk * f[base + i];
-                                r[i] += sk * q[base + i];
-                                fw[i * nf + base + i] += wt * le * sk;
-                            }
-                        }
-                        for i in 0..d.min(MAX_DIM) {
-                            force[i] += wt * le * w[i];
-                            r[i] -= r0[i];
-                        }
-                        if d == 2 {
-                            moment[0] += wt * le * (r[0] * w[1] - r[1] * w[0]);
-                        } else {
-                            let mm = cross(&r[..d], &w[..d]);
-                            moment
-                                .iter_mut()
-                                .zip(mm)
-                                .for_each(|(a, b)| *a += wt * le * b);
-                        }
+                check_len("hf", nf, hf.len())?;
+                check_len("f", nf, f.len())?;
+                let fw = self.load_map()?;
+                for (i, fi) in force.iter_mut().enumerate() {
+                    *fi = dot(&fw[i * nf..(i + 1) * nf], f);
+                }
+                // Σ_a q_a × (B F)_a over the slots (DIM-vectors)
+                for (qa, ba) in q[..nf].chunks_exact(d).zip(hf.chunks_exact(d)) {
+                    moment
+                        .iter_mut()
+                        .zip(cross(qa, ba))
+                        .for_each(|(m, c)| *m += c);
+                }
+                moment
+                    .iter_mut()
+                    .zip(cross(r0, &force))
+                    .for_each(|(m, c)| *m -= c);
+                Ok((force, moment, fw.clone()))
+            }
+        }
+    }
+
+    /// The map `F → ∫ w dX` of the distributed load (`DIM × n_F`,
+    /// row-major), formed by 5-point Gauss quadrature of the shape functions
+    /// at the first call and kept.
+    fn load_map(&self) -> Result<&Vec<f64>> {
+        if let Some(m) = self.load_map.get() {
+            return Ok(m);
+        }
+        let d = E::DIM;
+        let nd = E::NODE_DOFS;
+        let nf = self.n_f;
+        let mut fw = vec![0.0; d * nf];
+        let rule = crate::quadrature::GaussRule::new(5)?;
+        for (e, el) in self.robot().elements().iter().enumerate() {
+            let le = el.length();
+            for (xi, wt) in rule.iter() {
+                for (k, sk) in el.shape(xi).iter().enumerate() {
+                    // slot k: node e + k/2, its position (k even) or slope
+                    // (k odd)
+                    let base = (e + k / 2) * nd + (k % 2) * d;
+                    for i in 0..d {
+                        fw[i * nf + base + i] += wt * le * sk;
                     }
                 }
             }
         }
-        Ok((force, moment, fw))
+        Ok(self.load_map.get_or_init(|| fw))
     }
 }
 
