@@ -276,12 +276,13 @@ impl<E: Element> NewtonEstimator<E> {
         let mut prev_dec = f64::INFINITY;
         // the objective at the accepted trial point, which the next
         // iteration starts from
-        let mut at_trial: Option<(f64, f64, Vec<f64>)> = None;
+        let mut at_trial: Option<(f64, f64, Vec<f64>, Vec<f64>)> = None;
         let mut eager = far.is_some() && f.iter().all(|v| *v == 0.0);
         loop {
-            let (wr, pen, e) = match at_trial.take() {
+            // (with `H F`, for the gradient)
+            let (wr, pen, e, hf) = match at_trial.take() {
                 Some(x) => x,
-                None => core.objective(op, q.as_slice(), &f, alpha)?,
+                None => core.objective_hf(op, q.as_slice(), &f, alpha)?,
             };
             let obj = wr + pen;
             // a cold solve from zero load (a stream's first, from the
@@ -327,7 +328,7 @@ impl<E: Element> NewtonEstimator<E> {
                 Some(x) => x,
                 None => (core.derivs(&lu, op)?, None),
             };
-            let g = core.gradient(&dv, op, &e, &f, alpha)?;
+            let g = core.gradient_hf(&dv, op, &e, &hf, alpha)?;
             // the step (the covariances are formed on request, from `fac`)
             let (mut step, fac) = core.gn_solve_reusing(&dv, op, &e, &f, alpha, gn)?;
             let dec = -0.5 * dot(&g, &step);
@@ -498,9 +499,10 @@ impl<E: Element> NewtonEstimator<E> {
                     core.tracker().try_solve(&load, &ft, &qp).ok().flatten()
                 };
                 if let Some(eq) = trial {
-                    let (wr_t, pen_t, e_t) = core.objective(op, eq.q.as_slice(), &ft, alpha)?;
+                    let (wr_t, pen_t, e_t, hf_t) =
+                        core.objective_hf(op, eq.q.as_slice(), &ft, alpha)?;
                     if wr_t + pen_t <= obj + 1e-4 * t * slope || dec <= 1e-8 * scale {
-                        accepted = Some((ft, eq, Some((wr_t, pen_t, e_t))));
+                        accepted = Some((ft, eq, Some((wr_t, pen_t, e_t, hf_t))));
                         break;
                     }
                 }

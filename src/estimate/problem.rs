@@ -384,8 +384,24 @@ impl<E: Element> Problem<E> {
         f: &[f64],
         alpha: f64,
     ) -> Result<(f64, f64, Vec<f64>)> {
+        let (wr, pen, e, _) = self.objective_hf(op, q, f, alpha)?;
+        Ok((wr, pen, e))
+    }
+
+    /// As [`Problem::objective`], with `H F` ([`Problem::penalty_grad`]),
+    /// which the gradient at the same `F` takes
+    /// ([`Problem::gradient_hf`]) instead of forming it again.
+    pub(crate) fn objective_hf(
+        &self,
+        op: &ObservationOperator,
+        q: &[f64],
+        f: &[f64],
+        alpha: f64,
+    ) -> Result<(f64, f64, Vec<f64>, Vec<f64>)> {
         let e = op.residual(q);
-        Ok((op.weighted(&e), alpha * self.penalty(f)?, e))
+        let hf = self.penalty_grad(f)?;
+        let pen: f64 = hf.iter().zip(f).map(|(a, b)| a * b).sum();
+        Ok((op.weighted(&e), alpha * pen, e, hf))
     }
 
     /// Reduced gradient (29): `2 (Jᵀ W e + α H F)`.
@@ -397,11 +413,20 @@ impl<E: Element> Problem<E> {
         f: &[f64],
         alpha: f64,
     ) -> Result<Vec<f64>> {
-        let mut g: Vec<f64> = self
-            .penalty_grad(f)?
-            .iter()
-            .map(|v| 2.0 * alpha * v)
-            .collect();
+        self.gradient_hf(dv, op, e, &self.penalty_grad(f)?, alpha)
+    }
+
+    /// As [`Problem::gradient`], with `H F` given (`hf`, `n_F`).
+    pub(crate) fn gradient_hf(
+        &self,
+        dv: &Derivs,
+        op: &ObservationOperator,
+        e: &[f64],
+        hf: &[f64],
+        alpha: f64,
+    ) -> Result<Vec<f64>> {
+        check_len("hf", self.n_f, hf.len())?;
+        let mut g: Vec<f64> = hf.iter().map(|v| 2.0 * alpha * v).collect();
         for ((ji, wi), ei) in columns(&dv.jt).zip(op.weights()).zip(e) {
             let c = 2.0 * wi * ei;
             g.iter_mut().zip(ji).for_each(|(a, b)| *a += c * b);
@@ -554,10 +579,13 @@ impl<E: Element> Problem<E> {
                 }
                 // Σ_a q_a × (B F)_a over the slots (DIM-vectors)
                 for (qa, ba) in q[..nf].chunks_exact(d).zip(hf.chunks_exact(d)) {
-                    moment
-                        .iter_mut()
-                        .zip(cross(qa, ba))
-                        .for_each(|(m, c)| *m += c);
+                    if d == 2 {
+                        moment[0] += qa[0] * ba[1] - qa[1] * ba[0];
+                    } else {
+                        moment[0] += qa[1] * ba[2] - qa[2] * ba[1];
+                        moment[1] += qa[2] * ba[0] - qa[0] * ba[2];
+                        moment[2] += qa[0] * ba[1] - qa[1] * ba[0];
+                    }
                 }
                 moment
                     .iter_mut()
