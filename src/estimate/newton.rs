@@ -101,6 +101,9 @@ pub struct NewtonEstimator<E: Element> {
     /// The observation rows of `derivs_cache` (kept between steps: a
     /// stream's frames share them).
     cache_rows: Vec<ObsRow>,
+    /// The last estimate `F` and `H F` there: a warm step's first
+    /// objective starts at that `F`.
+    hf_cache: Option<(Vec<f64>, Vec<f64>)>,
     /// The full-space iterations of a far start (made when first needed;
     /// see [`full_space`]).
     full_space: Option<Box<SqpEstimator<E>>>,
@@ -153,6 +156,7 @@ impl<E: Element> NewtonEstimator<E> {
             )?),
             derivs_cache: None,
             cache_rows: Vec::new(),
+            hf_cache: None,
             full_space: None,
         })
     }
@@ -262,6 +266,7 @@ impl<E: Element> NewtonEstimator<E> {
             stream,
             derivs_cache,
             cache_rows,
+            hf_cache,
             full_space: inner,
         } = self;
         let core = &mut stream.problem;
@@ -282,7 +287,13 @@ impl<E: Element> NewtonEstimator<E> {
             // (with `H F`, for the gradient)
             let (wr, pen, e, hf) = match at_trial.take() {
                 Some(x) => x,
-                None => core.objective_hf(op, q.as_slice(), &f, alpha)?,
+                None => match hf_cache.take() {
+                    Some((fc, hf)) if fc == f => {
+                        let (wr, pen, e) = core.objective_with_hf(op, q.as_slice(), &f, &hf, alpha);
+                        (wr, pen, e, hf)
+                    }
+                    _ => core.objective_hf(op, q.as_slice(), &f, alpha)?,
+                },
             };
             let obj = wr + pen;
             // a cold solve from zero load (a stream's first, from the
@@ -375,6 +386,7 @@ impl<E: Element> NewtonEstimator<E> {
                     dv.clone(),
                     Some((op.weights().to_vec(), fac.clone())),
                 ));
+                *hf_cache = Some((f.clone(), hf));
                 return Ok(Solved {
                     f,
                     q,
@@ -554,6 +566,7 @@ impl<E: Element + 'static> Estimator for NewtonEstimator<E> {
     fn reset(&mut self) {
         self.stream.reset();
         self.derivs_cache = None;
+        self.hf_cache = None;
         self.full_space = None;
     }
 

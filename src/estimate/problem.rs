@@ -398,10 +398,23 @@ impl<E: Element> Problem<E> {
         f: &[f64],
         alpha: f64,
     ) -> Result<(f64, f64, Vec<f64>, Vec<f64>)> {
-        let e = op.residual(q);
         let hf = self.penalty_grad(f)?;
+        let (wr, pen, e) = self.objective_with_hf(op, q, f, &hf, alpha);
+        Ok((wr, pen, e, hf))
+    }
+
+    /// As [`Problem::objective`], with `H F` given (`hf`).
+    pub(crate) fn objective_with_hf(
+        &self,
+        op: &ObservationOperator,
+        q: &[f64],
+        f: &[f64],
+        hf: &[f64],
+        alpha: f64,
+    ) -> (f64, f64, Vec<f64>) {
+        let e = op.residual(q);
         let pen: f64 = hf.iter().zip(f).map(|(a, b)| a * b).sum();
-        Ok((op.weighted(&e), alpha * pen, e, hf))
+        (op.weighted(&e), alpha * pen, e)
     }
 
     /// Reduced gradient (29): `2 (Jᵀ W e + α H F)`.
