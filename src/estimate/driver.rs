@@ -128,7 +128,9 @@ impl<E: Element> Stream<E> {
         let problem = &self.problem;
         let mut f = f;
         unused_load_slots_zeroed::<E>(problem.load(), &mut f);
-        let (resultant_force_n, resultant_moment_nm, fw) = problem.resultants(&q, &f)?;
+        // `H F̂`: the resultants' moment and the penalty `F̂ᵀ H F̂`
+        let hf = problem.penalty_grad(&f)?;
+        let (resultant_force_n, resultant_moment_nm, fw) = problem.resultants(&q, &f, &hf)?;
         let informative = super::evidence::informative(&dv);
         let mut report = report;
         if !informative {
@@ -138,7 +140,7 @@ impl<E: Element> Stream<E> {
         let by_evidence = settings.alpha.is_none() && settings.alpha_rule == AlphaRule::Evidence;
         // the penalty `F̂ᵀ H F̂`, for the evidence's covariances and its γ
         let pen = if informative {
-            Some(problem.penalty(&f)?)
+            Some(hf.iter().zip(&f).map(|(a, b)| a * b).sum())
         } else {
             None
         };

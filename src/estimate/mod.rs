@@ -104,6 +104,8 @@
 mod covariance;
 mod driver;
 mod evidence;
+#[cfg(test)]
+mod gn_tests;
 pub mod newton;
 mod problem;
 pub mod sqp;

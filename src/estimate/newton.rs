@@ -63,12 +63,16 @@ use crate::sensitivity::Sensitivity;
 use nalgebra::{DMatrix, DVector};
 
 use super::driver::{run_step, Method, Solved, Stream};
-use super::problem::{step_cap, Derivs, Problem};
+use super::problem::{step_cap, Derivs, GnFactor, Problem};
 use super::sqp::SqpEstimator;
 use super::{
     Backend, Estimate, EstimateCriterion, EstimateReport, EstimateStatus, Estimator,
     EstimatorSettings, Observation,
 };
+
+/// The derivatives at a shape `q` (first), with the Gauss–Newton factor
+/// formed from them for the observation weights it holds, if any.
+type DerivsCache = (Vec<f64>, Derivs, Option<(Vec<f64>, GnFactor)>);
 
 /// The reduced Gauss–Newton estimator (backend "newton").
 ///
@@ -93,10 +97,13 @@ pub struct NewtonEstimator<E: Element> {
     /// The derivatives at the last converged estimate's shape for the
     /// observation rows `cache_rows`: a warm step's first iteration starts
     /// there.
-    derivs_cache: Option<(Vec<f64>, Derivs)>,
+    derivs_cache: Option<DerivsCache>,
     /// The observation rows of `derivs_cache` (kept between steps: a
     /// stream's frames share them).
     cache_rows: Vec<ObsRow>,
+    /// The last estimate `F` and `H F` there: a warm step's first
+    /// objective starts at that `F`.
+    hf_cache: Option<(Vec<f64>, Vec<f64>)>,
     /// The full-space iterations of a far start (made when first needed;
     /// see [`full_space`]).
     full_space: Option<Box<SqpEstimator<E>>>,
@@ -149,6 +156,7 @@ impl<E: Element> NewtonEstimator<E> {
             )?),
             derivs_cache: None,
             cache_rows: Vec::new(),
+            hf_cache: None,
             full_space: None,
         })
     }
@@ -258,6 +266,7 @@ impl<E: Element> NewtonEstimator<E> {
             stream,
             derivs_cache,
             cache_rows,
+            hf_cache,
             full_space: inner,
         } = self;
         let core = &mut stream.problem;
@@ -272,12 +281,19 @@ impl<E: Element> NewtonEstimator<E> {
         let mut prev_dec = f64::INFINITY;
         // the objective at the accepted trial point, which the next
         // iteration starts from
-        let mut at_trial: Option<(f64, f64, Vec<f64>)> = None;
+        let mut at_trial: Option<(f64, f64, Vec<f64>, Vec<f64>)> = None;
         let mut eager = far.is_some() && f.iter().all(|v| *v == 0.0);
         loop {
-            let (wr, pen, e) = match at_trial.take() {
+            // (with `H F`, for the gradient)
+            let (wr, pen, e, hf) = match at_trial.take() {
                 Some(x) => x,
-                None => core.objective(op, q.as_slice(), &f, alpha)?,
+                None => match hf_cache.take() {
+                    Some((fc, hf)) if fc == f => {
+                        let (wr, pen, e) = core.objective_with_hf(op, q.as_slice(), &f, &hf, alpha);
+                        (wr, pen, e, hf)
+                    }
+                    _ => core.objective_hf(op, q.as_slice(), &f, alpha)?,
+                },
             };
             let obj = wr + pen;
             // a cold solve from zero load (a stream's first, from the
@@ -310,17 +326,22 @@ impl<E: Element> NewtonEstimator<E> {
             }
             // (a warm step starts where the last one converged: the
             // derivatives there are cached)
+            // (with the Gauss–Newton factor formed there, for the same
+            // weights: the same numbers)
             let cached = match derivs_cache.take() {
-                Some((qc, dv)) if qc == q && cache_rows[..] == *op.rows() => Some(dv),
+                Some((qc, dv, gn)) if qc == q && cache_rows[..] == *op.rows() => {
+                    let gn = gn.and_then(|(w, fac)| (w[..] == *op.weights()).then_some(fac));
+                    Some((dv, gn))
+                }
                 _ => None,
             };
-            let dv = match cached {
-                Some(dv) => dv,
-                None => core.derivs(&lu, op)?,
+            let (dv, gn) = match cached {
+                Some(x) => x,
+                None => (core.derivs(&lu, op)?, None),
             };
-            let g = core.gradient(&dv, op, &e, &f, alpha)?;
+            let g = core.gradient_hf(&dv, op, &e, &hf, alpha)?;
             // the step (the covariances are formed on request, from `fac`)
-            let (mut step, fac) = core.gn_solve(&dv, op, &e, &f, alpha)?;
+            let (mut step, fac) = core.gn_solve_reusing(&dv, op, &e, &f, alpha, gn)?;
             let dec = -0.5 * dot(&g, &step);
             let scale = obj.max(n_ob);
             // the statistical test: dec = dFᵀ N dF ≤ κ² (see
@@ -360,7 +381,12 @@ impl<E: Element> NewtonEstimator<E> {
                 if cache_rows[..] != *op.rows() {
                     *cache_rows = op.rows().to_vec();
                 }
-                *derivs_cache = Some((q.clone(), dv.clone()));
+                *derivs_cache = Some((
+                    q.clone(),
+                    dv.clone(),
+                    Some((op.weights().to_vec(), fac.clone())),
+                ));
+                *hf_cache = Some((f.clone(), hf));
                 return Ok(Solved {
                     f,
                     q,
@@ -485,9 +511,10 @@ impl<E: Element> NewtonEstimator<E> {
                     core.tracker().try_solve(&load, &ft, &qp).ok().flatten()
                 };
                 if let Some(eq) = trial {
-                    let (wr_t, pen_t, e_t) = core.objective(op, eq.q.as_slice(), &ft, alpha)?;
+                    let (wr_t, pen_t, e_t, hf_t) =
+                        core.objective_hf(op, eq.q.as_slice(), &ft, alpha)?;
                     if wr_t + pen_t <= obj + 1e-4 * t * slope || dec <= 1e-8 * scale {
-                        accepted = Some((ft, eq, Some((wr_t, pen_t, e_t))));
+                        accepted = Some((ft, eq, Some((wr_t, pen_t, e_t, hf_t))));
                         break;
                     }
                 }
@@ -539,6 +566,7 @@ impl<E: Element + 'static> Estimator for NewtonEstimator<E> {
     fn reset(&mut self) {
         self.stream.reset();
         self.derivs_cache = None;
+        self.hf_cache = None;
         self.full_space = None;
     }
 
@@ -562,7 +590,7 @@ impl<E: Element + 'static> Estimator for NewtonEstimator<E> {
 #[allow(clippy::too_many_arguments)]
 fn far_start<E: Element>(
     inner: &mut Option<Box<SqpEstimator<E>>>,
-    derivs_cache: &mut Option<(Vec<f64>, Derivs)>,
+    derivs_cache: &mut Option<DerivsCache>,
     cache_rows: &mut Vec<ObsRow>,
     core: &mut Problem<E>,
     op: &ObservationOperator,
@@ -586,7 +614,7 @@ fn far_start<E: Element>(
         let tol = 1e-10 * core.robot().length();
         if eq.q.iter().zip(&qs).all(|(a, b)| (a - b).abs() <= tol) {
             *cache_rows = op.rows().to_vec();
-            *derivs_cache = Some((eq.q.as_slice().to_vec(), dv));
+            *derivs_cache = Some((eq.q.as_slice().to_vec(), dv, None));
         }
     }
     Ok(Some((fs, eq, its)))

@@ -127,6 +127,9 @@ pub(crate) struct Problem<E: Element> {
     /// The shape of the known loads alone ([`Problem::unloaded_start`]),
     /// once solved, with the factored tangent there when it was formed.
     unloaded: Option<(Vec<f64>, Option<FactoredTangent>)>,
+    /// The map `F → ∫ w dX` of the distributed load ([`Problem::resultants`]),
+    /// once formed (it depends on the mesh alone).
+    load_map: std::sync::OnceLock<Vec<f64>>,
 }
 
 impl<E: Element> Problem<E> {
@@ -178,6 +181,7 @@ impl<E: Element> Problem<E> {
             n_f,
             last_operator: None,
             unloaded: None,
+            load_map: std::sync::OnceLock::new(),
         })
     }
 
@@ -380,8 +384,37 @@ impl<E: Element> Problem<E> {
         f: &[f64],
         alpha: f64,
     ) -> Result<(f64, f64, Vec<f64>)> {
+        let (wr, pen, e, _) = self.objective_hf(op, q, f, alpha)?;
+        Ok((wr, pen, e))
+    }
+
+    /// As [`Problem::objective`], with `H F` ([`Problem::penalty_grad`]),
+    /// which the gradient at the same `F` takes
+    /// ([`Problem::gradient_hf`]) instead of forming it again.
+    pub(crate) fn objective_hf(
+        &self,
+        op: &ObservationOperator,
+        q: &[f64],
+        f: &[f64],
+        alpha: f64,
+    ) -> Result<(f64, f64, Vec<f64>, Vec<f64>)> {
+        let hf = self.penalty_grad(f)?;
+        let (wr, pen, e) = self.objective_with_hf(op, q, f, &hf, alpha);
+        Ok((wr, pen, e, hf))
+    }
+
+    /// As [`Problem::objective`], with `H F` given (`hf`).
+    pub(crate) fn objective_with_hf(
+        &self,
+        op: &ObservationOperator,
+        q: &[f64],
+        f: &[f64],
+        hf: &[f64],
+        alpha: f64,
+    ) -> (f64, f64, Vec<f64>) {
         let e = op.residual(q);
-        Ok((op.weighted(&e), alpha * self.penalty(f)?, e))
+        let pen: f64 = hf.iter().zip(f).map(|(a, b)| a * b).sum();
+        (op.weighted(&e), alpha * pen, e)
     }
 
     /// Reduced gradient (29): `2 (Jᵀ W e + α H F)`.
@@ -393,11 +426,20 @@ impl<E: Element> Problem<E> {
         f: &[f64],
         alpha: f64,
     ) -> Result<Vec<f64>> {
-        let mut g: Vec<f64> = self
-            .penalty_grad(f)?
-            .iter()
-            .map(|v| 2.0 * alpha * v)
-            .collect();
+        self.gradient_hf(dv, op, e, &self.penalty_grad(f)?, alpha)
+    }
+
+    /// As [`Problem::gradient`], with `H F` given (`hf`, `n_F`).
+    pub(crate) fn gradient_hf(
+        &self,
+        dv: &Derivs,
+        op: &ObservationOperator,
+        e: &[f64],
+        hf: &[f64],
+        alpha: f64,
+    ) -> Result<Vec<f64>> {
+        check_len("hf", self.n_f, hf.len())?;
+        let mut g: Vec<f64> = hf.iter().map(|v| 2.0 * alpha * v).collect();
         for ((ji, wi), ei) in columns(&dv.jt).zip(op.weights()).zip(e) {
             let c = 2.0 * wi * ei;
             g.iter_mut().zip(ji).for_each(|(a, b)| *a += c * b);
@@ -418,6 +460,24 @@ impl<E: Element> Problem<E> {
         f: &[f64],
         alpha: f64,
     ) -> Result<(Vec<f64>, GnFactor)> {
+        self.gn_solve_reusing(dv, op, e, f, alpha, None)
+    }
+
+    /// As [`Problem::gn_solve`], with the factor `reuse` of the distributed
+    /// load's system when the caller has it: formed by `gn_solve` from the
+    /// same `dv` and the same weights of `op` (a warm step's first
+    /// iteration, at the last estimate's cached derivatives). It is used
+    /// when its `α` is `alpha` (the same numbers: `S` depends on nothing
+    /// else), formed anew otherwise.
+    pub(crate) fn gn_solve_reusing(
+        &self,
+        dv: &Derivs,
+        op: &ObservationOperator,
+        e: &[f64],
+        f: &[f64],
+        alpha: f64,
+        reuse: Option<GnFactor>,
+    ) -> Result<(Vec<f64>, GnFactor)> {
         let w = op.weights();
         let not_spd = || Error::NotPositiveDefinite {
             context: "the Gauss-Newton matrix of the estimator".into(),
@@ -430,19 +490,28 @@ impl<E: Element> Problem<E> {
                 let m = w.len();
                 let z: Vec<&[f64]> = columns(&dv.z).collect();
                 let jt: Vec<&[f64]> = columns(&dv.jt).collect();
-                let mut k = DMatrix::zeros(m, m);
-                for i in 0..m {
-                    for j in i..m {
-                        let v = dot(z[i], jt[j]);
-                        k[(i, j)] = v;
-                        k[(j, i)] = v;
+                let reuse = reuse.and_then(|fac| match fac.gram {
+                    Some(k) if fac.alpha == alpha && k.nrows() == m => Some((fac.chol, k)),
+                    _ => None,
+                });
+                let (chol, k) = match reuse {
+                    Some(x) => x,
+                    None => {
+                        let mut k = DMatrix::zeros(m, m);
+                        for i in 0..m {
+                            for j in i..m {
+                                let v = dot(z[i], jt[j]);
+                                k[(i, j)] = v;
+                                k[(j, i)] = v;
+                            }
+                        }
+                        let mut s = k.clone();
+                        for i in 0..m {
+                            s[(i, i)] += alpha / w[i];
+                        }
+                        (jittered_cholesky(s).ok_or_else(not_spd)?, k)
                     }
-                }
-                let mut s = k.clone();
-                for i in 0..m {
-                    s[(i, i)] += alpha / w[i];
-                }
-                let chol = jittered_cholesky(s).ok_or_else(not_spd)?;
+                };
                 let mut c =
                     DVector::from_iterator(m, jt.iter().zip(e).map(|(j, ei)| dot(j, f) - ei));
                 chol.solve_mut(&mut c);
@@ -483,12 +552,19 @@ impl<E: Element> Problem<E> {
 
     /// Resultant force and moment (about the base position, in the shape
     /// `q`) of the load `F`, and the `DIM × n_F` map `F → ∫ w dX`
-    /// (row-major).
+    /// (row-major). `hf` is `H F` ([`Problem::penalty_grad`]), which for
+    /// the distributed load is `B F` (23): with `r = S q`, `w = S F` and
+    /// `B = ∫ Sᵀ S dX = b ⊗ I` (the scalar shape functions' Gram matrix
+    /// times the identity over the components), `∫ r_i w_j dX = Σ_a q_{a,i}
+    /// (B F)_{a,j}` over the slots `a` (node positions and slopes), so the
+    /// moment `∫ (r − r₀) × w dX` is `Σ_a q_a × (B F)_a − r₀ × ∫ w dX`, and
+    /// the force `∫ w dX` the map times `F`.
     #[allow(clippy::type_complexity)]
     pub(crate) fn resultants(
         &self,
         q: &[f64],
         f: &[f64],
+        hf: &[f64],
     ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
         let d = E::DIM;
         let nd = E::NODE_DOFS;
@@ -496,62 +572,69 @@ impl<E: Element> Problem<E> {
         let r0 = &q[..d];
         let mut force = vec![0.0; d];
         let mut moment = vec![0.0; if d == 2 { 1 } else { 3 }];
-        let mut fw = vec![0.0; d * nf];
         match self.load() {
             LoadModel::Concentrated { node } => {
+                let mut fw = vec![0.0; d * nf];
                 force.copy_from_slice(f);
                 let r: Vec<f64> = (0..d).map(|i| q[node * nd + i] - r0[i]).collect();
                 moment = cross(&r, f);
                 for a in 0..d {
                     fw[a * nf + a] = 1.0;
                 }
+                Ok((force, moment, fw))
             }
             LoadModel::Distributed => {
-                const MAX_DIM: usize = 3;
-                let rule = crate::quadrature::GaussRule::new(5)?;
-                // the shape functions at the rule's points (elements of a
-                // section share a length: recomputed only when it changes)
-                let mut le_prev = f64::NAN;
-                let mut shapes = [[0.0; 4]; 5];
-                for (e, el) in self.robot().elements().iter().enumerate() {
-                    let le = el.length();
-                    if le != le_prev {
-                        for (sh, (xi, _)) in shapes.iter_mut().zip(rule.iter()) {
-                            *sh = el.shape(xi);
-                        }
-                        le_prev = le;
+                check_len("hf", nf, hf.len())?;
+                check_len("f", nf, f.len())?;
+                let fw = self.load_map()?;
+                for (i, fi) in force.iter_mut().enumerate() {
+                    *fi = dot(&fw[i * nf..(i + 1) * nf], f);
+                }
+                // Σ_a q_a × (B F)_a over the slots (DIM-vectors)
+                for (qa, ba) in q[..nf].chunks_exact(d).zip(hf.chunks_exact(d)) {
+                    if d == 2 {
+                        moment[0] += qa[0] * ba[1] - qa[1] * ba[0];
+                    } else {
+                        moment[0] += qa[1] * ba[2] - qa[2] * ba[1];
+                        moment[1] += qa[2] * ba[0] - qa[0] * ba[2];
+                        moment[2] += qa[0] * ba[1] - qa[1] * ba[0];
                     }
-                    for (sh, (_, wt)) in shapes.iter().zip(rule.iter()) {
-                        let mut w = [0.0; MAX_DIM];
-                        let mut r = [0.0; MAX_DIM];
-                        for (k, sk) in sh.iter().enumerate() {
-                            // slot k: node e + k/2, its position (k even)
-                            // or slope (k odd)
-                            let base = (e + k / 2) * nd + (k % 2) * d;
-                            for i in 0..d.min(MAX_DIM) {
-                                w[i] += sk * f[base + i];
-                                r[i] += sk * q[base + i];
-                                fw[i * nf + base + i] += wt * le * sk;
-                            }
-                        }
-                        for i in 0..d.min(MAX_DIM) {
-                            force[i] += wt * le * w[i];
-                            r[i] -= r0[i];
-                        }
-                        if d == 2 {
-                            moment[0] += wt * le * (r[0] * w[1] - r[1] * w[0]);
-                        } else {
-                            let mm = cross(&r[..d], &w[..d]);
-                            moment
-                                .iter_mut()
-                                .zip(mm)
-                                .for_each(|(a, b)| *a += wt * le * b);
-                        }
+                }
+                moment
+                    .iter_mut()
+                    .zip(cross(r0, &force))
+                    .for_each(|(m, c)| *m -= c);
+                Ok((force, moment, fw.clone()))
+            }
+        }
+    }
+
+    /// The map `F → ∫ w dX` of the distributed load (`DIM × n_F`,
+    /// row-major), formed by 5-point Gauss quadrature of the shape functions
+    /// at the first call and kept.
+    fn load_map(&self) -> Result<&Vec<f64>> {
+        if let Some(m) = self.load_map.get() {
+            return Ok(m);
+        }
+        let d = E::DIM;
+        let nd = E::NODE_DOFS;
+        let nf = self.n_f;
+        let mut fw = vec![0.0; d * nf];
+        let rule = crate::quadrature::GaussRule::new(5)?;
+        for (e, el) in self.robot().elements().iter().enumerate() {
+            let le = el.length();
+            for (xi, wt) in rule.iter() {
+                for (k, sk) in el.shape(xi).iter().enumerate() {
+                    // slot k: node e + k/2, its position (k even) or slope
+                    // (k odd)
+                    let base = (e + k / 2) * nd + (k % 2) * d;
+                    for i in 0..d {
+                        fw[i * nf + base + i] += wt * le * sk;
                     }
                 }
             }
         }
-        Ok((force, moment, fw))
+        Ok(self.load_map.get_or_init(|| fw))
     }
 }
 
