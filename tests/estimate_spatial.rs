@@ -222,11 +222,11 @@ fn distributed_load_from_exudyn_markers_both_backends_agree() {
 fn quadrature_resultants(e: &Estimate) -> (Vec<f64>, Vec<f64>) {
     use softrod::element::ArcPoint;
     const X: [f64; 5] = [
-        0.046_910_077_030_668_0,
+        0.046_910_077_030_668,
         0.230_765_344_947_158_5,
         0.5,
         0.769_234_655_052_841_5,
-        0.953_089_922_969_332_0,
+        0.953_089_922_969_332,
     ];
     const W: [f64; 5] = [
         0.118_463_442_528_094_5,

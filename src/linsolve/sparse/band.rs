@@ -286,7 +286,7 @@ impl BandFactors {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use std::sync::Arc;
 
     use crate::linsolve::{
@@ -295,24 +295,42 @@ mod tests {
     };
 
     /// A chain of `elements` elements between nodes of `dofs` coordinates,
-    /// each element block `Gᵀ G + 0.1 I` (seeded) plus `diag` on the
-    /// diagonal of the whole matrix.
-    fn chain(elements: usize, dofs: usize, diag: f64) -> SymmetricMatrix {
+    /// each element block `block(rand, 2 dofs)` (row-major, symmetric;
+    /// `rand` draws seeded numbers in `[−0.5, 0.5)`), plus `diag` on the
+    /// diagonal of the whole matrix. Also the band LU's tests' matrices.
+    pub(in crate::linsolve::sparse) fn chain_with(
+        elements: usize,
+        dofs: usize,
+        diag: f64,
+        seed: u64,
+        mut block: impl FnMut(&mut dyn FnMut() -> f64, usize) -> Vec<f64>,
+    ) -> SymmetricMatrix {
         let n = (elements + 1) * dofs;
         let els: Vec<Vec<usize>> = (0..elements)
             .map(|e| (e * dofs..(e + 2) * dofs).collect())
             .collect();
         let p = Arc::new(SymmetricPattern::from_elements(n, &els).unwrap());
         let mut k = SymmetricMatrix::zeros(p);
-        let mut seed = 7u64;
+        let mut s = seed;
         let mut rand = || {
-            seed = seed
+            s = s
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+            ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
         };
-        let m = 2 * dofs;
         for e in 0..elements {
+            k.add_element(e, &block(&mut rand, 2 * dofs)).unwrap();
+        }
+        for i in 0..n {
+            k.add(i, i, diag).unwrap();
+        }
+        k
+    }
+
+    /// [`chain_with`] of blocks `Gᵀ G + 0.1 I` (seed 7): positive definite
+    /// for `diag` ≥ 0.
+    fn chain(elements: usize, dofs: usize, diag: f64) -> SymmetricMatrix {
+        chain_with(elements, dofs, diag, 7, |rand, m| {
             let g: Vec<f64> = (0..m * m).map(|_| rand()).collect();
             let mut h = vec![0.0; m * m];
             for a in 0..m {
@@ -321,12 +339,8 @@ mod tests {
                         + if a == b { 0.1 } else { 0.0 };
                 }
             }
-            k.add_element(e, &h).unwrap();
-        }
-        for i in 0..n {
-            k.add(i, i, diag).unwrap();
-        }
-        k
+            h
+        })
     }
 
     /// The band path (`L D Lᵀ`, the default) against the general one

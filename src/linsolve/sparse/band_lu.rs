@@ -262,21 +262,7 @@ mod tests {
     /// A chain of `elements` random symmetric (indefinite) element blocks
     /// of `2 dofs` coordinates, plus `diag` on the diagonal.
     fn chain(elements: usize, dofs: usize, diag: f64, seed: u64) -> SymmetricMatrix {
-        let n = (elements + 1) * dofs;
-        let els: Vec<Vec<usize>> = (0..elements)
-            .map(|e| (e * dofs..(e + 2) * dofs).collect())
-            .collect();
-        let p = Arc::new(SymmetricPattern::from_elements(n, &els).unwrap());
-        let mut k = SymmetricMatrix::zeros(p);
-        let mut s = seed;
-        let mut rand = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        };
-        let m = 2 * dofs;
-        for e in 0..elements {
+        super::super::band::tests::chain_with(elements, dofs, diag, seed, |rand, m| {
             let mut h = vec![0.0; m * m];
             for a in 0..m {
                 for b in a..m {
@@ -286,12 +272,8 @@ mod tests {
                     h[b * m + a] = v;
                 }
             }
-            k.add_element(e, &h).unwrap();
-        }
-        for i in 0..n {
-            k.add(i, i, diag).unwrap();
-        }
-        k
+            h
+        })
     }
 
     fn general(p: &Arc<SymmetricPattern>) -> SparseSolver {
