@@ -100,9 +100,12 @@ fn declaration(lines: &[&str], i: usize, field: bool) -> String {
                 ',' if field && depth <= 0 => return collapse(&text),
                 _ => {}
             }
-            // `->` is not a closing bracket
+            // `->` is not a closing bracket, `<<` (a shift) no bracket
             if ch == '>' && text.ends_with('-') {
                 depth += 1;
+            }
+            if ch == '<' && text.ends_with('<') {
+                depth -= 2;
             }
             text.push(ch);
         }
@@ -127,6 +130,14 @@ fn listing(root: &Path) -> BTreeSet<String> {
         let mut container = String::new();
         for (i, line) in lines.iter().enumerate() {
             if line.starts_with("#[cfg(test)]") {
+                // the listing ends at a file's first test item: a public
+                // item after it would be left out, so test items go last
+                let hidden = lines[i..].iter().find(|l| l.starts_with("pub "));
+                assert!(
+                    hidden.is_none(),
+                    "{r}: public item after the test item at line {}: {hidden:?} (move the test item to the end of the file)",
+                    i + 1
+                );
                 break;
             }
             let trimmed = line.trim_start();

@@ -53,21 +53,6 @@ mod qp;
 mod settings;
 mod solver;
 mod start;
-#[cfg(test)]
-mod tests;
-
-/// Faults the unit tests inject (per thread) to reach the paths a solve
-/// takes when the QP's active set is wrong or the polish cannot converge.
-#[cfg(test)]
-pub(crate) mod faults {
-    use std::cell::Cell;
-    thread_local! {
-        /// Every QP multiplier counts, even of a gap the step leaves open.
-        pub(crate) static NO_COMPLEMENTARITY: Cell<bool> = const { Cell::new(false) };
-        /// Every polish fails.
-        pub(crate) static NO_POLISH: Cell<bool> = const { Cell::new(false) };
-    }
-}
 
 pub use gap::Gap;
 pub use obstacle::{Obstacle, SignedDistance, MAX_OBSTACLE_EXTENT_M};
@@ -253,3 +238,19 @@ impl Obstacles {
         Ok(out)
     }
 }
+
+/// Faults the unit tests inject (per thread) to reach the paths a solve
+/// takes when the QP's active set is wrong or the polish cannot converge.
+#[cfg(test)]
+pub(crate) mod faults {
+    use std::cell::Cell;
+    thread_local! {
+        /// Every QP multiplier counts, even of a gap the step leaves open.
+        pub(crate) static NO_COMPLEMENTARITY: Cell<bool> = const { Cell::new(false) };
+        /// Every polish fails.
+        pub(crate) static NO_POLISH: Cell<bool> = const { Cell::new(false) };
+    }
+}
+
+#[cfg(test)]
+mod tests;

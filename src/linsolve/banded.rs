@@ -9,9 +9,6 @@
 
 use crate::error::{check_len, Error, Result};
 
-#[cfg(test)]
-mod tests;
-
 /// The most numbers [`BandedMatrix::try_zeros`] stores (2³⁰, 8 GiB).
 pub const MAX_ENTRIES: usize = 1 << 30;
 
@@ -312,3 +309,6 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     }
     t
 }
+
+#[cfg(test)]
+mod tests;

@@ -63,8 +63,6 @@ mod auto;
 pub mod banded;
 mod pattern;
 pub mod sparse;
-#[cfg(test)]
-mod tests;
 mod work;
 
 pub use auto::{AutoFactors, AutoSolver, SolverKind};
@@ -448,3 +446,6 @@ fn check_rhs(name: &'static str, expected: usize, got: usize) -> Result<(), Lins
 fn pivot_tolerance(n: usize) -> f64 {
     (n.max(1) as f64) * f64::EPSILON
 }
+
+#[cfg(test)]
+mod tests;

@@ -35,8 +35,6 @@ mod spatial;
 
 use nalgebra::Vector2;
 
-#[cfg(test)]
-pub(crate) use spatial::frame_of_columns;
 pub(crate) use spatial::resolve_spatial;
 pub use spatial::{
     rotate_3d, rotate_back_3d, rotation_vector_of, SpatialAttachment, SPATIAL_END_COLUMNS,
@@ -145,6 +143,9 @@ pub(crate) enum Attachment {
     /// A spatial-cable or full 3-D node on a 3-D body.
     Spatial(SpatialAttachment),
 }
+
+#[cfg(test)]
+pub(crate) use spatial::frame_of_columns;
 
 #[cfg(test)]
 mod tests {
