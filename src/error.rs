@@ -198,6 +198,17 @@ impl Error {
     }
 }
 
+/// `check(name)` with the field name formatted only when the check fails
+/// (the load checks run on every solve; a formatted name is an
+/// allocation): the check runs with an empty name first and, on an error,
+/// again with `name()`.
+pub(crate) fn named<T>(
+    check: impl Fn(&str) -> Result<T>,
+    name: impl FnOnce() -> String,
+) -> Result<T> {
+    check("").or_else(|_| check(&name()))
+}
+
 /// Checks that `value` is at most `max`.
 pub(crate) fn check_at_most(name: &str, value: usize, max: usize) -> Result<()> {
     if value <= max {

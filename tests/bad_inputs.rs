@@ -470,3 +470,156 @@ fn a_small_budget_bounds_the_iterations_of_a_divergent_solve() {
         other => panic!("expected the iteration budget to stop the solve, got {other:?}"),
     }
 }
+
+/// The load checks run on every solve and format a field's name only when
+/// it is at fault: the second entry of each list is named with its index
+/// and field, as the first would be.
+#[test]
+fn the_load_checks_name_the_entry_at_fault_by_its_index() {
+    use softrod::loads::{FollowerLoad, PointMoment};
+    let robot = Scene::two_section().robot().unwrap();
+    let good_force = PointForce {
+        s_m: 0.1,
+        force_n: vec![0.0, -0.01],
+    };
+    let good_line = LineLoad::Uniform {
+        w_n_per_m: vec![0.0, -0.1],
+    };
+    let rows: Vec<(Loads, Kind, &str)> = vec![
+        (
+            Loads {
+                point_forces: vec![
+                    good_force.clone(),
+                    PointForce {
+                        s_m: 0.1,
+                        force_n: vec![0.0, f64::NAN],
+                    },
+                ],
+                ..default_loads()
+            },
+            Kind::Invalid,
+            "point_forces[1].force_n[1]",
+        ),
+        (
+            Loads {
+                point_forces: vec![
+                    good_force.clone(),
+                    PointForce {
+                        s_m: 0.1,
+                        force_n: vec![0.0],
+                    },
+                ],
+                ..default_loads()
+            },
+            Kind::Dim,
+            "point_forces[1].force_n",
+        ),
+        (
+            Loads {
+                point_forces: vec![
+                    good_force.clone(),
+                    PointForce {
+                        s_m: 5.0,
+                        force_n: vec![0.0, -0.01],
+                    },
+                ],
+                ..default_loads()
+            },
+            Kind::Invalid,
+            "point_forces[1].s_m",
+        ),
+        (
+            Loads {
+                line_loads: vec![
+                    good_line.clone(),
+                    LineLoad::Uniform {
+                        w_n_per_m: vec![0.0, -0.1, 0.0],
+                    },
+                ],
+                ..default_loads()
+            },
+            Kind::Dim,
+            "line_loads[1].w_n_per_m",
+        ),
+        (
+            Loads {
+                line_loads: vec![
+                    good_line.clone(),
+                    LineLoad::Tabulated {
+                        s_m: vec![0.0, 9.0],
+                        w_n_per_m: vec![vec![0.0, 0.0], vec![0.0, -0.1]],
+                    },
+                ],
+                ..default_loads()
+            },
+            Kind::Invalid,
+            "line_loads[1].s_m[1]",
+        ),
+        (
+            Loads {
+                node_moments: vec![
+                    NodeMoment {
+                        node: 3,
+                        moment_nm: vec![0.01],
+                    },
+                    NodeMoment {
+                        node: 4,
+                        moment_nm: vec![f64::INFINITY],
+                    },
+                ],
+                ..default_loads()
+            },
+            Kind::Invalid,
+            "node_moments[1].moment_nm[0]",
+        ),
+        (
+            Loads {
+                point_moments: vec![
+                    PointMoment {
+                        s_m: 0.1,
+                        moment_nm: vec![0.01],
+                    },
+                    PointMoment {
+                        s_m: 0.1,
+                        moment_nm: vec![f64::NAN],
+                    },
+                ],
+                ..default_loads()
+            },
+            Kind::Invalid,
+            "point_moments[1].moment_nm[0]",
+        ),
+        (
+            Loads {
+                follower_loads: vec![
+                    FollowerLoad {
+                        pressure_n_per_m: 0.1,
+                        s_start_m: None,
+                        s_end_m: None,
+                    },
+                    FollowerLoad {
+                        pressure_n_per_m: f64::NAN,
+                        s_start_m: None,
+                        s_end_m: None,
+                    },
+                ],
+                ..default_loads()
+            },
+            Kind::Invalid,
+            "follower_loads[1].pressure_n_per_m",
+        ),
+    ];
+    for (loads, kind, field) in rows {
+        let e = robot.validate_loads(&loads).unwrap_err();
+        assert_eq!(
+            (kind_of(&e), e.field()),
+            (Some(kind), Some(field)),
+            "{field}: {e}"
+        );
+        // the solver's own check says the same
+        let e = StaticSolver::default()
+            .solve(&robot, &loads, None)
+            .unwrap_err();
+        assert_eq!(e.field(), Some(field), "{field}: {e}");
+    }
+}

@@ -90,44 +90,66 @@ impl LineLoad {
     /// # Example
     /// See [`LineLoad`].
     pub fn at(&self, x: f64, total: f64) -> nalgebra::DVector<f64> {
-        nalgebra::DVector::from_vec(self.at_vec(x, total))
+        let mut w = nalgebra::DVector::zeros(self.dim());
+        self.at_into(x, total, w.as_mut_slice());
+        w
     }
 
-    /// [`LineLoad::at`] as a plain vector.
-    fn at_vec(&self, x: f64, total: f64) -> Vec<f64> {
+    /// The number of components of the profile's vectors (a table without
+    /// entries: 0).
+    fn dim(&self) -> usize {
         match self {
-            LineLoad::Uniform { w_n_per_m } => w_n_per_m.clone(),
+            LineLoad::Uniform { w_n_per_m } => w_n_per_m.len(),
+            LineLoad::Linear {
+                w_start_n_per_m, ..
+            } => w_start_n_per_m.len(),
+            LineLoad::Gaussian {
+                amplitude_n_per_m, ..
+            } => amplitude_n_per_m.len(),
+            LineLoad::Tabulated { w_n_per_m, .. } => w_n_per_m.first().map_or(0, Vec::len),
+        }
+    }
+
+    /// [`LineLoad::at`] into `out` (its first components; the assembly's
+    /// quadrature calls it at every point, without allocating).
+    pub(crate) fn at_into(&self, x: f64, total: f64, out: &mut [f64]) {
+        let lerp = |out: &mut [f64], a: &[f64], b: &[f64], t: f64| {
+            for ((o, a), b) in out.iter_mut().zip(a).zip(b) {
+                *o = a + t * (b - a);
+            }
+        };
+        match self {
+            LineLoad::Uniform { w_n_per_m } => {
+                out.iter_mut().zip(w_n_per_m).for_each(|(o, w)| *o = *w);
+            }
             LineLoad::Linear {
                 w_start_n_per_m: a,
                 w_end_n_per_m: b,
-            } => {
-                let t = x / total;
-                a.iter().zip(b).map(|(a, b)| a + t * (b - a)).collect()
-            }
+            } => lerp(out, a, b, x / total),
             LineLoad::Gaussian {
                 amplitude_n_per_m,
                 center_m,
                 width_m,
             } => {
                 let g = (-(x - center_m).powi(2) / (2.0 * width_m * width_m)).exp();
-                amplitude_n_per_m.iter().map(|a| a * g).collect()
+                out.iter_mut()
+                    .zip(amplitude_n_per_m)
+                    .for_each(|(o, a)| *o = a * g);
             }
             LineLoad::Tabulated { s_m, w_n_per_m } => {
-                let zero = || vec![0.0; w_n_per_m.first().map_or(0, Vec::len)];
                 // the entry at or before x; none before the first or after the last
                 let k = s_m.partition_point(|&s| s <= x);
                 let (Some(k), Some(&last)) = (k.checked_sub(1), s_m.last()) else {
-                    return zero();
+                    out.fill(0.0);
+                    return;
                 };
                 let Some(a) = w_n_per_m.get(k).filter(|_| x <= last) else {
-                    return zero();
+                    out.fill(0.0);
+                    return;
                 };
                 match (s_m.get(k + 1), w_n_per_m.get(k + 1)) {
-                    (Some(s1), Some(b)) => {
-                        let t = (x - s_m[k]) / (s1 - s_m[k]);
-                        a.iter().zip(b).map(|(a, b)| a + t * (b - a)).collect()
-                    }
-                    _ => a.clone(),
+                    (Some(s1), Some(b)) => lerp(out, a, b, (x - s_m[k]) / (s1 - s_m[k])),
+                    _ => out.iter_mut().zip(a).for_each(|(o, w)| *o = *w),
                 }
             }
         }

@@ -22,6 +22,10 @@ impl<E: Element> Rod<E> {
         let nd = E::NODE_DOFS;
         let total = self.length();
         let cuts = l.breakpoints();
+        // the load per length at a quadrature point (validated: E::DIM
+        // components, at most 3)
+        let mut w = [0.0; 3];
+        let w = &mut w[..E::DIM.min(3)];
         for (e, el) in self.elements.iter().enumerate() {
             let le = el.length();
             let x0 = self.node_s[e];
@@ -30,8 +34,8 @@ impl<E: Element> Rod<E> {
             };
             if cuts.is_empty() {
                 for (xi, wt) in self.line_rule.iter() {
-                    let w = l.at(x0 + xi * le, total);
-                    add_shape_force(el, xi, w.as_slice(), wt * le, out);
+                    l.at_into(x0 + xi * le, total, w);
+                    add_shape_force(el, xi, w, wt * le, out);
                 }
                 continue;
             }
@@ -42,7 +46,8 @@ impl<E: Element> Rod<E> {
                 let h = b - a;
                 for (xi, wt) in self.line_rule.iter() {
                     let x = a + xi * h;
-                    add_shape_force(el, (x - x0) / le, l.at(x, total).as_slice(), wt * h, out);
+                    l.at_into(x, total, w);
+                    add_shape_force(el, (x - x0) / le, w, wt * h, out);
                 }
                 a = b;
             }
@@ -60,7 +65,10 @@ impl<E: Element> Rod<E> {
     /// the rod, and beyond the start if it is clamped.
     pub(super) fn validate_point_moments(&self, loads: &Loads, clamped_start: bool) -> Result<()> {
         for (i, m) in loads.point_moments.iter().enumerate() {
-            check_all_finite(&format!("point_moments[{i}].moment_nm"), &m.moment_nm)?;
+            crate::error::named(
+                |n| check_all_finite(n, &m.moment_nm),
+                || format!("point_moments[{i}].moment_nm"),
+            )?;
             self.point_moment_at(i, m.s_m)?;
             if clamped_start && m.s_m <= 0.0 {
                 return Err(Error::invalid(

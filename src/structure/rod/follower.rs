@@ -16,7 +16,10 @@ impl<E: Element> Rod<E> {
     /// the rod and not empty).
     pub(super) fn validate_followers(&self, loads: &Loads) -> Result<()> {
         for (i, f) in loads.follower_loads.iter().enumerate() {
-            f.validate(&format!("follower_loads[{i}]"), self.length())?;
+            crate::error::named(
+                |n| f.validate(n, self.length()),
+                || format!("follower_loads[{i}]"),
+            )?;
         }
         Ok(())
     }

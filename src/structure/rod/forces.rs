@@ -6,7 +6,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::{add_shape_force, slot, Rod};
 use crate::element::Element;
-use crate::error::{check_all_finite, check_index, check_len, Error, Result};
+use crate::error::{check_all_finite, check_index, check_len, named, Error, Result};
 use crate::loads::Loads;
 
 impl<E: Element> Rod<E> {
@@ -130,16 +130,28 @@ impl<E: Element> Rod<E> {
             check_all_finite("distributed_f", &loads.distributed_f)?;
         }
         for (i, l) in loads.line_loads.iter().enumerate() {
-            l.validate(&format!("line_loads[{i}]"), d)?;
-            l.check_on_robot(&format!("line_loads[{i}]"), self.length())?;
+            let name = || format!("line_loads[{i}]");
+            named(|n| l.validate(n, d), name)?;
+            named(|n| l.check_on_robot(n, self.length()), name)?;
         }
         for (i, p) in loads.point_forces.iter().enumerate() {
-            check_len(&format!("point_forces[{i}].force_n"), d, p.force_n.len())?;
-            check_all_finite(&format!("point_forces[{i}].force_n"), &p.force_n)?;
-            self.locate(&format!("point_forces[{i}].s_m"), p.s_m)?;
+            named(
+                |n| {
+                    check_len(n, d, p.force_n.len())?;
+                    check_all_finite(n, &p.force_n)
+                },
+                || format!("point_forces[{i}].force_n"),
+            )?;
+            named(
+                |n| self.locate(n, p.s_m),
+                || format!("point_forces[{i}].s_m"),
+            )?;
         }
         for (i, m) in loads.node_moments.iter().enumerate() {
-            check_all_finite(&format!("node_moments[{i}].moment_nm"), &m.moment_nm)?;
+            named(
+                |n| check_all_finite(n, &m.moment_nm),
+                || format!("node_moments[{i}].moment_nm"),
+            )?;
             if clamped_start && m.node == 0 {
                 return Err(Error::invalid(
                     format!("node_moments[{i}].node"),
