@@ -95,6 +95,7 @@ use crate::grasp::rest::{rest_on_table, TableTop};
 use crate::grasp::slip::{settle, Grip, Touch};
 use crate::grasp::strategy::{bounded_step, contact_jacobian, contact_pose};
 use crate::loads::Loads;
+use crate::outcome::ContactStatus;
 use crate::statics::StaticSolver;
 
 mod finger;
@@ -519,8 +520,8 @@ pub enum Failure {
     PlantSolve {
         /// The finger.
         side: Side,
-        /// The solver's status.
-        status: String,
+        /// The contact solver's status (never converged).
+        status: ContactStatus,
     },
     /// The object's motion on the table could not be computed (its
     /// least-constraint program was not solved).

@@ -70,10 +70,7 @@ impl PlantStep {
     pub(super) fn states(self) -> std::result::Result<[FingerState; 2], Failure> {
         match self {
             PlantStep::Solved(s) => Ok(*s),
-            PlantStep::Failed { side, status } => Err(Failure::PlantSolve {
-                side,
-                status: format!("{status:?}"),
-            }),
+            PlantStep::Failed { side, status } => Err(Failure::PlantSolve { side, status }),
         }
     }
 }

@@ -277,7 +277,7 @@ mod tests {
         let out = out.unwrap();
         assert!(!out.success);
         assert!(
-            matches!(&out.failure, Some(Failure::PlantSolve { status, .. }) if !status.is_empty()),
+            matches!(&out.failure, Some(Failure::PlantSolve { status, .. }) if !status.is_converged()),
             "{:?}",
             out.failure
         );
