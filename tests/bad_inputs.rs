@@ -478,133 +478,69 @@ fn a_small_budget_bounds_the_iterations_of_a_divergent_solve() {
 fn the_load_checks_name_the_entry_at_fault_by_its_index() {
     use softrod::loads::{FollowerLoad, PointMoment};
     let robot = Scene::two_section().robot().unwrap();
-    let good_force = PointForce {
-        s_m: 0.1,
-        force_n: vec![0.0, -0.01],
+    let with = |f: &dyn Fn(&mut Loads)| {
+        let mut l = default_loads();
+        f(&mut l);
+        l
     };
-    let good_line = LineLoad::Uniform {
-        w_n_per_m: vec![0.0, -0.1],
+    let force = |s_m: f64, force_n: Vec<f64>| PointForce { s_m, force_n };
+    let forces = |bad: PointForce| vec![force(0.1, vec![0.0, -0.01]), bad];
+    let uniform = |w: Vec<f64>| LineLoad::Uniform { w_n_per_m: w };
+    let node = |node: usize, m: f64| NodeMoment {
+        node,
+        moment_nm: vec![m],
+    };
+    let point = |m: f64| PointMoment {
+        s_m: 0.1,
+        moment_nm: vec![m],
+    };
+    let follower = |p: f64| FollowerLoad {
+        pressure_n_per_m: p,
+        s_start_m: None,
+        s_end_m: None,
+    };
+    let table = LineLoad::Tabulated {
+        s_m: vec![0.0, 9.0],
+        w_n_per_m: vec![vec![0.0, 0.0], vec![0.0, -0.1]],
     };
     let rows: Vec<(Loads, Kind, &str)> = vec![
         (
-            Loads {
-                point_forces: vec![
-                    good_force.clone(),
-                    PointForce {
-                        s_m: 0.1,
-                        force_n: vec![0.0, f64::NAN],
-                    },
-                ],
-                ..default_loads()
-            },
+            with(&|l| l.point_forces = forces(force(0.1, vec![0.0, f64::NAN]))),
             Kind::Invalid,
             "point_forces[1].force_n[1]",
         ),
         (
-            Loads {
-                point_forces: vec![
-                    good_force.clone(),
-                    PointForce {
-                        s_m: 0.1,
-                        force_n: vec![0.0],
-                    },
-                ],
-                ..default_loads()
-            },
+            with(&|l| l.point_forces = forces(force(0.1, vec![0.0]))),
             Kind::Dim,
             "point_forces[1].force_n",
         ),
         (
-            Loads {
-                point_forces: vec![
-                    good_force.clone(),
-                    PointForce {
-                        s_m: 5.0,
-                        force_n: vec![0.0, -0.01],
-                    },
-                ],
-                ..default_loads()
-            },
+            with(&|l| l.point_forces = forces(force(5.0, vec![0.0, -0.01]))),
             Kind::Invalid,
             "point_forces[1].s_m",
         ),
         (
-            Loads {
-                line_loads: vec![
-                    good_line.clone(),
-                    LineLoad::Uniform {
-                        w_n_per_m: vec![0.0, -0.1, 0.0],
-                    },
-                ],
-                ..default_loads()
-            },
+            with(&|l| l.line_loads = vec![uniform(vec![0.0, -0.1]), uniform(vec![0.0; 3])]),
             Kind::Dim,
             "line_loads[1].w_n_per_m",
         ),
         (
-            Loads {
-                line_loads: vec![
-                    good_line.clone(),
-                    LineLoad::Tabulated {
-                        s_m: vec![0.0, 9.0],
-                        w_n_per_m: vec![vec![0.0, 0.0], vec![0.0, -0.1]],
-                    },
-                ],
-                ..default_loads()
-            },
+            with(&|l| l.line_loads = vec![uniform(vec![0.0, -0.1]), table.clone()]),
             Kind::Invalid,
             "line_loads[1].s_m[1]",
         ),
         (
-            Loads {
-                node_moments: vec![
-                    NodeMoment {
-                        node: 3,
-                        moment_nm: vec![0.01],
-                    },
-                    NodeMoment {
-                        node: 4,
-                        moment_nm: vec![f64::INFINITY],
-                    },
-                ],
-                ..default_loads()
-            },
+            with(&|l| l.node_moments = vec![node(3, 0.01), node(4, f64::INFINITY)]),
             Kind::Invalid,
             "node_moments[1].moment_nm[0]",
         ),
         (
-            Loads {
-                point_moments: vec![
-                    PointMoment {
-                        s_m: 0.1,
-                        moment_nm: vec![0.01],
-                    },
-                    PointMoment {
-                        s_m: 0.1,
-                        moment_nm: vec![f64::NAN],
-                    },
-                ],
-                ..default_loads()
-            },
+            with(&|l| l.point_moments = vec![point(0.01), point(f64::NAN)]),
             Kind::Invalid,
             "point_moments[1].moment_nm[0]",
         ),
         (
-            Loads {
-                follower_loads: vec![
-                    FollowerLoad {
-                        pressure_n_per_m: 0.1,
-                        s_start_m: None,
-                        s_end_m: None,
-                    },
-                    FollowerLoad {
-                        pressure_n_per_m: f64::NAN,
-                        s_start_m: None,
-                        s_end_m: None,
-                    },
-                ],
-                ..default_loads()
-            },
+            with(&|l| l.follower_loads = vec![follower(0.1), follower(f64::NAN)]),
             Kind::Invalid,
             "follower_loads[1].pressure_n_per_m",
         ),
