@@ -1,15 +1,19 @@
 //! What a robot computes once and keeps (shared by its clones, which are
 //! the same robot: a [`Robot`] is never changed after it is built): the
-//! coarse mesh a cold solve of a fine mesh starts from, and the elements'
+//! coarse mesh a cold solve of a fine mesh starts from, the elements'
 //! tangent stiffness at the straight reference configuration, where every
-//! cold solve of an unactuated robot takes its first Newton step.
+//! cold solve of an unactuated robot takes its first Newton step, and that
+//! solve's start point.
 
 use std::sync::{Arc, OnceLock};
+
+use nalgebra::DVector;
 
 use super::{Robot, TangentTarget};
 use crate::element::Element;
 use crate::error::Result;
 use crate::linsolve::SymmetricMatrix;
+use crate::structure::Assembled;
 
 /// The robot's kept results (see the module documentation).
 pub(super) struct RobotCache<E: Element> {
@@ -19,6 +23,9 @@ pub(super) struct RobotCache<E: Element> {
     /// The elements' tangent at the reference configuration (`None` if it
     /// could not be formed).
     reference: OnceLock<Option<ReferenceTangent>>,
+    /// The free coordinates of the arcs of no actuation (the cold start of
+    /// every solve without pressures; `None` if they could not be formed).
+    pub(super) unactuated_start: OnceLock<Option<DVector<f64>>>,
 }
 
 /// The elements' part of the tangent (no loads) at a configuration, on
@@ -35,6 +42,7 @@ impl<E: Element> Default for RobotCache<E> {
         RobotCache {
             coarse: OnceLock::new(),
             reference: OnceLock::new(),
+            unactuated_start: OnceLock::new(),
         }
     }
 }
@@ -69,6 +77,19 @@ impl<E: Element> Robot<E> {
         kept.as_ref()
             .filter(|r| r.q.as_slice() == q)
             .map(|r| r.values.as_slice())
+    }
+
+    /// The free coordinates of [`Robot::arc_configuration`] without
+    /// pressures (the robot's rest curvature only), formed once per robot:
+    /// the cold start of every solve of the unactuated robot.
+    pub(super) fn unactuated_start(&self) -> Option<&DVector<f64>> {
+        self.cache
+            .unactuated_start
+            .get_or_init(|| {
+                let q = self.arc_configuration(&[]);
+                Assembled::free_coordinates_of(self, q.as_slice()).ok()
+            })
+            .as_ref()
     }
 
     /// The coarse robot of [`Robot::coarsened`], built once.

@@ -123,6 +123,13 @@ impl<E: Element> Assembled for Robot<E> {
     /// The arcs of the actuation ([`Robot::arc_configuration`]).
     fn start_free_coordinates(&self, loads: &Loads) -> Result<DVector<f64>> {
         self.validate_loads(loads)?;
+        // no pressure (or only zeros): the arcs of no actuation, kept by the
+        // robot (the same numbers: a zero pressure adds a zero torque)
+        if loads.pressures_pa.iter().all(|p| *p == 0.0) {
+            if let Some(u) = self.unactuated_start() {
+                return Ok(u.clone());
+            }
+        }
         self.free_coordinates_of(self.arc_configuration(&loads.pressures_pa).as_slice())
     }
 

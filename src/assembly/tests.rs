@@ -322,3 +322,51 @@ fn kept_coarse_robot_equals_a_fresh_one() {
         assert_eq!(c.reference_configuration(), fresh.reference_configuration());
     }
 }
+
+#[test]
+fn kept_unactuated_start_equals_the_arcs_of_no_pressure() {
+    use crate::structure::{Assembled, RestCurvatureProfile};
+    let mut curved = Section::uniform(0.12, 300.0, 0.025, 6);
+    curved.rest_curvature_profile = Some(RestCurvatureProfile {
+        s_m: vec![0.0, 0.12],
+        kappa_per_m: vec![2.0, -5.0],
+    });
+    let robots = [
+        crate::scene::Scene::two_section().robot().unwrap(),
+        RobotSpec::new(vec![curved, Section::uniform(0.1, 300.0, 0.02, 4)])
+            .build_planar()
+            .unwrap(),
+    ];
+    for robot in robots {
+        let fresh = |p: &[f64]| {
+            Assembled::free_coordinates_of(&robot, robot.arc_configuration(p).as_slice()).unwrap()
+        };
+        let zeros = vec![0.0; robot.n_pressures()];
+        let mut minus = zeros.clone();
+        minus.iter_mut().for_each(|p| *p = -0.0);
+        for p in [zeros.clone(), minus] {
+            let loads = Loads {
+                pressures_pa: p.clone(),
+                ..Loads::default()
+            };
+            // twice: formed, then kept; bit for bit the arcs computed afresh
+            for _ in 0..2 {
+                let u = Assembled::start_free_coordinates(&robot, &loads).unwrap();
+                assert_eq!(u, fresh(&p));
+                assert_eq!(u, fresh(&[]));
+            }
+        }
+        assert!(robot.cache.unactuated_start.get().is_some());
+        // a pressure: its own arcs, not the kept start
+        let mut p = zeros;
+        let Some(p0) = p.first_mut() else { continue };
+        *p0 = 2e4;
+        let loads = Loads {
+            pressures_pa: p.clone(),
+            ..Loads::default()
+        };
+        let u = Assembled::start_free_coordinates(&robot, &loads).unwrap();
+        assert_eq!(u, fresh(&p));
+        assert_ne!(Some(&u), robot.unactuated_start());
+    }
+}
