@@ -41,7 +41,7 @@ use std::sync::Arc;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_len, Error, Result};
+use crate::error::{check_at_most, check_len, check_positive, named, Error, Result};
 use crate::linsolve::{AutoSolver, SolverKind, TangentSolver};
 pub use crate::outcome::{NonFiniteAt, StaticCriterion, StaticReport, StaticStatus};
 use crate::structure::Assembled;
@@ -136,9 +136,7 @@ impl StaticSettings {
             ("max_iterations", self.max_iterations),
             ("max_total_iterations", self.max_total_iterations),
         ] {
-            if crate::error::check_at_most("", v, MAX_ITERATIONS).is_err() {
-                crate::error::check_at_most(&f(name), v, MAX_ITERATIONS)?;
-            }
+            named(|n| check_at_most(n, v, MAX_ITERATIONS), || f(name))?;
         }
         if self.max_total_iterations < self.max_iterations {
             return Err(Error::invalid(
@@ -153,9 +151,7 @@ impl StaticSettings {
             ("max_step_rotation", self.max_step_rotation),
             ("min_load_step", self.min_load_step),
         ] {
-            if crate::error::check_positive("", v).is_err() {
-                crate::error::check_positive(&f(name), v)?;
-            }
+            named(|n| check_positive(n, v), || f(name))?;
         }
         for (name, v) in [
             ("residual_tolerance", self.residual_tolerance),

@@ -327,6 +327,22 @@ pub(super) mod tests {
         k
     }
 
+    /// Two right-hand sides for an `n × n` matrix (fixed integers in
+    /// `[−5, 5]`, column after column) solved by both factorizations:
+    /// `(rhs, x_a, x_b, max |x_b|)`, what the band paths' tests compare.
+    pub(in crate::linsolve::sparse) fn two_column_solves(
+        a: &impl Factorization,
+        b: &impl Factorization,
+        n: usize,
+    ) -> (Vec<f64>, Vec<f64>, Vec<f64>, f64) {
+        let rhs: Vec<f64> = (0..2 * n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
+        let (mut xa, mut xb) = (rhs.clone(), rhs.clone());
+        a.solve_columns_in_place(&mut xa, 2).unwrap();
+        b.solve_columns_in_place(&mut xb, 2).unwrap();
+        let scale = xb.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        (rhs, xa, xb, scale)
+    }
+
     /// [`chain_with`] of blocks `Gᵀ G + 0.1 I` (seed 7): positive definite
     /// for `diag` ≥ 0.
     fn chain(elements: usize, dofs: usize, diag: f64) -> SymmetricMatrix {
@@ -386,11 +402,7 @@ pub(super) mod tests {
             assert_eq!(fo.method(), FactorMethod::Llt);
             assert_eq!(fb.inertia(), fo.inertia());
             let n = k.n();
-            let rhs: Vec<f64> = (0..2 * n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
-            let (mut xb, mut xo) = (rhs.clone(), rhs.clone());
-            fb.solve_columns_in_place(&mut xb, 2).unwrap();
-            fo.solve_columns_in_place(&mut xo, 2).unwrap();
-            let scale = xo.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let (rhs, xb, xo, scale) = two_column_solves(&fb, &fo, n);
             let diff = xb
                 .iter()
                 .zip(&xo)

@@ -312,11 +312,8 @@ mod tests {
                     "{e:?}"
                 );
                 let n = k.n();
-                let rhs: Vec<f64> = (0..2 * n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
-                let (mut xb, mut xo) = (rhs.clone(), rhs.clone());
-                fb.solve_columns_in_place(&mut xb, 2).unwrap();
-                fo.solve_columns_in_place(&mut xo, 2).unwrap();
-                let scale = xo.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let (rhs, xb, xo, scale) =
+                    super::super::band::tests::two_column_solves(&fb, &fo, n);
                 for (a, b) in xb.iter().zip(&xo) {
                     assert!((a - b).abs() <= 1e-9 * scale, "{a} vs {b}");
                 }
