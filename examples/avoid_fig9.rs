@@ -1,7 +1,7 @@
 //! Obstacle avoidance by touch (the paper's Fig. 9) on the five-section
 //! robot, the plant not the model (twice the mesh, EI +15 %, gain −10 %,
 //! EA −5 %, σ = 0.05 mm, regulator lag 20 ms), 20 Hz, the paper's field
-//! parameters: obstacle placements × goals (`softrod::touch::FIG9_*`), with
+//! parameters: obstacle placements × goals (`softrod::report::touch::FIG9_*`), with
 //! touch feedback and the baseline without it, 120 s each.
 //!
 //! Run: `cargo run --release --example avoid_fig9 [OUT.json] [--alpha=evidence|discrepancy]
@@ -12,9 +12,8 @@
 
 use softrod::estimate::AlphaRule;
 use softrod::plant::PlantSettings;
-use softrod::touch::{
-    avoidance_table, AvoidSettings, AvoidStatus, AvoidSummary, FIG9_GOALS, FIG9_PLACEMENTS,
-};
+use softrod::report::touch::{avoidance_table, AvoidSummary, FIG9_GOALS, FIG9_PLACEMENTS};
+use softrod::touch::{AvoidSettings, AvoidStatus};
 
 fn numbers(s: &str) -> Vec<f64> {
     s.split(',').map(|v| v.parse().expect("a number")).collect()

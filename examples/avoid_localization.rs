@@ -13,7 +13,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use softrod::plant::PlantSettings;
-use softrod::touch::{run_localization, LocalizationCase};
+use softrod::report::touch::{run_localization, LocalizationCase};
 
 fn main() {
     let mut alpha_rule = softrod::touch::ALPHA_RULE;

@@ -6,11 +6,11 @@
 //! `cargo run --release --example grasp_table [-- OUT.json]`
 //!
 //! A subset (quick reruns): `GRASP_OBJECTS=0,6` (indices into
-//! [`softrod::grasp::table::table_objects`]), `GRASP_STRATEGIES=adaptive`
+//! [`softrod::report::grasp::table::table_objects`]), `GRASP_STRATEGIES=adaptive`
 //! (or `open-loop`), `GRASP_TRIES=5`.
 use softrod::grasp::gripper::GripperSpec;
-use softrod::grasp::table::{run_row, table_objects, TableRow};
 use softrod::grasp::trial::{GraspSettings, Strategy};
+use softrod::report::grasp::table::{run_row, table_objects, TableRow};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = std::env::args()

@@ -11,8 +11,8 @@
 use softrod::grasp::friction::{hold_check, FrictionContact};
 use softrod::grasp::gripper::GripperSpec;
 use softrod::grasp::object::{GraspObject, Pose, Shape};
-use softrod::grasp::table::{placement, table_objects};
 use softrod::grasp::trial::{run_trial, GraspSettings, Placement, Strategy};
+use softrod::report::grasp::table::{placement, table_objects};
 
 fn main() -> Result<(), softrod::Error> {
     let env = |k: &str, d: &str| std::env::var(k).unwrap_or_else(|_| d.to_string());

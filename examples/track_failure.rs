@@ -6,7 +6,7 @@
 //! (no arguments: the corners of the report's grid).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use softrod::control::{run_case, FailureSettings, LoopCase};
+use softrod::report::loop_failure::{run_case, FailureSettings, LoopCase};
 use softrod::scene::Scene;
 
 fn main() -> softrod::Result<()> {

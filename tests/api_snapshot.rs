@@ -1,7 +1,10 @@
 //! The public API is a committed list, so that a change to it is deliberate.
 //!
 //! `tests/public_api.txt` lists every `pub` item of the library's source
-//! (the command line, `src/main.rs` and `src/cli/`, is not the library):
+//! (the command line, `src/main.rs` and `src/cli/`, is not the library;
+//! the experiments of feature `report`, `src/report/`, are listed apart in
+//! `tests/public_api_report.txt`, so the library's list is the numerics a
+//! user calls):
 //! one line per item, `module | container | signature`, where the
 //! container is the `impl`, `struct`, `enum` or `trait` the item sits in
 //! and the signature is the item's declaration with its whitespace
@@ -25,6 +28,16 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 const SNAPSHOT: &str = "tests/public_api.txt";
+
+/// The report tree's list (feature `report`: the studies, tables and
+/// paper-figure runs).
+const SNAPSHOT_REPORT: &str = "tests/public_api_report.txt";
+
+/// Whether a source file (relative path, `/`-separated) is in the report
+/// tree.
+fn in_report(r: &str) -> bool {
+    r.starts_with("src/report/")
+}
 
 /// Item keywords after `pub `.
 const KINDS: [&str; 11] = [
@@ -114,14 +127,19 @@ fn declaration(lines: &[&str], i: usize, field: bool) -> String {
     collapse(&text)
 }
 
-fn listing(root: &Path) -> BTreeSet<String> {
+/// The listing of the library (`report == false`) or of the report tree.
+fn listing(root: &Path, report: bool) -> BTreeSet<String> {
     let mut files = Vec::new();
     rust_files(&root.join("src"), &mut files);
     let mut out = BTreeSet::new();
     for path in files {
         let rel = path.strip_prefix(root).unwrap().to_path_buf();
         let r = rel.to_string_lossy().replace('\\', "/");
-        if r == "src/main.rs" || r.starts_with("src/cli/") || r.ends_with("/tests.rs") {
+        if r == "src/main.rs"
+            || r.starts_with("src/cli/")
+            || r.ends_with("/tests.rs")
+            || in_report(&r) != report
+        {
             continue;
         }
         let module = module_path(&rel);
@@ -187,9 +205,20 @@ fn listing(root: &Path) -> BTreeSet<String> {
 
 #[test]
 fn the_public_api_is_the_committed_list() {
+    check_listing(false, SNAPSHOT);
+}
+
+#[test]
+fn the_report_trees_public_api_is_its_committed_list() {
+    check_listing(true, SNAPSHOT_REPORT);
+}
+
+/// The listing of the library or of the report tree against its committed
+/// file (rewritten under `SOFTROD_BLESS_API`).
+fn check_listing(report: bool, snapshot: &str) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let now = listing(root);
-    let file = root.join(SNAPSHOT);
+    let now = listing(root, report);
+    let file = root.join(snapshot);
     if std::env::var_os("SOFTROD_BLESS_API").is_some() {
         let text: String = now.iter().map(|l| format!("{l}\n")).collect();
         std::fs::write(&file, text).unwrap();
@@ -204,7 +233,7 @@ fn the_public_api_is_the_committed_list() {
     let removed: Vec<&String> = committed.difference(&now).collect();
     assert!(
         added.is_empty() && removed.is_empty(),
-        "the public API changed ({} added, {} removed); if deliberate, regenerate {SNAPSHOT} \
+        "the public API changed ({} added, {} removed); if deliberate, regenerate {snapshot} \
          with SOFTROD_BLESS_API=1 cargo test --release --test api_snapshot\n\
          added:\n  {}\nremoved:\n  {}",
         added.len(),
@@ -232,7 +261,7 @@ fn the_listing_notices_a_change() {
     std::fs::create_dir_all(&src).unwrap();
     let write = |body: &str| {
         std::fs::write(src.join("mod.rs"), body).unwrap();
-        listing(&dir)
+        listing(&dir, false)
     };
     let base = write("pub struct A {\n    pub x_m: f64,\n    y: f64,\n}\nimpl A {\n    pub fn f(&self, a: Vec<f64>) -> f64 {\n        0.0\n    }\n    fn g() {}\n}\n#[cfg(test)]\nmod tests {\n    pub fn t() {}\n}\n");
     assert_eq!(base.len(), 3, "{base:?}");
@@ -244,5 +273,14 @@ fn the_listing_notices_a_change() {
     let changed = write("pub struct A {\n    pub x_m: f32,\n    y: f64,\n}\nimpl A {\n    pub fn f(&self, a: &[f64]) -> f64 {\n        0.0\n    }\n    fn g() {}\n    fn h() {}\n}\n");
     assert_eq!(changed.len(), 3);
     assert_eq!(base.intersection(&changed).count(), 1, "{changed:?}");
+    // the report tree is listed apart from the library
+    let report = dir.join("src").join("report");
+    std::fs::create_dir_all(&report).unwrap();
+    std::fs::write(report.join("study.rs"), "pub fn run() {}\n").unwrap();
+    assert!(!listing(&dir, false).iter().any(|l| l.starts_with("report")));
+    assert_eq!(
+        listing(&dir, true).into_iter().collect::<Vec<_>>(),
+        ["report::study |  | pub fn run()"]
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -4,11 +4,11 @@
 //! watchdog set by hand; bad input of the loop and the sweep.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use softrod::control::{
-    plant_reach_m, run_case, ClosedLoop, FailureSettings, LoopCase, LoopCause, LoopSettings,
-    LoopVerdict, StepStatus, Trajectory,
-};
+use softrod::control::{ClosedLoop, LoopSettings, StepStatus, Trajectory};
 use softrod::plant::{MarkerFrame, Plant, PlantSettings, SimulatedPlant};
+use softrod::report::loop_failure::{
+    plant_reach_m, run_case, FailureSettings, LoopCase, LoopCause, LoopVerdict,
+};
 use softrod::scene::Scene;
 
 fn scene() -> Scene {

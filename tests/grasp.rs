@@ -4,10 +4,13 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use softrod::grasp::friction::hold_check;
-use softrod::grasp::gripper::{GripperSpec, Side};
+use softrod::grasp::gripper::GripperSpec;
+#[cfg(feature = "report")]
+use softrod::grasp::gripper::Side;
 use softrod::grasp::object::{GraspObject, Shape};
-use softrod::grasp::table::{placement, table_objects};
 use softrod::grasp::trial::{run_trial, Failure, GraspSettings, Placement, Strategy};
+#[cfg(feature = "report")]
+use softrod::report::grasp::table::{placement, table_objects};
 
 fn disc(radius_m: f64, mass_kg: f64, mu: f64) -> GraspObject {
     GraspObject {
@@ -67,6 +70,7 @@ fn adaptive_holds_a_disc_the_open_loop_strategy_drops() {
     assert!(h.holds && (h.weight_factor - adaptive.hold.unwrap().weight_factor).abs() < 1e-9);
 }
 
+#[cfg(feature = "report")]
 #[test]
 fn a_table_object_that_is_not_a_disc() {
     // the tangerine (an ellipse, its circle cover in the plant)
@@ -187,6 +191,7 @@ fn the_quick_report_part_writes_the_table_and_the_sequences() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+#[cfg(feature = "report")]
 #[test]
 fn the_ruler_set_down_turned_stands_up_and_holds() {
     // the ruler (a 3 mm × 30 mm section on its 3 mm edge, covered by 37
@@ -236,6 +241,7 @@ fn the_ruler_set_down_turned_stands_up_and_holds() {
     }
 }
 
+#[cfg(feature = "report")]
 #[test]
 fn noise_alone_does_not_make_a_contact() {
     // red apple, try 3: the second estimate of the left finger, 50 mm from

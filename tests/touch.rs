@@ -10,10 +10,11 @@ use nalgebra::Vector2;
 use softrod::contact::{ContactSettings, Obstacle, Obstacles};
 use softrod::loads::PointForce;
 use softrod::plant::{Plant, PlantContact, PlantSettings, SimulatedPlant};
+#[cfg(feature = "report")]
+use softrod::report::touch::{run_localization, LocalizationCase};
 use softrod::statics::StaticSolver;
 use softrod::touch::{
-    calibrate, five_section_scene, marker_arcs, run_localization, FreeFrame, LocalizationCase,
-    MarkerResponse, ROD_RADIUS_M,
+    calibrate, five_section_scene, marker_arcs, FreeFrame, MarkerResponse, ROD_RADIUS_M,
 };
 use softrod::Error;
 
@@ -223,6 +224,7 @@ fn calibration_recovers_the_plants_stiffness_and_gain() {
 }
 
 #[test]
+#[cfg(feature = "report")]
 fn point_search_locates_contacts_within_5_mm_with_six_markers() {
     // the last: a weak contact near the tip (8 mN; 16 mm off with 5 frames
     // averaged instead of the default 20)

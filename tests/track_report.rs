@@ -48,7 +48,7 @@ fn quick_tracking_report_writes_both_figures() {
 
 #[test]
 fn quick_loop_report_writes_the_speed_chart_and_the_failure_map() {
-    use softrod::control::{LoopCause, LoopVerdict};
+    use softrod::report::loop_failure::{LoopCause, LoopVerdict};
     use softrod::report::{loop_failure, loop_pareto};
     let dir = std::env::temp_dir().join(format!("softrod-loop-report-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

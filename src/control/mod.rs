@@ -17,15 +17,14 @@
 //! - [`ClosedLoop`]: one controller stepping against a [`crate::plant::Plant`].
 //! - [`parallel`]: the same loop on the soft parallel robot (its own
 //!   inverse kinematics and platform estimator, this module's updater).
-//! - [`run_case`]: one case of the sweep of where the loop fails
-//!   (payload × stiffness error × noise × rate), converged or diverged and
-//!   why.
+//!
+//! The sweep of where the loop fails (payload × stiffness error × noise ×
+//! rate) is an experiment: `report::loop_failure` (feature `report`).
 
 pub(crate) mod adapter;
 pub(crate) mod boxqp;
 mod closed_loop;
 mod corrector;
-mod failure;
 mod ik;
 mod ik_settings;
 mod mass;
@@ -38,10 +37,6 @@ mod weighing;
 
 pub use closed_loop::{
     ClosedLoop, ControllerKind, EstimateFlag, LoopSample, LoopSettings, StepStatus, TimeSeries,
-};
-pub use failure::{
-    case_file, plant_reach_m, robot_mass_kg, run_case, FailureSettings, LoopCase, LoopCause,
-    LoopOutcome, LoopVerdict,
 };
 pub use ik::{IkSolution, InverseKinematics, RESTART_RADIUS_M};
 pub use ik_settings::{IkSettings, IkStatus, PressureBound};

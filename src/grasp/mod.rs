@@ -17,7 +17,6 @@
 //!   settles in the fingers (Gauss's principle of least constraint).
 //! - [`trial`]: one quasi-static grasp trial and its success criterion.
 //! - [`scene`]: the grasp scene file of `softrod grasp`, parsed and checked.
-//! - [`table`]: Table I's nine objects and the seeded runner.
 
 pub mod friction;
 pub mod gripper;
@@ -27,7 +26,6 @@ mod rest;
 pub mod scene;
 mod slip;
 pub mod strategy;
-pub mod table;
 pub mod trial;
 
 #[cfg(test)]

@@ -35,31 +35,18 @@
 //! # Ok::<(), softrod::Error>(())
 //! ```
 
-#[doc(hidden)]
 pub mod auto_point;
-#[doc(hidden)]
 pub mod coverage;
-#[doc(hidden)]
 pub mod grasp;
-#[doc(hidden)]
 pub mod loop_failure;
-#[doc(hidden)]
 pub mod loop_pareto;
-#[doc(hidden)]
 pub mod pareto;
-#[doc(hidden)]
 pub mod plot;
-#[doc(hidden)]
 pub mod reference;
-#[doc(hidden)]
 pub mod spatial;
-#[doc(hidden)]
 pub mod stability;
-#[doc(hidden)]
 pub mod sweep;
-#[doc(hidden)]
 pub mod touch;
-#[doc(hidden)]
 pub mod tracking;
 
 use std::io::IsTerminal;

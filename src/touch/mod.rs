@@ -16,8 +16,6 @@ mod point_search;
 mod response;
 mod robot;
 mod scene;
-mod sweep;
-mod table;
 
 pub use avoid::{
     calibrate_on_free_plant, check_obstacles, run_avoidance, AvoidRun, AvoidSample, AvoidSettings,
@@ -30,12 +28,11 @@ pub use point_search::{locate_point_force, marker_offset, PointContact, PointSea
 pub use response::MarkerResponse;
 pub use robot::{five_section_scene, marker_arcs, ROD_RADIUS_M, SECTIONS, SECTION_LENGTH_M};
 pub use scene::AvoidScene;
-pub use sweep::{run_localization, LocalizationCase, LocalizationResult, PROBE_RADIUS_M};
-pub use table::{avoidance_table, AvoidRow, AvoidSummary, FIG9_GOALS, FIG9_PLACEMENTS};
 
 /// How touch's estimators choose their regularization `α` by default (the
-/// avoidance's [`AvoidSettings::alpha_rule`] and the localization's
-/// [`LocalizationCase::alpha_rule`]): the discrepancy principle.
+/// avoidance's [`AvoidSettings::alpha_rule`] and the
+/// localization study's `alpha_rule` (`report::touch::LocalizationCase`,
+/// feature `report`)): the discrepancy principle.
 ///
 /// Reason, measured with both rules (six markers, σ = 0.05 mm, the plant
 /// not the model, 20 frames averaged; `cargo run --release --example
@@ -46,7 +43,7 @@ pub use table::{avoidance_table, AvoidRow, AvoidSummary, FIG9_GOALS, FIG9_PLACEM
 /// principle (21 / 68 mm, 27 mN): the evidence rule's smoother loads put
 /// the difference's peak far from the contact. The point-force search
 /// (0.2 / 0.6 mm) and the avoidance by touch (every placement × goal of
-/// [`FIG9_PLACEMENTS`] × [`FIG9_GOALS`] reached with both rules, final
+/// `report::touch::FIG9_PLACEMENTS` × `FIG9_GOALS` reached with both rules, final
 /// errors 0.02–0.34 mm, `cargo run --release --example avoid_fig9 --
 /// --alpha=evidence`) do not depend on the rule. One rule for both, the one
 /// under which the paper's method is at its best, keeps the two methods'

@@ -1,5 +1,5 @@
 //! The grasp's report part: Table I in simulation (the nine objects of
-//! [`crate::grasp::table`], five seeded placements each, both strategies;
+//! [`crate::report::grasp::table`], five seeded placements each, both strategies;
 //! quick: the plastic bottle once) and one grasp sequence per strategy
 //! (finger shapes over time, the object at the start and at the end, the
 //! contact forces after the lift), on the red apple's first placement
@@ -12,13 +12,16 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Serialize;
 
-use super::{io_error, write_json, ReportOptions};
 use crate::contact::Obstacle;
 use crate::error::Result;
 use crate::grasp::gripper::GripperSpec;
 use crate::grasp::object::GraspObject;
-use crate::grasp::table::{run_table, table_objects, TableRow};
+use crate::report::{io_error, write_json, ReportOptions};
+
+pub mod table;
+
 use crate::grasp::trial::{GraspSettings, Strategy, TrialOutcome};
+use table::{run_table, table_objects, TableRow};
 
 /// Index of the red apple in [`table_objects`] (the full report's sequence).
 const SEQUENCE_OBJECT: usize = 5;
@@ -83,7 +86,7 @@ pub fn run(opts: &ReportOptions) -> Result<(GraspReport, Vec<PathBuf>)> {
         (all, 5, SEQUENCE_OBJECT)
     };
     let strategies = [Strategy::Adaptive, Strategy::OpenLoop];
-    let pb = super::progress(objects.len() * tries * 2, opts.quiet, "grasp");
+    let pb = crate::report::progress(objects.len() * tries * 2, opts.quiet, "grasp");
     let mut sequences = Vec::new();
     let mut k = 0usize;
     let rows = run_table(
@@ -120,7 +123,7 @@ pub fn run(opts: &ReportOptions) -> Result<(GraspReport, Vec<PathBuf>)> {
     let md = dir.join("grasp.md");
     std::fs::write(&md, report.markdown()).map_err(|e| io_error(&md, e))?;
     let mut files = vec![json, md];
-    super::plot::register_font()?;
+    crate::report::plot::register_font()?;
     let png = dir.join("grasp.png");
     {
         let root = BitMapBackend::new(&png, (1500, 520)).into_drawing_area();
@@ -241,7 +244,7 @@ fn draw<DB: DrawingBackend>(
         for (j, &i) in picks.iter().enumerate() {
             let f = &out.frames[i];
             let t = 0.25 + 0.75 * j as f64 / 5.0;
-            let colour = super::plot::viridis(1.0 - t);
+            let colour = crate::report::plot::viridis(1.0 - t);
             let width = if j == 5 { 3 } else { 1 };
             for line in &f.centreline_m {
                 c.draw_series(LineSeries::new(

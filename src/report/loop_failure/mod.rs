@@ -1,12 +1,12 @@
 //! Where the closed loop fails: a coarse grid over the tip payload (0–5 ×
 //! the robot's own weight), the plant's `EI` error (−30 … +30 %), the
 //! marker noise (0–0.5 mm) and the control rate (5–60 Hz), each case run by
-//! [`crate::control::run_case`] (its verdict and cause are documented
+//! [`crate::report::loop_failure::run_case`] (its verdict and cause are documented
 //! there). Outputs `loop_failure.{png,svg,json}`: a failure map, one panel
 //! per noise × rate, payload across and `EI` error up, each cell coloured by
 //! its cause and labelled with its mean error (mm); a `*` marks the
 //! payload × `EI` cells whose plant cannot reach the path at all
-//! ([`crate::control::plant_reach_m`], 20 points of the scored path).
+//! ([`crate::report::loop_failure::plant_reach_m`], 20 points of the scored path).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -16,14 +16,18 @@ use plotters::prelude::*;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::control::{
-    plant_reach_m, run_case, FailureSettings, LoopCase, LoopCause, LoopOutcome, LoopVerdict,
-};
 use crate::error::Result;
 
-use super::plot::{both, ms};
-use super::tracking::guarded;
-use super::ReportOptions;
+use crate::report::plot::{both, ms};
+use crate::report::tracking::guarded;
+use crate::report::ReportOptions;
+
+mod grid;
+
+pub use grid::{
+    case_file, plant_reach_m, robot_mass_kg, run_case, FailureSettings, LoopCase, LoopCause,
+    LoopOutcome, LoopVerdict,
+};
 
 const FONT: &str = "sans-serif";
 
@@ -147,14 +151,14 @@ pub struct LoopFailureReport {
 /// None in practice: a failing case is a row.
 pub fn run(opts: &ReportOptions) -> Result<LoopFailureReport> {
     let start = Instant::now();
-    let scene = super::tracking::scene();
+    let scene = crate::report::tracking::scene();
     let grid = FailureGrid::new(opts.quick);
     let mut settings = FailureSettings::default();
     if opts.quick {
         settings.duration_s = 1.0;
     }
     let cases = grid.cases();
-    let pb = super::progress(cases.len(), opts.quiet, "loop fails");
+    let pb = crate::report::progress(cases.len(), opts.quiet, "loop fails");
     let rows: Vec<FailureRow> = cases
         .par_iter()
         .map(|case| {
@@ -244,7 +248,7 @@ pub fn run(opts: &ReportOptions) -> Result<LoopFailureReport> {
         .collect();
     Ok(LoopFailureReport {
         grid,
-        robot_mass_kg: crate::control::robot_mass_kg(&scene),
+        robot_mass_kg: crate::report::loop_failure::robot_mass_kg(&scene),
         settings,
         rows,
         plant_reach,
@@ -435,7 +439,7 @@ impl LoopFailureReport {
             |a| draw(a, self),
         )?;
         let json = dir.join("loop_failure.json");
-        super::write_json(&json, self)?;
+        crate::report::write_json(&json, self)?;
         files.push(json);
         Ok(files)
     }

@@ -14,16 +14,21 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Serialize;
 
-use super::plot::{both, ms};
-use super::{write_json, ReportOptions};
 use crate::contact::{Obstacle, Obstacles};
 use crate::error::Result;
 use crate::plant::{PlantSettings, SimulatedPlant};
+use crate::report::plot::{both, ms};
+use crate::report::{write_json, ReportOptions};
 use crate::touch::{
-    avoidance_table, calibrate_on_free_plant, five_section_scene, marker_arcs, run_avoidance,
-    run_localization, AvoidRow, AvoidRun, AvoidSettings, AvoidStatus, LocalizationCase,
-    LocalizationResult, FIG9_GOALS, FIG9_PLACEMENTS, ROD_RADIUS_M,
+    calibrate_on_free_plant, five_section_scene, marker_arcs, run_avoidance, AvoidRun,
+    AvoidSettings, AvoidStatus, ROD_RADIUS_M,
 };
+
+mod sweep;
+mod table;
+
+pub use sweep::{run_localization, LocalizationCase, LocalizationResult, PROBE_RADIUS_M};
+pub use table::{avoidance_table, AvoidRow, AvoidSummary, FIG9_GOALS, FIG9_PLACEMENTS};
 
 /// The avoidance run's disk (centre, radius; m) and goal (m).
 pub(crate) const AVOID_DISK: ([f64; 2], f64) = ([0.08, -0.465], 0.01);

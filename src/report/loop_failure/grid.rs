@@ -47,7 +47,7 @@ use crate::error::{Error, Result};
 use crate::plant::{PayloadSchedule, PlantSettings, SimulatedPlant};
 use crate::scene::Scene;
 
-use super::{
+use crate::control::{
     build_trajectory, run_track, CircleSpec, ControllerKind, EstimateFlag, IkSettings, IkStatus,
     InverseKinematics, LoopSettings, StepStatus, TrackFile, TrackRun, TrajectorySpec,
 };
@@ -56,7 +56,7 @@ use super::{
 ///
 /// # Example
 /// ```
-/// let c = softrod::control::LoopCase::nominal();
+/// let c = softrod::report::loop_failure::LoopCase::nominal();
 /// assert_eq!((c.payload_weights, c.ei_error, c.control_rate_hz), (0.0, 0.15, 30.0));
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -121,7 +121,7 @@ impl LoopCase {
 ///
 /// # Example
 /// ```
-/// let s = softrod::control::FailureSettings::default();
+/// let s = softrod::report::loop_failure::FailureSettings::default();
 /// assert_eq!((s.hold_s, s.duration_s, s.converged_mean_m), (3.0, 6.0, 5e-4));
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -176,7 +176,7 @@ impl FailureSettings {
     ///
     /// # Example
     /// ```
-    /// let s = softrod::control::FailureSettings::default();
+    /// let s = softrod::report::loop_failure::FailureSettings::default();
     /// assert_eq!(s.center(), nalgebra::Vector2::new(0.1911, 0.1203));
     /// ```
     pub fn center(&self) -> nalgebra::Vector2<f64> {
@@ -188,13 +188,13 @@ impl FailureSettings {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LoopVerdict {
-    /// See [`run_case`](crate::control::run_case).
+    /// See [`run_case`](crate::report::loop_failure::run_case).
     Converged,
-    /// See [`run_case`](crate::control::run_case).
+    /// See [`run_case`](crate::report::loop_failure::run_case).
     Diverged,
 }
 
-/// Why a case diverged (see [`run_case`](crate::control::run_case) for the
+/// Why a case diverged (see [`run_case`](crate::report::loop_failure::run_case) for the
 /// order in which they are tested).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -289,7 +289,7 @@ pub fn robot_mass_kg(scene: &Scene) -> f64 {
         .sum()
 }
 
-/// The trajectory file of `case` under `settings` (see [`run_case`](crate::control::run_case)).
+/// The trajectory file of `case` under `settings` (see [`run_case`](crate::report::loop_failure::run_case)).
 ///
 /// # Errors
 /// As [`LoopCase::validate`].
@@ -446,7 +446,7 @@ fn mean(v: &[f64]) -> f64 {
     }
 }
 
-/// The verdict and cause of a finished run (see [`run_case`](crate::control::run_case)).
+/// The verdict and cause of a finished run (see [`run_case`](crate::report::loop_failure::run_case)).
 fn judge(scene: &Scene, case: LoopCase, settings: &FailureSettings, run: &TrackRun) -> LoopOutcome {
     let from = run.summary.score_from_s;
     let scored: Vec<_> = run

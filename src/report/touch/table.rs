@@ -17,7 +17,7 @@ use crate::contact::{Obstacle, Obstacles};
 use crate::error::Result;
 use crate::plant::{PlantSettings, SimulatedPlant};
 
-use super::{
+use crate::touch::{
     calibrate_on_free_plant, five_section_scene, marker_arcs, run_avoidance, AvoidRun,
     AvoidSettings, AvoidStatus, ROD_RADIUS_M,
 };
@@ -27,7 +27,7 @@ use super::{
 ///
 /// # Example
 /// ```
-/// let (center, radius) = softrod::touch::FIG9_PLACEMENTS[0];
+/// let (center, radius) = softrod::report::touch::FIG9_PLACEMENTS[0];
 /// assert_eq!((center, radius), (nalgebra::Vector2::new(0.08, -0.465), 0.01));
 /// ```
 pub const FIG9_PLACEMENTS: [(Vector2<f64>, f64); 5] = [
@@ -42,7 +42,7 @@ pub const FIG9_PLACEMENTS: [(Vector2<f64>, f64); 5] = [
 ///
 /// # Example
 /// ```
-/// assert_eq!(softrod::touch::FIG9_GOALS[1], nalgebra::Vector2::new(0.12, -0.36));
+/// assert_eq!(softrod::report::touch::FIG9_GOALS[1], nalgebra::Vector2::new(0.12, -0.36));
 /// ```
 pub const FIG9_GOALS: [Vector2<f64>; 2] = [Vector2::new(0.15, -0.40), Vector2::new(0.12, -0.36)];
 
@@ -50,7 +50,7 @@ pub const FIG9_GOALS: [Vector2<f64>; 2] = [Vector2::new(0.15, -0.40), Vector2::n
 ///
 /// # Example
 /// ```
-/// use softrod::touch::AvoidSummary;
+/// use softrod::report::touch::AvoidSummary;
 /// let s = AvoidSummary::default();
 /// assert_eq!((s.touches, s.first_contact_s), (0, None));
 /// ```
@@ -90,7 +90,7 @@ impl AvoidSummary {
     ///
     /// # Example
     /// ```
-    /// let s = softrod::touch::AvoidSummary { final_tip_m: [0.15, -0.4], ..Default::default() };
+    /// let s = softrod::report::touch::AvoidSummary { final_tip_m: [0.15, -0.4], ..Default::default() };
     /// assert_eq!(s.final_tip(), nalgebra::Vector2::new(0.15, -0.4));
     /// ```
     pub fn final_tip(&self) -> Vector2<f64> {
@@ -126,7 +126,7 @@ impl AvoidSummary {
     pub fn of(run: &AvoidRun, wall_s: f64, bounds: &[(f64, f64)]) -> Self {
         let g = run.goal();
         let dist = |t: [f64; 2]| (Vector2::from(t) - g).norm();
-        let touching = |s: &&super::AvoidSample| s.contact_force_n > 1e-3;
+        let touching = |s: &&crate::touch::AvoidSample| s.contact_force_n > 1e-3;
         let last = run.samples.last();
         AvoidSummary {
             status: run.status,

@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::estimate::{AlphaRule, Estimator, EstimatorSettings};
 use crate::plant::{MarkerFrame, Plant, PlantSettings, SimulatedPlant};
 
-use super::{
+use crate::touch::{
     calibrate, five_section_scene, locate_point_force, marker_arcs, marker_offset, peak_contact,
     FreeFrame, PointSearchSettings, ROD_RADIUS_M,
 };
@@ -23,7 +23,7 @@ pub const PROBE_RADIUS_M: f64 = 0.02;
 ///
 /// # Example
 /// ```
-/// let c = softrod::touch::LocalizationCase::new(0.3, 0.006, 6, 1);
+/// let c = softrod::report::touch::LocalizationCase::new(0.3, 0.006, 6, 1);
 /// assert_eq!((c.pressures_pa.len(), c.frames), (10, 20));
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -45,14 +45,14 @@ pub struct LocalizationCase {
     /// small marker signal).
     pub frames: usize,
     /// How the estimators choose their regularization `α` (default
-    /// [`ALPHA_RULE`](super::ALPHA_RULE), the touch default, with its
+    /// [`ALPHA_RULE`](crate::touch::ALPHA_RULE), the touch default, with its
     /// reason there).
     #[serde(default = "touch_alpha_rule")]
     pub alpha_rule: AlphaRule,
 }
 
 fn touch_alpha_rule() -> AlphaRule {
-    super::ALPHA_RULE
+    crate::touch::ALPHA_RULE
 }
 
 impl LocalizationCase {
@@ -68,7 +68,7 @@ impl LocalizationCase {
             n_markers,
             seed,
             frames: 20,
-            alpha_rule: super::ALPHA_RULE,
+            alpha_rule: crate::touch::ALPHA_RULE,
         }
     }
 }
@@ -112,7 +112,7 @@ pub struct LocalizationResult {
     /// The point-force search: force (N).
     pub point_force_n: [f64; 2],
     /// The calibration the point search used.
-    pub calibration: super::Calibration,
+    pub calibration: crate::touch::Calibration,
 }
 
 impl LocalizationResult {
@@ -268,13 +268,13 @@ pub fn run_localization(
     let vp = est.step(&frame_free.observation(arcs)?)?.converged()?;
     let mut with_vp = known;
     with_vp.distributed_f = vp.f.as_slice().to_vec();
-    let free_markers = super::planar_points("markers", &frame_free.positions_m)?;
+    let free_markers = crate::touch::planar_points("markers", &frame_free.positions_m)?;
     let offset = marker_offset(&model, &with_vp, arcs, &free_markers)?;
     let point = locate_point_force(
         &model,
         &with_vp,
         arcs,
-        &super::planar_points("markers", &frame.positions_m)?,
+        &crate::touch::planar_points("markers", &frame.positions_m)?,
         &offset,
         &PointSearchSettings::default(),
     )?;

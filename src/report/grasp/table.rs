@@ -66,7 +66,7 @@ fn rounded_rect(name: &str, w_mm: f64, h_mm: f64, r_mm: f64, g: f64, mu: f64) ->
 ///
 /// # Example
 /// ```
-/// let objects = softrod::grasp::table::table_objects();
+/// let objects = softrod::report::grasp::table::table_objects();
 /// assert_eq!(objects.len(), 9);
 /// assert!(objects.iter().all(|o| o.validate("object").is_ok()));
 /// ```
@@ -112,7 +112,7 @@ fn uniform(state: &mut u64) -> f64 {
 ///
 /// # Example
 /// ```
-/// use softrod::grasp::table::{placement, MAX_OFFSET_M};
+/// use softrod::report::grasp::table::{placement, MAX_OFFSET_M};
 /// let p = placement(7, 2, 3);
 /// assert_eq!(p, placement(7, 2, 3));
 /// assert!(p.offset_m.abs() <= MAX_OFFSET_M);
@@ -152,7 +152,8 @@ pub struct TableRow {
 ///
 /// # Example
 /// ```no_run
-/// use softrod::grasp::{gripper::GripperSpec, table::{run_table, table_objects}, trial::{GraspSettings, Strategy}};
+/// use softrod::grasp::{gripper::GripperSpec, trial::{GraspSettings, Strategy}};
+/// use softrod::report::grasp::table::{run_table, table_objects};
 /// let rows = run_table(&GripperSpec::default(), &table_objects(), &[Strategy::Adaptive], 5, &GraspSettings::default(), 1, |_| {})?;
 /// for r in rows { println!("{} {}/{}", r.object, r.successes, r.tries); }
 /// # Ok::<(), softrod::Error>(())
@@ -186,7 +187,8 @@ pub fn run_table(
 ///
 /// # Example
 /// ```no_run
-/// use softrod::grasp::{gripper::GripperSpec, table::{run_row, table_objects}, trial::{GraspSettings, Strategy}};
+/// use softrod::grasp::{gripper::GripperSpec, trial::{GraspSettings, Strategy}};
+/// use softrod::report::grasp::table::{run_row, table_objects};
 /// let mouse = &table_objects()[6];
 /// let row = run_row(&GripperSpec::default(), mouse, 6, Strategy::Adaptive, 5, &GraspSettings::default(), 1, |_| {})?;
 /// println!("{}/{}", row.successes, row.tries);
