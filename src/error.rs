@@ -103,6 +103,18 @@ pub enum Error {
         /// Which matrix.
         context: String,
     },
+    /// A factorization that was required to be positive definite met a
+    /// pivot that is not clearly positive (the linear solver's
+    /// `NotPositiveDefinite`, with its data).
+    #[error("{context}: not positive definite, pivot {pivot:e} at row {index}")]
+    NonPositivePivot {
+        /// Which matrix.
+        context: String,
+        /// Row of the pivot (of the matrix as given, not of a reordering).
+        index: usize,
+        /// The pivot (of the Jacobi-scaled matrix, whose diagonal is 1 + shift).
+        pivot: f64,
+    },
     /// An estimate did not converge and the caller asked for a converged one
     /// ([`crate::estimate::Estimate::converged`]); the estimators themselves
     /// return their last iterate with its status.
@@ -138,6 +150,12 @@ pub enum Error {
     #[error("non-finite value in {context}")]
     NonFinite {
         /// Where it appeared.
+        context: String,
+    },
+    /// An allocation failed (the factors of a linear solve, a workspace).
+    #[error("out of memory in {context}")]
+    OutOfMemory {
+        /// What was being allocated.
         context: String,
     },
 }

@@ -456,7 +456,7 @@ impl Run<'_> {
                 (None, Some(TrialFailure::Estimate(status)))
             }
             Err(Error::Singular { .. }) => (None, Some(TrialFailure::Singular)),
-            Err(Error::NotPositiveDefinite { .. }) => {
+            Err(Error::NotPositiveDefinite { .. } | Error::NonPositivePivot { .. }) => {
                 (None, Some(TrialFailure::NotPositiveDefinite))
             }
             Err(Error::NonFinite { .. }) => (None, Some(TrialFailure::NonFinite)),

@@ -422,7 +422,7 @@ impl<E: Element> Robot<E> {
         let kept = match k.as_mut() {
             Some(k) => self
                 .reference_element_tangent(q)
-                .is_some_and(|values| k.copy_values(values)),
+                .is_some_and(|values| k.add_values(values)),
             None => false,
         };
         self.assemble_elements(

@@ -36,7 +36,7 @@ pub trait TangentTarget: StiffnessSink {
     /// tangent pattern, if `self` is such a matrix (`true`); `false` (and
     /// nothing added) otherwise, the default. (How a robot puts its kept
     /// element tangent at the reference configuration into a solve's
-    /// matrix.)
+    /// matrix, just after [`TangentTarget::reset`]: added to zeros.)
     ///
     /// # Example
     /// ```
@@ -45,13 +45,13 @@ pub trait TangentTarget: StiffnessSink {
     /// let robot = RobotSpec::new(vec![Section::uniform(0.2, 300.0, 0.02, 2)]).build_planar()?;
     /// let mut k = SymmetricMatrix::zeros(robot.tangent_pattern().clone());
     /// let ones = vec![1.0; k.values().len()];
-    /// assert!(k.copy_values(&ones) && k.copy_values(&ones));
+    /// assert!(k.add_values(&ones) && k.add_values(&ones));
     /// assert!(k.values().iter().all(|v| *v == 2.0));
-    /// assert!(!k.copy_values(&[1.0]));
-    /// assert!(!BandedMatrix::zeros(1, 0, 0).copy_values(&[1.0]));
+    /// assert!(!k.add_values(&[1.0]));
+    /// assert!(!BandedMatrix::zeros(1, 0, 0).add_values(&[1.0]));
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    fn copy_values(&mut self, values: &[f64]) -> bool {
+    fn add_values(&mut self, values: &[f64]) -> bool {
         let _ = values;
         false
     }
@@ -88,7 +88,7 @@ impl TangentTarget for SymmetricMatrix {
         self.add_element(e, h)
     }
 
-    fn copy_values(&mut self, values: &[f64]) -> bool {
+    fn add_values(&mut self, values: &[f64]) -> bool {
         let own = self.values_mut();
         if own.len() != values.len() {
             return false;

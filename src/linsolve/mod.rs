@@ -24,15 +24,22 @@
 //! Failures are data: [`LinsolveError`].
 //!
 //! Implementations:
-//! - [`SparseSolver`] (faer): any pattern, fill-reducing ordering,
-//!   symbolic analysis shared by all factorizations.
-//! - [`AutoSolver`]: the solver a [`SolverKind`] names (today the sparse
-//!   one for every kind: a banded solver for single chains was measured
-//!   against it end to end and removed, see the README's performance
-//!   section).
+//! - [`SparseSolver`]: any pattern. faer's `L D Lᵀ` (or Cholesky) after a
+//!   fill-reducing ordering whose symbolic analysis all factorizations
+//!   share, and faer's pivoted LU; and the *band path*: where the pattern
+//!   is a narrow band in the dofs' own order (a chain numbered node by
+//!   node, i.e. every robot's tangent; [`sparse::BandPath`] says when
+//!   exactly), band kernels in that order replace faer: a band `L D Lᵀ`
+//!   for a positive definite matrix, its inertia and a band LU with
+//!   partial pivoting for an indefinite one. They were kept because they
+//!   measured faster than faer on the small tangents of the static solves
+//!   (README, "Performance").
+//! - [`AutoSolver`]: the [`SparseSolver`] a [`SolverKind`] names: the band
+//!   path where the pattern is a narrow band (`Auto`, the default), never
+//!   (`Sparse`), or required (`Band`).
 //!
-//! [`BandedMatrix`] remains as plain band storage (the load Gram matrix,
-//! a tangent target for element tests); nothing factors it.
+//! [`BandedMatrix`] is plain band storage (the load Gram matrix, a tangent
+//! target for element tests); nothing factors it.
 //!
 //! # Example
 //! ```
@@ -148,21 +155,48 @@ pub enum LinsolveError {
     /// An allocation for the factors or a workspace failed.
     #[error("out of memory in the linear solver")]
     OutOfMemory,
+    /// The band path was required ([`sparse::BandPath::Required`]) of a
+    /// pattern that is not a narrow band: its band in the dofs' own order
+    /// stores more than twice the entries of the fill-reduced sparse factor.
+    #[error(
+        "the pattern is not a narrow band: half-bandwidth {half_bandwidth}, \
+         {band_entries} band entries against {factor_entries} of the sparse factor"
+    )]
+    NotBanded {
+        /// The half-bandwidth `b` in the dofs' own order.
+        half_bandwidth: usize,
+        /// The band's storage `n (b + 1)` (`usize::MAX` if it overflows).
+        band_entries: usize,
+        /// The entries of faer's factor after its fill-reducing ordering.
+        factor_entries: usize,
+    },
 }
 
 impl From<LinsolveError> for crate::Error {
-    /// Maps onto the crate's error kinds: a singular or not positive definite
-    /// matrix to [`crate::Error::Singular`] (context says which), a
-    /// non-finite entry to [`crate::Error::NonFinite`], sizes to
-    /// [`crate::Error::DimensionMismatch`] / [`crate::Error::TooLarge`].
+    /// Maps each failure onto the crate's error kind that carries its data:
+    /// a pivot that is not positive where positive definiteness was required
+    /// to [`crate::Error::NonPositivePivot`] (its row and value), a singular
+    /// matrix to [`crate::Error::Singular`] (row, pivot, scale), a
+    /// non-finite entry to [`crate::Error::NonFinite`] (naming it), sizes
+    /// to [`crate::Error::DimensionMismatch`] / [`crate::Error::TooLarge`],
+    /// a failed allocation to [`crate::Error::OutOfMemory`], and the
+    /// caller's mistakes (another pattern, a bad option, the band path
+    /// required of a pattern that is not banded) to
+    /// [`crate::Error::InvalidParameter`].
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{linsolve::LinsolveError, Error};
+    /// let e: Error = LinsolveError::NotPositiveDefinite { index: 3, pivot: -0.5 }.into();
+    /// assert!(matches!(e, Error::NonPositivePivot { index: 3, pivot: -0.5, .. }));
+    /// ```
     fn from(e: LinsolveError) -> Self {
         use crate::Error;
         match e {
-            LinsolveError::NotPositiveDefinite { index, pivot } => Error::Singular {
-                context: "linear solve (not positive definite)".into(),
+            LinsolveError::NotPositiveDefinite { index, pivot } => Error::NonPositivePivot {
+                context: "linear solve".into(),
                 index,
                 pivot,
-                scale: 1.0,
             },
             LinsolveError::Singular {
                 index,
@@ -201,9 +235,12 @@ impl From<LinsolveError> for crate::Error {
                 value,
                 reason,
             } => Error::invalid(name, value, reason),
-            LinsolveError::OutOfMemory => Error::NonFinite {
-                context: "linear solve: out of memory".into(),
+            LinsolveError::OutOfMemory => Error::OutOfMemory {
+                context: "linear solve".into(),
             },
+            e @ LinsolveError::NotBanded { .. } => {
+                Error::invalid("linear_solver", "band", e.to_string())
+            }
         }
     }
 }

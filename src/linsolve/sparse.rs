@@ -1,10 +1,16 @@
 //! The sparse solver (faer): `L D Lᵀ` or Cholesky with a fill-reducing
 //! ordering whose symbolic analysis every factorization reuses, and a
 //! sparse LU with partial pivoting for tangents that are not positive
-//! definite. A pattern that is a band with little fill in its own order
-//! (a robot's chain) is factored first by a band `L D Lᵀ` in that order
-//! (`band.rs`); a matrix that is not positive definite then goes on to the
-//! faer path.
+//! definite.
+//!
+//! The band path ([`BandPath`]): a pattern whose band in the dofs' own
+//! order is narrow (a chain numbered node by node: every robot's tangent)
+//! is factored by band kernels in that order instead: a band `L D Lᵀ`
+//! (`band.rs`) when the matrix is positive definite, else the band
+//! `L D Lᵀ`'s inertia and a band LU with partial pivoting (`band_lu.rs`).
+//! Only an indefinite matrix with a pivot too small for the band `L D Lᵀ`'s
+//! inertia still goes to faer's `L D Lᵀ` (for the inertia), and then to the
+//! band LU.
 //!
 //! All faer calls run sequentially (`Par::Seq` is passed to each of them,
 //! so the process-wide setting is left to the application): the tangents
@@ -77,6 +83,35 @@ pub enum Ordering {
     Natural,
 }
 
+/// When [`SparseSolver`] factors by its band kernels (the band path of the
+/// module docs) rather than by faer.
+///
+/// A pattern is a *narrow band* when its band in the dofs' own order
+/// (`n (b + 1)` entries, `b` the half-bandwidth) stores at most twice the
+/// entries of faer's factor after its fill-reducing ordering, or when it has
+/// at most 32 rows: the band kernels' work grows as `n b²`, faer's with its
+/// fill. A chain numbered node by node (a robot's tangent, `b = 2 × node
+/// dofs − 1`) is one; a structure whose joints couple distant dofs may not be.
+///
+/// # Example
+/// ```
+/// use softrod::linsolve::{sparse::BandPath, SparseSettings};
+/// assert_eq!(SparseSettings::default().band, BandPath::WhereNarrow);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BandPath {
+    /// The band path for a narrow band and the [`CholeskyKind::Ldlt`]
+    /// setting, faer's factorizations otherwise (the default).
+    #[default]
+    WhereNarrow,
+    /// faer's factorizations for every pattern.
+    Never,
+    /// The band path whatever [`SparseSettings::cholesky`] says; the
+    /// analysis of a pattern that is not a narrow band is refused
+    /// ([`LinsolveError::NotBanded`]).
+    Required,
+}
+
 /// Settings of [`SparseSolver`].
 ///
 /// # Example
@@ -91,6 +126,9 @@ pub struct SparseSettings {
     pub cholesky: CholeskyKind,
     /// The fill-reducing ordering. Default [`Ordering::Amd`].
     pub ordering: Ordering,
+    /// When the band kernels factor instead of faer. Default
+    /// [`BandPath::WhereNarrow`].
+    pub band: BandPath,
 }
 
 /// The matrix as faer factors it: symmetrically permuted by the
@@ -117,8 +155,8 @@ struct Permuted {
     /// each of its entries the stored entry it copies: built when an LU of
     /// this pattern is first needed, then shared by every solver of it.
     full: OnceLock<(SymbolicSparseColMat<usize>, Vec<usize>)>,
-    /// The band `L D Lᵀ` in the natural order tried first, for a band
-    /// pattern with little fill and the `L D Lᵀ` setting (see `band.rs`).
+    /// The band kernels in the natural order, tried first: for a narrow
+    /// band pattern as [`SparseSettings::band`] says (see `band.rs`).
     band: Option<Band>,
 }
 
@@ -200,7 +238,9 @@ impl SparseSolver {
     ///
     /// # Errors
     /// [`LinsolveError::TooLarge`] or [`LinsolveError::OutOfMemory`] when
-    /// faer cannot index or allocate the symbolic factorization.
+    /// faer cannot index or allocate the symbolic factorization;
+    /// [`LinsolveError::NotBanded`] for [`BandPath::Required`] and a pattern
+    /// that is not a narrow band.
     ///
     /// # Example
     /// ```
@@ -295,9 +335,12 @@ impl SparseSolver {
             })
             .collect();
         let tri = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        let band = match settings.cholesky {
-            CholeskyKind::Ldlt => Band::of(pattern, symbolic.len_val()),
-            CholeskyKind::Llt => None,
+        let band = match (settings.band, settings.cholesky) {
+            (BandPath::WhereNarrow, CholeskyKind::Ldlt) => {
+                Band::of(pattern, symbolic.len_val()).ok()
+            }
+            (BandPath::WhereNarrow, CholeskyKind::Llt) | (BandPath::Never, _) => None,
+            (BandPath::Required, _) => Some(Band::of(pattern, symbolic.len_val())?),
         };
         Ok((
             symbolic,
@@ -329,6 +372,23 @@ impl SparseSolver {
     /// pattern rather than the simplicial one.
     pub fn is_supernodal(&self) -> bool {
         matches!(self.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
+    }
+
+    /// The half-bandwidth of the band path when this solver takes it (see
+    /// [`BandPath`]), `None` when every matrix is factored by faer.
+    ///
+    /// # Example
+    /// ```
+    /// use std::sync::Arc;
+    /// use softrod::linsolve::{sparse::BandPath, SparseSettings, SparseSolver, SymmetricPattern, TangentSolver};
+    /// let p = Arc::new(SymmetricPattern::from_elements(3, [[0, 1], [1, 2]])?);
+    /// assert_eq!(SparseSolver::analyze(&p)?.band_half_width(), Some(1));
+    /// let never = SparseSettings { band: BandPath::Never, ..Default::default() };
+    /// assert_eq!(SparseSolver::with_settings(&p, never)?.band_half_width(), None);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn band_half_width(&self) -> Option<usize> {
+        self.perm.band.as_ref().map(Band::b)
     }
 
     /// The numeric `L Lᵀ` (`llt`) or `L D Lᵀ` of the scaled matrix with the

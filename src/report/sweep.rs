@@ -117,7 +117,9 @@ impl FailureCause {
             | Error::DimensionMismatch { .. }
             | Error::Scene { .. } => FailureCause::InvalidInput,
             Error::Singular { .. } => FailureCause::SingularTangent,
-            Error::NotPositiveDefinite { .. } => FailureCause::IllConditioning,
+            Error::NotPositiveDefinite { .. } | Error::NonPositivePivot { .. } => {
+                FailureCause::IllConditioning
+            }
             Error::NotConverged { report } => Self::of_statics(&report.status),
             Error::EstimateNotConverged { status, .. } => Self::of_estimate(status),
             Error::NonFinite { .. } => FailureCause::Divergence,

@@ -79,8 +79,13 @@ pub struct StaticSettings {
     pub max_step_rotation: f64,
     /// Smallest homotopy step before giving up (default 1e-4).
     pub min_load_step: f64,
-    /// The linear solver of the tangent (default [`SolverKind::Auto`]:
-    /// faer's sparse `LDLᵀ`, with an LU fallback for indefinite tangents).
+    /// The linear solver of the tangent (default [`SolverKind::Auto`]: the
+    /// band kernels where the tangent's pattern is a narrow band, as every
+    /// robot's chain is, faer's sparse `L D Lᵀ` otherwise; each with a
+    /// pivoted LU for indefinite tangents). [`SolverKind::Sparse`] never
+    /// takes the band path, [`SolverKind::Band`] refuses a model whose
+    /// pattern is not a narrow band ([`Error::InvalidParameter`] naming
+    /// `linear_solver`). See [`crate::linsolve::sparse::BandPath`].
     pub linear_solver: SolverKind,
 }
 

@@ -34,7 +34,14 @@ impl Band {
     /// The band layout of `pattern`, if its band in the natural order has
     /// no more than [`MAX_BAND_FILL`] times `factor_entries` entries (or
     /// the pattern is small).
-    pub(super) fn of(pattern: &SymmetricPattern, factor_entries: usize) -> Option<Band> {
+    ///
+    /// # Errors
+    /// [`LinsolveError::NotBanded`] (its band and `factor_entries`)
+    /// otherwise.
+    pub(super) fn of(
+        pattern: &SymmetricPattern,
+        factor_entries: usize,
+    ) -> Result<Band, LinsolveError> {
         let n = pattern.n();
         let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
         let mut b = 0;
@@ -43,9 +50,14 @@ impl Band {
                 b = b.max(j.abs_diff(i));
             }
         }
-        let storage = n.checked_mul(b + 1)?;
-        if n > SMALL && storage > MAX_BAND_FILL.saturating_mul(factor_entries) {
-            return None;
+        let storage = n.checked_mul(b + 1);
+        let narrow = storage.is_some_and(|s| s <= MAX_BAND_FILL.saturating_mul(factor_entries));
+        if n > SMALL && !narrow {
+            return Err(LinsolveError::NotBanded {
+                half_bandwidth: b,
+                band_entries: storage.unwrap_or(usize::MAX),
+                factor_entries,
+            });
         }
         let mut slots = Vec::with_capacity(ri.len());
         for j in 0..n {
@@ -55,7 +67,7 @@ impl Band {
                 slots.push(((hi + 1) * b + lo, i, j));
             }
         }
-        Some(Band { b, slots })
+        Ok(Band { b, slots })
     }
 
     /// The half-bandwidth.

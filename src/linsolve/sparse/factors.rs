@@ -61,6 +61,26 @@ pub struct SparseFactors {
 }
 
 impl SparseFactors {
+    /// Whether the band kernels factored the matrix (the band path of
+    /// [`crate::linsolve::sparse`]: band `L D Lᵀ` or band LU in the dofs'
+    /// own order), not faer.
+    ///
+    /// # Example
+    /// ```
+    /// use std::sync::Arc;
+    /// use softrod::linsolve::*;
+    /// let p = Arc::new(SymmetricPattern::from_elements(2, [[0, 1]])?);
+    /// let mut k = SymmetricMatrix::zeros(p.clone());
+    /// k.add_element(0, &[2.0, 1.0, 1.0, 2.0])?;
+    /// let band = AutoSolver::with_kind(&p, SolverKind::Auto)?.factor(&k, FactorOptions::default())?;
+    /// let faer = AutoSolver::with_kind(&p, SolverKind::Sparse)?.factor(&k, FactorOptions::default())?;
+    /// assert!(band.is_banded() && !faer.is_banded());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn is_banded(&self) -> bool {
+        matches!(self.numeric, Numeric::Band(_) | Numeric::BandLu(_))
+    }
+
     /// The solve for `k >= 1` column-major right-hand sides (sizes checked):
     /// permuted and scaled into a workspace (kept per thread, so repeated
     /// solves do not allocate), solved there, back.
