@@ -13,6 +13,7 @@ macro_rules! outln {
 
 mod avoid;
 mod demo;
+mod replay;
 mod track;
 
 use std::path::PathBuf;
@@ -75,7 +76,9 @@ enum Command {
     /// The markers file is JSON: {"markers": [{"node": 4, "position_m": [x, y]},
     /// {"s_m": 0.24, "position_m": [x, y], "tangent": [tx, ty]}, ...]} (positions in m,
     /// world axes; [x, y, z] and [tx, ty, tz] in a "spatial_cable" or "ancf3d" scene; optional
-    /// "position_weight"/"tangent_weight" per component).
+    /// "position_weight"/"tangent_weight" per component), or a recorded stream
+    /// {"frames": [{"t_s": 0.0, "markers": [...]}, ...]}: one estimate per frame,
+    /// the estimator kept warm, written as {"frames": [{"t_s", "status", "estimate"}, ...]}.
     /// Without it, the observation is synthesized: the scene is solved forward
     /// with its own loads and seeded 0.01 mm noise is added at the scene's markers.
     Estimate {
@@ -485,13 +488,6 @@ fn estimate_out<E: Element>(
     }
 }
 
-/// Reads a markers file.
-fn read_markers(path: &PathBuf) -> Result<Observation> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    serde_json::from_str(&text).with_context(|| format!("{}: not a markers file", path.display()))
-}
-
 /// The scene's markers read off the configuration `q` (exact).
 fn observe<E: Element>(scene: &Scene, robot: &Robot<E>, q: &[f64]) -> Result<Observation> {
     let mut markers = Vec::new();
@@ -517,16 +513,22 @@ fn observe<E: Element>(scene: &Scene, robot: &Robot<E>, q: &[f64]) -> Result<Obs
     Ok(Observation { markers })
 }
 
+/// The estimates of `softrod estimate`: one per observation of the markers
+/// file (one, or every frame of a recorded stream, the estimator kept
+/// warm), or of the synthesized observation without one; each with the
+/// frame's time (`None` for a single observation).
 fn estimate(
     scene: &Scene,
     backend: Option<Backend>,
-    markers: Option<&PathBuf>,
-) -> Result<EstimateOut> {
+    markers: Option<(&PathBuf, replay::Markers)>,
+) -> Result<Vec<(Option<f64>, EstimateOut)>> {
     match scene.build()? {
         SceneRobot::Planar(robot) => {
-            let mut out = estimate_with(scene, robot.clone(), backend, markers)?;
-            fill_angles(&robot, &out.q, &mut out.nodes)?;
-            Ok(out)
+            let mut outs = estimate_with(scene, robot.clone(), backend, markers)?;
+            for (_, out) in &mut outs {
+                fill_angles(&robot, &out.q, &mut out.nodes)?;
+            }
+            Ok(outs)
         }
         SceneRobot::Spatial(robot) => estimate_with(scene, robot, backend, markers),
         SceneRobot::Full(robot) => estimate_with(scene, robot, backend, markers),
@@ -538,29 +540,36 @@ fn estimate_with<E: Element + 'static>(
     scene: &Scene,
     robot: Robot<E>,
     backend: Option<Backend>,
-    markers: Option<&PathBuf>,
-) -> Result<EstimateOut> {
+    markers: Option<(&PathBuf, replay::Markers)>,
+) -> Result<Vec<(Option<f64>, EstimateOut)>> {
     let known = scene.loads()?;
     let mut settings = scene.estimator_settings()?;
     if let Some(b) = backend {
         settings.backend = b;
     }
-    let (obs, source) = match markers {
-        Some(path) => (
-            read_markers(path)?,
-            format!("markers file {}", path.display()),
-        ),
+    let (observations, source) = match markers {
+        Some((path, m)) => (m.observations(), format!("markers file {}", path.display())),
         None => {
             let solver = StaticSolver::new(scene.solver.statics.clone())?;
             let eq = solver.solve(&robot, &known, None)?;
             let obs = observe(scene, &robot, eq.q.as_slice())?.with_noise(1e-5, 1);
-            (obs, "synthesized: the scene solved forward with its own loads, seeded 0.01 mm noise added to the marker positions (seed 1); the estimated load should be near zero".to_string())
+            (vec![(None, obs)], "synthesized: the scene solved forward with its own loads, seeded 0.01 mm noise added to the marker positions (seed 1); the estimated load should be near zero".to_string())
         }
     };
     let pressures = known.pressures_pa.clone();
     let mut est = settings.build_for(&robot, &known)?;
-    let e = est.step(&obs)?;
-    Ok(estimate_out(scene, &robot, pressures, &e, source))
+    let mut outs = Vec::with_capacity(observations.len());
+    for (i, (t_s, obs)) in observations.into_iter().enumerate() {
+        let e = est.step(&obs).with_context(|| match t_s {
+            Some(t) => format!("frames[{i}] (t_s = {t})"),
+            None => "the markers".to_string(),
+        })?;
+        outs.push((
+            t_s,
+            estimate_out(scene, &robot, pressures.clone(), &e, source.clone()),
+        ));
+    }
+    Ok(outs)
 }
 
 /// Resolves "elements": "auto" sections by refinement (the observation for a
@@ -656,12 +665,46 @@ pub fn run() -> Result<()> {
                 // the refinement estimates with the backend the result is for
                 scene.solver.estimator.backend = b.into();
             }
-            let observation = match (&markers, scene.has_auto_elements()) {
-                (Some(path), true) => Some(read_markers(path)?),
+            let file = markers.as_ref().map(|p| replay::read(p)).transpose()?;
+            let observation = match (&file, scene.has_auto_elements()) {
+                (Some(m), true) => m.first(),
                 _ => None,
             };
             let (scene, refinement) = refine(scene, observation.as_ref())?;
-            let mut result = estimate(&scene, backend.map(Backend::from), markers.as_ref())?;
+            let stream = matches!(file, Some(replay::Markers::Stream(_)));
+            let mut outs = estimate(
+                &scene,
+                backend.map(Backend::from),
+                markers.as_ref().zip(file),
+            )?;
+            if stream {
+                let source = outs
+                    .first()
+                    .map(|(_, o)| o.observation.clone())
+                    .unwrap_or_default();
+                let frames = outs
+                    .into_iter()
+                    .map(|(t, mut o)| {
+                        o.refinement.clone_from(&refinement);
+                        (t.unwrap_or(0.0), o)
+                    })
+                    .collect();
+                let result = replay::StreamOut::new(source, frames);
+                result.summarize();
+                write_json(&result, out.as_ref())?;
+                if let Some(&i) = result.not_converged.first() {
+                    anyhow::bail!(
+                        "{} of {} frames did not converge (the first: frames[{i}], {}); every frame's record is written with its status",
+                        result.not_converged.len(),
+                        result.n_frames,
+                        result.frames[i].status
+                    );
+                }
+                return Ok(());
+            }
+            let Some((_, mut result)) = outs.pop() else {
+                anyhow::bail!("no observation to estimate from");
+            };
             result.refinement = refinement;
             if markers.is_none() {
                 eprintln!("softrod: no markers file: {}", result.observation);

@@ -14,7 +14,7 @@ use crate::observe::{Observation, ObservationOperator};
 
 use super::covariance::{CovarianceInputs, LazyCovariances};
 use super::problem::{Derivs, GnFactor, Problem};
-use super::{AlphaRule, Backend, Estimate, EstimateReport};
+use super::{AlphaRule, Backend, Estimate, EstimateReport, FarStart};
 
 /// Where the searches for `α` (the evidence's, the discrepancy principle's)
 /// begin their continuation in `α` (m/N² with whitened weights).
@@ -214,6 +214,11 @@ pub(crate) trait Method<E: Element> {
         q0: Vec<f64>,
         alpha: f64,
     ) -> Result<Solved>;
+    /// The far starts of the solves since the last call (see
+    /// [`FarStart`]), `None` if none took one; the log starts anew.
+    fn take_far_start(&mut self) -> Option<FarStart> {
+        None
+    }
 }
 
 /// Chooses `α` by the discrepancy principle: `weighted_residual(α) =
@@ -284,57 +289,69 @@ fn path_solve<E: Element, M: Method<E>>(
     Some(s.report.weighted_residual)
 }
 
-/// One observation through the backend's method: `α` chosen if not yet, a
-/// large jump split into intermediate observations, each solved from the
-/// last; the estimate with its covariances. A solve that stops short ends
-/// the step with its last iterate and status (the warm start stays at the
-/// last converged estimate).
-pub(crate) fn run_step<E: Element, M: Method<E>>(
-    method: &mut M,
-    observation: &Observation,
-) -> Result<Estimate> {
-    let start = Instant::now();
-    let work = LinearWork::now();
-    let backend = M::BACKEND;
-    let op = method.stream().problem.operator_of_frame(observation)?;
+/// Chooses `α` for the observation `op` by the settings' rule, each
+/// solve of the search starting from the last converged one (continuation
+/// in `α`, from the stream's start); keeps it in the stream with the warm
+/// start the search leaves.
+fn choose_alpha<E: Element, M: Method<E>>(method: &mut M, op: &ObservationOperator) -> Result<f64> {
     let rule = method.stream().problem.settings().alpha_rule;
-    let alpha = match method.stream().alpha {
-        Some(a) => a,
-        None if rule == AlphaRule::Evidence => {
-            let (a, warm) = super::evidence::evidence_alpha(method, &op)?;
-            let stream = method.stream();
-            stream.alpha = Some(a);
-            stream.warm = Some(warm);
-            a
-        }
-        None => {
-            // continuation in α: each solve starts from the last converged one
-            let (mut f0, mut q0) = method.stream().start()?;
-            let a = discrepancy_alpha(op.len(), |a| {
-                // a failure (at an extreme α) counts as a perfect fit: the
-                // search then moves to larger α
-                Ok(path_solve(method, &op, a, &mut f0, &mut q0).unwrap_or(0.0))
-            })?;
-            let stream = method.stream();
-            stream.alpha = Some(a);
-            // the last solve of the search is close: start from it
-            stream.warm = Some(Warm {
-                f: f0,
-                q: q0,
-                y: op.measurements().to_vec(),
-            });
-            a
-        }
+    let (a, warm) = if rule == AlphaRule::Evidence {
+        super::evidence::evidence_alpha(method, op)?
+    } else {
+        let (mut f0, mut q0) = method.stream().start()?;
+        let a = discrepancy_alpha(op.len(), |a| {
+            // a failure (at an extreme α) counts as a perfect fit: the
+            // search then moves to larger α
+            Ok(path_solve(method, op, a, &mut f0, &mut q0).unwrap_or(0.0))
+        })?;
+        // the last solve of the search is close: start from it
+        let warm = Warm {
+            f: f0,
+            q: q0,
+            y: op.measurements().to_vec(),
+        };
+        (a, warm)
     };
-    // a stream's first observation in one go (there is no observation
-    // before it: the solve's own trust region, which grows while its full
-    // steps hold, globalizes the way from the unloaded shape); a later
-    // one's jump from the last split into intermediate observations
+    let stream = method.stream();
+    stream.alpha = Some(a);
+    stream.warm = Some(warm);
+    Ok(a)
+}
+
+/// How the solves of one observation ended.
+enum Targets {
+    /// Every solve converged: the last one's, for the observation itself.
+    Converged(Solved),
+    /// A solve stopped short (of an intermediate observation, or of the
+    /// observation itself): its last iterate.
+    Stopped(Solved),
+}
+
+/// The solves of one observation at `alpha` with the iterations they took
+/// and how many observations (intermediate ones and the observation
+/// itself) were solved.
+struct TargetsRun {
+    outcome: Targets,
+    iterations: usize,
+    sub_steps: usize,
+}
+
+/// The observation `op` at `alpha`: a stream's first observation in one
+/// go (there is no observation before it: the solve's own trust region,
+/// which grows while its full steps hold, globalizes the way from the
+/// unloaded shape); a later one's jump from the last split into
+/// intermediate observations, each solved from the last; the first that
+/// stops short ends the run.
+fn solve_targets<E: Element, M: Method<E>>(
+    method: &mut M,
+    op: &ObservationOperator,
+    alpha: f64,
+) -> Result<TargetsRun> {
     let targets = if method.stream().warm.is_none() {
         vec![op.measurements().to_vec()]
     } else {
         let (_, q_start) = method.stream().start()?;
-        method.stream().sub_targets(&op, &q_start)
+        method.stream().sub_targets(op, &q_start)
     };
     let n_sub = targets.len();
     let mut iterations = 0;
@@ -347,7 +364,7 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
         // the last target is the observation itself
         let sub_op;
         let sub = if k + 1 == n_sub {
-            &op
+            op
         } else {
             sub_op = op.with_measurements(y)?;
             &sub_op
@@ -355,37 +372,140 @@ pub(crate) fn run_step<E: Element, M: Method<E>>(
         let s = method.solve_one(sub, f0, q0, alpha)?;
         iterations += s.report.iterations;
         if !s.report.status.is_converged() {
-            // the last iterate, with its status; its objective and marker
-            // residuals against the observation itself, not the intermediate
-            // one
-            let stream = method.stream();
-            let (wr, pen, e) = stream.problem.objective(&op, &s.q, &s.f, alpha)?;
-            let mut report = s.report;
-            report.iterations = iterations;
-            report.sub_steps = n_sub;
-            report.backend = backend;
-            report.objective = wr + pen;
-            report.weighted_residual = wr;
-            report.wall_time_s = start.elapsed().as_secs_f64();
-            report.linear_work = LinearWork::now().since(work);
-            return stream.finish(s.q, s.f, &op, s.derivs, s.gn, e, report);
+            return Ok(TargetsRun {
+                outcome: Targets::Stopped(s),
+                iterations,
+                sub_steps: n_sub,
+            });
         }
         last = Some(s);
     }
     let s = last.ok_or_else(|| Error::NonFinite {
         context: "estimator produced no step".into(),
     })?;
-    let stream = method.stream();
-    stream.warm = Some(Warm {
-        f: s.f.clone(),
-        q: s.q.clone(),
+    Ok(TargetsRun {
+        outcome: Targets::Converged(s),
+        iterations,
+        sub_steps: n_sub,
+    })
+}
+
+/// The α revisit: a converged solve of a later frame at an `α` chosen
+/// automatically on an earlier one whose answer fails the fit test (the
+/// markers show a load the prior of that frame forbids, as a payload put
+/// on a robot first seen at rest): `α` is chosen again on this frame, from
+/// the answer, and the frame solved at the new `α`, which the stream keeps.
+fn revisit_alpha<E: Element, M: Method<E>>(
+    method: &mut M,
+    op: &ObservationOperator,
+    run: TargetsRun,
+) -> Result<TargetsRun> {
+    let Targets::Converged(s) = run.outcome else {
+        return Ok(run);
+    };
+    method.stream().warm = Some(Warm {
+        f: s.f,
+        q: s.q,
         y: op.measurements().to_vec(),
     });
-    let mut report = s.report;
-    report.iterations = iterations;
-    report.sub_steps = n_sub;
-    report.backend = backend;
-    report.wall_time_s = start.elapsed().as_secs_f64();
-    report.linear_work = LinearWork::now().since(work);
-    stream.finish(s.q, s.f, &op, s.derivs, s.gn, s.e, report)
+    let alpha = choose_alpha(method, op)?;
+    let (f0, q0) = method.stream().start()?;
+    let s = method.solve_one(op, f0, q0, alpha)?;
+    let iterations = run.iterations + s.report.iterations;
+    let outcome = if s.report.status.is_converged() {
+        Targets::Converged(s)
+    } else {
+        Targets::Stopped(s)
+    };
+    Ok(TargetsRun {
+        outcome,
+        iterations,
+        sub_steps: run.sub_steps,
+    })
+}
+
+/// Whether a run converged with an answer that fails the fit test.
+fn fails_fit(run: &TargetsRun) -> bool {
+    match &run.outcome {
+        Targets::Converged(s) => {
+            super::fit::fit_test(s.report.weighted_residual, s.report.n_observations).is_err()
+        }
+        Targets::Stopped(_) => false,
+    }
+}
+
+/// One observation through the backend's method: `α` chosen if not yet, a
+/// large jump split into intermediate observations, each solved from the
+/// last; `α` chosen again when it was chosen automatically on an earlier
+/// frame and this frame's answer fails the fit test; the fit test on the
+/// answer of a converged solve (a failure ends as
+/// [`super::EstimateStatus::MisfitBeyondNoise`]); the estimate with its
+/// covariances. A solve that stops short ends the step with its last
+/// iterate and status (the warm start stays at the last estimate whose
+/// solve converged, a fit failure's included: it is the problem's optimum
+/// at this `α`).
+pub(crate) fn run_step<E: Element, M: Method<E>>(
+    method: &mut M,
+    observation: &Observation,
+) -> Result<Estimate> {
+    let start = Instant::now();
+    let work = LinearWork::now();
+    let backend = M::BACKEND;
+    let op = method.stream().problem.operator_of_frame(observation)?;
+    method.take_far_start();
+    let alpha_given = method.stream().problem.settings().alpha.is_some();
+    // (an α not yet chosen is chosen on this frame: no revisit then)
+    let chosen_now = method.stream().alpha.is_none();
+    let alpha = match method.stream().alpha {
+        Some(a) => a,
+        None => choose_alpha(method, &op)?,
+    };
+    let mut run = solve_targets(method, &op, alpha)?;
+    if !alpha_given && !chosen_now && fails_fit(&run) {
+        run = revisit_alpha(method, &op, run)?;
+    }
+    let far_start = method.take_far_start();
+    let finish_report = |mut report: EstimateReport| {
+        report.iterations = run.iterations;
+        report.sub_steps = run.sub_steps;
+        report.backend = backend;
+        report.far_start = far_start;
+        report.wall_time_s = start.elapsed().as_secs_f64();
+        report.linear_work = LinearWork::now().since(work);
+        report
+    };
+    match run.outcome {
+        Targets::Stopped(s) => {
+            // the last iterate, with its status; its objective and marker
+            // residuals against the observation itself, not the intermediate
+            // one
+            let stream = method.stream();
+            let (wr, pen, e) = stream.problem.objective(&op, &s.q, &s.f, s.report.alpha)?;
+            let mut report = s.report;
+            report.objective = wr + pen;
+            report.weighted_residual = wr;
+            let report = finish_report(report);
+            stream.finish(s.q, s.f, &op, s.derivs, s.gn, e, report)
+        }
+        Targets::Converged(s) => {
+            let stream = method.stream();
+            stream.warm = Some(Warm {
+                f: s.f.clone(),
+                q: s.q.clone(),
+                y: op.measurements().to_vec(),
+            });
+            let mut report = finish_report(s.report);
+            if let (Some(stopped_by), Err(quantile)) = (
+                report.status.criterion(),
+                super::fit::fit_test(report.weighted_residual, report.n_observations),
+            ) {
+                report.status = super::EstimateStatus::MisfitBeyondNoise {
+                    stopped_by,
+                    weighted_residual: report.weighted_residual,
+                    quantile,
+                };
+            }
+            stream.finish(s.q, s.f, &op, s.derivs, s.gn, s.e, report)
+        }
+    }
 }

@@ -104,6 +104,7 @@
 mod covariance;
 mod driver;
 mod evidence;
+mod fit;
 pub mod newton;
 mod problem;
 pub mod sqp;
@@ -111,6 +112,7 @@ mod triplets;
 
 pub use driver::ALPHA_CONTINUATION_START;
 pub use evidence::AlphaRule;
+pub use fit::{chi2_quantile, FIT_QUANTILE};
 pub use newton::NewtonEstimator;
 pub use problem::direct_solution;
 pub use sqp::SqpEstimator;
@@ -399,7 +401,9 @@ pub struct EstimateReport {
     /// stopped it, if one did).
     pub status: EstimateStatus,
     /// Outer iterations (Gauss–Newton steps or QPs), summed over the
-    /// intermediate observations.
+    /// intermediate observations (and, for the Newton backend, the
+    /// full-space iterations of a far start its solve took, see
+    /// [`EstimateReport::far_start`]).
     pub iterations: usize,
     /// Intermediate observations used (1: the observation was taken directly).
     pub sub_steps: usize,
@@ -427,6 +431,51 @@ pub struct EstimateReport {
     /// instead of timed.
     #[serde(default)]
     pub linear_work: crate::linsolve::LinearWork,
+    /// The Newton backend's far start in this step, if a solve took it
+    /// (see [`FarStart`]); `None` for the sqp backend and for a step that
+    /// did not need it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub far_start: Option<FarStart>,
+}
+
+/// The Newton backend's far start in one step: while a stream has no
+/// estimate yet, a reduced solve whose step the trust region cuts (or that
+/// starts from zero load) continues with the sqp backend's full-space
+/// iterations over `(q, F)`, and the reduced iteration resumes at their
+/// equilibrium (see [`NewtonEstimator`]). Counted over every solve of the
+/// step, the `α` search's included.
+///
+/// # Example
+/// ```
+/// use softrod::estimate::{Backend, EstimatorSettings, Observation};
+/// use softrod::loads::PointForce;
+/// use softrod::{scene::Scene, statics::StaticSolver};
+/// let scene = Scene::two_section();
+/// let (robot, mut loads) = (scene.robot()?, scene.loads()?);
+/// let known = loads.clone();
+/// loads.point_forces.push(PointForce { s_m: 0.24, force_n: vec![0.0, -0.3] });
+/// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+/// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[5, 10, 15, 20])?.with_noise(1e-5, 1);
+/// let settings = EstimatorSettings { alpha: Some(1e-2), ..Default::default() };
+/// let e = settings.build_for(&robot, &known)?.step(&obs)?;
+/// // a cold estimate from zero load takes the far start at once
+/// let far = e.report.far_start.expect("far start");
+/// assert!(far.solves >= 1 && far.iterations >= 1 && far.iterations <= e.report.iterations);
+/// # Ok::<(), softrod::Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct FarStart {
+    /// Solves of the step that took it.
+    pub solves: usize,
+    /// Full-space iterations (QPs) those solves took, in all (when
+    /// `answer`, the returned solve's are part of
+    /// [`EstimateReport::iterations`]).
+    pub iterations: usize,
+    /// Solves through it that did not converge and were repeated without
+    /// it.
+    pub repeated_without: usize,
+    /// Whether the solve of the returned estimate went through it.
+    pub answer: bool,
 }
 
 impl std::fmt::Display for EstimateReport {
@@ -443,7 +492,21 @@ impl std::fmt::Display for EstimateReport {
             self.gradient_norm,
             self.alpha,
             self.wall_time_s * 1e6,
-        )
+        )?;
+        if let Some(fs) = &self.far_start {
+            write!(
+                f,
+                "; far start: {} solve(s), {} full-space iterations{}",
+                fs.solves,
+                fs.iterations,
+                if fs.answer {
+                    ", the answer's included"
+                } else {
+                    ""
+                }
+            )?;
+        }
+        Ok(())
     }
 }
 

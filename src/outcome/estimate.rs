@@ -57,6 +57,13 @@ impl EstimateCriterion {
 
 /// How an estimation ended.
 ///
+/// `Converged` means both that the iteration stopped by the test it names
+/// and that the answer passed the fit test: its weighted misfit at its own
+/// equilibrium within the 0.999 quantile of χ²(`n_ob`) (see
+/// [`FIT_QUANTILE`](crate::estimate::FIT_QUANTILE)). An iteration that
+/// stopped but whose answer fails the fit test ends as
+/// [`EstimateStatus::MisfitBeyondNoise`].
+///
 /// An estimator that stops short still returns its last iterate (an
 /// equilibrium) with one of the other variants: see
 /// [`Estimator::step`](crate::estimate::Estimator::step).
@@ -70,12 +77,39 @@ impl EstimateCriterion {
 /// assert_eq!(serde_json::to_string(&s).unwrap(), r#"{"qp_not_solved":"PrimalInfeasible"}"#);
 /// let back: EstimateStatus = serde_json::from_str(r#"{"qp_not_solved":"PrimalInfeasible"}"#).unwrap();
 /// assert_eq!(back, s);
+/// let m = EstimateStatus::MisfitBeyondNoise {
+///     stopped_by: softrod::outcome::EstimateCriterion::WithinNoise,
+///     weighted_residual: 2.1e6,
+///     quantile: 37.7,
+/// };
+/// assert!(!m.is_converged());
+/// assert_eq!(
+///     serde_json::to_string(&m).unwrap(),
+///     r#"{"misfit_beyond_noise":{"stopped_by":"within_noise","weighted_residual":2100000.0,"quantile":37.7}}"#
+/// );
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum EstimateStatus {
-    /// Converged; the test that ended it.
+    /// Converged; the test that ended it (and the answer passed the fit
+    /// test).
     Converged(EstimateCriterion),
+    /// The iteration stopped (by `stopped_by`), but the answer does not
+    /// explain the markers to their noise: its weighted misfit
+    /// `(Aq − y)ᵀW(Aq − y)` exceeds the χ² quantile for the observed
+    /// components (an unmodelled effect, a wrong noise level, or a penalty
+    /// that holds the load back). Not converged.
+    MisfitBeyondNoise {
+        /// The test that stopped the iteration.
+        stopped_by: EstimateCriterion,
+        /// The weighted misfit at the answer (dimensionless with whitened
+        /// weights).
+        weighted_residual: f64,
+        /// The χ² quantile it exceeds
+        /// ([`FIT_QUANTILE`](crate::estimate::FIT_QUANTILE) for `n_ob`
+        /// degrees of freedom).
+        quantile: f64,
+    },
     /// The outer iteration budget (`max_iterations`) ran out.
     IterationLimit {
         /// Outer iterations of the solve that stopped.
@@ -121,6 +155,15 @@ impl std::fmt::Display for EstimateStatus {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             EstimateStatus::Converged(c) => write!(f, "converged ({})", c.name()),
+            EstimateStatus::MisfitBeyondNoise {
+                stopped_by,
+                weighted_residual,
+                quantile,
+            } => write!(
+                f,
+                "misfit beyond the noise: weighted residual {weighted_residual:.4e} above the chi-square quantile {quantile:.4e} (stopped by {})",
+                stopped_by.name()
+            ),
             EstimateStatus::IterationLimit { iterations } => {
                 write!(f, "iteration limit ({iterations} iterations)")
             }

@@ -174,7 +174,9 @@ impl FailureCause {
             EstimateStatus::SingularTangent => FailureCause::SingularTangent,
             EstimateStatus::NotPositiveDefinite => FailureCause::IllConditioning,
             EstimateStatus::NonFinite { .. } => FailureCause::Divergence,
-            EstimateStatus::Converged(_) | EstimateStatus::NoInformation => FailureCause::Other,
+            EstimateStatus::Converged(_)
+            | EstimateStatus::NoInformation
+            | EstimateStatus::MisfitBeyondNoise { .. } => FailureCause::Other,
         }
     }
 }

@@ -70,6 +70,7 @@
 //! so a warm step of a stream factors once (the second QP's tangent).
 
 mod bounded;
+mod iterate;
 mod trust;
 
 use clarabel::solver::SolverStatus;
@@ -83,19 +84,16 @@ use crate::linsolve::{
     TangentSolver,
 };
 use crate::loads::Loads;
-use crate::numeric::{dot, max_abs, norm2};
+use crate::numeric::{dot, max_abs};
 use crate::observe::{ObsRow, ObservationOperator};
 use crate::outcome::NonFiniteAt;
-use crate::statics::residual_floor;
 use crate::statics::tracker::FactoredTangent;
 
 use super::driver::{run_step, Method, Solved, Stream};
 use super::problem::{columns, Derivs, GnFactor, Problem};
 use super::{
-    Backend, Estimate, EstimateCriterion, EstimateReport, EstimateStatus, Estimator,
-    EstimatorSettings, LoadModel, Observation,
+    Backend, Estimate, EstimateStatus, Estimator, EstimatorSettings, LoadModel, Observation,
 };
-use crate::statics::tracker::chord_converged;
 
 /// Why an SQP subproblem was not solved: clarabel's status, or an error of
 /// the linear algebra around it.
@@ -425,7 +423,6 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
         &mut self.stream
     }
 
-    #[allow(clippy::too_many_lines)]
     fn solve_one(
         &mut self,
         op: &ObservationOperator,
@@ -433,282 +430,7 @@ impl<E: Element> Method<E> for SqpEstimator<E> {
         q0: Vec<f64>,
         alpha: f64,
     ) -> Result<Solved> {
-        let settings = self.stream.problem.settings().clone();
-        let len = self.stream.problem.robot().length();
-        let n_free = self.stream.problem.robot().n_free();
-        let mut f = f0;
-        let mut q = q0;
-        let n_ob = op.len() as f64;
-        let mut iterations = 0;
-        let mut mu = 0.0f64;
-        // set where the loop ends
-        let status;
-        let mut prev_dec = f64::INFINITY;
-        // the state at (q, F): dead force, residual Q, objective parts; an
-        // accepted line-search trial hands its own on to the next iteration
-        let mut dead = self.stream.problem.dead_with(&f)?;
-        let mut r = self.stream.problem.residual(&q, &f)?;
-        let (mut wr, mut pen, mut e) = self.stream.problem.objective(op, &q, &f, alpha)?;
-        // derivatives and Gauss–Newton factor of the last QP, taken at q
-        let mut at_q: Option<(Derivs, GnFactor)> = None;
-        // the factored tangent of the last QP (the second-order correction,
-        // the final chord step)
-        let mut last: Option<FactoredTangent> = None;
-        // the trust radius on the predicted marker motion (m)
-        let mut radius = settings.max_observation_jump_m;
-        loop {
-            let obj = wr + pen;
-            let load = norm2(self.stream.problem.robot().restrict(&dead)?.as_slice()).max(1e-12);
-            let rn = norm2(&r);
-            if iterations >= settings.max_iterations {
-                status = EstimateStatus::IterationLimit { iterations };
-                break;
-            }
-            let (
-                QpStep {
-                    mut du,
-                    mut df,
-                    lambda_max: lmax,
-                    c,
-                    active,
-                    exact,
-                    bound_violation,
-                    dec_opt,
-                    derivs,
-                    tangent_max_abs,
-                },
-                tangent,
-            ) = match self.qp(op, &q, &f, &e, &r, alpha) {
-                Ok(s) => s,
-                Err(err) => {
-                    status = err.status()?;
-                    break;
-                }
-            };
-            at_q = derivs;
-            let lu = &last.insert(tangent).factors;
-            iterations += 1;
-            let mut dm = du.clone();
-            dm.extend_from_slice(&df);
-            // model decrease of the objective
-            let dec = (-dot(&c, &dm)).max(0.0);
-            // trust region on the predicted marker motion
-            let mut dq = self.stream.problem.robot().expand_step(&du)?;
-            let moved = op
-                .rows()
-                .iter()
-                .map(|row| row.apply(dq.as_slice()).abs())
-                .fold(0.0f64, f64::max);
-            let cut = moved > radius && moved.is_finite();
-            if cut {
-                let s = radius / moved;
-                du.iter_mut()
-                    .chain(df.iter_mut())
-                    .chain(dm.iter_mut())
-                    .chain(dq.iter_mut())
-                    .for_each(|v| *v *= s);
-            }
-            let lin = dot(&c, &dm);
-            let scale = obj.max(n_ob);
-            // feasible: |Q| relative to the applied loads, or at the round-off
-            // floor ε |K|max |q|∞ √n (which grows with the element count)
-            let floor = residual_floor(tangent_max_abs, max_abs(&q), n_free);
-            let feasible = rn <= (1e-9 * load).max(floor) && bound_violation <= 1e-9;
-            // with a bound active the step is clarabel's, accurate to its
-            // tolerances only: a predicted decrease of 1e-9 then ends it
-            let tol = if active && !exact {
-                settings.tolerance.max(1e-9)
-            } else {
-                settings.tolerance
-            };
-            // convergence is judged on the decrease along the manifold
-            // (−g̃ᵀdF = 2 dFᵀ N dF at the QP's solution: the statistical test
-            // is on half of it, as the Newton backend's)
-            let dec_c = dec_opt.unwrap_or(dec);
-            if feasible {
-                let criterion = if dec_c <= tol * scale {
-                    Some(EstimateCriterion::PredictedDecrease)
-                } else if 0.5 * dec_c <= settings.statistical_tolerance.powi(2) {
-                    Some(EstimateCriterion::WithinNoise)
-                } else if dec_c <= 1e-13 * scale && dec_c > 0.9 * prev_dec {
-                    Some(EstimateCriterion::RoundOffFloor)
-                } else {
-                    None
-                };
-                if let Some(c) = criterion {
-                    status = EstimateStatus::Converged(c);
-                    break;
-                }
-            }
-            prev_dec = if feasible { dec_c } else { f64::INFINITY };
-            mu = mu.max(1.5 * lmax + 1e-12);
-            let r1: f64 = r.iter().map(|v| v.abs()).sum();
-            let phi = obj + mu * r1;
-            let slope = lin - mu * r1;
-            let mut t = 1.0;
-            let mut accepted = false;
-            // second-order correction (against the Maratos effect): the
-            // trial shape is pulled back onto the equilibrium manifold by
-            // chord steps u += K⁻¹ Q(q_t, F_t) with the factorization at q
-            for _ in 0..30 {
-                let mut qt: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + t * b).collect();
-                let ft: Vec<f64> = f.iter().zip(&df).map(|(a, b)| a + t * b).collect();
-                let problem = &self.stream.problem;
-                let dead_t = problem.dead_with(&ft)?;
-                let mut rt: Vec<f64> = problem
-                    .robot()
-                    .residual(&qt, &dead_t, problem.known())?
-                    .data
-                    .into();
-                {
-                    // up to four chord steps while the residual shrinks
-                    let mut rn_t = norm2(rt.as_slice());
-                    for _ in 0..4 {
-                        let mut du_c = rt.clone();
-                        lu.solve_in_place(&mut du_c)?;
-                        if !du_c.iter().all(|v| v.is_finite()) {
-                            break;
-                        }
-                        let corr = problem.robot().expand_step(du_c.as_slice())?;
-                        let qc: Vec<f64> = qt.iter().zip(&corr).map(|(a, b)| a + b).collect();
-                        let rc: Vec<f64> = problem
-                            .robot()
-                            .residual(&qc, &dead_t, problem.known())?
-                            .data
-                            .into();
-                        let rn_c = norm2(rc.as_slice());
-                        if rn_c.is_nan() || rn_c >= rn_t {
-                            break;
-                        }
-                        qt = qc;
-                        rt = rc;
-                        rn_t = rn_c;
-                        if rn_t <= 1e-10 * load {
-                            break;
-                        }
-                    }
-                }
-                let (wr_t, pen_t, e_t) = problem.objective(op, &qt, &ft, alpha)?;
-                let phi_t = wr_t + pen_t + mu * rt.iter().map(|v| v.abs()).sum::<f64>();
-                let small = dec <= 1e-8 * scale && rn <= 1e-6 * load;
-                // near the round-off floor μ|Q|₁ is noise: a trial that stays
-                // feasible to 10× the tolerance and decreases J is accepted
-                let feasible_t = norm2(rt.as_slice()) <= 10.0 * (1e-9 * load).max(floor);
-                let descends = wr_t + pen_t <= obj + 1e-4 * t * lin.min(0.0);
-                if phi_t <= phi + 1e-4 * t * slope.min(0.0) || small || (feasible_t && descends) {
-                    q = qt;
-                    f = ft;
-                    dead = dead_t;
-                    r = rt;
-                    (wr, pen, e) = (wr_t, pen_t, e_t);
-                    at_q = None;
-                    accepted = true;
-                    radius =
-                        trust::next_radius(radius, t, cut, settings.max_observation_jump_m, len);
-                    break;
-                }
-                t *= 0.5;
-            }
-            if !accepted {
-                status = if dec <= 1e-10 * scale && rn <= 1e-6 * load {
-                    EstimateStatus::Converged(EstimateCriterion::NegligibleDecrease)
-                } else {
-                    EstimateStatus::LineSearchFailed
-                };
-                break;
-            }
-        }
-        // exact equilibrium at the final F, derivatives and covariance
-        // there: at a feasible point a few chord steps with the last QP's
-        // factorization (taken at q) do it, and while they move the shape
-        // by no more than 1e-6 L that QP's derivatives stay exact to about
-        // 1e-6 relative (they serve the covariances, the reported gradient
-        // norm and the next warm step's first QP, not the estimate itself);
-        // otherwise the equilibrium is re-solved and re-factored. (One
-        // chord step of 1e-10 L at most, as before, missed at fine meshes,
-        // where the feasibility test's round-off floor is larger: the
-        // shape then moves by 1e-8 m at 800 elements, and the re-solve cost
-        // a second linearization per warm step.)
-        let mut finish = None;
-        let mut warm_qp = None;
-        if let (Some((dv, fac)), Some(tangent)) = (at_q.take(), last) {
-            let lu = &tangent.factors;
-            let problem = &self.stream.problem;
-            let mut qc = q.clone();
-            let mut rc = r.clone();
-            let mut moved = 0.0;
-            let mut prev = f64::INFINITY;
-            let mut done = false;
-            for _ in 0..4 {
-                let mut w = rc.clone();
-                lu.solve_in_place(&mut w)?;
-                let step = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                moved += step;
-                if !step.is_finite() || moved > 1e-6 * len {
-                    break;
-                }
-                let dq = problem.robot().expand_step(&w)?;
-                qc.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
-                rc = problem
-                    .robot()
-                    .residual(&qc, &dead, problem.known())?
-                    .data
-                    .into();
-                // below 1e-10 L, or predicted so by the contraction so far
-                if chord_converged(step, prev, moved, len) {
-                    done = true;
-                    break;
-                }
-                prev = step;
-            }
-            if done {
-                q = qc;
-                let residual_n = norm2(&rc);
-                warm_qp = Some(WarmQp {
-                    q: q.clone(),
-                    rows: op.rows().to_vec(),
-                    tangent,
-                    dv: dv.clone(),
-                });
-                finish = Some((q.clone(), dv, Some(fac), residual_n));
-            }
-        }
-        self.warm_qp = warm_qp;
-        let (q, dv, gn, residual_n) = match finish {
-            Some(x) => x,
-            None => {
-                let problem = &mut self.stream.problem;
-                let eq = problem.equilibrium(&f, &q)?;
-                let dv = problem.derivs(&eq.factors, op)?;
-                let e = op.residual(eq.q.as_slice());
-                let (_, gn) = problem.gn_solve(&dv, op, &e, &f, alpha)?;
-                (eq.q.data.into(), dv, Some(gn), eq.residual_n)
-            }
-        };
-        let problem = &self.stream.problem;
-        let (wr, pen, e) = problem.objective(op, &q, &f, alpha)?;
-        let g = problem.gradient(&dv, op, &e, &f, alpha)?;
-        Ok(Solved {
-            f,
-            q,
-            derivs: dv,
-            gn,
-            e,
-            report: EstimateReport {
-                backend: Backend::Sqp,
-                status,
-                iterations,
-                sub_steps: 1,
-                objective: wr + pen,
-                weighted_residual: wr,
-                n_observations: op.len(),
-                gradient_norm: norm2(&g),
-                equilibrium_residual_n: residual_n,
-                alpha,
-                wall_time_s: 0.0,
-                linear_work: Default::default(),
-            },
-        })
+        self.iterate(op, f0, q0, alpha)
     }
 }
 

@@ -1,0 +1,106 @@
+//! The far start of a cold reduced solve: the sqp backend's full-space
+//! iterations over `(q, F)` (see the [module documentation](super)).
+
+use crate::element::Element;
+use crate::error::Result;
+use crate::observe::ObservationOperator;
+
+use super::super::driver::Method;
+use super::super::problem::{Derivs, Problem};
+use super::super::sqp::SqpEstimator;
+use super::reduced::{Iterate, Reduced};
+
+impl<E: Element> Reduced<'_, E> {
+    /// The far start from the iterate `it` (objective `obj`): the full-space
+    /// iterations ([`full_space`]) and the equilibrium at their estimate,
+    /// with the iterations they took; `None` if they did not converge below
+    /// `obj` or the equilibrium failed. Their last factored tangent is kept in
+    /// the tracker (the equilibrium there is then a chord step without a
+    /// factorization) and their derivatives cached for the next iteration, at
+    /// the equilibrium's shape when that stayed within `1e-10 L` of theirs
+    /// (the tracker then returns the same factors, from which the derivatives
+    /// are the same numbers).
+    pub(super) fn far_start(&mut self, it: &Iterate, obj: f64) -> Result<Option<(Iterate, usize)>> {
+        let (core, op) = (&mut *self.core, self.op);
+        let Some((fs, qs, its, last)) =
+            full_space(self.inner, core, op, &it.f, &it.q, self.alpha, obj)
+        else {
+            return Ok(None);
+        };
+        let mut cached = None;
+        if let Some((tangent, dv)) = last {
+            core.tracker().keep_factors(&qs, tangent.factors)?;
+            cached = Some(dv);
+        }
+        let Ok(eq) = core.equilibrium(&fs, &qs) else {
+            return Ok(None);
+        };
+        if let Some(dv) = cached {
+            let tol = 1e-10 * core.robot().length();
+            if eq.q.iter().zip(&qs).all(|(a, b)| (a - b).abs() <= tol) {
+                *self.cache_rows = op.rows().to_vec();
+                *self.derivs_cache = Some((eq.q.as_slice().to_vec(), dv, None));
+            }
+        }
+        Ok(Some((Iterate::at(fs, eq), its)))
+    }
+}
+
+/// The full-space iterations of a far start: from `(f, q)`, an
+/// equilibrium, the estimate at `alpha` for `op` by the sqp backend's
+/// iterations over `(q, F)`, whose iterates need not be equilibria; made
+/// over a copy of the problem (its analyzed linear solver, its unloaded
+/// start) the first time it is needed, kept in `inner`. Its converged
+/// estimate, an equilibrium, with the iterations it took and its last
+/// QP's factored tangent and derivatives when taken there (the reduced
+/// iteration resumes from them without a factorization or adjoint solves),
+/// if it converged below the objective `obj` at `(f, q)`; `None` otherwise
+/// (the reduced iteration then backtracks on its own).
+///
+/// It is taken as soon as the trust region cuts a step of a cold solve,
+/// without trying the reduced step's equilibrium first: that trial (chord
+/// and plain Newton steps from the linearized prediction) failed on every
+/// large deflection measured and cost factorizations of its own.
+///
+/// Why: far from the solution (the first estimate of a large deflection,
+/// from the unloaded shape) a step of the reduced method needs the
+/// equilibrium at every trial load. A full trust-region step (2 cm of
+/// predicted node motion) leaves its linearized prediction off the
+/// equilibrium by second-order terms (1.9 N on the 0.24 m exudyn cable
+/// under 3 × its self-weight) from which plain Newton steps diverge, so
+/// the line search halved down to 1/16 of the step, 1–2 mm of motion, and
+/// each accepted trial converged a static solve of 4–6 factorizations: 19
+/// iterations and 213 factorizations where the full-space iterations,
+/// which restore the equilibrium in the same linear solve as the step,
+/// take 7 iterations of one factorization each.
+pub(super) fn full_space<E: Element>(
+    inner: &mut Option<Box<SqpEstimator<E>>>,
+    core: &Problem<E>,
+    op: &ObservationOperator,
+    f: &[f64],
+    q: &[f64],
+    alpha: f64,
+    obj: f64,
+) -> Option<FullSpace> {
+    if inner.is_none() {
+        // the same problem (its analysis, its unloaded start)
+        *inner = Some(Box::new(SqpEstimator::over(core.clone()).ok()?));
+    }
+    let sqp = inner.as_mut()?;
+    let s = sqp.solve_one(op, f.to_vec(), q.to_vec(), alpha).ok()?;
+    if !(s.report.status.is_converged() && s.report.objective < obj) {
+        return None;
+    }
+    let last = sqp.take_final_qp(&s.q, op);
+    Some((s.f, s.q, s.report.iterations, last))
+}
+
+/// A converged run of the full-space iterations: the load, the shape, the
+/// iterations, and the last QP's factored tangent and derivatives when they
+/// were taken at that shape.
+type FullSpace = (
+    Vec<f64>,
+    Vec<f64>,
+    usize,
+    Option<(crate::statics::tracker::FactoredTangent, Derivs)>,
+);
