@@ -72,6 +72,7 @@ pub mod quadrature;
 pub mod refine;
 #[cfg(feature = "report")]
 pub mod report;
+pub(crate) mod rng;
 pub mod scene;
 pub mod sensitivity;
 pub mod shape;

@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::{check_all_finite, check_index, check_len, check_positive, Error, Result};
+use crate::rng::Gaussian;
 
 /// How far beyond the robot's scale a marker may be: positions beyond
 /// `MAX_MARKER_SCALE` robot lengths, weights beyond `MAX_MARKER_SCALE`
@@ -237,44 +238,6 @@ impl Observation {
             }
         }
         self
-    }
-}
-
-/// A small deterministic normal generator (SplitMix64 + Box–Muller), for
-/// synthetic observations (and the simulated experiments' noise).
-#[derive(Debug, Clone)]
-pub(crate) struct Gaussian {
-    state: u64,
-    spare: Option<f64>,
-}
-
-impl Gaussian {
-    pub(crate) fn new(seed: u64) -> Self {
-        Gaussian {
-            state: seed ^ 0x9E37_79B9_7F4A_7C15,
-            spare: None,
-        }
-    }
-
-    fn uniform(&mut self) -> f64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        ((z >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-
-    /// One standard normal sample.
-    pub(crate) fn sample(&mut self) -> f64 {
-        if let Some(s) = self.spare.take() {
-            return s;
-        }
-        let (u, v) = (self.uniform(), self.uniform());
-        let r = (-2.0 * u.ln()).sqrt();
-        let t = 2.0 * std::f64::consts::PI * v;
-        self.spare = Some(r * t.sin());
-        r * t.cos()
     }
 }
 

@@ -19,13 +19,10 @@ fn robot(n: usize) -> Robot<PlanarCable> {
 
 fn perturbed(r: &Robot<PlanarCable>, seed: u64) -> Vec<f64> {
     let mut q: Vec<f64> = r.reference_configuration().data.into();
-    let mut s = seed;
+    let mut rng = crate::rng::Lcg::new(seed);
     q[2] *= 1.003; // a stretched base
     for v in q.iter_mut().skip(4) {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        *v += 0.02 * (((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5);
+        *v += 0.02 * rng.centered();
     }
     q
 }

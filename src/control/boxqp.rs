@@ -178,13 +178,8 @@ mod tests {
 
     #[test]
     fn matches_enumeration_of_active_sets_on_random_problems() {
-        let mut state = 12345u64;
-        let mut rnd = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
+        let mut rng = crate::rng::Lcg::new(12345);
+        let mut rnd = || rng.symmetric();
         for n in [1usize, 2, 4, 6] {
             for _ in 0..40 {
                 let a = DMatrix::from_fn(n + 2, n, |_, _| rnd());

@@ -51,9 +51,9 @@ use serde::Serialize;
 use super::{ControllerKind, ParameterUpdater, Trajectory, UpdaterGains};
 use crate::element::{Ancf3d, Element};
 use crate::error::{check_all_finite, check_len, Error, Result};
-use crate::observe::Gaussian;
 use crate::parallel::warm::{WarmCounts, WarmStatics};
 use crate::parallel::{ParallelRobot, ParallelSpec};
+use crate::rng::Gaussian;
 
 /// Weight of the scaled pressures' norm against the position error.
 const MU: f64 = 1e-4;

@@ -598,15 +598,9 @@ mod tests {
 
     /// A deterministic pseudo-random deformed element.
     fn deformed(seed: u64, le: f64) -> [f64; 8] {
-        let mut s = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let mut rnd = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        };
+        let mut rng = crate::rng::Lcg::new(seed);
+        rng.next_u64(); // (the first state is not drawn from)
+        let mut rnd = || rng.centered();
         [
             0.1 * le * rnd(),
             0.1 * le * rnd(),

@@ -7,13 +7,7 @@
 
 use super::*;
 use crate::linsolve::sparse::Ordering;
-
-fn lcg(seed: &mut u64) -> f64 {
-    *seed = seed
-        .wrapping_mul(6364136223846793005)
-        .wrapping_add(1442695040888963407);
-    ((*seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-}
+use crate::rng::Lcg;
 
 /// A chain of `elements` elements coupling two nodes of `b` dofs each.
 fn chain(elements: usize, b: usize) -> (usize, Vec<Vec<usize>>) {
@@ -51,13 +45,13 @@ fn random_matrix(
     elements: &[Vec<usize>],
     spd: bool,
     diag: f64,
-    seed: &mut u64,
+    rng: &mut Lcg,
 ) -> SymmetricMatrix {
     let p = Arc::new(SymmetricPattern::from_elements(n, elements).unwrap());
     let mut k = SymmetricMatrix::zeros(p);
     for (e, el) in elements.iter().enumerate() {
         let m = el.len();
-        let g: Vec<f64> = (0..m * m).map(|_| lcg(seed)).collect();
+        let g: Vec<f64> = (0..m * m).map(|_| rng.centered()).collect();
         let mut block = vec![0.0; m * m];
         for a in 0..m {
             for c in a..m {
@@ -194,10 +188,10 @@ fn patterns() -> Vec<(String, usize, Vec<Vec<usize>>)> {
 
 #[test]
 fn residuals_are_small_for_random_spd_and_indefinite_matrices() {
-    let mut seed = 17u64;
+    let mut rng = Lcg::new(17);
     for (name, n, els) in patterns() {
         for spd in [true, false] {
-            let k = random_matrix(n, &els, spd, 0.3, &mut seed);
+            let k = random_matrix(n, &els, spd, 0.3, &mut rng);
             let neg = if n <= 300 {
                 let eig = dense(&k).symmetric_eigenvalues();
                 let neg = eig.iter().filter(|v| **v < 0.0).count();
@@ -206,7 +200,7 @@ fn residuals_are_small_for_random_spd_and_indefinite_matrices() {
             } else {
                 None
             };
-            let b: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
+            let b: Vec<f64> = (0..n).map(|_| rng.centered()).collect();
             for (solver, mut factor) in solvers(k.pattern()) {
                 let f = factor(&k, FactorOptions::default()).unwrap();
                 if spd {
@@ -236,7 +230,7 @@ fn residuals_are_small_for_random_spd_and_indefinite_matrices() {
 fn the_inertia_is_found_on_simplicial_and_supernodal_factors() {
     // the supernodal path (blocked factors) is taken for wide fronts: a
     // joined structure with a large shared block
-    let mut seed = 5u64;
+    let mut rng = Lcg::new(5);
     let mut seen = [false; 2];
     for (n, els) in [chain(40, 4), joined(10, 6, 150)] {
         for kind in [CholeskyKind::Ldlt, CholeskyKind::Llt] {
@@ -248,7 +242,7 @@ fn the_inertia_is_found_on_simplicial_and_supernodal_factors() {
             let mut s = SparseSolver::with_settings(&p, settings).unwrap();
             seen[usize::from(s.is_supernodal())] = true;
             for spd in [true, false] {
-                let k = random_matrix(n, &els, spd, 0.2, &mut seed);
+                let k = random_matrix(n, &els, spd, 0.2, &mut rng);
                 let eig = dense(&k).symmetric_eigenvalues();
                 let neg = eig.iter().filter(|v| **v < 0.0).count();
                 let f = s.factor(&k, FactorOptions::default()).unwrap();
@@ -256,7 +250,7 @@ fn the_inertia_is_found_on_simplicial_and_supernodal_factors() {
                 assert_eq!((i.positive, i.negative), (n - neg, neg), "n={n} {kind:?}");
                 assert_eq!(f.is_positive_definite(), spd);
                 // the solve of either layout, through the LU when indefinite
-                let b: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
+                let b: Vec<f64> = (0..n).map(|_| rng.centered()).collect();
                 let mut x = b.clone();
                 f.solve_in_place(&mut x).unwrap();
                 let be = backward_error(&k, &x, &b);
@@ -269,14 +263,14 @@ fn the_inertia_is_found_on_simplicial_and_supernodal_factors() {
 
 #[test]
 fn many_right_hand_sides_equal_one_at_a_time() {
-    let mut seed = 9u64;
+    let mut rng = Lcg::new(9);
     for (name, n, els) in patterns().into_iter().skip(2) {
         for spd in [true, false] {
-            let k = random_matrix(n, &els, spd, 0.3, &mut seed);
+            let k = random_matrix(n, &els, spd, 0.3, &mut rng);
             for (solver, mut factor) in solvers(k.pattern()) {
                 let f = factor(&k, FactorOptions::default()).unwrap();
                 for r in [1usize, 3, 10] {
-                    let b: Vec<f64> = (0..n * r).map(|_| lcg(&mut seed)).collect();
+                    let b: Vec<f64> = (0..n * r).map(|_| rng.centered()).collect();
                     let mut x = b.clone();
                     f.solve_cols(&mut x, r).unwrap();
                     for c in 0..r {
@@ -309,12 +303,12 @@ fn many_right_hand_sides_equal_one_at_a_time() {
 
 #[test]
 fn a_refactorization_equals_a_fresh_one() {
-    let mut seed = 23u64;
+    let mut rng = Lcg::new(23);
     for (name, n, els) in patterns() {
-        let k1 = random_matrix(n, &els, true, 0.3, &mut seed);
-        let k2 = random_matrix(n, &els, false, 0.3, &mut seed);
-        let k3 = random_matrix(n, &els, true, 0.3, &mut seed);
-        let b: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
+        let k1 = random_matrix(n, &els, true, 0.3, &mut rng);
+        let k2 = random_matrix(n, &els, false, 0.3, &mut rng);
+        let k3 = random_matrix(n, &els, true, 0.3, &mut rng);
+        let b: Vec<f64> = (0..n).map(|_| rng.centered()).collect();
         let mut reused = SparseSolver::analyze(k1.pattern()).unwrap();
         for k in [&k1, &k2, &k3] {
             // the same pattern, another Arc: accepted
@@ -340,16 +334,16 @@ fn a_refactorization_equals_a_fresh_one() {
 
 #[test]
 fn the_shift_solves_the_shifted_system() {
-    let mut seed = 3u64;
+    let mut rng = Lcg::new(3);
     let (n, els) = joined(6, 4, 6);
     for spd in [true, false] {
-        let k = random_matrix(n, &els, spd, 0.3, &mut seed);
+        let k = random_matrix(n, &els, spd, 0.3, &mut rng);
         let mu = 0.4;
         let mut shifted = k.clone();
         for j in 0..n {
             shifted.add(j, j, mu * k.get(j, j).abs()).unwrap();
         }
-        let b: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
+        let b: Vec<f64> = (0..n).map(|_| rng.centered()).collect();
         for (solver, mut factor) in solvers(k.pattern()) {
             let o = FactorOptions {
                 shift: mu,
@@ -476,7 +470,7 @@ fn singular_and_bad_inputs_give_typed_errors_not_panics() {
 fn rank_deficient_matrices_never_give_nan() {
     // B Bᵀ with B of rank n − 2: singular to working precision; whatever
     // round-off leaves, the answer is an error or a finite solution
-    let mut seed = 31u64;
+    let mut rng = Lcg::new(31);
     for (name, n, els) in patterns().into_iter().take(6) {
         let p = Arc::new(SymmetricPattern::from_elements(n, &els).unwrap());
         let mut k = SymmetricMatrix::zeros(p.clone());
@@ -488,7 +482,7 @@ fn rank_deficient_matrices_never_give_nan() {
             let mut block = vec![0.0; m * m];
             for _ in 0..m.saturating_sub(2) {
                 // v ⟂ the constants on even and on odd dofs
-                let mut v: Vec<f64> = (0..m).map(|_| lcg(&mut seed)).collect();
+                let mut v: Vec<f64> = (0..m).map(|_| rng.centered()).collect();
                 for parity in 0..2 {
                     let idx: Vec<usize> = (0..m).filter(|a| el[*a] % 2 == parity).collect();
                     let mean = idx.iter().map(|&a| v[a]).sum::<f64>() / idx.len().max(1) as f64;
@@ -502,7 +496,7 @@ fn rank_deficient_matrices_never_give_nan() {
             }
             k.add_element(e, &block).unwrap();
         }
-        let b: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
+        let b: Vec<f64> = (0..n).map(|_| rng.centered()).collect();
         for (solver, mut factor) in solvers(&p) {
             match factor(&k, FactorOptions::default()) {
                 Err(LinsolveError::Singular { pivot, scale, .. }) => {
@@ -521,10 +515,10 @@ fn rank_deficient_matrices_never_give_nan() {
 
 #[test]
 fn llt_and_ldlt_first_give_the_same_solution() {
-    let mut seed = 41u64;
+    let mut rng = Lcg::new(41);
     for (name, n, els) in patterns() {
-        let k = random_matrix(n, &els, true, 0.0, &mut seed);
-        let b: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
+        let k = random_matrix(n, &els, true, 0.0, &mut rng);
+        let b: Vec<f64> = (0..n).map(|_| rng.centered()).collect();
         let mut xs = Vec::new();
         for cholesky in [CholeskyKind::Ldlt, CholeskyKind::Llt] {
             let mut s = SparseSolver::with_settings(

@@ -23,7 +23,7 @@ use nalgebra::{DVector, Matrix3, Vector3, Vector6};
 use super::ParallelRobot;
 use crate::element::Element;
 use crate::error::{check_all_finite, Error, Result};
-use crate::observe::Gaussian;
+use crate::rng::Gaussian;
 use crate::statics::Equilibrium;
 
 /// Newton iterations of [`ParallelRobot::estimate_payload`] at most.

@@ -37,6 +37,7 @@ use crate::element::PlanarCable;
 use crate::error::Result;
 use crate::estimate::{AlphaRule, Backend, EstimatorSettings, MarkerObservation, Observation};
 use crate::loads::{LineLoad, Loads, PointForce};
+use crate::rng::SplitMix64;
 use crate::scene::Scene;
 use crate::statics::StaticSolver;
 
@@ -196,28 +197,6 @@ pub struct CoverageReport {
     pub machine: Machine,
 }
 
-/// SplitMix64: seeded uniform numbers.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-    /// Uniform in `[a, b)`.
-    fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.next()
-    }
-    /// Log-uniform in `[a, b)`.
-    fn log_range(&mut self, a: f64, b: f64) -> f64 {
-        (a.ln() + (b.ln() - a.ln()) * self.next()).exp()
-    }
-}
-
 /// The estimator's scene: the two-section robot.
 pub fn scene() -> Scene {
     Scene::two_section()
@@ -234,9 +213,9 @@ fn robot(scene: &Scene, elements: usize) -> Result<Robot<PlanarCable>> {
 
 /// What trial `seed` of `family` draws, on a robot of length `length_m`.
 pub(crate) fn trial_spec(family: Family, seed: u64, length_m: f64) -> TrialSpec {
-    let mut rng = Rng(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ family as u64);
+    let mut rng = SplitMix64::new(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ family as u64);
     let l = length_m;
-    let n = 3 + (rng.next() * 9.0) as usize; // 3..=11
+    let n = 3 + (rng.uniform() * 9.0) as usize; // 3..=11
     let mut marker_s_m: Vec<f64> = (1..n).map(|_| rng.range(0.1 * l, l)).collect();
     marker_s_m.sort_by(f64::total_cmp);
     marker_s_m.push(l);

@@ -1,12 +1,5 @@
 use super::*;
-
-/// A deterministic pseudo-random number in [-1, 1).
-fn noise(seed: &mut u64) -> f64 {
-    *seed = seed
-        .wrapping_mul(6364136223846793005)
-        .wrapping_add(1442695040888963407);
-    ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-}
+use crate::rng::Lcg;
 
 /// The straight node as a plain vector (the tests splice nodes).
 fn straight_node(position: &[f64], direction: &[f64]) -> Vec<f64> {
@@ -15,7 +8,7 @@ fn straight_node(position: &[f64], direction: &[f64]) -> Vec<f64> {
 
 /// A bent, twisted, stretched, slightly sheared element of length `le`.
 fn deformed(le: f64, seed: u64) -> Vec<f64> {
-    let mut s = seed;
+    let mut rng = Lcg::new(seed);
     let mut qe = straight_node(&[0.0; 3], &[1.0, 0.0, 0.0]);
     qe.extend(straight_node(&[le, 0.0, 0.0], &[1.0, 0.0, 0.0]));
     // rotate node 2 by 0.4 rad about an oblique axis, move it, perturb all
@@ -34,7 +27,7 @@ fn deformed(le: f64, seed: u64) -> Vec<f64> {
     qe[13] += 0.2 * le;
     qe[14] -= 0.1 * le;
     for v in qe.iter_mut() {
-        *v += 0.03 * noise(&mut s);
+        *v += 0.03 * rng.symmetric();
     }
     qe
 }

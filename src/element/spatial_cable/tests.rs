@@ -1,33 +1,22 @@
 use super::*;
 use crate::element::PlanarCable;
-
-/// A deterministic pseudo-random number in `[-0.5, 0.5)`.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-    }
-}
+use crate::rng::Lcg;
 
 /// A large deformation of an element of length `le`: the second node off
 /// the first one's tangent, slopes turned by up to about 60° and stretched
 /// by up to ±20 %.
 fn deformed(seed: u64, le: f64) -> [f64; 12] {
-    let mut r = Rng(seed.wrapping_add(17));
+    let mut r = Lcg::new(seed.wrapping_add(17));
     let mut q = [0.0; 12];
     for (i, v) in q.iter_mut().enumerate() {
         *v = match i {
-            0..=2 => 0.1 * le * r.next(),
-            3 => 1.0 + 0.4 * r.next(),
-            4 | 5 => 1.2 * r.next(),
-            6 => le * (1.0 + 0.3 * r.next()),
-            7 | 8 => 0.6 * le * r.next(),
-            9 => 0.9 + 0.4 * r.next(),
-            _ => 1.2 * r.next(),
+            0..=2 => 0.1 * le * r.centered(),
+            3 => 1.0 + 0.4 * r.centered(),
+            4 | 5 => 1.2 * r.centered(),
+            6 => le * (1.0 + 0.3 * r.centered()),
+            7 | 8 => 0.6 * le * r.centered(),
+            9 => 0.9 + 0.4 * r.centered(),
+            _ => 1.2 * r.centered(),
         };
     }
     q
@@ -35,8 +24,8 @@ fn deformed(seed: u64, le: f64) -> [f64; 12] {
 
 /// A random rotation matrix (from a random unit quaternion).
 fn rotation(seed: u64) -> [[f64; 3]; 3] {
-    let mut r = Rng(seed);
-    let q = [r.next(), r.next(), r.next(), r.next()];
+    let mut r = Lcg::new(seed);
+    let q = [r.centered(), r.centered(), r.centered(), r.centered()];
     let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
     let [w, x, y, z] = q.map(|v| v / n);
     [
@@ -130,8 +119,8 @@ fn energy_is_invariant_under_rigid_motions_and_the_gradient_rotates() {
     for seed in 0..20 {
         let q = deformed(seed + 300, le);
         let rot = rotation(seed + 1000);
-        let mut shift = Rng(seed + 2000);
-        let t = [shift.next(), shift.next(), shift.next()];
+        let mut shift = Lcg::new(seed + 2000);
+        let t = [shift.centered(), shift.centered(), shift.centered()];
         // positions rotate and translate, slopes rotate
         let mut qr = [0.0; 12];
         for k in 0..4 {

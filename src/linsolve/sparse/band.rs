@@ -323,13 +323,8 @@ pub(super) mod tests {
             .collect();
         let p = Arc::new(SymmetricPattern::from_elements(n, &els).unwrap());
         let mut k = SymmetricMatrix::zeros(p);
-        let mut s = seed;
-        let mut rand = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        };
+        let mut rng = crate::rng::Lcg::new(seed);
+        let mut rand = || rng.centered();
         for e in 0..elements {
             k.add_element(e, &block(&mut rand, 2 * dofs)).unwrap();
         }

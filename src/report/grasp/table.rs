@@ -32,6 +32,7 @@ use crate::error::Result;
 use crate::grasp::gripper::GripperSpec;
 use crate::grasp::object::{GraspObject, Shape};
 use crate::grasp::trial::{run_trial, Failure, GraspSettings, Placement, Strategy, TrialOutcome};
+use crate::rng::SplitMix64;
 
 /// Largest placement offset (m).
 pub const MAX_OFFSET_M: f64 = 0.006;
@@ -98,16 +99,6 @@ pub fn table_objects() -> Vec<GraspObject> {
     ]
 }
 
-/// SplitMix64: a uniform number in `[−1, 1)`.
-fn uniform(state: &mut u64) -> f64 {
-    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let mut z = *state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^= z >> 31;
-    2.0 * ((z >> 11) as f64 / (1u64 << 53) as f64) - 1.0
-}
-
 /// The placement of try `k` of object `i` under `seed`.
 ///
 /// # Example
@@ -118,12 +109,13 @@ fn uniform(state: &mut u64) -> f64 {
 /// assert!(p.offset_m.abs() <= MAX_OFFSET_M);
 /// ```
 pub fn placement(seed: u64, object: usize, try_index: usize) -> Placement {
-    let mut st = seed
-        .wrapping_mul(0x2545_F491_4F6C_DD1D)
-        .wrapping_add((object as u64) << 32 | try_index as u64);
+    let mut rng = SplitMix64::new(
+        seed.wrapping_mul(0x2545_F491_4F6C_DD1D)
+            .wrapping_add((object as u64) << 32 | try_index as u64),
+    );
     Placement {
-        offset_m: MAX_OFFSET_M * uniform(&mut st),
-        angle_rad: MAX_TURN_RAD * uniform(&mut st),
+        offset_m: MAX_OFFSET_M * rng.symmetric(),
+        angle_rad: MAX_TURN_RAD * rng.symmetric(),
     }
 }
 
