@@ -52,6 +52,6 @@ pub use track::{
     TrajectorySpec,
 };
 pub use trajectory::Trajectory;
-pub use updater::{ParameterUpdater, UpdaterGains};
+pub use updater::{ParameterUpdater, UpdaterGains, MAX_K_I_PER_S2, MAX_K_P_PER_S};
 pub use virtual_payload::VirtualPayload;
 pub use weighing::{MassConfiguration, MassRow, MassTable, WeighingExperiment};

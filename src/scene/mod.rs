@@ -7,6 +7,7 @@
 mod ladder;
 mod load;
 pub mod parallel;
+pub mod ranges;
 mod robot;
 mod settings;
 
@@ -339,6 +340,7 @@ impl Scene {
     /// is a three-component one in a planar scene); a spatial scene's
     /// element counts are fixed (`"auto"` is planar only).
     pub fn validate(&self) -> Result<()> {
+        ranges::check(self)?;
         match self.robot.element {
             ElementKind::PlanarCable => self.validate_as::<PlanarCable>(),
             ElementKind::SpatialCable | ElementKind::Ancf3d => {
@@ -435,6 +437,7 @@ impl Scene {
             }
             seen.push(s);
         }
+        ranges::check_estimate_work("markers", self.markers.len(), robot.n_elements())?;
         if auto {
             Ok(()) // checked on the way to the smallest mesh
         } else {
@@ -656,7 +659,12 @@ impl Scene {
     pub fn robot_spec(&self) -> RobotSpec {
         RobotSpec {
             sections: self.robot.sections.clone(),
-            base: self.base.clone(),
+            base: crate::assembly::Base {
+                // (−π, π]: an angle is reduced before use (bit for bit the
+                // same inside)
+                angle_rad: ranges::reduce_angle(self.base.angle_rad),
+                ..self.base.clone()
+            },
             gravity_m_per_s2: self.gravity_m_per_s2.clone(),
             axial_gauss_points: self.robot.axial_gauss_points,
             bending_gauss_points: self.robot.bending_gauss_points,
