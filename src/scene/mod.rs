@@ -4,6 +4,7 @@
 //! Unknown fields and missing required ones are errors that name the field.
 //! Format: `README.md`; the paper's two-section robot: `examples/two_section.json`.
 
+pub(crate) mod json;
 mod ladder;
 mod load;
 pub mod parallel;
@@ -276,19 +277,8 @@ impl Scene {
     /// `robot.sections[0].elements: invalid value ...`, and gives the line and
     /// column); the errors of [`Scene::validate`].
     pub fn from_json(text: &str) -> Result<Scene> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
-            // `?` marks a segment the parser had not identified yet (truncated input)
-            let path = e.path().to_string();
-            let path = path.trim_end_matches(".?").trim_end_matches('?');
-            let inner = e.into_inner();
-            Error::Scene {
-                message: if path.is_empty() || path == "." {
-                    inner.to_string()
-                } else {
-                    format!("{path}: {inner}")
-                },
-            }
+        let scene: Scene = json::parse(text).map_err(|e| Error::Scene {
+            message: e.located(),
         })?;
         scene.validate()?;
         Ok(scene)
