@@ -182,3 +182,55 @@ fn friction_outside_its_range_is_refused() {
         assert_eq!(e.field(), Some("object.mu"), "{e}");
     }
 }
+
+/// Bounded work (issue 33, "Unbounded work"): the runs that were accepted
+/// for hours are refused up front, naming the field.
+#[test]
+fn runs_beyond_their_step_budget_are_refused_naming_the_field() {
+    use softrod::control::parallel::TrackSettings;
+    use softrod::touch::AvoidScene;
+    let scene = track_scene();
+    // `track`: 3600 s at 10 kHz (3.6e7 steps) was accepted
+    let file = trajectory(|t| {
+        t["trajectory"]["duration_s"] = 3590.0.into();
+        t["trajectory"]["hold_s"] = 10.0.into();
+        t["loop"]["control_rate_hz"] = 1e4.into();
+    });
+    let e = check_track(&scene, &file, None).unwrap_err();
+    assert_eq!(e.field(), Some("loop.control_rate_hz"), "{e}");
+    // the same hour at the default 30 Hz is within the budget
+    let file = trajectory(|t| {
+        t["trajectory"]["duration_s"] = 3590.0.into();
+        t["trajectory"]["hold_s"] = 10.0.into();
+    });
+    assert!(check_track(&scene, &file, None).is_ok());
+    // `avoid`: 1e6 steps (about 65 min) was accepted
+    let mut a = example("avoid_disk.json");
+    a["avoid"] = serde_json::json!({"duration_s": 5e4, "control_rate_hz": 20.0});
+    let e = AvoidScene::from_json(&a.to_string()).unwrap_err();
+    assert_eq!(e.field(), Some("avoid.duration_s"), "{e}");
+    // parallel `track`: 600 s at 1 kHz (6e5 steps, about 4 h) was accepted
+    let mut p = example("parallel_track_settings.json");
+    p["duration_s"] = 590.0.into();
+    p["hold_s"] = 10.0.into();
+    p["control_rate_hz"] = 1000.0.into();
+    let e = TrackSettings::from_json(&p.to_string()).unwrap_err();
+    assert_eq!(e.field(), Some("control_rate_hz"), "{e}");
+    // markers: beyond MAX_MARKERS, and beyond the markers × elements budget
+    let base = example("two_section.json");
+    let markers = |n: usize| {
+        (0..n)
+            .map(|i| serde_json::json!({"s_m": 0.24 * (i + 1) as f64 / n as f64}))
+            .collect::<Vec<_>>()
+    };
+    let mut v = base.clone();
+    v["markers"] = markers(softrod::scene::ranges::MAX_MARKERS + 1).into();
+    let e = Scene::from_json(&v.to_string()).unwrap_err();
+    assert!(e.field().is_some_and(|f| f.starts_with("markers")), "{e}");
+    let mut v = base.clone();
+    v["robot"]["sections"][0]["elements"] = 1000.into();
+    v["markers"] = markers(30).into();
+    let e = Scene::from_json(&v.to_string()).unwrap_err();
+    assert!(e.field().is_some_and(|f| f.starts_with("markers")), "{e}");
+    assert!(matches!(e, softrod::Error::TooLarge { .. }), "{e}");
+}

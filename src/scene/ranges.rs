@@ -31,15 +31,16 @@ pub const MAX_GRAVITY_M_PER_S2: f64 = 981.0;
 /// 10 MPa = 100 bar, ten times what a pneumatic elastomer takes.
 pub const MAX_PRESSURE_PA: f64 = 1e7;
 
-/// The most markers a scene (and a markers file) may have: one every
-/// 0.1 mm on a robot of a metre is 10 000; motion capture has tens.
-pub const MAX_MARKERS: usize = 10_000;
+/// The most markers a scene may have: motion capture has tens; the
+/// estimator's cost grows faster than linearly in the markers (measured on
+/// 20 elements, both backends: 10 markers 0.07 s, 100 markers 1.6–2.0 s,
+/// 200 markers 11 s, so 250 about 20 s; 1 000 markers over 118 s).
+pub const MAX_MARKERS: usize = 250;
 
-/// The largest `markers × elements` an estimate is asked for: the
-/// estimator's work per iteration grows with the product (a marker row per
-/// observed component over every coordinate). 2 × 10⁵ is 10 000 markers on
-/// 20 elements, or 100 markers on 2 000.
-pub const MAX_MARKER_ELEMENT_PRODUCT: usize = 200_000;
+/// The largest `markers × elements` of a scene's markers (the ones an
+/// estimate or a tracking loop observes): 9 markers on the largest mesh
+/// (2 048 elements), 250 on 80.
+pub const MAX_MARKER_ELEMENT_PRODUCT: usize = 20_000;
 
 /// `|v| ≤ max` and finite, or the error naming `name`.
 fn within(name: &str, v: f64, max: f64, unit: &str) -> Result<()> {

@@ -21,7 +21,7 @@ mod table;
 
 pub use avoid::{
     calibrate_on_free_plant, check_obstacles, run_avoidance, AvoidRun, AvoidSample, AvoidSettings,
-    AvoidStatus, TouchedPoint,
+    AvoidStatus, TouchedPoint, MAX_AVOID_STEPS,
 };
 pub use calibrate::{calibrate, Calibration, FreeFrame};
 pub use field::{field_gradient, repulsive, FieldParams};
