@@ -608,11 +608,14 @@ fn every_refused_grasp_mutation_names_its_field() {
     assert!(!files.is_empty() && total >= 30, "{total}");
 }
 
+/// A parse-and-check function over a file's text.
+type Check = Box<dyn Fn(&str) -> Result<(), softrod::Error>>;
+
 /// The parse-and-check function the command line runs on an example file,
 /// by the file's kind; `None` for a markers file (read by `softrod
 /// estimate`'s own reader) and for the scenes the trajectory and payload
 /// checks run against.
-fn checker(name: &str, text: &str) -> Option<Box<dyn Fn(&str) -> Result<(), softrod::Error>>> {
+fn checker(name: &str, text: &str) -> Option<Check> {
     use softrod::control::parallel::TrackSettings;
     use softrod::control::{check_track, payloads_from_json, TrackFile};
     use softrod::grasp::scene::GraspScene;

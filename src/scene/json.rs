@@ -245,11 +245,14 @@ fn descend(v: &Value, rel: &mut Vec<Step>, f: &mut dyn FnMut(&[Step], &Value)) {
     }
 }
 
+/// A predicate on JSON values.
+type Matcher = Box<dyn Fn(&Value) -> bool>;
+
 /// A predicate for the values that serde's "invalid type/value/length"
 /// message `m` describes (`string "NaN"`, `floating point `1e308``,
 /// `integer `-1``, `sequence`, `map`, `null`, `boolean `true``, `invalid
 /// length 0`).
-fn unexpected_matcher(m: &str) -> Option<Box<dyn Fn(&Value) -> bool>> {
+fn unexpected_matcher(m: &str) -> Option<Matcher> {
     if let Some(rest) = m.strip_prefix("invalid length ") {
         let n: usize = rest
             .split(|c: char| !c.is_ascii_digit())

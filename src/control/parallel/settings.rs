@@ -183,10 +183,10 @@ impl TrackSettings {
     }
 }
 
-/// The most control steps of a parallel-robot tracking run (`(duration_s
-/// + hold_s) × control_rate_hz`): 600 s at the default 10 Hz, ≈ 2.4 min of
-/// computation at the measured ≈ 24 ms per step (600 s at 1 kHz, 6e5 steps
-/// or ≈ 4 h, was accepted before).
+/// The most control steps of a parallel-robot tracking run, `control_rate_hz`
+/// times `duration_s` plus `hold_s`: 600 s at the default 10 Hz, about 2.4
+/// min of computation at the measured 24 ms per step (600 s at 1 kHz, 6e5
+/// steps or about 4 h, was accepted before).
 pub const MAX_PARALLEL_TRACK_STEPS: usize = 6_000;
 
 impl TrackSettings {
