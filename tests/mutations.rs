@@ -10,15 +10,37 @@ use softrod::statics::StaticSolver;
 
 const VALUES: [f64; 5] = [-1.0, 0.0, 1e308, -1e-300, 1e9];
 
+/// The values that are not numbers: the string "NaN", a string, an empty array.
+fn odd_values() -> [Value; 3] {
+    [
+        Value::from("NaN"),
+        Value::from("a string"),
+        Value::Array(Vec::new()),
+    ]
+}
+
 /// Every number in `v` with its path as a user reads it (`robot.sections[0].length_m`).
 fn numbers(v: &Value, path: String, out: &mut Vec<(String, Vec<PathStep>)>, steps: Vec<PathStep>) {
+    walk(v, path, out, steps, &|x| x.is_number());
+}
+
+/// Every value in `v` that `pick` selects, with its path and steps.
+fn walk(
+    v: &Value,
+    path: String,
+    out: &mut Vec<(String, Vec<PathStep>)>,
+    steps: Vec<PathStep>,
+    pick: &dyn Fn(&Value) -> bool,
+) {
+    if pick(v) {
+        out.push((path.clone(), steps.clone()));
+    }
     match v {
-        Value::Number(_) => out.push((path, steps)),
         Value::Array(a) => {
             for (i, x) in a.iter().enumerate() {
                 let mut s = steps.clone();
                 s.push(PathStep::Index(i));
-                numbers(x, format!("{path}[{i}]"), out, s);
+                walk(x, format!("{path}[{i}]"), out, s, pick);
             }
         }
         Value::Object(o) => {
@@ -30,7 +52,7 @@ fn numbers(v: &Value, path: String, out: &mut Vec<(String, Vec<PathStep>)>, step
                 } else {
                     format!("{path}.{k}")
                 };
-                numbers(x, p, out, s);
+                walk(x, p, out, s, pick);
             }
         }
         _ => {}
@@ -51,13 +73,78 @@ fn mutants(base: &Value) -> impl Iterator<Item = (String, f64, Value)> + '_ {
     paths.into_iter().flat_map(move |(path, steps)| {
         VALUES.into_iter().map(move |x| {
             let mut v = base.clone();
-            set(&mut v, &steps, x);
+            set(&mut v, &steps, serde_json::json!(x));
             (path.clone(), x, v)
         })
     })
 }
 
-fn set(v: &mut Value, steps: &[PathStep], x: f64) {
+/// The mutants beyond [`mutants`]: each number set to each of
+/// [`odd_values`], each object key deleted and each duplicated (the same
+/// key and value written twice). Yields the path the refusal must name, a
+/// description and the mutated text (a duplicated key has no `Value`).
+fn more_mutants(base: &Value) -> Vec<(String, String, String)> {
+    let mut out = Vec::new();
+    let mut paths = Vec::new();
+    numbers(base, String::new(), &mut paths, Vec::new());
+    for (path, steps) in &paths {
+        for x in odd_values() {
+            let mut v = base.clone();
+            set(&mut v, steps, x.clone());
+            out.push((path.clone(), format!("= {x}"), v.to_string()));
+        }
+    }
+    // every key of every object (the values under a key: objects' members)
+    let mut keys = Vec::new();
+    walk(base, String::new(), &mut keys, Vec::new(), &|_| true);
+    for (path, steps) in keys {
+        let Some(PathStep::Key(k)) = steps.last() else {
+            continue;
+        };
+        let parent = &steps[..steps.len() - 1];
+        let mut v = base.clone();
+        remove(&mut v, parent, k);
+        out.push((path.clone(), "deleted".into(), v.to_string()));
+        out.push((
+            path.clone(),
+            "duplicated".into(),
+            duplicate(base, parent, k),
+        ));
+    }
+    out
+}
+
+fn remove(v: &mut Value, parent: &[PathStep], key: &str) {
+    let mut cur = v;
+    for s in parent {
+        cur = match s {
+            PathStep::Key(k) => cur.get_mut(k.as_str()).unwrap(),
+            PathStep::Index(i) => cur.get_mut(*i).unwrap(),
+        };
+    }
+    cur.as_object_mut().unwrap().remove(key);
+}
+
+/// `base` as text with `key` of the object at `parent` written twice.
+fn duplicate(base: &Value, parent: &[PathStep], key: &str) -> String {
+    const MARK: &str = "\u{1}duplicate\u{1}";
+    let mut v = base.clone();
+    let mut cur = &mut v;
+    for s in parent {
+        cur = match s {
+            PathStep::Key(k) => cur.get_mut(k.as_str()).unwrap(),
+            PathStep::Index(i) => cur.get_mut(*i).unwrap(),
+        };
+    }
+    let o = cur.as_object_mut().unwrap();
+    let x = o[key].clone();
+    o.insert(MARK.to_string(), x);
+    let text = v.to_string();
+    let marked = serde_json::to_string(MARK).unwrap();
+    text.replace(&marked, &serde_json::to_string(key).unwrap())
+}
+
+fn set(v: &mut Value, steps: &[PathStep], x: Value) {
     let mut cur = v;
     for s in steps {
         cur = match s {
@@ -65,7 +152,7 @@ fn set(v: &mut Value, steps: &[PathStep], x: f64) {
             PathStep::Index(i) => cur.get_mut(*i).unwrap(),
         };
     }
-    *cur = serde_json::json!(x);
+    *cur = x;
 }
 
 /// Does the error name the field: its path, or the array holding it?
@@ -519,4 +606,130 @@ fn every_refused_grasp_mutation_names_its_field() {
         GraspScene::from_json(text).map(|_| ())
     });
     assert!(!files.is_empty() && total >= 30, "{total}");
+}
+
+/// A parse-and-check function over a file's text.
+type Check = Box<dyn Fn(&str) -> Result<(), softrod::Error>>;
+
+/// The parse-and-check function the command line runs on an example file,
+/// by the file's kind; `None` for a markers file (read by `softrod
+/// estimate`'s own reader) and for the scenes the trajectory and payload
+/// checks run against.
+fn checker(name: &str, text: &str) -> Option<Check> {
+    use softrod::control::parallel::TrackSettings;
+    use softrod::control::{check_track, payloads_from_json, TrackFile};
+    use softrod::grasp::scene::GraspScene;
+    use softrod::scene::parallel::{ParallelScene, PlatformMarkers};
+    use softrod::touch::AvoidScene;
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
+    let read = |f: &str| std::fs::read_to_string(format!("{dir}/{f}")).unwrap();
+    if name.ends_with("markers.json") && !name.starts_with("parallel_") {
+        return None;
+    }
+    if ParallelScene::is_parallel(text) {
+        return Some(Box::new(|t| ParallelScene::from_json(t).map(|_| ())));
+    }
+    if name.starts_with("avoid_") {
+        return Some(Box::new(|t| AvoidScene::from_json(t).map(|_| ())));
+    }
+    if name.starts_with("grasp_") {
+        return Some(Box::new(|t| GraspScene::from_json(t).map(|_| ())));
+    }
+    if name.starts_with("parallel_track_settings") {
+        return Some(Box::new(|t| TrackSettings::from_json(t).map(|_| ())));
+    }
+    if name.starts_with("parallel_markers") {
+        let scene = ParallelScene::from_json(&read("parallel_estimate.json")).unwrap();
+        return Some(Box::new(move |t| {
+            PlatformMarkers::from_json(t, &scene).map(|_| ())
+        }));
+    }
+    let track_scene = Scene::from_json(&read("track_scene.json")).unwrap();
+    if name.starts_with("trajectory_") {
+        return Some(Box::new(move |t| {
+            check_track(&track_scene, &TrackFile::from_json(t)?, None).map(|_| ())
+        }));
+    }
+    if name.starts_with("payload_") {
+        let circle = TrackFile::from_json(&read("trajectory_circle.json")).unwrap();
+        return Some(Box::new(move |t| {
+            check_track(&track_scene, &circle, Some(&payloads_from_json(t)?)).map(|_| ())
+        }));
+    }
+    Some(Box::new(|t| {
+        let scene = Scene::from_json(t)?;
+        if !scene.has_auto_elements() && !solve_finite(&scene).unwrap_or(true) {
+            return Err(softrod::Error::NonFinite {
+                context: "accepted: the solved shape".into(),
+            });
+        }
+        Ok(())
+    }))
+}
+
+/// The extended sweep of issue 33: every example input (scenes, parallel,
+/// avoidance and grasp scenes, trajectory, payload, parallel tracking and
+/// platform-marker files) × each number set to "NaN", a string and `[]`,
+/// plus the deletion and the duplication of every field. Every refusal
+/// must name the exact field (its path as written: not an ancestor, not an
+/// internal name); an accepted scene is solved and must be finite.
+#[test]
+fn every_odd_value_deleted_or_duplicated_field_is_refused_by_its_path() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|f| f.extension().is_some_and(|e| e == "json"))
+        .collect();
+    files.sort();
+    let (mut total, mut refused, mut accepted, mut nan) = (0, 0, 0, 0);
+    let mut wrong = Vec::new();
+    for file in &files {
+        let name = file.file_name().unwrap().to_string_lossy().to_string();
+        let text = std::fs::read_to_string(file).unwrap();
+        let Some(check) = checker(&name, &text) else {
+            continue;
+        };
+        let base: Value = serde_json::from_str(&text).unwrap();
+        for (path, what, t) in more_mutants(&base) {
+            total += 1;
+            match check(&t) {
+                Ok(()) => accepted += 1,
+                Err(softrod::Error::NonFinite { .. }) => {
+                    nan += 1;
+                    wrong.push(format!("{name}: {path} {what}: accepted, non-finite shape"));
+                }
+                Err(e) => {
+                    refused += 1;
+                    let m = e.to_string();
+                    if !(names(&m, &path) || what == "deleted" && names_written(&m, &base)) {
+                        wrong.push(format!("{name}: {path} {what}: {m}"));
+                    }
+                }
+            }
+        }
+    }
+    println!(
+        "extended sweep: {total} mutations: {refused} refused, {accepted} accepted ({nan} with a NaN), {} wrong",
+        wrong.len()
+    );
+    assert!(total > 1000, "only {total}");
+    assert!(
+        wrong.is_empty(),
+        "{} of {refused} refusals name the wrong field:\n{}",
+        wrong.len(),
+        wrong.join("\n")
+    );
+}
+
+/// For a deleted field whose default conflicts with another field (a
+/// planar default against 3-D vectors, no chambers against the pressures)
+/// or an object left without either of two alternatives (a marker's `node`
+/// or `s_m`): the refusal names, by its exact path, a field the file still
+/// has.
+fn names_written(message: &str, doc: &Value) -> bool {
+    let mut all = Vec::new();
+    walk(doc, String::new(), &mut all, Vec::new(), &|_| true);
+    all.iter()
+        .any(|(p, _)| !p.is_empty() && message.contains(&format!("`{p}`")))
 }

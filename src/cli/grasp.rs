@@ -46,8 +46,7 @@ pub fn run(scene: PathBuf, strategy: Option<StrategyArg>, out: Option<PathBuf>) 
     );
     let text = serde_json::to_string_pretty(&outcome)?;
     match out {
-        Some(path) => std::fs::write(&path, text + "\n")
-            .with_context(|| format!("cannot write {}", path.display())),
+        Some(path) => super::atomic::write_atomic(&path, (text + "\n").as_bytes()),
         None => {
             outln!("{text}");
             Ok(())

@@ -11,6 +11,7 @@ macro_rules! outln {
     }};
 }
 
+mod atomic;
 mod avoid;
 mod demo;
 mod replay;
@@ -364,8 +365,7 @@ fn solve(scene: &Scene, pressures: Option<Vec<f64>>) -> Result<SolveOut> {
 fn write_json<T: Serialize>(value: &T, out: Option<&PathBuf>) -> Result<()> {
     let text = serde_json::to_string_pretty(value)?;
     match out {
-        Some(path) => std::fs::write(path, text + "\n")
-            .with_context(|| format!("cannot write {}", path.display())),
+        Some(path) => atomic::write_atomic(path, (text + "\n").as_bytes()),
         None => {
             use std::io::Write;
             let mut stdout = std::io::stdout().lock();

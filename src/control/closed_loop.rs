@@ -118,14 +118,7 @@ impl LoopSettings {
                 format!("must be > 0 and at most {MAX_RATE_HZ} Hz"),
             ));
         }
-        for (name, v) in [
-            ("loop.gains.k_p_per_s", self.gains.k_p_per_s),
-            ("loop.gains.k_i_per_s2", self.gains.k_i_per_s2),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(Error::invalid(name, v, "must be finite and > 0"));
-            }
-        }
+        self.gains.validate_at("loop.gains.")?;
         if let Some(a) = self.abort_error_m {
             if !(a.is_finite() && a > 0.0) {
                 return Err(Error::invalid(

@@ -44,9 +44,9 @@ pub use mass::{MassEstimate, MassEstimator, MassForce, MassReference, MassSettin
 pub use track::{
     build_trajectory, check_track, payloads_from_json, run_track, CircleSpec, FigureEightSpec,
     LineSpec, PressuresSpec, SamplesSpec, TrackFile, TrackRun, TrackSample, TrackSummary,
-    TrajectorySpec,
+    TrajectorySpec, MAX_TRACK_STEPS,
 };
 pub use trajectory::Trajectory;
-pub use updater::{ParameterUpdater, UpdaterGains};
+pub use updater::{ParameterUpdater, UpdaterGains, MAX_K_I_PER_S2, MAX_K_P_PER_S};
 pub use virtual_payload::VirtualPayload;
 pub use weighing::{MassConfiguration, MassRow, MassTable, WeighingExperiment};

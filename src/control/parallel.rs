@@ -69,7 +69,7 @@ const MAX_STEP: f64 = 0.25;
 const ESTIMATOR_ITERATIONS: usize = 8;
 
 mod settings;
-pub use settings::TrackSettings;
+pub use settings::{TrackSettings, MAX_PARALLEL_TRACK_STEPS};
 
 /// The controller of one robot model: estimator, updater, inverse
 /// kinematics, with their warm states (see the [module

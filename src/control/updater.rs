@@ -20,6 +20,15 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{check_all_finite, check_len, Error, Result};
 
+/// The largest proportional gain of the updater (1/s): a time constant of
+/// 0.1 ms, one period of the fastest control rate a loop accepts (10 kHz);
+/// far beyond it the discretization's matrix exponential overflows (at
+/// `1e308` every sample's load was NaN).
+pub const MAX_K_P_PER_S: f64 = 1e4;
+
+/// The largest integral gain of the updater (1/s²): `MAX_K_P_PER_S²`.
+pub const MAX_K_I_PER_S2: f64 = 1e8;
+
 /// Gains of the updater (31); defaults `K_P = 4` (1/s), `K_I = 4` (1/s²).
 ///
 /// # Example
@@ -30,9 +39,9 @@ use crate::error::{check_all_finite, check_len, Error, Result};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct UpdaterGains {
-    /// Proportional gain `K_P` (1/s, > 0; default 4).
+    /// Proportional gain `K_P` (1/s, in `(0, MAX_K_P_PER_S]`; default 4).
     pub k_p_per_s: f64,
-    /// Integral gain `K_I` (1/s², > 0; default 4).
+    /// Integral gain `K_I` (1/s², in `(0, MAX_K_I_PER_S2]`; default 4).
     pub k_i_per_s2: f64,
 }
 
@@ -50,14 +59,25 @@ impl UpdaterGains {
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] naming `updater.k_p_per_s` or
-    /// `updater.k_i_per_s2` for a gain ≤ 0 or not finite.
+    /// `updater.k_i_per_s2` for a gain ≤ 0, not finite or above
+    /// [`MAX_K_P_PER_S`] / [`MAX_K_I_PER_S2`].
     pub fn validate(&self) -> Result<()> {
-        for (name, v) in [
-            ("updater.k_p_per_s", self.k_p_per_s),
-            ("updater.k_i_per_s2", self.k_i_per_s2),
+        self.validate_at("updater.")
+    }
+
+    /// [`UpdaterGains::validate`] with the fields named `prefix` + name
+    /// (`loop.gains.` in a trajectory file).
+    pub(crate) fn validate_at(&self, prefix: &str) -> Result<()> {
+        for (name, v, max) in [
+            ("k_p_per_s", self.k_p_per_s, MAX_K_P_PER_S),
+            ("k_i_per_s2", self.k_i_per_s2, MAX_K_I_PER_S2),
         ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(Error::invalid(name, v, "must be finite and > 0"));
+            if !(v.is_finite() && v > 0.0 && v <= max) {
+                return Err(Error::invalid(
+                    format!("{prefix}{name}"),
+                    v,
+                    format!("must be > 0 and at most {max:e}"),
+                ));
             }
         }
         Ok(())

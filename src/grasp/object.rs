@@ -112,6 +112,11 @@ impl Pose {
     }
 }
 
+/// The friction coefficients an object accepts: from 0.01 (ice on steel)
+/// to 10 (far above any rubber). At `mu = 0` the hold check's friction
+/// cone degenerates and its program ended in `InsufficientProgress`.
+pub const MU_RANGE: (f64, f64) = (0.01, 10.0);
+
 fn positive(path: &str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {
         Ok(())
@@ -121,7 +126,7 @@ fn positive(path: &str, v: f64) -> Result<()> {
 }
 
 impl GraspObject {
-    /// Checks the mass (`> 0`), `mu` (`>= 0`) and the shape (positive
+    /// Checks the mass (`> 0`), `mu` (in [`MU_RANGE`]) and the shape (positive
     /// sizes; a rounded polygon's core convex and counter-clockwise, at
     /// least three vertices); field paths start with `path`.
     ///
@@ -129,11 +134,15 @@ impl GraspObject {
     /// [`Error::InvalidParameter`] naming the field.
     pub fn validate(&self, path: &str) -> Result<()> {
         positive(&format!("{path}.mass_kg"), self.mass_kg)?;
-        if !(self.mu.is_finite() && self.mu >= 0.0) {
+        let (lo, hi) = MU_RANGE;
+        if !(self.mu.is_finite() && (lo..=hi).contains(&self.mu)) {
             return Err(Error::invalid(
                 format!("{path}.mu"),
                 self.mu,
-                "must be finite and >= 0",
+                format!(
+                    "must lie in [{lo}, {hi}]: a pinch without friction holds no weight \
+                     (and its cone program degenerates), and no rubber grips above {hi}"
+                ),
             ));
         }
         let sp = format!("{path}.shape");

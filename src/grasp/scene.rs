@@ -68,17 +68,8 @@ impl GraspScene {
     /// assert_eq!(e.field(), Some("seed"), "{e}");
     /// ```
     pub fn from_json(text: &str) -> Result<GraspScene> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let s: GraspScene = serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            let path = path.trim_end_matches(".?").trim_end_matches('?');
-            let name = if path.is_empty() || path == "." {
-                "(file)".to_string()
-            } else {
-                path.to_string()
-            };
-            Error::invalid(name, "as written", e.into_inner().to_string())
-        })?;
+        let s: GraspScene = crate::scene::json::parse(text)
+            .map_err(|e| Error::invalid(e.name(), "as written", e.message))?;
         check_trial(&s.gripper, &s.object, &s.placement, &s.settings)?;
         Ok(s)
     }

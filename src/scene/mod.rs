@@ -4,9 +4,11 @@
 //! Unknown fields and missing required ones are errors that name the field.
 //! Format: `README.md`; the paper's two-section robot: `examples/two_section.json`.
 
+pub(crate) mod json;
 mod ladder;
 mod load;
 pub mod parallel;
+pub mod ranges;
 mod robot;
 mod settings;
 
@@ -275,19 +277,8 @@ impl Scene {
     /// `robot.sections[0].elements: invalid value ...`, and gives the line and
     /// column); the errors of [`Scene::validate`].
     pub fn from_json(text: &str) -> Result<Scene> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
-            // `?` marks a segment the parser had not identified yet (truncated input)
-            let path = e.path().to_string();
-            let path = path.trim_end_matches(".?").trim_end_matches('?');
-            let inner = e.into_inner();
-            Error::Scene {
-                message: if path.is_empty() || path == "." {
-                    inner.to_string()
-                } else {
-                    format!("{path}: {inner}")
-                },
-            }
+        let scene: Scene = json::parse(text).map_err(|e| Error::Scene {
+            message: e.located(),
         })?;
         scene.validate()?;
         Ok(scene)
@@ -339,6 +330,7 @@ impl Scene {
     /// is a three-component one in a planar scene); a spatial scene's
     /// element counts are fixed (`"auto"` is planar only).
     pub fn validate(&self) -> Result<()> {
+        ranges::check(self)?;
         match self.robot.element {
             ElementKind::PlanarCable => self.validate_as::<PlanarCable>(),
             ElementKind::SpatialCable | ElementKind::Ancf3d => {
@@ -435,6 +427,7 @@ impl Scene {
             }
             seen.push(s);
         }
+        ranges::check_estimate_work("markers", self.markers.len(), robot.n_elements())?;
         if auto {
             Ok(()) // checked on the way to the smallest mesh
         } else {
@@ -656,7 +649,12 @@ impl Scene {
     pub fn robot_spec(&self) -> RobotSpec {
         RobotSpec {
             sections: self.robot.sections.clone(),
-            base: self.base.clone(),
+            base: crate::assembly::Base {
+                // (−π, π]: an angle is reduced before use (bit for bit the
+                // same inside)
+                angle_rad: ranges::reduce_angle(self.base.angle_rad),
+                ..self.base.clone()
+            },
             gravity_m_per_s2: self.gravity_m_per_s2.clone(),
             axial_gauss_points: self.robot.axial_gauss_points,
             bending_gauss_points: self.robot.bending_gauss_points,

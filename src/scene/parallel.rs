@@ -184,17 +184,8 @@ impl ParallelScene {
     /// message starts with the field's path); the errors of
     /// [`ParallelScene::validate`].
     pub fn from_json(text: &str) -> Result<Self> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let s: ParallelScene = serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            let inner = e.into_inner();
-            Error::Scene {
-                message: if path.is_empty() || path == "." {
-                    inner.to_string()
-                } else {
-                    format!("{path}: {inner}")
-                },
-            }
+        let s: ParallelScene = super::json::parse(text).map_err(|e| Error::Scene {
+            message: e.located(),
         })?;
         s.validate()?;
         Ok(s)
@@ -382,16 +373,8 @@ impl PlatformMarkers {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn from_json(text: &str, scene: &ParallelScene) -> Result<PlatformMarkers> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let m: PlatformMarkers = serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            let name = if path.is_empty() || path == "." {
-                "(file)".to_string()
-            } else {
-                path
-            };
-            Error::invalid(name, "as written", e.into_inner().to_string())
-        })?;
+        let m: PlatformMarkers = super::json::parse(text)
+            .map_err(|e| Error::invalid(e.name(), "as written", e.message))?;
         m.check(scene)?;
         Ok(m)
     }

@@ -19,7 +19,7 @@ mod scene;
 
 pub use avoid::{
     calibrate_on_free_plant, check_obstacles, run_avoidance, AvoidRun, AvoidSample, AvoidSettings,
-    AvoidStatus, TouchedPoint,
+    AvoidStatus, TouchedPoint, MAX_AVOID_STEPS,
 };
 pub use calibrate::{calibrate, Calibration, FreeFrame};
 pub use field::{field_gradient, repulsive, FieldParams};

@@ -75,17 +75,8 @@ impl AvoidScene {
     /// `markers` below 2 or above 64, the plant's and the controller's
     /// settings (`plant.*`, `avoid.*`, `field.*`).
     pub fn from_json(text: &str) -> Result<Self> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let scene: AvoidScene = serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            let inner = e.into_inner();
-            Error::Scene {
-                message: if path.is_empty() || path == "." {
-                    inner.to_string()
-                } else {
-                    format!("{path}: {inner}")
-                },
-            }
+        let scene: AvoidScene = crate::scene::json::parse(text).map_err(|e| Error::Scene {
+            message: e.located(),
         })?;
         scene.validate()?;
         Ok(scene)
