@@ -103,3 +103,56 @@ fn a_perfect_column_leaves_the_saddle() {
     // bent column is nearly as far (the 0.01 rad tilt moves it little)
     assert!(eq.q[k].abs() > 0.15, "tip x {} m: {}", eq.q[k], eq.report);
 }
+
+/// A perfect column under ten times its Euler load (a compressive tip
+/// force, `P = 10 π² EI / (4 L²)`, 16 elements): the straight equilibrium
+/// has two negative eigenvalues, and when the solver returns it (it does
+/// today: the escape along the negative curvature does not reach a stable
+/// equilibrium) the report carries the stability warning, which its text
+/// prints; a stable answer carries none. (Before: no warning, the only
+/// trace a count in `negative_eigenvalues`.)
+#[test]
+fn an_unstable_answer_carries_a_warning() {
+    use softrod::statics::StaticWarning;
+    let mut scene = cases::hard("buckled_column", 16);
+    scene.base.angle_rad = std::f64::consts::FRAC_PI_2;
+    let p = 10.0 * std::f64::consts::PI.powi(2) * 0.025 / (4.0 * 0.24f64.powi(2));
+    scene.loads = serde_json::from_value(serde_json::json!([
+        {"type": "tip_force", "force_n": [0.0, -p]}
+    ]))
+    .unwrap();
+    let (robot, loads) = (scene.robot().unwrap(), scene.loads().unwrap());
+    let eq = StaticSolver::default().solve(&robot, &loads, None).unwrap();
+    let r = &eq.report;
+    let negative = r.negative_eigenvalues.unwrap();
+    // checked independently: the dense eigenvalues agree on the sign
+    let lowest = smallest_relative_eigenvalue(&robot, eq.q.as_slice(), &loads);
+    assert_eq!(negative > 0, lowest < 0.0, "{lowest:e}: {r}");
+    if negative > 0 {
+        assert_eq!(
+            r.warnings,
+            vec![StaticWarning::Unstable {
+                negative_eigenvalues: negative
+            }]
+        );
+        assert!(
+            r.to_string().contains("warning: unstable equilibrium"),
+            "{r}"
+        );
+        let json = serde_json::to_string(r).unwrap();
+        assert!(json.contains("\"warnings\":[{\"unstable\""), "{json}");
+    } else {
+        assert!(r.warnings.is_empty(), "{r}");
+    }
+    // what the solver returns today (update when the escape succeeds)
+    assert_eq!(negative, 2, "{r}");
+    // a stable answer: no warning
+    let stable = cases::hard("buckled_column", 16);
+    let (robot, loads) = (stable.robot().unwrap(), stable.loads().unwrap());
+    let eq = StaticSolver::default().solve(&robot, &loads, None).unwrap();
+    assert!(
+        eq.report.is_stable() && eq.report.warnings.is_empty(),
+        "{}",
+        eq.report
+    );
+}

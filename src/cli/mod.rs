@@ -638,6 +638,11 @@ pub fn run() -> Result<()> {
             let mut result = solve(&scene, pressures)?;
             result.refinement = refinement;
             warn_all(&result.warnings);
+            result
+                .report
+                .warnings
+                .iter()
+                .for_each(|w| eprintln!("softrod: warning: {w}"));
             write_json(&result, out.as_ref())
         }
         Some(Command::Estimate {

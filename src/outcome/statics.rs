@@ -18,9 +18,11 @@ pub enum StaticCriterion {
     Residual,
     /// `|Q|` reached the round-off floor (see
     /// [`residual_floor`](crate::statics::residual_floor)); one more Newton
-    /// step was taken there.
+    /// step was taken there, and `|Q| <= floor` holds on the answer.
     RoundOffFloor,
-    /// A full Newton step below `increment_tolerance × L`.
+    /// A full Newton step below `increment_tolerance × L`, at a residual
+    /// within [`INCREMENT_RESIDUAL_MULTIPLE`](crate::statics::INCREMENT_RESIDUAL_MULTIPLE)
+    /// times the larger of the tolerance and the floor.
     Increment,
 }
 
@@ -81,6 +83,15 @@ pub enum StaticStatus {
         /// Where.
         at: NonFiniteAt,
     },
+    /// The iteration ended on `criterion`, but that test does not hold on
+    /// the returned configuration's own residual (in the report, with the
+    /// tolerance and the floor): e.g. a stiffness contrast between sections
+    /// beyond what double precision resolves, whose stiff rows set a
+    /// round-off floor the soft rows' loads are below.
+    Unverified {
+        /// The test the iteration ended on.
+        criterion: StaticCriterion,
+    },
 }
 
 impl StaticStatus {
@@ -114,6 +125,49 @@ impl std::fmt::Display for StaticStatus {
                 )
             }
             StaticStatus::NonFinite { at } => write!(f, "non-finite {}", at.name()),
+            StaticStatus::Unverified { criterion } => write!(
+                f,
+                "not converged (the {} test does not hold on the answer's residual)",
+                criterion.name()
+            ),
+        }
+    }
+}
+
+/// A warning about a converged static answer: the equilibrium holds, but
+/// something about it needs the user's attention.
+///
+/// # Example
+/// ```
+/// use softrod::outcome::StaticWarning;
+/// let w = StaticWarning::Unstable { negative_eigenvalues: 2 };
+/// assert_eq!(serde_json::to_string(&w).unwrap(), r#"{"unstable":{"negative_eigenvalues":2}}"#);
+/// assert!(w.to_string().contains("2 negative eigenvalues"));
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StaticWarning {
+    /// The equilibrium is not stable: the tangent at it has negative
+    /// eigenvalues (a saddle or a maximum of the total potential that the
+    /// solver could not leave); the slightest disturbance moves the robot
+    /// away from it.
+    Unstable {
+        /// How many ([`StaticReport::negative_eigenvalues`]).
+        negative_eigenvalues: usize,
+    },
+}
+
+impl std::fmt::Display for StaticWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StaticWarning::Unstable {
+                negative_eigenvalues,
+            } => write!(
+                f,
+                "unstable equilibrium: its tangent has {negative_eigenvalues} negative \
+                 eigenvalues (a saddle of the potential the solver could not leave; a small \
+                 disturbance moves the robot off it)"
+            ),
         }
     }
 }
@@ -156,6 +210,11 @@ pub struct StaticReport {
     /// when nothing was solved.
     #[serde(default)]
     pub negative_eigenvalues: Option<usize>,
+    /// Warnings about the answer: [`StaticWarning::Unstable`] whenever
+    /// `negative_eigenvalues` is more than zero (empty: none; not written
+    /// then).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<StaticWarning>,
     /// Wall time (s).
     pub wall_time_s: f64,
 }
@@ -181,7 +240,7 @@ impl std::fmt::Display for StaticReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{}{}; {} iterations ({} load steps), |Q| = {:.3e} N (tolerance {:.3e} N, round-off floor {:.3e} N), last step {:.3e} m",
+            "{}{}; {} iterations ({} load steps), |Q| = {:.3e} N (tolerance {:.3e} N, round-off floor {:.3e} N), last step {:.3e} m{}",
             self.status,
             match self.negative_eigenvalues {
                 Some(0) => String::from(", stable"),
@@ -193,7 +252,11 @@ impl std::fmt::Display for StaticReport {
             self.residual_norm_n,
             self.residual_tolerance_n,
             self.residual_floor_n,
-            self.increment_norm_m
+            self.increment_norm_m,
+            self.warnings
+                .iter()
+                .map(|w| format!("; warning: {w}"))
+                .collect::<String>()
         )
     }
 }

@@ -146,7 +146,7 @@ impl FailureCause {
             StaticStatus::NonFinite { .. } | StaticStatus::LoadStepTooSmall { .. } => {
                 FailureCause::Divergence
             }
-            StaticStatus::Converged(_) => FailureCause::Other,
+            StaticStatus::Converged(_) | StaticStatus::Unverified { .. } => FailureCause::Other,
         }
     }
 

@@ -22,9 +22,14 @@
 //! generalized forces, but never asks for less than the round-off floor
 //! `ε |K|_max |q|_∞ max(1, 0.05 √n)`, which grows with the element count (a fixed
 //! relative tolerance of 1e-10 is unreachable at 32+ elements). A full Newton
-//! step below `increment_tolerance × L` also ends the solve. The report's
-//! status shows which test ended it (or why it failed), with the tolerance
-//! and the floor ([`residual_floor`]).
+//! step below `increment_tolerance × L` also ends the solve, when the residual
+//! is within [`INCREMENT_RESIDUAL_MULTIPLE`] times the tolerance or floor. The
+//! report's status shows which test ended it (or why it failed), with the
+//! tolerance and the floor ([`residual_floor`]); before a converged status is
+//! returned its test is checked again on the answer's own residual
+//! ([`StaticStatus::Unverified`] when it does not hold: a stiff section beside
+//! a soft one can put the floor, set by the stiff rows, above the whole load).
+//! An answer with negative eigenvalues carries [`StaticWarning::Unstable`].
 //!
 //! Stability: the answer's tangent is factored once more and the signs of
 //! its `L D Lᵀ` pivots give its inertia ([`StaticReport::negative_eigenvalues`]);
@@ -43,11 +48,12 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{check_at_most, check_len, check_positive, named, Error, Result};
 use crate::linsolve::{AutoSolver, SolverKind, TangentSolver};
-pub use crate::outcome::{NonFiniteAt, StaticCriterion, StaticReport, StaticStatus};
+pub use crate::outcome::{NonFiniteAt, StaticCriterion, StaticReport, StaticStatus, StaticWarning};
 use crate::structure::Assembled;
 
 mod continuation;
 mod newton;
+pub use newton::INCREMENT_RESIDUAL_MULTIPLE;
 mod sequence;
 mod stability;
 pub mod tracker;
