@@ -1,26 +1,6 @@
-//! The inverse kinematics' warm equilibrium corrector: the equilibrium (17)
-//! at new pressures or a new load field, from a start close to it (the last
-//! equilibrium moved along its sensitivities), with the factors of the
-//! tangent at the answer.
-//!
-//! Plain Newton: per step one pass over the elements for the residual and
-//! the tangent together, one factorization, full steps. The answer is the
-//! first iterate whose residual is within the static solver's own
-//! tolerance (`residual_tolerance` times the applied forces' norm at the
-//! start, as [`StaticSolver`](crate::statics::StaticSolver) states it); its
-//! tangent, already factored for the convergence test's step, is positive
-//! definite (a stable equilibrium, the static solver's inertia test) and
-//! its factors are handed back: the inverse kinematics' Jacobian (43) is
-//! then a few solves with them instead of another assembly and
-//! factorization.
-//!
-//! The corrector gives up at the first sign of a hard solve (a tangent
-//! that is not positive definite, a step that turns a node slope more than
-//! the static solver allows, a residual that does not shrink, more than
-//! [`MAX_STEPS`] steps, anything not finite); the caller then runs the
-//! static solver from its own start, with its line search, homotopy and
-//! saddle escape. A corrected equilibrium satisfies the same residual
-//! tolerance and stability test as the static solver's.
+//! The inverse kinematics' corrector as it was before the one generic
+//! tracker (kept for the comparison of old and new only).
+#![allow(dead_code, missing_docs, clippy::all)]
 
 use crate::assembly::Robot;
 use crate::element::Element;

@@ -24,7 +24,8 @@
 pub(crate) mod adapter;
 pub(crate) mod boxqp;
 mod closed_loop;
-mod corrector;
+#[cfg(test)]
+pub(crate) mod corrector;
 mod failure;
 mod ik;
 mod ik_settings;
