@@ -24,8 +24,6 @@
 pub(crate) mod adapter;
 pub(crate) mod boxqp;
 mod closed_loop;
-#[cfg(test)]
-pub(crate) mod corrector;
 mod failure;
 mod ik;
 mod ik_settings;

@@ -17,8 +17,8 @@
 //! tangent and takes chord (modified Newton) steps `u ← u + K₀⁻¹ R(u)` with
 //! them, each a residual and a back-substitution; it refactors at the
 //! current point when the steps stop shrinking by half, and falls back to
-//! the globalized [`StaticSolver`] when the chord iteration fails. What is
-//! this robot's here: the platform's sensitivities. The same factors give
+//! the globalized [`crate::statics::StaticSolver`] when the chord
+//! iteration fails. What is this robot's own here: the same factors give
 //! the platform's sensitivities ([`WarmStatics::sensitivities`]): its
 //! compliance `C = A_x K⁻¹ A_xᵀ` (32)–(35) and its pressure Jacobian
 //! `J = A_x K⁻¹ ∂R/∂P` (43), from three solves with `A_xᵀ` (K is
@@ -85,7 +85,7 @@ impl<E: Element> WarmStatics<E> {
     /// `1e-11` times the leg length over 0.1 m, the answer's residual not
     /// evaluated (a residual per solve saved; its status is then
     /// [`crate::statics::WarmStatus::Unconfirmed`]), the fallback the
-    /// default [`StaticSolver`].
+    /// default [`crate::statics::StaticSolver`].
     ///
     /// # Errors
     /// As [`Tracker::new`] for a pattern too large to factor.
@@ -137,7 +137,7 @@ impl<E: Element> WarmStatics<E> {
     ///
     /// # Errors
     /// Sizes as [`crate::structure::Structure::residual`]; the errors of
-    /// [`StaticSolver::solve`] when the fallback fails too.
+    /// [`crate::statics::StaticSolver::solve`] when the fallback fails too.
     pub fn solve(&mut self, loads: &StructureLoads, u0: &[f64]) -> Result<DVector<f64>> {
         check_len("u0", self.robot.structure().n_free(), u0.len())?;
         self.tracker.set_loads(loads.clone())?;
@@ -231,6 +231,3 @@ impl<E: Element> WarmStatics<E> {
         })
     }
 }
-
-#[cfg(test)]
-pub(crate) mod old;

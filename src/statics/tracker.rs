@@ -217,7 +217,7 @@ pub enum WarmStrategy {
     /// is shorter than half the last and than a quarter of the model's
     /// length; then, from the start again, up to 12 plain Newton steps,
     /// each shorter than 0.9 of the last; a step below `1e-10 L` (or chord
-    /// steps whose contraction predicts that, [`chord_converged`]) ends
+    /// steps whose contraction predicts that) ends
     /// it, and the tangent is factored at the solution.
     ChordThenNewton,
     /// Chord steps with the kept factors (factored at the start if none
@@ -274,7 +274,7 @@ impl WarmStrategy {
                 }
                 crate::error::check_positive("step_tolerance_m", step_tolerance_m)
             }
-            WarmStrategy::Newton { max_steps } if max_steps == 0 => {
+            WarmStrategy::Newton { max_steps: 0 } => {
                 Err(Error::invalid("max_steps", 0, "must be >= 1"))
             }
             WarmStrategy::Newton { .. } => Ok(()),
@@ -1403,9 +1403,6 @@ pub(crate) fn chord_converged(step: f64, prev: f64, path: f64, len: f64) -> bool
     let rho = step / prev;
     rho <= 0.5 && rho * step <= tol * (1.0 - rho)
 }
-
-#[cfg(test)]
-mod old;
 
 #[cfg(test)]
 mod tests;

@@ -1,23 +1,17 @@
-//! The one warm tracker against the three warm solvers it replaced, run on
-//! the same scenarios: the estimators' robot tracker (`old`), the parallel
-//! robot's chord solver (`crate::parallel::warm::old`) and the inverse
-//! kinematics' corrector (`crate::control::corrector`). Equal means equal
-//! bits: shapes, residuals, the factors (a solve with each) and the counts.
+//! The one warm tracker against the recorded behaviour of the three warm
+//! solvers it replaced (the estimators' `EquilibriumTracker`, the parallel
+//! robot's `WarmStatics` chord solver, the inverse kinematics' corrector).
+//!
+//! Commit 1072545 kept the old three beside the new tracker and ran the
+//! same scenarios through both: equal bits of every shape, residual and
+//! factors, equal counts. The digests below were recorded there (the new
+//! path's, equal to the old one's) when the old paths were deleted: a change
+//! of any bit of an answer, or of the work done, fails here.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use super::*;
 use crate::estimate::LoadModel;
 use crate::scene::Scene;
-
-/// The two factorizations give the same bits on a fixed right-hand side.
-fn assert_same_factors(a: &AutoFactors, b: &AutoFactors) {
-    let n = a.n();
-    let mut x: Vec<f64> = (0..n).map(|i| (0.37 * i as f64).sin()).collect();
-    let mut y = x.clone();
-    a.solve_in_place(&mut x).unwrap();
-    b.solve_in_place(&mut y).unwrap();
-    assert_eq!(x, y);
-}
 
 /// A load of size `k` of the model: every node pulled down (distributed) or
 /// a force at node 12.
@@ -28,220 +22,6 @@ fn load_at(load: LoadModel, n_f: usize, k: f64) -> Vec<f64> {
             .collect(),
         LoadModel::Concentrated { .. } => vec![0.01 * k, -0.02 * k],
     }
-}
-
-/// The estimators' calls: a cold solve, warm solves along a load path, a
-/// repeat, a trial without fallback, a chord step, factors kept from
-/// outside, a far jump.
-#[test]
-fn robot_tracker_gives_the_old_trackers_bits() {
-    let scene = Scene::two_section();
-    let robot = scene.robot().unwrap();
-    let known = scene.loads().unwrap();
-    let mut statuses = Vec::new();
-    for load in [LoadModel::Distributed, LoadModel::Concentrated { node: 12 }] {
-        let n_f = LinearLoad::n_params(&load, &robot);
-        let mut old =
-            old::EquilibriumTracker::new(robot.clone(), known.clone(), Default::default()).unwrap();
-        let mut new =
-            EquilibriumTracker::new(robot.clone(), known.clone(), Default::default()).unwrap();
-        let check = |a: &old::TrackedEquilibrium, b: &TrackedEquilibrium| {
-            assert_eq!(a.q, b.q);
-            assert_eq!(a.residual_n, b.residual_n);
-            assert_same_factors(&a.factors, &b.factors);
-        };
-        let start = robot.arc_configuration(&known.pressures_pa);
-        let f0 = load_at(load, n_f, 0.0);
-        let (a, b) = (
-            old.solve(&load, &f0, start.as_slice()).unwrap(),
-            new.solve(&load, &f0, start.as_slice()).unwrap(),
-        );
-        check(&a, &b);
-        statuses.push((b.path, b.status));
-        let mut q = b.q;
-        let mut f = f0;
-        for k in 1..=6 {
-            f = load_at(load, n_f, 0.2 * k as f64);
-            let (a, b) = (
-                old.solve(&load, &f, q.as_slice()).unwrap(),
-                new.solve(&load, &f, q.as_slice()).unwrap(),
-            );
-            check(&a, &b);
-            statuses.push((b.path, b.status));
-            q = b.q;
-        }
-        // asked again at the answer
-        let (a, b) = (
-            old.solve(&load, &f, q.as_slice()).unwrap(),
-            new.solve(&load, &f, q.as_slice()).unwrap(),
-        );
-        check(&a, &b);
-        assert_eq!(b.path, WarmPath::Repeated);
-        // a line-search trial, far: no fallback
-        let f = load_at(load, n_f, 3.0);
-        let (a, b) = (
-            old.try_solve(&load, &f, q.as_slice()).unwrap(),
-            new.try_solve(&load, &f, q.as_slice()).unwrap(),
-        );
-        assert_eq!(a.is_some(), b.is_some());
-        if let (Some(a), Some(b)) = (&a, &b) {
-            check(a, b);
-            q = b.q.clone();
-        }
-        // a tiny last step by chord steps only
-        let mut f = load_at(load, n_f, if b.is_some() { 3.0 } else { 1.2 });
-        f[1] *= 1.0 + 1e-7;
-        let (a, b) = (
-            old.solve_chord(&load, &f, q.as_slice()).unwrap(),
-            new.solve_chord(&load, &f, q.as_slice()).unwrap(),
-        );
-        assert_eq!(a, b);
-        // factors kept from outside, then a warm solve from them
-        let (ta, tb) = (
-            old.factor_tangent(q.as_slice()).unwrap(),
-            new.factor_tangent(q.as_slice()).unwrap(),
-        );
-        assert_same_factors(&ta.factors, &tb.factors);
-        old.keep_factors(q.as_slice(), ta.factors).unwrap();
-        new.keep_factors(q.as_slice(), tb.factors).unwrap();
-        let f = load_at(load, n_f, 1.0);
-        let (a, b) = (
-            old.solve(&load, &f, q.as_slice()).unwrap(),
-            new.solve(&load, &f, q.as_slice()).unwrap(),
-        );
-        check(&a, &b);
-        // a far jump: the fallback
-        let f = load_at(load, n_f, 40.0);
-        let (a, b) = (
-            old.solve(&load, &f, q.as_slice()).unwrap(),
-            new.solve(&load, &f, q.as_slice()).unwrap(),
-        );
-        check(&a, &b);
-        statuses.push((b.path, b.status));
-        // new known loads
-        let mut k2 = known.clone();
-        k2.pressures_pa[0] += 2e3;
-        old.set_known(k2.clone()).unwrap();
-        new.set_known(k2).unwrap();
-        let (a, b) = (
-            old.solve(&load, &f, b.q.as_slice()).unwrap(),
-            new.solve(&load, &f, b.q.as_slice()).unwrap(),
-        );
-        check(&a, &b);
-        statuses.push((b.path, b.status));
-    }
-    println!("{statuses:?}");
-}
-
-/// The parallel robot's tracking loop: nudged pressures and platform
-/// forces, the factors kept across loads, an explicit factorization, the
-/// platform sensitivities.
-#[test]
-fn parallel_warm_solves_give_the_old_solvers_bits_and_counts() {
-    use crate::parallel::warm::{old, WarmStatics};
-    use crate::parallel::ParallelSpec;
-    let spec = ParallelSpec {
-        elements_per_section: 1,
-        ..ParallelSpec::default()
-    };
-    let robot = spec.build_full().unwrap();
-    let p0 = crate::control::parallel::centre_pressures(&spec);
-    let mut p: Vec<f64> = p0.as_slice().to_vec();
-    let loads = robot.loads(&p, [0.0; 3], [0.0; 3]).unwrap();
-    let eq = robot.solve(&loads, None).unwrap();
-    let mut a = old::WarmStatics::new(robot.clone()).unwrap();
-    let mut b = WarmStatics::new(robot.clone()).unwrap();
-    a.factor_at(eq.u.as_slice(), &loads).unwrap();
-    b.factor_at(eq.u.as_slice(), &loads).unwrap();
-    let mut u = eq.u.clone();
-    for k in 0..24 {
-        let np = p.len();
-        p[k % np] += 500.0 * (1.0 + k as f64);
-        let f = [0.0, 0.0, -0.1 * k as f64];
-        let loads = robot.loads(&p, f, [0.0; 3]).unwrap();
-        if k % 7 == 3 {
-            a.factor_at(u.as_slice(), &loads).unwrap();
-            b.factor_at(u.as_slice(), &loads).unwrap();
-        }
-        let (ua, ub) = (
-            a.solve(&loads, u.as_slice()).unwrap(),
-            b.solve(&loads, u.as_slice()).unwrap(),
-        );
-        assert_eq!(ua, ub, "solve {k}");
-        let (sa, sb) = (
-            a.sensitivities(ub.as_slice()).unwrap(),
-            b.sensitivities(ub.as_slice()).unwrap(),
-        );
-        assert_eq!(sa.compliance_m_per_n, sb.compliance_m_per_n);
-        assert_eq!(sa.jacobian_m_per_pa, sb.jacobian_m_per_pa);
-        u = ub;
-    }
-    // a far jump: the fallback
-    let loads = robot.loads(&p, [0.3, 0.0, -3.0], [0.0; 3]).unwrap();
-    let (ua, ub) = (
-        a.solve(&loads, eq.u.as_slice()).unwrap(),
-        b.solve(&loads, eq.u.as_slice()).unwrap(),
-    );
-    assert_eq!(ua, ub);
-    let (ca, cb) = (a.counts(), b.counts());
-    println!("old {ca:?}, new {cb:?}");
-    assert_eq!(
-        (ca.solves, ca.residuals, ca.factorizations, ca.fallbacks),
-        (cb.solves, cb.residuals, cb.factorizations, cb.fallbacks)
-    );
-}
-
-/// The inverse kinematics' corrector: from starts predicted along `∂q/∂P`
-/// (small and large pressure changes, one too large for it), the answer,
-/// its factors and the steps.
-#[test]
-fn newton_strategy_gives_the_old_correctors_bits_and_steps() {
-    let scene = Scene::two_section();
-    let robot = scene.robot().unwrap();
-    let known = scene.loads().unwrap();
-    let settings = StaticSettings::default();
-    let mut linear =
-        AutoSolver::with_kind(robot.tangent_pattern(), settings.linear_solver).unwrap();
-    let mut new = EquilibriumTracker::new(robot.clone(), known.clone(), settings.clone())
-        .unwrap()
-        .with_strategy(WarmStrategy::Newton { max_steps: 6 })
-        .unwrap();
-    let eq = StaticSolver::default().solve(&robot, &known, None).unwrap();
-    let t = new.factor_tangent(eq.q.as_slice()).unwrap();
-    let dqdp = crate::sensitivity::Sensitivity::new(&robot, &t.factors)
-        .unwrap()
-        .dq_dp(eq.q.as_slice())
-        .unwrap();
-    let mut given_up = 0;
-    for (k, dp) in [1e2, 1e3, 5e3, 2e4, 6e4, 1e5].iter().enumerate() {
-        let mut loads = known.clone();
-        let dpv: Vec<f64> = (0..loads.pressures_pa.len())
-            .map(|c| if c == k % 2 { *dp } else { -0.5 * dp })
-            .collect();
-        loads
-            .pressures_pa
-            .iter_mut()
-            .zip(&dpv)
-            .for_each(|(a, b)| *a = (*a + b).clamp(0.0, 1e5));
-        let dq = &dqdp * nalgebra::DVector::from_vec(dpv);
-        let start: Vec<f64> = eq.q.iter().zip(dq.iter()).map(|(a, b)| a + b).collect();
-        let (old, steps) =
-            crate::control::corrector::correct(&robot, &loads, &start, &settings, &mut linear);
-        let before = new.counts().steps;
-        new.set_known(loads.clone()).unwrap();
-        let u0 = robot.free_coordinates_of(&start).unwrap();
-        let got = new.try_solve_free(u0.as_slice()).unwrap();
-        assert_eq!(steps, (new.counts().steps - before).max(1), "dp {dp}");
-        assert_eq!(old.is_some(), got.is_some(), "dp {dp}");
-        if let (Some(a), Some(b)) = (old, got) {
-            assert_eq!(a.q, b.q.as_slice());
-            assert_same_factors(&a.factors, &b.factors);
-            assert!(b.status.is_converged());
-        } else {
-            given_up += 1;
-        }
-    }
-    println!("given up {given_up} of 6");
 }
 
 /// Chord steps contracting at a constant rate `ρ` from an error of
@@ -293,8 +73,9 @@ fn digest(v: &[f64]) -> f64 {
     v.iter().enumerate().map(|(i, x)| (i + 1) as f64 * x).sum()
 }
 
-/// The robot scenario of [`robot_tracker_gives_the_old_trackers_bits`] on
-/// the new tracker alone: the digest of every answer, and the counts.
+/// The estimators' calls on the robot (two load models): a cold solve, warm
+/// solves along a load path, a trial without fallback, a far jump (the
+/// fallback): the digest of every answer, and the counts.
 fn robot_scenario() -> (Vec<u64>, WarmCounts) {
     let scene = Scene::two_section();
     let robot = scene.robot().unwrap();
@@ -335,7 +116,9 @@ fn robot_scenario() -> (Vec<u64>, WarmCounts) {
     (out, counts)
 }
 
-/// The parallel scenario on the new solver alone: the digests and counts.
+/// The parallel robot's tracking solves: nudged pressures and platform
+/// forces, the factors kept across loads, explicit refactors, the platform
+/// sensitivities: the digests and counts.
 fn parallel_scenario() -> (Vec<u64>, WarmCounts) {
     use crate::parallel::warm::WarmStatics;
     use crate::parallel::ParallelSpec;
@@ -370,9 +153,171 @@ fn parallel_scenario() -> (Vec<u64>, WarmCounts) {
     (out, b.counts())
 }
 
-/// Prints the digests the regression test records.
+/// The robot's and the parallel robot's scenarios give the recorded bits and
+/// counts of the old trackers.
 #[test]
-fn print_digests() {
-    println!("robot {:?}", robot_scenario());
-    println!("parallel {:?}", parallel_scenario());
+fn warm_solves_give_the_recorded_bits_and_counts_of_the_old_solvers() {
+    let (digests, counts) = robot_scenario();
+    assert_eq!(digests, ROBOT_DIGESTS);
+    assert_eq!((counts.solves, counts.fallbacks), (18, 4), "{counts:?}");
+    // recorded on the new path (the old tracker kept no counts)
+    assert_eq!(
+        (counts.residuals, counts.factorizations, counts.steps),
+        (54, 46, 78),
+        "{counts:?}"
+    );
+    let (digests, counts) = parallel_scenario();
+    assert_eq!(digests, PARALLEL_DIGESTS);
+    // the old solver's counts, and the steps of the new
+    assert_eq!(
+        (
+            counts.solves,
+            counts.residuals,
+            counts.factorizations,
+            counts.fallbacks,
+            counts.steps
+        ),
+        (24, 185, 8, 0, 181)
+    );
 }
+
+/// The inverse kinematics' corrector from starts predicted along `∂q/∂P`
+/// (pressure changes of 0.1 to 100 kPa): the old corrector's answers
+/// (digests) and steps; the two largest changes given up.
+#[test]
+fn newton_strategy_gives_the_recorded_answers_and_steps_of_the_old_corrector() {
+    let (answers, steps) = newton_scenario();
+    assert_eq!(answers, NEWTON_DIGESTS);
+    assert_eq!(steps, NEWTON_STEPS);
+}
+
+/// The corrector's scenario: per start the digest of the answer (`None`
+/// where it gives up) and the steps taken.
+fn newton_scenario() -> (Vec<Option<u64>>, Vec<usize>) {
+    let scene = Scene::two_section();
+    let robot = scene.robot().unwrap();
+    let known = scene.loads().unwrap();
+    let mut t = EquilibriumTracker::new(robot.clone(), known.clone(), StaticSettings::default())
+        .unwrap()
+        .with_strategy(WarmStrategy::Newton { max_steps: 6 })
+        .unwrap();
+    let eq = StaticSolver::default().solve(&robot, &known, None).unwrap();
+    let tangent = t.factor_tangent(eq.q.as_slice()).unwrap();
+    let dqdp = crate::sensitivity::Sensitivity::new(&robot, &tangent.factors)
+        .unwrap()
+        .dq_dp(eq.q.as_slice())
+        .unwrap();
+    let (mut answers, mut steps) = (Vec::new(), Vec::new());
+    for (k, dp) in [1e2, 1e3, 5e3, 2e4, 6e4, 1e5].iter().enumerate() {
+        let mut loads = known.clone();
+        let dpv: Vec<f64> = (0..loads.pressures_pa.len())
+            .map(|c| if c == k % 2 { *dp } else { -0.5 * dp })
+            .collect();
+        loads
+            .pressures_pa
+            .iter_mut()
+            .zip(&dpv)
+            .for_each(|(a, b)| *a = (*a + b).clamp(0.0, 1e5));
+        let dq = &dqdp * nalgebra::DVector::from_vec(dpv);
+        let start: Vec<f64> = eq.q.iter().zip(dq.iter()).map(|(a, b)| a + b).collect();
+        let before = t.counts().steps;
+        t.set_known(loads).unwrap();
+        let u0 = robot.free_coordinates_of(&start).unwrap();
+        let got = t.try_solve_free(u0.as_slice()).unwrap();
+        steps.push((t.counts().steps - before).max(1));
+        if let Some(b) = &got {
+            assert!(b.status.is_converged() && b.factors.is_positive_definite());
+        }
+        answers.push(got.map(|b| digest(b.q.as_slice()).to_bits()));
+    }
+    (answers, steps)
+}
+
+/// [`robot_scenario`]'s digests, recorded (see the module documentation).
+const ROBOT_DIGESTS: [u64; 20] = [
+    4653874434017115452,
+    4653873099853374332,
+    4653871761350402596,
+    4653870418502324515,
+    4653869071303280428,
+    4653867719747426959,
+    4653866363828937169,
+    4653853963290763922,
+    4653514947876754119,
+    4439934453459010052,
+    4653874434017115452,
+    4653871246761974492,
+    4653868039001724200,
+    4653864810756377125,
+    4653861562046694159,
+    4653858292894184018,
+    4653855003321102591,
+    4653824482278700180,
+    4652896182766998136,
+    4437147937684692702,
+];
+
+/// [`parallel_scenario`]'s digests (shape, pressure Jacobian per solve).
+const PARALLEL_DIGESTS: [u64; 48] = [
+    4633514734530263098,
+    4501901970826434338,
+    4633524248690207312,
+    4501901970826434182,
+    4633544043106199654,
+    4501901970826434158,
+    4633576873716805972,
+    4501936509355968306,
+    4633571924999290253,
+    4501936509355968146,
+    4633542405291547548,
+    4501936509355968220,
+    4633517816901244789,
+    4501936509355968250,
+    4633443388575956545,
+    4501936509355968228,
+    4633571308602577505,
+    4501936509355968216,
+    4633586009001309178,
+    4501936509355968326,
+    4633742629193483935,
+    4501906240247190928,
+    4633566125224732875,
+    4501906240247191026,
+    4633358199997095925,
+    4501906240247190988,
+    4633273892055814792,
+    4501906240247191080,
+    4633615765765702350,
+    4501906240247191022,
+    4633883134577295419,
+    4501641894124764006,
+    4634036782238469774,
+    4501641894124763932,
+    4633584703271345909,
+    4501894997260605828,
+    4633436124525386555,
+    4501894997260605630,
+    4633496113907136860,
+    4501894997260605646,
+    4633608772895447107,
+    4501894997260605666,
+    4633768233197437471,
+    4501894997260605754,
+    4633734574024585158,
+    4502285361352781204,
+    4633607058586476192,
+    4501894840755932828,
+];
+
+/// [`newton_scenario`]'s digests.
+const NEWTON_DIGESTS: [Option<u64>; 6] = [
+    Some(4653877472466768359),
+    Some(4653844028850847754),
+    Some(4654004114119096679),
+    Some(4652932266093807538),
+    None,
+    None,
+];
+
+/// [`newton_scenario`]'s steps.
+const NEWTON_STEPS: [usize; 6] = [3, 4, 5, 5, 1, 1];
