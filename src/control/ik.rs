@@ -62,13 +62,14 @@ use nalgebra::{DMatrix, DVector};
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::{check_all_finite, check_len, Error, Result};
-use crate::linsolve::{AutoFactors, AutoSolver};
+use crate::linsolve::AutoFactors;
 use crate::loads::Loads;
 use crate::sensitivity::Sensitivity;
-use crate::statics::{StaticSettings, StaticSolver};
+use crate::statics::{StaticSettings, StaticSolver, TrackedEquilibrium, Tracker, WarmStrategy};
+use crate::structure::Assembled;
 
 use super::ik_settings::{IkSettings, IkStatus, PressureBound};
-use super::{adapter, boxqp, corrector};
+use super::{adapter, boxqp};
 
 /// The result of [`InverseKinematics::solve`].
 ///
@@ -121,14 +122,16 @@ pub struct IkSolution {
 /// ```
 #[derive(Debug, Clone)]
 pub struct InverseKinematics<E: Element> {
-    robot: Robot<E>,
+    /// The robot and the warm corrector of its equilibria (the one warm
+    /// tracker, [`WarmStrategy::Newton`]), whose linear solver, analyzed
+    /// once, also serves the static solves and the Jacobians.
+    tracker: Tracker<Robot<E>>,
     known: Loads,
     settings: IkSettings,
     solver: StaticSolver,
     /// The solver of the line search's trials (its total budget
     /// [`IkSettings::trial_max_total_iterations`]).
     trial_solver: StaticSolver,
-    linear: AutoSolver,
     effector_s_m: f64,
     /// Scaled pressure bounds and the scale (range) of each chamber.
     lo: Vec<f64>,
@@ -195,6 +198,11 @@ fn spent(eq: &Result<crate::statics::Equilibrium>) -> usize {
 /// of 1e-4 of the pressure range after 9 failed trials each).
 const FAILED_TRIALS: usize = 8;
 
+/// Newton steps the corrector takes at most (a warm start from the
+/// sensitivities' prediction converges in one or two: measured on the
+/// tracking bench's loop).
+const CORRECTOR_STEPS: usize = 6;
+
 /// Weight of the pressures' norm against the position error (see the
 /// module documentation).
 const MU: f64 = 1e-2;
@@ -244,16 +252,19 @@ impl<E: Element> InverseKinematics<E> {
             max_total_iterations: total,
             ..settings.statics.clone()
         })?;
-        let linear =
-            AutoSolver::with_kind(robot.tangent_pattern(), settings.statics.linear_solver)?;
+        let effector_s_m = robot.length();
+        let tracker = Tracker::new(robot, known.clone(), settings.statics.clone())?.with_strategy(
+            WarmStrategy::Newton {
+                max_steps: CORRECTOR_STEPS,
+            },
+        )?;
         Ok(InverseKinematics {
-            effector_s_m: robot.length(),
-            robot,
+            effector_s_m,
+            tracker,
             known,
             settings,
             solver,
             trial_solver,
-            linear,
             lo,
             hi,
             range,
@@ -265,7 +276,7 @@ impl<E: Element> InverseKinematics<E> {
 
     /// The robot.
     pub fn robot(&self) -> &Robot<E> {
-        &self.robot
+        self.tracker.robot()
     }
 
     /// Forgets the warm start.
@@ -309,12 +320,12 @@ impl<E: Element> InverseKinematics<E> {
         q0: Option<&[f64]>,
     ) -> Result<(Vec<f64>, Vec<f64>)> {
         let loads = self.loads(p, f_hat);
-        let eq = self
-            .solver
-            .solve_with(&self.robot, &loads, q0, &mut self.linear);
+        let eq = self.tracker.static_solve(&self.solver, &loads, q0);
         self.spent += spent(&eq);
         let eq = eq?;
-        let x = self.robot.position_at(eq.q.as_slice(), self.effector_s_m)?;
+        let x = self
+            .robot()
+            .position_at(eq.q.as_slice(), self.effector_s_m)?;
         Ok((eq.q.data.into(), x.data.into()))
     }
 
@@ -331,28 +342,39 @@ impl<E: Element> InverseKinematics<E> {
         trial: bool,
     ) -> Result<Eq> {
         let loads = self.loads(p, f_hat);
-        let (corrected, steps) = corrector::correct(
-            &self.robot,
-            &loads,
-            start,
-            &self.settings.statics,
-            &mut self.linear,
-        );
-        self.spent += steps;
+        let before = self.tracker.counts().steps;
+        let corrected = self.correct(&loads, start);
+        // the Newton steps taken (at least 1: the static solver's count)
+        self.spent += (self.tracker.counts().steps - before).max(1);
         if let Some(c) = corrected {
-            let x = self.robot.position_at(&c.q, self.effector_s_m)?;
-            return Ok((c.q, x.data.into(), Some(c.factors)));
+            let x = self
+                .robot()
+                .position_at(c.q.as_slice(), self.effector_s_m)?;
+            return Ok((c.q.data.into(), x.data.into(), Some(c.factors)));
         }
         let solver = if trial {
             &self.trial_solver
         } else {
             &self.solver
         };
-        let eq = solver.solve_with(&self.robot, &loads, Some(fallback), &mut self.linear);
+        let eq = self.tracker.static_solve(solver, &loads, Some(fallback));
         self.spent += spent(&eq);
         let eq = eq?;
-        let x = self.robot.position_at(eq.q.as_slice(), self.effector_s_m)?;
+        let x = self
+            .robot()
+            .position_at(eq.q.as_slice(), self.effector_s_m)?;
         Ok((eq.q.data.into(), x.data.into(), None))
+    }
+
+    /// The corrector: the tracker's [`WarmStrategy::Newton`] from `start`
+    /// under `loads` to the static solver's residual tolerance, with the
+    /// positive definite factors of the tangent at its answer; `None`
+    /// where it gives up (a hard solve, or an error: the static solver
+    /// from the caller's start then reports it).
+    fn correct(&mut self, loads: &Loads, start: &[f64]) -> Option<TrackedEquilibrium> {
+        let u0 = self.robot().free_coordinates_of(start).ok()?;
+        self.tracker.set_known(loads.clone()).ok()?;
+        self.tracker.try_solve_free(u0.as_slice()).ok().flatten()
     }
 
     /// The first equilibrium of a Newton run: the held one as it is when
@@ -373,8 +395,8 @@ impl<E: Element> InverseKinematics<E> {
                 let predicted = match &h.factors {
                     Some(f) => {
                         let df: Vec<f64> = f_hat.iter().zip(&h.f_hat).map(|(a, b)| a - b).collect();
-                        let g = self.robot.apply_load_gram(&df)?;
-                        let dq = Sensitivity::new(&self.robot, f)?.response(g.as_slice())?;
+                        let g = self.robot().apply_load_gram(&df)?;
+                        let dq = Sensitivity::new(self.robot(), f)?.response(g.as_slice())?;
                         h.q.iter().zip(dq.iter()).map(|(a, b)| a + b).collect()
                     }
                     None => h.q.clone(),
@@ -391,7 +413,7 @@ impl<E: Element> InverseKinematics<E> {
     /// # Errors
     /// [`Error::Singular`] if the tangent cannot be factored; dimension errors.
     pub fn dq_dp(&self, q: &[f64], p: &[f64], f_hat: &[f64]) -> Result<DMatrix<f64>> {
-        adapter::dq_dp(&self.robot, &self.loads(p, f_hat), q)
+        adapter::dq_dp(self.robot(), &self.loads(p, f_hat), q)
     }
 
     /// The end effector's Jacobian `∂x/∂P = S(X_e) ∂q/∂P` (43) at the
@@ -417,10 +439,11 @@ impl<E: Element> InverseKinematics<E> {
         factors: Option<&AutoFactors>,
     ) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
         let dqdp = match factors {
-            Some(f) => Sensitivity::new(&self.robot, f)?.dq_dp(q)?,
+            Some(f) => Sensitivity::new(self.robot(), f)?.dq_dp(q)?,
             None => {
                 let loads = self.loads(p, f_hat);
-                adapter::dq_dp_with(&self.robot, &loads, q, &mut self.linear)?
+                let (robot, linear) = self.tracker.model_and_linear();
+                adapter::dq_dp_with(robot, &loads, q, linear)?
             }
         };
         Ok((self.effector_columns(&dqdp)?, dqdp))
@@ -428,7 +451,7 @@ impl<E: Element> InverseKinematics<E> {
 
     /// `S(X_e) ∂q/∂P`: the end effector's rows of the columns of `dqdp`.
     fn effector_columns(&self, dqdp: &DMatrix<f64>) -> Result<DMatrix<f64>> {
-        let point = self.robot.arc_point("effector", self.effector_s_m)?;
+        let point = self.robot().arc_point("effector", self.effector_s_m)?;
         let d = E::DIM;
         let mut jac = DMatrix::zeros(d, dqdp.ncols());
         let mut out = vec![0.0; d];
@@ -455,10 +478,10 @@ impl<E: Element> InverseKinematics<E> {
         let d = E::DIM;
         check_len("x_d", d, x_d.len())?;
         check_all_finite("x_d", x_d)?;
-        check_len("f_hat", self.robot.n_q(), f_hat.len())?;
+        check_len("f_hat", self.robot().n_q(), f_hat.len())?;
         check_all_finite("f_hat", f_hat)?;
         let np = self.range.len();
-        let bounds = self.robot.pressure_bounds();
+        let bounds = self.robot().pressure_bounds();
         self.spent = 0;
         let start = match self.warm.take() {
             Some(h) => Start::Warm(Box::new(h)),
@@ -559,8 +582,8 @@ impl<E: Element> InverseKinematics<E> {
     ) -> Result<IkSolution> {
         let mut loads = self.known.clone();
         loads.pressures_pa = p0_pa.to_vec();
-        self.robot.validate_loads(&loads)?;
-        check_len("f_hat", self.robot.n_q(), f_hat.len())?;
+        self.robot().validate_loads(&loads)?;
+        check_len("f_hat", self.robot().n_q(), f_hat.len())?;
         check_all_finite("f_hat", f_hat)?;
         let (q, x) = self.forward_raw(p0_pa, f_hat, None)?;
         self.warm = Some(Held {
@@ -605,7 +628,7 @@ impl<E: Element> InverseKinematics<E> {
             0.5 * r2 / (ELL_M * ELL_M) + 0.5 * MU * p2
         };
         let mut phi = merit(&x, &P, &self.range);
-        let bounds_pa = self.robot.pressure_bounds();
+        let bounds_pa = self.robot().pressure_bounds();
         let mut iterations = 0;
         let mut stalled = false;
         let mut damping = 0.0f64;

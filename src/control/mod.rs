@@ -24,7 +24,6 @@
 pub(crate) mod adapter;
 pub(crate) mod boxqp;
 mod closed_loop;
-mod corrector;
 mod ik;
 mod ik_settings;
 mod mass;

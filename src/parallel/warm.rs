@@ -12,11 +12,13 @@
 //! iterations ≈ 75 ms, one residual ≈ 0.5 ms, one residual and tangent
 //! ≈ 14 ms.
 //!
-//! So [`WarmStatics`] keeps the factors of the last tangent and takes
-//! chord (modified Newton) steps `u ← u + K₀⁻¹ R(u)` with them: each costs
-//! a residual and a back-substitution. It refactors at the current point
-//! when the steps stop shrinking by half, and falls back to the globalized
-//! [`StaticSolver`] when the chord iteration fails. The same factors give
+//! So [`WarmStatics`] runs the one warm [`Tracker`] with
+//! [`WarmStrategy::ChordRefactor`]: it keeps the factors of the last
+//! tangent and takes chord (modified Newton) steps `u ← u + K₀⁻¹ R(u)` with
+//! them, each a residual and a back-substitution; it refactors at the
+//! current point when the steps stop shrinking by half, and falls back to
+//! the globalized [`crate::statics::StaticSolver`] when the chord
+//! iteration fails. What is this robot's own here: the same factors give
 //! the platform's sensitivities ([`WarmStatics::sensitivities`]): its
 //! compliance `C = A_x K⁻¹ A_xᵀ` (32)–(35) and its pressure Jacobian
 //! `J = A_x K⁻¹ ∂R/∂P` (43), from three solves with `A_xᵀ` (K is
@@ -28,11 +30,11 @@ use nalgebra::{DMatrix, DVector, SMatrix};
 use super::ParallelRobot;
 use crate::element::Element;
 use crate::error::{check_len, Error, Result};
-use crate::linsolve::{
-    AutoFactors, AutoSolver, FactorOptions, Factorization, SymmetricMatrix, TangentSolver,
-};
-use crate::statics::StaticSolver;
-use crate::structure::{Assembled, StructureLoads};
+use crate::linsolve::{AutoFactors, Factorization};
+use crate::statics::{StaticSettings, Tracker, WarmStrategy};
+use crate::structure::{Structure, StructureLoads};
+
+pub use crate::statics::WarmCounts;
 
 /// Chord steps per solve before the solve refactors (at most twice) and
 /// then falls back.
@@ -48,25 +50,6 @@ pub struct PlatformSensitivities {
     pub compliance_m_per_n: SMatrix<f64, 3, 3>,
     /// `∂x/∂P`: 3 × (number of pressures) (m/Pa).
     pub jacobian_m_per_pa: DMatrix<f64>,
-}
-
-/// Counts of what the warm solves cost.
-///
-/// # Example
-/// ```
-/// let c = softrod::parallel::warm::WarmCounts::default();
-/// assert_eq!(c.factorizations, 0);
-/// ```
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-pub struct WarmCounts {
-    /// Solves asked for.
-    pub solves: usize,
-    /// Residual evaluations (chord steps).
-    pub residuals: usize,
-    /// Tangent assemblies and factorizations.
-    pub factorizations: usize,
-    /// Solves that fell back to the globalized [`StaticSolver`].
-    pub fallbacks: usize,
 }
 
 /// Warm static solves of one [`ParallelRobot`] (see the [module
@@ -92,31 +75,35 @@ pub struct WarmCounts {
 #[derive(Debug, Clone)]
 pub struct WarmStatics<E: Element> {
     robot: ParallelRobot<E>,
-    solver: AutoSolver,
-    k: SymmetricMatrix,
-    factors: Option<AutoFactors>,
-    counts: WarmCounts,
-    /// A chord solve ends with a step below this (m or unit slope).
-    step_tolerance: f64,
+    tracker: Tracker<Structure<E>>,
 }
 
 impl<E: Element> WarmStatics<E> {
-    /// The warm solver of `robot` (its tangent pattern analyzed once).
+    /// The warm solver of `robot` (its tangent pattern analyzed once): the
+    /// tracker's [`WarmStrategy::ChordRefactor`] with at most 3
+    /// factorizations and 36 residuals per solve, a step tolerance of
+    /// `1e-11` times the leg length over 0.1 m, the answer's residual not
+    /// evaluated (a residual per solve saved; its status is then
+    /// [`crate::statics::WarmStatus::Unconfirmed`]), the fallback the
+    /// default [`crate::statics::StaticSolver`].
     ///
     /// # Errors
-    /// As [`AutoSolver::with_kind`] for a pattern too large to factor.
+    /// As [`Tracker::new`] for a pattern too large to factor.
     pub fn new(robot: ParallelRobot<E>) -> Result<Self> {
-        let pattern = Assembled::tangent_pattern(robot.structure())?;
-        let solver = AutoSolver::with_kind(&pattern, crate::linsolve::SolverKind::Auto)?;
-        let step_tolerance = 1e-11 * robot.spec().leg_length_m.max(1e-3) / 0.1;
-        Ok(WarmStatics {
-            robot,
-            solver,
-            k: SymmetricMatrix::zeros(pattern),
-            factors: None,
-            counts: WarmCounts::default(),
-            step_tolerance,
-        })
+        let step_tolerance_m = 1e-11 * robot.spec().leg_length_m.max(1e-3) / 0.1;
+        let strategy = WarmStrategy::ChordRefactor {
+            max_factorizations: 3,
+            max_residuals: MAX_CHORD_STEPS * 3,
+            step_tolerance_m,
+            confirm: false,
+        };
+        let tracker = Tracker::new(
+            robot.structure().clone(),
+            StructureLoads::default(),
+            StaticSettings::default(),
+        )?
+        .with_strategy(strategy)?;
+        Ok(WarmStatics { robot, tracker })
     }
 
     /// The robot.
@@ -126,7 +113,12 @@ impl<E: Element> WarmStatics<E> {
 
     /// What the solves cost so far.
     pub fn counts(&self) -> WarmCounts {
-        self.counts
+        self.tracker.counts()
+    }
+
+    /// The tracker the solves run on.
+    pub fn tracker(&self) -> &Tracker<Structure<E>> {
+        &self.tracker
     }
 
     /// Assembles and factors the tangent at `u` under `loads`, kept for the
@@ -136,13 +128,8 @@ impl<E: Element> WarmStatics<E> {
     /// Sizes as [`crate::structure::Structure::residual`]; a tangent that
     /// cannot be factored.
     pub fn factor_at(&mut self, u: &[f64], loads: &StructureLoads) -> Result<()> {
-        let s = self.robot.structure();
-        let dead: Vec<f64> = s.dead_force(loads)?.data.into();
-        let q: Vec<f64> = s.configuration(u)?.data.into();
-        s.tangent_into(u, &q, &dead, loads, &mut self.k)?;
-        self.factors = Some(self.solver.factor(&self.k, FactorOptions::default())?);
-        self.counts.factorizations += 1;
-        Ok(())
+        self.tracker.set_loads(loads.clone())?;
+        self.tracker.factor_at_free(u)
     }
 
     /// The equilibrium's free coordinates `u` under `loads`, from `u0` (a
@@ -150,72 +137,28 @@ impl<E: Element> WarmStatics<E> {
     ///
     /// # Errors
     /// Sizes as [`crate::structure::Structure::residual`]; the errors of
-    /// [`StaticSolver::solve`] when the fallback fails too.
+    /// [`crate::statics::StaticSolver::solve`] when the fallback fails too.
     pub fn solve(&mut self, loads: &StructureLoads, u0: &[f64]) -> Result<DVector<f64>> {
-        let s = self.robot.structure();
-        check_len("u0", s.n_free(), u0.len())?;
-        self.counts.solves += 1;
-        let dead: Vec<f64> = s.dead_force(loads)?.data.into();
-        let (n, nq) = (s.n_free(), s.n_q());
-        let mut u = u0.to_vec();
-        let mut q: Vec<f64> = s.configuration(&u)?.data.into();
-        let (mut r, mut du, mut dq) = (vec![0.0; n], vec![0.0; n], vec![0.0; nq]);
-        let (mut u1, mut q1) = (u.clone(), q.clone());
-        let mut last = f64::INFINITY;
-        let mut refactors = 0;
-        if self.factors.is_none() {
-            self.factor_at(&u, loads)?;
-            refactors += 1;
-        }
-        for _ in 0..MAX_CHORD_STEPS * 3 {
-            let s = self.robot.structure();
-            s.residual_into(&u, &q, &dead, loads, &mut r)?;
-            self.counts.residuals += 1;
-            du.copy_from_slice(&r);
-            let Some(f) = &self.factors else { break };
-            f.solve_in_place(&mut du)?;
-            let step = du.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            if !step.is_finite() {
-                break;
-            }
-            if step > 0.5 * last {
-                // not contracting: a Newton step from here, at most twice
-                if refactors >= 3 {
-                    break;
-                }
-                self.factor_at(&u, loads)?;
-                refactors += 1;
-                last = f64::INFINITY;
-                continue;
-            }
-            let s = self.robot.structure();
-            s.step_into(&u, &du, &mut dq)?;
-            s.advance_into(&u, &q, &du, &dq, 1.0, &mut u1, &mut q1)?;
-            std::mem::swap(&mut u, &mut u1);
-            std::mem::swap(&mut q, &mut q1);
-            if step <= self.step_tolerance {
-                return Ok(DVector::from_vec(u));
-            }
-            last = step;
-        }
-        self.counts.fallbacks += 1;
-        let s = self.robot.structure();
-        let q0: Vec<f64> = s.configuration(u0)?.data.into();
-        let eq = StaticSolver::default().solve_with(s, loads, Some(&q0), &mut self.solver)?;
-        self.factor_at(eq.u.as_slice(), loads)?;
-        Ok(eq.u)
+        check_len("u0", self.robot.structure().n_free(), u0.len())?;
+        self.tracker.set_loads(loads.clone())?;
+        Ok(self.tracker.solve_free(u0)?.u)
+    }
+
+    /// The kept factors, or the error of sensitivities asked too early.
+    fn factors(&self) -> Result<&AutoFactors> {
+        self.tracker.kept_factors().ok_or_else(|| {
+            Error::invalid(
+                "warm",
+                "unfactored",
+                "factor a tangent (a solve or factor_at) before the sensitivities",
+            )
+        })
     }
 
     /// `W = K⁻¹ A_xᵀ` (three columns of `n_free`, column-major) and the
     /// compliance `C = A_x W` with the kept factors.
     fn compliance_columns(&self) -> Result<(Vec<f64>, SMatrix<f64, 3, 3>)> {
-        let Some(f) = &self.factors else {
-            return Err(Error::invalid(
-                "warm",
-                "unfactored",
-                "factor a tangent (a solve or factor_at) before the sensitivities",
-            ));
-        };
+        let f = self.factors()?;
         let n = self.robot.structure().n_free();
         let x0 = self.robot.platform_free_start()?;
         let mut w = vec![0.0; 3 * n];

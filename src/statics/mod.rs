@@ -58,7 +58,10 @@ mod sequence;
 mod stability;
 pub mod tracker;
 
-pub use tracker::{EquilibriumTracker, FactoredTangent, LinearLoad, TrackedEquilibrium};
+pub use tracker::{
+    EquilibriumTracker, FactoredTangent, LinearLoad, ModelLoad, TrackedEquilibrium, Tracker,
+    WarmCounts, WarmPath, WarmStatus, WarmStrategy,
+};
 
 /// Settings of the static solver; every field has a documented default.
 ///
