@@ -33,6 +33,7 @@ impl SplitMix64 {
     }
 
     /// Uniform in `[0, 1)`: the top 53 bits over `2⁵³`.
+    #[cfg_attr(not(feature = "report"), allow(dead_code))] // the experiments' draws
     pub(crate) fn uniform(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 / TWO_53
     }
@@ -44,16 +45,19 @@ impl SplitMix64 {
     }
 
     /// Uniform in `[−1, 1)`.
+    #[cfg_attr(not(feature = "report"), allow(dead_code))] // the experiments' draws
     pub(crate) fn symmetric(&mut self) -> f64 {
         2.0 * self.uniform() - 1.0
     }
 
     /// Uniform in `[a, b)`.
+    #[cfg_attr(not(feature = "report"), allow(dead_code))] // the experiments' draws
     pub(crate) fn range(&mut self, a: f64, b: f64) -> f64 {
         a + (b - a) * self.uniform()
     }
 
     /// Log-uniform in `[a, b)` (`0 < a < b`).
+    #[cfg_attr(not(feature = "report"), allow(dead_code))] // the experiments' draws
     pub(crate) fn log_range(&mut self, a: f64, b: f64) -> f64 {
         (a.ln() + (b.ln() - a.ln()) * self.uniform()).exp()
     }
@@ -119,6 +123,7 @@ impl Lcg {
     }
 
     /// Uniform in `[0, 1)`: the top 53 bits over `2⁵³`.
+    #[cfg_attr(not(feature = "report"), allow(dead_code))] // the experiments' draws
     pub(crate) fn uniform(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 / TWO_53
     }
@@ -129,6 +134,7 @@ impl Lcg {
     }
 
     /// Uniform in `[−1, 1)`.
+    #[cfg_attr(not(feature = "report"), allow(dead_code))] // the experiments' draws
     pub(crate) fn symmetric(&mut self) -> f64 {
         2.0 * self.uniform() - 1.0
     }
