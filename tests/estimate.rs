@@ -22,6 +22,18 @@ fn two_section(elements_per_section: usize) -> Robot<PlanarCable> {
     s.robot().unwrap()
 }
 
+/// Solved at the model's optimum: converged, or stopped there with a
+/// misfit the fit test puts beyond the noise (a bound held active against
+/// the data, or a load model that cannot explain the truth: the honest
+/// status since the fit test, the optimum the same).
+fn solved(s: &softrod::outcome::EstimateStatus) -> bool {
+    s.is_converged()
+        || matches!(
+            s,
+            softrod::outcome::EstimateStatus::MisfitBeyondNoise { .. }
+        )
+}
+
 fn known() -> Loads {
     Scene::two_section().loads().unwrap()
 }
@@ -325,7 +337,7 @@ proptest! {
         let settings = EstimatorSettings { alpha: Some(alpha), load_model: model, statistical_tolerance: 0.0, ..EstimatorSettings::default() };
         let en = softrod::estimate::EstimatorSettings { backend: Backend::Newton, ..settings.clone() }.build_for(&robot, &k).unwrap().step(&obs).unwrap();
         let es = softrod::estimate::EstimatorSettings { backend: Backend::Sqp, ..settings }.build_for(&robot, &k).unwrap().step(&obs).unwrap();
-        prop_assert!(en.report.status.is_converged() && es.report.status.is_converged());
+        prop_assert!(solved(&en.report.status) && solved(&es.report.status));
         let nf: f64 = en.f.iter().map(|v| v * v).sum::<f64>().sqrt();
         let df: f64 = en.f.iter().zip(&es.f).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
         let dq = en.node_positions::<2>().unwrap().iter().zip(es.node_positions::<2>().unwrap()).map(|(a, b)| (a - b).norm()).fold(0.0f64, f64::max);
@@ -527,7 +539,7 @@ fn sqp_respects_local_frame_bounds() {
         .map(|b| normal_load(&free, b.s_m))
         .fold(f64::MAX, f64::min);
     eprintln!("min n.w at bounded points: {worst:.3e} N/m (unbounded: {worst_free:.3e})");
-    assert!(e.report.status.is_converged(), "{}", e.report);
+    assert!(solved(&e.report.status), "{}", e.report);
     assert!(worst >= -1e-5, "{worst}");
     assert!(
         worst_free < -1e-3,

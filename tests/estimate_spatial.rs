@@ -17,6 +17,18 @@ use softrod::estimate::{
 };
 use softrod::loads::Loads;
 
+/// Solved at the model's optimum: converged, or stopped there with a
+/// misfit the fit test puts beyond the noise (a bound held active against
+/// the data, or a load model that cannot explain the truth: the honest
+/// status since the fit test, the optimum the same).
+fn solved(s: &softrod::outcome::EstimateStatus) -> bool {
+    s.is_converged()
+        || matches!(
+            s,
+            softrod::outcome::EstimateStatus::MisfitBeyondNoise { .. }
+        )
+}
+
 const L: f64 = 0.24;
 
 /// The references' robot at `n` elements: two sections of 0.12 m, EA 300 N,
@@ -299,7 +311,7 @@ fn world_bounds_hold_in_3d_and_the_local_frame_is_refused() {
     .build_for(&robot, &Loads::default())
     .unwrap();
     let e = est.step(&obs).unwrap();
-    assert!(e.report.status.is_converged(), "{}", e.report);
+    assert!(solved(&e.report.status), "{}", e.report);
     let fz = e.resultant_force_n[2];
     println!("bounded tip force: {:?} N", e.resultant_force_n);
     assert!((fz + 1.0).abs() <= 1e-6, "{fz}");

@@ -623,7 +623,11 @@ fn checker(name: &str, text: &str) -> Option<Check> {
     use softrod::touch::AvoidScene;
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
     let read = |f: &str| std::fs::read_to_string(format!("{dir}/{f}")).unwrap();
-    if name.ends_with("markers.json") && !name.starts_with("parallel_") {
+    // markers files and recorded marker streams (`*_frames.json`) are the
+    // estimate command's input, not a scene
+    if (name.ends_with("markers.json") && !name.starts_with("parallel_"))
+        || name.ends_with("_frames.json")
+    {
         return None;
     }
     if ParallelScene::is_parallel(text) {

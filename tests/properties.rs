@@ -281,8 +281,10 @@ fn scene_strategy() -> impl Strategy<Value = Scene> {
         (
             num(),
             num(),
-            num(),
-            -10.0..10.0f64,
+            // gravity, inside its documented range (100 g)
+            -900.0..900.0f64,
+            // base.angle_rad, inside its documented range |θ| ≤ 2π
+            -6.0..6.0f64,
             num(),
             0.0..0.24f64,
             1usize..=20,

@@ -436,7 +436,7 @@ struct Target<'a> {
 /// let push = |fx: f64| StructureLoads { bodies: vec![BodyLoad { body: 0, force_n: vec![fx, 0.0], moment_nm: vec![0.0] }], ..StructureLoads::default() };
 /// let mut tracker = Tracker::new(s.clone(), push(0.1), StaticSettings::default())?;
 /// let u0 = s.reference_free_coordinates();
-/// let first = tracker.solve_free(u0.as_slice())?; // far from the start: the fallback
+/// let first = tracker.solve_free(u0)?; // far from the start: the fallback
 /// tracker.set_loads(push(0.11))?;
 /// let next = tracker.solve_free(first.u.as_slice())?;
 /// assert!(next.status.is_converged() && next.path != WarmPath::Fallback);

@@ -307,7 +307,7 @@ pub(super) fn cases() -> Vec<Case> {
                 })
             },
             Parse,
-            "loads[0]: moment_nm[1]",
+            "loads[0].moment_nm[1]",
         ),
         case(
             "four-component moment",
@@ -317,7 +317,7 @@ pub(super) fn cases() -> Vec<Case> {
                 })
             },
             Parse,
-            "loads[0]: moment_nm",
+            "loads[0].moment_nm",
         ),
         case(
             "vector tip moment in a planar scene",

@@ -343,7 +343,7 @@ pub fn case_file(scene: &Scene, case: &LoopCase, settings: &FailureSettings) -> 
 ///
 /// # Example
 /// ```
-/// use softrod::control::{plant_reach_m, FailureSettings, LoopCase};
+/// use softrod::report::loop_failure::{plant_reach_m, FailureSettings, LoopCase};
 /// let mut scene = softrod::scene::Scene::two_section();
 /// scene.pressures_pa = vec![45e3, 0.0, 45e3, 0.0];
 /// let d = plant_reach_m(&scene, &LoopCase::nominal(), &FailureSettings::default(), 2)?;

@@ -135,7 +135,8 @@ impl LocalizationResult {
     /// # Example
     /// ```
     /// use nalgebra::Vector2;
-    /// use softrod::touch::{Calibration, LocalizationCase, LocalizationResult};
+    /// use softrod::report::touch::{LocalizationCase, LocalizationResult};
+    /// use softrod::touch::Calibration;
     /// let r = LocalizationResult { case: LocalizationCase::new(0.3, 0.006, 6, 1),
     ///     true_s_m: 0.3, true_force_n: [0.0, 0.02], peak_s_m: 0.31, peak_force_n: [0.0, 0.018],
     ///     point_s_m: 0.3, point_force_n: [0.001, 0.02],

@@ -182,7 +182,7 @@ impl AvoidRow {
     ///
     /// # Example
     /// ```
-    /// use softrod::touch::{AvoidRow, AvoidSummary};
+    /// use softrod::report::touch::{AvoidRow, AvoidSummary};
     /// let row = AvoidRow { center_m: [0.08, -0.465], radius_m: 0.01, goal_m: [0.15, -0.4],
     ///     touch: AvoidSummary::default(), baseline: AvoidSummary::default() };
     /// assert_eq!(row.center(), nalgebra::Vector2::new(0.08, -0.465));
@@ -212,7 +212,8 @@ impl AvoidRow {
 ///
 /// # Example
 /// ```
-/// use softrod::touch::{avoidance_table, AvoidSettings, FIG9_GOALS, FIG9_PLACEMENTS};
+/// use softrod::report::touch::{avoidance_table, FIG9_GOALS, FIG9_PLACEMENTS};
+/// use softrod::touch::AvoidSettings;
 /// // one placement and goal, 0.5 s of each run (the table's runs take 120 s)
 /// let settings = AvoidSettings { duration_s: 0.5, ..AvoidSettings::default() };
 /// let rows = avoidance_table(&FIG9_PLACEMENTS[..1], &FIG9_GOALS[..1],
