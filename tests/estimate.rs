@@ -3,6 +3,8 @@
 //! finer "real robot". Every test states the bound a broken estimator fails.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+mod common;
+use common::lcg;
 use proptest::prelude::*;
 use softrod::assembly::Robot;
 use softrod::element::{Element, PlanarCable};
@@ -36,19 +38,6 @@ fn solved(s: &softrod::outcome::EstimateStatus) -> bool {
 
 fn known() -> Loads {
     Scene::two_section().loads().unwrap()
-}
-
-/// Seeded pseudo-random numbers in [-1, 1).
-fn lcg(seed: u64, n: usize) -> Vec<f64> {
-    let mut s = seed;
-    (0..n)
-        .map(|_| {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            2.0 * ((s >> 11) as f64 / (1u64 << 53) as f64) - 1.0
-        })
-        .collect()
 }
 
 /// The marker Jacobian `∂(Aq)/∂F` (adjoint solves) equals central finite

@@ -11,6 +11,8 @@
 //! quantile.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+mod common;
+use common::lcg;
 use softrod::assembly::Robot;
 use softrod::element::PlanarCable;
 use softrod::estimate::{
@@ -219,19 +221,6 @@ fn at_rest_then_payload_recovers_the_load() {
             );
         }
     }
-}
-
-/// Seeded numbers in [-1, 1).
-fn lcg(seed: u64, n: usize) -> Vec<f64> {
-    let mut s = seed;
-    (0..n)
-        .map(|_| {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            2.0 * ((s >> 11) as f64 / (1u64 << 53) as f64) - 1.0
-        })
-        .collect()
 }
 
 /// A stream whose unknown load changes at random every frame (seeded): a

@@ -54,3 +54,16 @@ pub fn two_legs(n: usize, mass_kg: f64, gravity: bool) -> StructureSpec {
     }
     spec
 }
+
+/// Seeded pseudo-random numbers in [-1, 1) (Knuth's MMIX LCG).
+pub fn lcg(seed: u64, n: usize) -> Vec<f64> {
+    let mut s = seed;
+    (0..n)
+        .map(|_| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            2.0 * ((s >> 11) as f64 / (1u64 << 53) as f64) - 1.0
+        })
+        .collect()
+}
