@@ -76,6 +76,7 @@ pub(crate) mod rng;
 pub mod scene;
 pub mod sensitivity;
 pub mod shape;
+pub mod site;
 pub mod statics;
 pub mod structure;
 pub mod touch;

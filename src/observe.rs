@@ -17,10 +17,9 @@
 use nalgebra::{Dim, RawStorage, SVector, Vector};
 use serde::{Deserialize, Serialize};
 
-use crate::assembly::Robot;
-use crate::element::Element;
-use crate::error::{check_all_finite, check_index, check_len, check_positive, Error, Result};
+use crate::error::{check_all_finite, check_len, check_positive, Error, Result};
 use crate::rng::Gaussian;
+use crate::site::{Site, Sites};
 
 /// How far beyond the robot's scale a marker may be: positions beyond
 /// `MAX_MARKER_SCALE` robot lengths, weights beyond `MAX_MARKER_SCALE`
@@ -39,12 +38,20 @@ pub const MAX_MARKER_SCALE: f64 = 1e12;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MarkerObservation {
-    /// Node index, or
+    /// The rod of `node` or `s_m` on a structure of several rods (default
+    /// 0, the clamped robot's one rod).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rod: Option<usize>,
+    /// Node index (of the rod), or
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub node: Option<usize>,
-    /// undeformed arc coordinate (m): exactly one of the two.
+    /// undeformed arc coordinate (m, of the rod), or
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub s_m: Option<f64>,
+    /// a rigid body's reference point (the parallel robot's platform centre,
+    /// `body: 0`): exactly one of the three.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub body: Option<usize>,
     /// Measured position (m, world axes).
     pub position_m: Vec<f64>,
     /// Measured tangent `r'` (dimensionless), if observed.
@@ -76,8 +83,10 @@ impl MarkerObservation {
         position_m: Vector<f64, D, S>,
     ) -> Self {
         MarkerObservation {
+            rod: None,
             node: Some(node),
             s_m: None,
+            body: None,
             position_m: position_m.iter().copied().collect(),
             tangent: None,
             position_weight: None,
@@ -100,12 +109,81 @@ impl MarkerObservation {
     /// [`MarkerObservation::at_arc`] from a position as a frame holds it.
     pub(crate) fn at_arc_slice(s_m: f64, position_m: Vec<f64>) -> Self {
         MarkerObservation {
+            rod: None,
             node: None,
             s_m: Some(s_m),
+            body: None,
             position_m,
             tangent: None,
             position_weight: None,
             tangent_weight: None,
+        }
+    }
+
+    /// A position-only marker at `site` with default weights; `position_m`
+    /// (m) as in [`MarkerObservation::at_node`].
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{observe::MarkerObservation, site::Site};
+    /// let m = MarkerObservation::at_site(&Site::Body { body: 0 }, vec![0.0, 0.0, -0.1]);
+    /// assert_eq!(m.body, Some(0));
+    /// let m = MarkerObservation::at_site(&Site::Rod { rod: 2, s_m: 0.1 }, vec![0.0; 3]);
+    /// assert_eq!((m.rod, m.s_m), (Some(2), Some(0.1)));
+    /// ```
+    pub fn at_site(site: &Site, position_m: Vec<f64>) -> Self {
+        let (rod, s_m, body) = match *site {
+            Site::Rod { rod, s_m } => ((rod != 0).then_some(rod), Some(s_m), None),
+            Site::Body { body } => (None, None, Some(body)),
+        };
+        MarkerObservation {
+            rod,
+            node: None,
+            s_m,
+            body,
+            position_m,
+            tangent: None,
+            position_weight: None,
+            tangent_weight: None,
+        }
+    }
+
+    /// The site this marker observes on `model`: its `node` or `s_m` on its
+    /// `rod` (default 0), or its `body`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] named `field` unless exactly one of
+    /// `node`, `s_m` and `body` is given, or for a `rod` beside `body`;
+    /// [`Error::IndexOutOfRange`] named `field.node` / `field.rod` for a
+    /// node or rod that does not exist.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{observe::MarkerObservation, scene::Scene, site::Site};
+    /// let robot = Scene::two_section().robot()?;
+    /// let m = MarkerObservation::at_node(20, nalgebra::Vector2::new(0.2, 0.05));
+    /// assert_eq!(m.site(&robot, "m")?, Site::Rod { rod: 0, s_m: robot.node_arc()[20] });
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn site<M: Sites>(&self, model: &M, field: &str) -> Result<Site> {
+        let rod = self.rod.unwrap_or(0);
+        match (self.node, self.s_m, self.body) {
+            (Some(n), None, None) => Ok(Site::Rod {
+                rod,
+                s_m: model.node_arc_m(&format!("{field}.node"), rod, n)?,
+            }),
+            (None, Some(s_m), None) => Ok(Site::Rod { rod, s_m }),
+            (None, None, Some(body)) if self.rod.is_none() => Ok(Site::Body { body }),
+            (None, None, Some(_)) => Err(Error::invalid(
+                format!("{field}.rod"),
+                rod,
+                "a body marker names no rod",
+            )),
+            _ => Err(Error::invalid(
+                field,
+                "",
+                "give exactly one of `node`, `s_m` and `body`",
+            )),
         }
     }
 
@@ -188,23 +266,48 @@ impl Observation {
     /// assert!(Observation::of_nodes(&robot, &q, &[10, 21]).is_err());
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    pub fn of_nodes<E: Element>(robot: &Robot<E>, q: &[f64], nodes: &[usize]) -> Result<Self> {
-        check_len("q", robot.n_q(), q.len())?;
+    pub fn of_nodes<M: Sites>(model: &M, q: &[f64], nodes: &[usize]) -> Result<Self> {
+        check_len("q", model.n_q(), q.len())?;
+        let mut markers = Vec::with_capacity(nodes.len());
         for (i, &n) in nodes.iter().enumerate() {
-            check_index(&format!("nodes[{i}]"), n, robot.n_nodes())?;
+            let r = model.node_coordinates_of(&format!("nodes[{i}]"), 0, n)?;
+            let p = &q[r.start..r.start + model.dim()];
+            markers.push(MarkerObservation::at_node(
+                n,
+                nalgebra::DVectorView::from(p),
+            ));
         }
-        let (nd, d) = (E::NODE_DOFS, E::DIM);
-        Ok(Observation {
-            markers: nodes
-                .iter()
-                .map(|&n| {
-                    MarkerObservation::at_node(
-                        n,
-                        nalgebra::DVectorView::from(&q[n * nd..n * nd + d]),
-                    )
-                })
-                .collect(),
-        })
+        Ok(Observation { markers })
+    }
+
+    /// The exact positions of the configuration `q` of `model` at `sites`
+    /// (a noise-free synthetic observation: the one way the simulated
+    /// plants, the reports and the tests make markers).
+    ///
+    /// # Errors
+    /// [`crate::Error::DimensionMismatch`] named `q`; a site that is not on
+    /// the model as [`Sites::site_rows`], named `sites[i]`.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{observe::Observation, scene::Scene, site::Site};
+    /// let robot = Scene::two_section().robot()?;
+    /// let q = robot.reference_configuration().as_slice().to_vec();
+    /// let o = Observation::of_sites(&robot, &q, &[Site::Rod { rod: 0, s_m: 0.12 }])?;
+    /// assert!((o.markers[0].position_m[0] - 0.12).abs() < 1e-12);
+    /// assert!(Observation::of_sites(&robot, &q, &[Site::Rod { rod: 0, s_m: 0.5 }]).is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn of_sites<M: Sites>(model: &M, q: &[f64], sites: &[Site]) -> Result<Self> {
+        check_len("q", model.n_q(), q.len())?;
+        let mut markers = Vec::with_capacity(sites.len());
+        for (i, site) in sites.iter().enumerate() {
+            let p = model
+                .site_rows(&format!("sites[{i}]"), site)?
+                .position_at(q);
+            markers.push(MarkerObservation::at_site(site, p));
+        }
+        Ok(Observation { markers })
     }
 
     /// Number of observed scalar components `n_ob`.
@@ -256,10 +359,19 @@ impl ObsRow {
 
     /// The observed scalar at `q` (`n_q` coordinates; NaN if `q` is too short).
     pub(crate) fn apply(&self, q: &[f64]) -> f64 {
-        self.entries
-            .iter()
-            .map(|&(j, w)| w * q.get(j).copied().unwrap_or(f64::NAN))
-            .sum()
+        crate::site::apply_row(&self.entries, q)
+    }
+}
+
+/// Whether two markers' sites are one point: the same body, or the same
+/// rod within `1e-9` of the model's length.
+fn same_site(a: &Site, b: &Site, length_m: f64) -> bool {
+    match (a, b) {
+        (Site::Body { body: x }, Site::Body { body: y }) => x == y,
+        (Site::Rod { rod: r, s_m: s }, Site::Rod { rod: q, s_m: t }) => {
+            r == q && (t - s).abs() <= 1e-9 * length_m
+        }
+        _ => false,
     }
 }
 
@@ -301,15 +413,15 @@ impl ObservationOperator {
     /// the last; [`Error::DimensionMismatch`] for a vector that is not `DIM`
     /// long; for a `sigma` that is not finite and positive,
     /// [`Error::InvalidParameter`].
-    pub fn new<E: Element>(
-        robot: &Robot<E>,
+    pub fn new<M: Sites>(
+        model: &M,
         obs: &Observation,
         noise_sigma_m: f64,
         tangent_sigma: f64,
     ) -> Result<Self> {
         check_positive("noise_sigma_m", noise_sigma_m)?;
         check_positive("tangent_sigma", tangent_sigma)?;
-        let (d, nd) = (E::DIM, E::NODE_DOFS);
+        let d = model.dim();
         if obs.markers.is_empty() {
             return Err(Error::invalid(
                 "observation.markers",
@@ -324,47 +436,29 @@ impl ObservationOperator {
         };
         let pw = 1.0 / (noise_sigma_m * noise_sigma_m);
         let tw = 1.0 / (tangent_sigma * tangent_sigma);
-        let mut seen: Vec<f64> = Vec::with_capacity(obs.markers.len());
+        let length = model.length_m();
+        let mut seen: Vec<Site> = Vec::with_capacity(obs.markers.len());
         for (i, m) in obs.markers.iter().enumerate() {
-            let name = |f: &str| format!("observation.markers[{i}].{f}");
-            let s = match (m.node, m.s_m) {
-                (Some(n), None) => {
-                    check_index(&name("node"), n, robot.n_nodes())?;
-                    robot.node_arc()[n]
-                }
-                (None, Some(s)) => s,
-                _ => {
-                    return Err(Error::invalid(
-                        format!("observation.markers[{i}]"),
-                        "",
-                        "give exactly one of `node` and `s_m`",
-                    ))
-                }
-            };
-            let p = robot.arc_point(&name("s_m"), s)?;
-            if seen
-                .iter()
-                .any(|t: &f64| (t - s).abs() <= 1e-9 * robot.length())
-            {
+            let field = format!("observation.markers[{i}]");
+            let name = |f: &str| format!("{field}.{f}");
+            let site = m.site(model, &field)?;
+            let rows = model.site_rows(&field, &site)?;
+            if seen.iter().any(|t| same_site(t, &site, length)) {
+                let at = match site {
+                    Site::Rod { s_m, .. } => s_m,
+                    Site::Body { body } => body as f64,
+                };
                 return Err(Error::invalid(
-                    format!("observation.markers[{i}]"),
-                    s,
+                    field,
+                    at,
                     "duplicates another marker's position",
                 ));
             }
-            seen.push(s);
-            // (16): r(X) = Σ_k s_k(ξ) of the element's four slots, the
-            // positions and slopes of its two nodes; r'(X) with s_k'
-            let (e, sh, dsh) = (p.element, p.values, p.slopes);
-            let row = |w: &[f64; 4], comp: usize| ObsRow {
-                entries: (0..4)
-                    .map(|k| ((e + k / 2) * nd + (k % 2) * d + comp, w[k]))
-                    .collect(),
-            };
+            seen.push(site);
             check_len(&name("position_m"), d, m.position_m.len())?;
             check_all_finite(&name("position_m"), &m.position_m)?;
             // magnitudes that can only overflow: 1e12 robot lengths away
-            let far = MAX_MARKER_SCALE * robot.length();
+            let far = MAX_MARKER_SCALE * length;
             if let Some(k) = m.position_m.iter().position(|v| v.abs() > far) {
                 return Err(Error::invalid(
                     format!("{}[{k}]", name("position_m")),
@@ -396,12 +490,19 @@ impl ObservationOperator {
                 }
             };
             let wp = weights(&m.position_weight, "position_weight", pw)?;
-            for (c, (y, w)) in m.position_m.iter().zip(&wp).enumerate() {
-                op.rows.push(row(&sh, c));
+            for ((row, y), w) in rows.position.into_iter().zip(&m.position_m).zip(&wp) {
+                op.rows.push(ObsRow { entries: row });
                 op.y.push(*y);
                 op.weights.push(*w);
             }
             if let Some(t) = &m.tangent {
+                let Some(tangent_rows) = rows.tangent else {
+                    return Err(Error::invalid(
+                        name("tangent"),
+                        format!("{t:?}"),
+                        "a rigid body's point has no tangent: observe its position only",
+                    ));
+                };
                 check_len(&name("tangent"), d, t.len())?;
                 check_all_finite(&name("tangent"), t)?;
                 let norm = t.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -414,8 +515,8 @@ impl ObservationOperator {
                     ));
                 }
                 let wtan = weights(&m.tangent_weight, "tangent_weight", tw)?;
-                for (c, (y, w)) in t.iter().zip(&wtan).enumerate() {
-                    op.rows.push(row(&dsh, c));
+                for ((row, y), w) in tangent_rows.into_iter().zip(t).zip(&wtan) {
+                    op.rows.push(ObsRow { entries: row });
                     op.y.push(*y);
                     op.weights.push(*w);
                 }

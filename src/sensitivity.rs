@@ -76,6 +76,7 @@ use crate::element::Element;
 use crate::error::{check_len, Error, Result};
 use crate::linsolve::{AutoFactors, Factorization};
 use crate::statics::LinearLoad;
+use crate::structure::Assembled;
 
 /// The sensitivities of one equilibrium of `robot`, from the factors `F` of
 /// its tangent `K` there (as [`crate::statics::EquilibriumTracker`] returns
@@ -84,18 +85,21 @@ use crate::statics::LinearLoad;
 /// # Example
 /// See the [module documentation](self).
 #[derive(Debug)]
-pub struct Sensitivity<'a, E: Element, F: Factorization = AutoFactors> {
-    robot: &'a Robot<E>,
+pub struct Sensitivity<'a, M: Assembled, F: Factorization = AutoFactors> {
+    robot: &'a M,
+    /// The free coordinates of the equilibrium (the map's Jacobian `T(u)`
+    /// is taken there; the clamped robot's map is linear).
+    u: &'a [f64],
     factors: &'a F,
 }
 
-impl<E: Element, F: Factorization> Clone for Sensitivity<'_, E, F> {
+impl<M: Assembled, F: Factorization> Clone for Sensitivity<'_, M, F> {
     fn clone(&self) -> Self {
         *self
     }
 }
 
-impl<E: Element, F: Factorization> Copy for Sensitivity<'_, E, F> {}
+impl<M: Assembled, F: Factorization> Copy for Sensitivity<'_, M, F> {}
 
 /// Adjoint fields of `m` outputs `y_i = c_i · q`, column `i` each.
 ///
@@ -109,9 +113,10 @@ pub struct Adjoints {
     pub full: DMatrix<f64>,
 }
 
-impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
-    /// The sensitivities at an equilibrium whose tangent's factors (over
-    /// the free coordinates) are `factors`.
+impl<'a, E: Element, F: Factorization> Sensitivity<'a, Robot<E>, F> {
+    /// The sensitivities of the clamped robot at an equilibrium whose
+    /// tangent's factors (over the free coordinates) are `factors` (its map
+    /// `q = φ(u)` is linear: [`Sensitivity::at`] without the point).
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] if the factors are not `n_free` square.
@@ -120,7 +125,73 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
     /// See the [module documentation](self).
     pub fn new(robot: &'a Robot<E>, factors: &'a F) -> Result<Self> {
         check_len("factors", robot.n_free(), factors.n())?;
-        Ok(Sensitivity { robot, factors })
+        Ok(Sensitivity {
+            robot,
+            u: &[],
+            factors,
+        })
+    }
+
+    /// (43) `∂q/∂P = −(∂Q/∂q)⁻¹ ∂Q/∂P` (`n_q × n_pressures`, m/Pa) at the
+    /// equilibrium `q` of these factors.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `q` is not `n_q` long.
+    pub fn dq_dp(&self, q: &[f64]) -> Result<DMatrix<f64>> {
+        let np = self.robot.n_pressures();
+        // n_free × n_p, its columns one after the other
+        let b = self.robot.pressure_jacobian(q)?.data.into();
+        self.expand_columns(b, np)
+    }
+
+    /// The gradients `∇_P y_i = (∂Q/∂P)ᵀ u_i` of the outputs of `adjoints`
+    /// with respect to the pressures at the equilibrium `q`, column `i` each
+    /// (`n_pressures × m`, per Pa).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `q` is not `n_q` long or `adjoints`
+    /// do not fit the robot.
+    pub fn pressure_gradients(&self, q: &[f64], adjoints: &Adjoints) -> Result<DMatrix<f64>> {
+        let nfree = self.robot.n_free();
+        check_len("adjoints", nfree, adjoints.free.nrows())?;
+        let jac = self.robot.pressure_jacobian(q)?;
+        Ok(jac.tr_mul(&adjoints.free))
+    }
+}
+
+impl<'a, M: Assembled, F: Factorization> Sensitivity<'a, M, F> {
+    /// The sensitivities of any model at the equilibrium of free
+    /// coordinates `u` whose tangent's factors are `factors`.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `u` is not `n_free` long or the
+    /// factors are not `n_free` square.
+    ///
+    /// # Example
+    /// The parallel robot's platform moving under a force on it:
+    /// ```
+    /// use softrod::{estimate::LoadModel, sensitivity::Sensitivity, site::Site, statics::Tracker};
+    /// let robot = softrod::parallel::ParallelSpec::default().build_cable()?;
+    /// let s = robot.structure();
+    /// let loads = robot.loads(&[], [0.0; 3], [0.0; 3])?;
+    /// let mut tracker = Tracker::new(s.clone(), loads, Default::default())?;
+    /// let load = LoadModel::AtSite { site: Site::Body { body: 0 } };
+    /// let q0 = s.configuration(s.reference_free_coordinates())?;
+    /// let eq = tracker.solve(&load, &[0.0; 3], q0.as_slice())?;
+    /// let dq_df = Sensitivity::at(s, eq.u.as_slice(), &eq.factors)?.dq_df(&load)?;
+    /// // a downward force moves the platform down
+    /// let z = s.body_coordinates(0)?.start + 2;
+    /// assert!(dq_df[(z, 2)] > 0.0);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn at(model: &'a M, u: &'a [f64], factors: &'a F) -> Result<Self> {
+        check_len("u", model.n_free(), u.len())?;
+        check_len("factors", model.n_free(), factors.n())?;
+        Ok(Sensitivity {
+            robot: model,
+            u,
+            factors,
+        })
     }
 
     /// The shape's response `dq = M K⁻¹ Mᵀ g` to a change `g` of the
@@ -147,9 +218,13 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn response(&self, g: &[f64]) -> Result<DVector<f64>> {
-        let mut du: Vec<f64> = self.robot.restrict(g)?.data.into();
+        check_len("g", self.robot.n_q(), g.len())?;
+        let mut du = vec![0.0; self.robot.n_free()];
+        self.robot.restrict_into(self.u, g, &mut du)?;
         self.factors.solve_in_place(&mut du)?;
-        self.robot.expand_step(&du)
+        let mut dq = DVector::zeros(self.robot.n_q());
+        self.robot.step_into(self.u, &du, dq.as_mut_slice())?;
+        Ok(dq)
     }
 
     /// (28) `∂q/∂F = M K⁻¹ Mᵀ G` (`n_q × n_F`) for the load `load`: one
@@ -157,7 +232,7 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
     ///
     /// # Errors
     /// The errors of [`LinearLoad::force`].
-    pub fn dq_df<L: LinearLoad<E>>(&self, load: &L) -> Result<DMatrix<f64>> {
+    pub fn dq_df<L: LinearLoad<M>>(&self, load: &L) -> Result<DMatrix<f64>> {
         let nf = load.n_params(self.robot);
         let nfree = self.robot.n_free();
         let mut b = vec![0.0; nfree * nf];
@@ -166,22 +241,10 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
             ej.iter_mut()
                 .enumerate()
                 .for_each(|(k, v)| *v = f64::from(u8::from(k == j)));
-            self.robot
-                .restrict_into(load.force(self.robot, &ej)?.as_slice(), col)?;
+            let g = load.force(self.robot, &ej)?;
+            self.robot.restrict_into(self.u, g.as_slice(), col)?;
         }
         self.expand_columns(b, nf)
-    }
-
-    /// (43) `∂q/∂P = −(∂Q/∂q)⁻¹ ∂Q/∂P` (`n_q × n_pressures`, m/Pa) at the
-    /// equilibrium `q` of these factors.
-    ///
-    /// # Errors
-    /// [`Error::DimensionMismatch`] if `q` is not `n_q` long.
-    pub fn dq_dp(&self, q: &[f64]) -> Result<DMatrix<f64>> {
-        let np = self.robot.n_pressures();
-        // n_free × n_p, its columns one after the other
-        let b = self.robot.pressure_jacobian(q)?.data.into();
-        self.expand_columns(b, np)
     }
 
     /// The adjoint fields of the outputs `rows` (each sparse over all `n_q`
@@ -209,7 +272,7 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
                 crate::error::check_index("output row index", j, nq)?;
                 c[j] += w;
             }
-            self.robot.restrict_into(&c, col)?;
+            self.robot.restrict_into(self.u, &c, col)?;
             for &(j, _) in row.iter() {
                 c[j] = 0.0;
             }
@@ -222,7 +285,7 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
             .chunks_exact(nfree.max(1))
             .zip(full.as_mut_slice().chunks_exact_mut(nq.max(1)))
         {
-            self.robot.expand_step_into(fi, zi)?;
+            self.robot.step_into(self.u, fi, zi)?;
         }
         Ok(Adjoints { free, full })
     }
@@ -233,7 +296,7 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
     ///
     /// # Errors
     /// The errors of [`LinearLoad::force_transpose`].
-    pub fn load_gradients<L: LinearLoad<E>>(
+    pub fn load_gradients<L: LinearLoad<M>>(
         &self,
         load: &L,
         adjoints: &Adjoints,
@@ -251,20 +314,6 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
             gi.copy_from_slice(g.as_slice());
         }
         Ok(out)
-    }
-
-    /// The gradients `∇_P y_i = (∂Q/∂P)ᵀ u_i` of the outputs of `adjoints`
-    /// with respect to the pressures at the equilibrium `q`, column `i` each
-    /// (`n_pressures × m`, per Pa).
-    ///
-    /// # Errors
-    /// [`Error::DimensionMismatch`] if `q` is not `n_q` long or `adjoints`
-    /// do not fit the robot.
-    pub fn pressure_gradients(&self, q: &[f64], adjoints: &Adjoints) -> Result<DMatrix<f64>> {
-        let nfree = self.robot.n_free();
-        check_len("adjoints", nfree, adjoints.free.nrows())?;
-        let jac = self.robot.pressure_jacobian(q)?;
-        Ok(jac.tr_mul(&adjoints.free))
     }
 
     /// Solves `K X = B` for the `ncols` columns of `b` (column-major
@@ -285,7 +334,7 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, E, F> {
             .chunks_exact(nfree.max(1))
             .zip(out.as_mut_slice().chunks_exact_mut(nq.max(1)))
         {
-            self.robot.expand_step_into(u, col)?;
+            self.robot.step_into(self.u, u, col)?;
         }
         Ok(out)
     }

@@ -34,6 +34,7 @@ mod configuration;
 mod follower;
 mod known_loads;
 mod model;
+mod sites;
 mod spec;
 mod tangent;
 mod typed;

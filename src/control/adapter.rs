@@ -44,7 +44,7 @@ pub(crate) fn dq_dp_with<E: Element>(
 #[derive(Debug, Clone)]
 pub(crate) enum LoopEstimator<E: Element> {
     /// The reduced Gauss–Newton backend.
-    Newton(Box<NewtonEstimator<E>>),
+    Newton(Box<NewtonEstimator<Robot<E>>>),
     /// The SQP backend.
     Sqp(Box<SqpEstimator<E>>),
 }

@@ -130,7 +130,7 @@ pub trait NodeKinematics {
 /// assert!((g[4] - 300.0 * 0.01).abs() < 1e-12); // the axial force at node 2
 /// # Ok::<(), softrod::Error>(())
 /// ```
-pub trait Element: NodeKinematics + Clone + std::fmt::Debug + Send + Sync {
+pub trait Element: NodeKinematics + Clone + std::fmt::Debug + Send + Sync + 'static {
     /// Undeformed length `L_e` (m).
     fn length(&self) -> f64;
     /// Elastic energy `U_E` of the element (J).

@@ -37,7 +37,7 @@ fn cov_factor(
             let (_, chol) = representer_system(dv, w, alpha, gn)?;
             &dv.z * (chol.inverse() * sigma)
         }
-        LoadModel::Concentrated { .. } => {
+        LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
             concentrated_system(dv, w, alpha, gn)?.solve(&weighted_columns(&dv.jt, w)) * sigma
         }
     })
@@ -150,7 +150,7 @@ fn posterior(
             let mk = (&mk + mk.transpose()) * 0.5;
             Some((row_major(&r), row_major(&mk)))
         }
-        LoadModel::Concentrated { .. } => {
+        LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
             let chol = concentrated_system(dv, w, alpha, gn)?;
             let ninv = chol.inverse();
             let r = &c * &ninv * c.transpose();
@@ -244,7 +244,7 @@ pub(crate) fn alpha_spread(
             let df = -(&fv - &dv.z * chol.solve(&u));
             (k, df)
         }
-        LoadModel::Concentrated { .. } => {
+        LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
             let k = dv.jt.tr_mul(&dv.jt);
             let chol = concentrated_system(dv, w, alpha, gn)?;
             let df = -chol.solve(&fv) * alpha;
@@ -611,13 +611,15 @@ mod tests {
         fn jt(&self, load: LoadModel) -> DMatrix<f64> {
             match load {
                 LoadModel::Distributed => &self.b * &self.z,
-                LoadModel::Concentrated { .. } => self.z.clone(),
+                LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => self.z.clone(),
             }
         }
         fn h(&self, load: LoadModel) -> DMatrix<f64> {
             match load {
                 LoadModel::Distributed => self.b.clone(),
-                LoadModel::Concentrated { .. } => DMatrix::identity(self.b.nrows(), self.b.nrows()),
+                LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
+                    DMatrix::identity(self.b.nrows(), self.b.nrows())
+                }
             }
         }
         /// `F̂(α)` and `−2 log p(y | α)` (up to a constant), densely.

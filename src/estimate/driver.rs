@@ -7,14 +7,14 @@ use std::time::Instant;
 
 use nalgebra::DVector;
 
-use crate::element::Element;
+use crate::element::{Element, NodeKinematics};
 use crate::error::{Error, Result};
 use crate::linsolve::LinearWork;
 use crate::observe::{Observation, ObservationOperator};
 
 use super::covariance::{CovarianceInputs, LazyCovariances};
 use super::problem::{Derivs, GnFactor, Problem};
-use super::{AlphaRule, Backend, Estimate, EstimateReport, FarStart};
+use super::{AlphaRule, Backend, Estimate, EstimateReport, EstimationModel, FarStart};
 
 /// Where the searches for `α` (the evidence's, the discrepancy principle's)
 /// begin their continuation in `α` (m/N² with whitened weights).
@@ -31,7 +31,7 @@ pub(crate) struct Warm {
 
 /// One solve of a backend at a fixed `α` and observation, converged or not
 /// (its report's status says).
-pub(crate) struct Solved {
+pub struct Solved {
     pub(crate) f: Vec<f64>,
     pub(crate) q: Vec<f64>,
     pub(crate) derivs: Derivs,
@@ -45,15 +45,15 @@ pub(crate) struct Solved {
 /// An estimator's state along a stream of observations: the problem, the
 /// `α` in use and the warm start.
 #[derive(Debug, Clone)]
-pub(crate) struct Stream<E: Element> {
-    pub(crate) problem: Problem<E>,
+pub(crate) struct Stream<M: EstimationModel> {
+    pub(crate) problem: Problem<M>,
     pub(crate) alpha: Option<f64>,
     pub(crate) warm: Option<Warm>,
 }
 
-impl<E: Element> Stream<E> {
+impl<M: EstimationModel> Stream<M> {
     /// A fresh stream over `problem` (`α` from its settings).
-    pub(crate) fn new(problem: Problem<E>) -> Self {
+    pub(crate) fn new(problem: Problem<M>) -> Self {
         Stream {
             alpha: problem.settings().alpha,
             problem,
@@ -127,7 +127,7 @@ impl<E: Element> Stream<E> {
     ) -> Result<Estimate> {
         let problem = &self.problem;
         let mut f = f;
-        unused_load_slots_zeroed::<E>(problem.load(), &mut f);
+        unused_load_slots_zeroed::<M::Element>(problem.load(), &mut f);
         // `H F̂`: the resultants' moment and the penalty `F̂ᵀ H F̂`
         let hf = problem.penalty_grad(&f)?;
         let (resultant_force_n, resultant_moment_nm, fw) = problem.resultants(&q, &f, &hf)?;
@@ -151,8 +151,8 @@ impl<E: Element> Stream<E> {
         };
         let cov = LazyCovariances::new(CovarianceInputs {
             load: problem.load(),
-            nd: E::NODE_DOFS,
-            used_slots: 2 * E::DIM,
+            nd: M::Element::NODE_DOFS,
+            used_slots: 2 * M::Element::DIM,
             sigma: settings.noise_sigma_m,
             fw,
             dv,
@@ -173,9 +173,13 @@ impl<E: Element> Stream<E> {
             marker_residuals: DVector::from_vec(e),
             noise_sigma_m: settings.noise_sigma_m,
             report,
-            node_s: problem.robot().node_arc().to_vec(),
-            dim: E::DIM,
-            node_dofs: E::NODE_DOFS,
+            node_s: problem
+                .robot()
+                .field_rod()
+                .map(|r| r.node_arc().to_vec())
+                .unwrap_or_default(),
+            dim: M::Element::DIM,
+            node_dofs: M::Element::NODE_DOFS,
             cov,
         })
     }
@@ -201,11 +205,11 @@ fn unused_load_slots_zeroed<E: Element>(load: super::LoadModel, f: &mut [f64]) {
 
 /// A method over the estimation problem: how one backend solves it at a
 /// fixed `α` and observation from a start `(F, q)`.
-pub(crate) trait Method<E: Element> {
+pub(crate) trait Method<M: EstimationModel> {
     /// The backend.
     const BACKEND: Backend;
     /// The stream the method runs on.
-    fn stream(&mut self) -> &mut Stream<E>;
+    fn stream(&mut self) -> &mut Stream<M>;
     /// One solve from `(f0, q0)` at `alpha` for the observation `op`.
     fn solve_one(
         &mut self,
@@ -274,8 +278,8 @@ pub(crate) fn discrepancy_alpha(
 /// One solve of a continuation path in `α` (the discrepancy search): from `(f0, q0)` at `alpha`; a converged solve
 /// becomes the next start. Its weighted residual, or `None` when the solve
 /// failed.
-fn path_solve<E: Element, M: Method<E>>(
-    method: &mut M,
+fn path_solve<Mo: EstimationModel, Me: Method<Mo>>(
+    method: &mut Me,
     op: &ObservationOperator,
     alpha: f64,
     f0: &mut Vec<f64>,
@@ -293,7 +297,10 @@ fn path_solve<E: Element, M: Method<E>>(
 /// solve of the search starting from the last converged one (continuation
 /// in `α`, from the stream's start); keeps it in the stream with the warm
 /// start the search leaves.
-fn choose_alpha<E: Element, M: Method<E>>(method: &mut M, op: &ObservationOperator) -> Result<f64> {
+fn choose_alpha<Mo: EstimationModel, Me: Method<Mo>>(
+    method: &mut Me,
+    op: &ObservationOperator,
+) -> Result<f64> {
     let rule = method.stream().problem.settings().alpha_rule;
     let (a, warm) = if rule == AlphaRule::Evidence {
         super::evidence::evidence_alpha(method, op)?
@@ -342,8 +349,8 @@ struct TargetsRun {
 /// unloaded shape); a later one's jump from the last split into
 /// intermediate observations, each solved from the last; the first that
 /// stops short ends the run.
-fn solve_targets<E: Element, M: Method<E>>(
-    method: &mut M,
+fn solve_targets<Mo: EstimationModel, Me: Method<Mo>>(
+    method: &mut Me,
     op: &ObservationOperator,
     alpha: f64,
 ) -> Result<TargetsRun> {
@@ -395,8 +402,8 @@ fn solve_targets<E: Element, M: Method<E>>(
 /// markers show a load the prior of that frame forbids, as a payload put
 /// on a robot first seen at rest): `α` is chosen again on this frame, from
 /// the answer, and the frame solved at the new `α`, which the stream keeps.
-fn revisit_alpha<E: Element, M: Method<E>>(
-    method: &mut M,
+fn revisit_alpha<Mo: EstimationModel, Me: Method<Mo>>(
+    method: &mut Me,
     op: &ObservationOperator,
     run: TargetsRun,
 ) -> Result<TargetsRun> {
@@ -444,13 +451,13 @@ fn fails_fit(run: &TargetsRun) -> bool {
 /// iterate and status (the warm start stays at the last estimate whose
 /// solve converged, a fit failure's included: it is the problem's optimum
 /// at this `α`).
-pub(crate) fn run_step<E: Element, M: Method<E>>(
-    method: &mut M,
+pub(crate) fn run_step<Mo: EstimationModel, Me: Method<Mo>>(
+    method: &mut Me,
     observation: &Observation,
 ) -> Result<Estimate> {
     let start = Instant::now();
     let work = LinearWork::now();
-    let backend = M::BACKEND;
+    let backend = Me::BACKEND;
     let op = method.stream().problem.operator_of_frame(observation)?;
     method.take_far_start();
     let alpha_given = method.stream().problem.settings().alpha.is_some();

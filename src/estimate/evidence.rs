@@ -43,7 +43,6 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::element::Element;
 use crate::error::Result;
 use crate::observe::ObservationOperator;
 
@@ -110,7 +109,7 @@ pub(crate) fn evidence(
             let tr: f64 = (0..m).map(|i| inv[(i, i)] / w[i]).sum();
             (log_det(&chol), tr, m as f64, 0.0)
         }
-        LoadModel::Concentrated { .. } => {
+        LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
             let d = dv.jt.nrows();
             let mut n = weighted_columns(&dv.jt, w) * dv.jt.transpose();
             for i in 0..d {
@@ -194,8 +193,8 @@ pub(crate) fn evidence_root(mut slope: impl FnMut(f64) -> Result<Option<f64>>) -
 /// warm start it leaves (the last converged solve of the search). An
 /// observation the markers cannot see (see [`informative`]) has a flat
 /// evidence: `α` stays at [`ALPHA_CONTINUATION_START`].
-pub(crate) fn evidence_alpha<E: Element, M: Method<E>>(
-    method: &mut M,
+pub(crate) fn evidence_alpha<Mo: super::EstimationModel, Me: Method<Mo>>(
+    method: &mut Me,
     op: &ObservationOperator,
 ) -> Result<(f64, Warm)> {
     let (mut f0, mut q0) = method.stream().start()?;
@@ -212,7 +211,7 @@ pub(crate) fn evidence_alpha<E: Element, M: Method<E>>(
             blind = true;
             return Ok(None);
         }
-        let problem: &Problem<E> = &method.stream().problem;
+        let problem: &Problem<Mo> = &method.stream().problem;
         let pen = problem.penalty(&s.f)?;
         let ev = evidence(
             problem.load(),
@@ -280,13 +279,15 @@ mod tests {
         fn jt(&self, load: LoadModel) -> DMatrix<f64> {
             match load {
                 LoadModel::Distributed => &self.b * &self.z,
-                LoadModel::Concentrated { .. } => self.z.clone(),
+                LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => self.z.clone(),
             }
         }
         fn h(&self, load: LoadModel) -> DMatrix<f64> {
             match load {
                 LoadModel::Distributed => self.b.clone(),
-                LoadModel::Concentrated { .. } => DMatrix::identity(self.b.nrows(), self.b.nrows()),
+                LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
+                    DMatrix::identity(self.b.nrows(), self.b.nrows())
+                }
             }
         }
         /// The minimizer of `(JF − y)ᵀW(JF − y) + α FᵀHF` and the

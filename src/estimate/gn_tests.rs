@@ -23,7 +23,7 @@ fn gn_step_from_the_factor_at_hand_is_the_one_formed_anew() {
     let q = eq.q.as_slice().to_vec();
     let f0 = vec![0.0; n_f];
     let lu = p.equilibrium(&f0, &q).unwrap().factors;
-    let dv = p.derivs(&lu, &op).unwrap();
+    let dv = p.derivs(&q, &lu, &op).unwrap();
     let e: Vec<f64> = (0..op.len()).map(|i| 1e-4 * (i as f64 + 1.0)).collect();
     let f: Vec<f64> = (0..n_f).map(|i| 0.01 * (i % 7) as f64).collect();
     let (alpha, other) = (31.0, 0.5);

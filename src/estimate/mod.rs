@@ -105,6 +105,8 @@ mod covariance;
 mod driver;
 mod evidence;
 mod fit;
+mod load_model;
+mod model;
 pub mod newton;
 mod problem;
 pub mod sqp;
@@ -113,6 +115,7 @@ mod triplets;
 pub use driver::ALPHA_CONTINUATION_START;
 pub use evidence::AlphaRule;
 pub use fit::{chi2_quantile, FIT_QUANTILE};
+pub use model::EstimationModel;
 pub use newton::NewtonEstimator;
 pub use problem::direct_solution;
 pub use sqp::SqpEstimator;
@@ -163,7 +166,7 @@ impl Backend {
 ///     serde_json::from_str(r#"{"kind": "concentrated", "node": 20}"#).unwrap();
 /// assert_eq!(m, softrod::estimate::LoadModel::Concentrated { node: 20 });
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum LoadModel {
     /// The distributed field `w(X) = S(X) F` (8): `F` has `n_q` entries,
@@ -175,6 +178,29 @@ pub enum LoadModel {
         /// The node (1 ..= number of elements; the base carries no load).
         node: usize,
     },
+    /// A force `F` (N, `DIM` entries) at a site of any model (32)–(35):
+    /// a rod point, or a rigid body's reference point (the parallel
+    /// robot's payload at its platform's centre, `{"kind": "body",
+    /// "body": 0}`). `Concentrated { node }` is this at the node's site.
+    AtSite {
+        /// Where the force acts.
+        site: crate::site::Site,
+    },
+}
+
+impl LoadModel {
+    /// Whether the load is a force at one point (`DIM` parameters, the
+    /// penalty `α |F|²`).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::estimate::LoadModel;
+    /// assert!(LoadModel::Concentrated { node: 3 }.is_concentrated());
+    /// assert!(!LoadModel::Distributed.is_concentrated());
+    /// ```
+    pub fn is_concentrated(&self) -> bool {
+        !matches!(self, LoadModel::Distributed)
+    }
 }
 
 /// The frame in which a [`LoadBound`] reads the load.
@@ -723,7 +749,7 @@ impl Estimate {
 ///
 /// # Example
 /// See the [module documentation](self).
-pub trait Estimator {
+pub trait Estimator<L = Loads> {
     /// Estimates shape and load from `observation`, warm-started from the
     /// previous step. A large jump from the previous observation is taken
     /// through intermediate observations (`max_observation_jump_m`).
@@ -759,7 +785,7 @@ pub trait Estimator {
     ///
     /// # Errors
     /// As [`crate::assembly::Robot::validate_loads`]; on an error the estimator is unchanged.
-    fn set_known_loads(&mut self, known: Loads) -> Result<()>;
+    fn set_known_loads(&mut self, known: L) -> Result<()>;
 }
 
 // (last: the public-API snapshot reads a file up to its first test item)

@@ -15,82 +15,22 @@
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use crate::assembly::Robot;
-use crate::element::Element;
+use crate::element::{Element, NodeKinematics};
 use crate::error::{check_len, Error, Result};
 use crate::linsolve::AutoFactors;
-use crate::loads::{Loads, PointForce};
+use crate::loads::Loads;
 use crate::numeric::dot;
 use crate::observe::{MarkerObservation, Observation, ObservationOperator, MAX_MARKER_SCALE};
 use crate::sensitivity::Sensitivity;
 use crate::statics::tracker::FactoredTangent;
-use crate::statics::{EquilibriumTracker, LinearLoad, StaticSolver, TrackedEquilibrium};
+use crate::statics::{LinearLoad, StaticSolver, TrackedEquilibrium, Tracker};
 
-use super::{BoundFrame, EstimatorSettings, LoadModel};
-
-/// `G F` of the load models: the distributed field (8) with `G = B = ∫ Sᵀ S dX`
-/// (22), (23), or a force at a node (32)–(35) (`G = A_xᵀ`).
-impl<E: Element> LinearLoad<E> for LoadModel {
-    fn n_params(&self, robot: &Robot<E>) -> usize {
-        match self {
-            LoadModel::Distributed => robot.n_q(),
-            LoadModel::Concentrated { .. } => E::DIM,
-        }
-    }
-
-    fn force(&self, robot: &Robot<E>, f: &[f64]) -> Result<DVector<f64>> {
-        match *self {
-            LoadModel::Distributed => robot.apply_load_gram(f),
-            LoadModel::Concentrated { node } => {
-                check_len("f", E::DIM, f.len())?;
-                let nd = E::NODE_DOFS;
-                let mut g = vec![0.0; robot.n_q()];
-                crate::error::check_index("load_model.node", node, robot.n_nodes())?;
-                g[node * nd..node * nd + E::DIM].copy_from_slice(f);
-                Ok(DVector::from_vec(g))
-            }
-        }
-    }
-
-    fn force_transpose(&self, robot: &Robot<E>, v: &[f64]) -> Result<DVector<f64>> {
-        match *self {
-            LoadModel::Distributed => robot.apply_load_gram(v),
-            LoadModel::Concentrated { node } => {
-                check_len("v", robot.n_q(), v.len())?;
-                crate::error::check_index("load_model.node", node, robot.n_nodes())?;
-                let nd = E::NODE_DOFS;
-                Ok(DVector::from_column_slice(
-                    &v[node * nd..node * nd + E::DIM],
-                ))
-            }
-        }
-    }
-
-    fn add_to(&self, robot: &Robot<E>, known: &Loads, f: &[f64]) -> Loads {
-        let mut loads = known.clone();
-        match *self {
-            LoadModel::Distributed => {
-                if loads.distributed_f.is_empty() {
-                    loads.distributed_f = f.to_vec();
-                } else {
-                    loads
-                        .distributed_f
-                        .iter_mut()
-                        .zip(f)
-                        .for_each(|(a, b)| *a += b);
-                }
-            }
-            LoadModel::Concentrated { node } => loads.point_forces.push(PointForce {
-                s_m: robot.node_arc().get(node).copied().unwrap_or(f64::NAN),
-                force_n: f.to_vec(),
-            }),
-        }
-        loads
-    }
-}
+use super::load_model::field_rod;
+use super::{BoundFrame, EstimationModel, EstimatorSettings, LoadModel};
 
 /// The derivatives of the observation at an equilibrium.
 #[derive(Debug, Clone)]
-pub(crate) struct Derivs {
+pub struct Derivs {
     /// Adjoint fields `z_i = M K⁻¹ Mᵀ a_iᵀ`, column `i` (`n_q × n_ob`).
     pub(crate) z: DMatrix<f64>,
     /// The marker Jacobian transposed (28): column `i` is `J_i = Gᵀ z_i`,
@@ -105,7 +45,7 @@ pub(crate) struct Derivs {
 /// covariances at that `α` are formed from them
 /// ([`super::covariance::posterior_cov`]) instead of again.
 #[derive(Debug, Clone)]
-pub(crate) struct GnFactor {
+pub struct GnFactor {
     /// The factor of `S` or `N`.
     pub chol: Cholesky<f64, Dyn>,
     /// `Zᵀ B Z` (distributed load; `None` for a concentrated one).
@@ -117,8 +57,8 @@ pub(crate) struct GnFactor {
 /// The estimation problem: the robot, its known loads and the load model,
 /// with the equilibrium tracker that solves `q(F)`.
 #[derive(Debug, Clone)]
-pub(crate) struct Problem<E: Element> {
-    tracker: EquilibriumTracker<E>,
+pub struct Problem<M: EstimationModel> {
+    tracker: Tracker<M>,
     settings: EstimatorSettings,
     n_f: usize,
     /// The last observation's markers and their operator: the next frame
@@ -132,37 +72,39 @@ pub(crate) struct Problem<E: Element> {
     load_map: std::sync::OnceLock<Vec<f64>>,
 }
 
-impl<E: Element> Problem<E> {
+impl<M: EstimationModel> Problem<M> {
     /// The problem of `robot` under the known loads `known`.
-    pub(crate) fn new(robot: Robot<E>, known: Loads, settings: EstimatorSettings) -> Result<Self> {
+    pub(crate) fn new(robot: M, known: M::Loads, settings: EstimatorSettings) -> Result<Self> {
         settings.validate()?;
         if let LoadModel::Concentrated { node } = settings.load_model {
-            if node == 0 || node >= robot.n_nodes() {
+            let nodes = robot.field_rod().map_or(0, |r| r.n_nodes());
+            if node == 0 || node >= nodes {
                 return Err(Error::invalid(
                     "estimator.load_model.node",
                     node,
-                    format!("must be a free node, 1..={}", robot.n_nodes() - 1),
+                    format!("must be a free node, 1..={}", nodes.saturating_sub(1)),
                 ));
             }
         }
-        if !known.follower_loads.is_empty() {
+        if !robot.conservative(&known) {
             // the sensitivities solve with the symmetric tangent: a follower
             // load's stiffness is not symmetric (assembly::Robot::follower_stiffness)
             return Err(Error::invalid(
                 "follower_loads",
-                format!("{} loads", known.follower_loads.len()),
+                "follower loads",
                 "the estimator does not take follower loads among its known loads yet \
                  (its sensitivities assume a symmetric tangent); solve with them instead",
             ));
         }
         let n_f = settings.load_model.n_params(&robot);
+        super::load_model::check_site_moves(&settings.load_model, &robot)?;
         for (i, b) in settings.bounds.iter().enumerate() {
             check_len(
                 &format!("estimator.bounds[{i}].direction"),
-                E::DIM,
+                M::Element::DIM,
                 b.direction.len(),
             )?;
-            if b.frame == BoundFrame::Local && E::DIM != 2 {
+            if b.frame == BoundFrame::Local && M::Element::DIM != 2 {
                 return Err(Error::invalid(
                     format!("estimator.bounds[{i}].frame"),
                     "local",
@@ -171,10 +113,10 @@ impl<E: Element> Problem<E> {
                 ));
             }
             if settings.load_model == LoadModel::Distributed {
-                robot.locate(&format!("estimator.bounds[{i}].s_m"), b.s_m)?;
+                field_rod(&robot)?.locate(&format!("estimator.bounds[{i}].s_m"), b.s_m)?;
             }
         }
-        let tracker = EquilibriumTracker::new(robot, known, settings.statics.clone())?;
+        let tracker = Tracker::new(robot, known, settings.statics.clone())?;
         Ok(Problem {
             tracker,
             settings,
@@ -186,17 +128,17 @@ impl<E: Element> Problem<E> {
     }
 
     /// The robot.
-    pub(crate) fn robot(&self) -> &Robot<E> {
-        self.tracker.robot()
+    pub(crate) fn robot(&self) -> &M {
+        self.tracker.model()
     }
 
     /// The equilibrium tracker.
-    pub(crate) fn tracker(&mut self) -> &mut EquilibriumTracker<E> {
+    pub(crate) fn tracker(&mut self) -> &mut Tracker<M> {
         &mut self.tracker
     }
 
     /// The known loads.
-    pub(crate) fn known(&self) -> &Loads {
+    pub(crate) fn known(&self) -> &M::Loads {
         self.tracker.known()
     }
 
@@ -234,7 +176,9 @@ impl<E: Element> Problem<E> {
     /// fails them, built anew (with its error naming the field), and kept.
     pub(crate) fn operator_of_frame(&mut self, obs: &Observation) -> Result<ObservationOperator> {
         if let Some((markers, op)) = &self.last_operator {
-            if let Some(y) = same_markers_values(markers, obs, self.robot().length(), E::DIM) {
+            if let Some(y) =
+                same_markers_values(markers, obs, self.robot().length_m(), M::Element::DIM)
+            {
                 if let Ok(op) = op.with_measurements(y) {
                     return Ok(op);
                 }
@@ -254,8 +198,8 @@ impl<E: Element> Problem<E> {
     /// field (`α ∫ wᵀ w dX`), `H = I` for a concentrated force.
     pub(crate) fn penalty_grad(&self, f: &[f64]) -> Result<Vec<f64>> {
         match self.load() {
-            LoadModel::Distributed => Ok(self.robot().apply_load_gram(f)?.data.into()),
-            LoadModel::Concentrated { .. } => Ok(f.to_vec()),
+            LoadModel::Distributed => Ok(field_rod(self.robot())?.apply_load_gram(f)?.data.into()),
+            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => Ok(f.to_vec()),
         }
     }
 
@@ -309,8 +253,8 @@ impl<E: Element> Problem<E> {
         if let Some((q, _)) = &self.unloaded {
             return Ok((f, q.clone()));
         }
-        if *self.known() == Loads::default() {
-            let q: Vec<f64> = self.robot().reference_configuration().data.into();
+        if *self.known() == M::Loads::default() {
+            let q: Vec<f64> = self.robot().reference_q().data.into();
             let r = self.residual(&q, &f)?;
             let t = self.tracker.factor_tangent(&q)?;
             let floor = crate::statics::residual_floor(
@@ -342,7 +286,7 @@ impl<E: Element> Problem<E> {
 
     /// Replaces the known loads ([`EquilibriumTracker::set_known`]) and
     /// forgets the shape of the old ones.
-    pub(crate) fn set_known(&mut self, known: Loads) -> Result<()> {
+    pub(crate) fn set_known(&mut self, known: M::Loads) -> Result<()> {
         self.tracker.set_known(known)?;
         self.unloaded = None;
         Ok(())
@@ -352,13 +296,24 @@ impl<E: Element> Problem<E> {
     /// the tangent's factors `lu`: row `i` of `∂(Aq)/∂F` is
     /// `Gᵀ M K⁻¹ Mᵀ a_iᵀ` (K symmetric), the `n_ob` adjoint systems in one
     /// sweep over the factors.
-    pub(crate) fn derivs(&self, lu: &AutoFactors, op: &ObservationOperator) -> Result<Derivs> {
-        let s = Sensitivity::new(self.robot(), lu)?;
+    pub(crate) fn derivs(
+        &self,
+        q: &[f64],
+        lu: &AutoFactors,
+        op: &ObservationOperator,
+    ) -> Result<Derivs> {
+        let u = self.robot().free_coordinates_of(q)?;
+        self.derivs_of(Sensitivity::at(self.robot(), u.as_slice(), lu)?, op)
+    }
+
+    /// [`Problem::derivs`] from the sensitivities `s` of the equilibrium.
+    fn derivs_of(&self, s: Sensitivity<'_, M>, op: &ObservationOperator) -> Result<Derivs> {
         let adj = s.adjoints(op.rows().iter().map(|r| r.entries()))?;
         let jt = match self.load() {
             // J_i = B z_i straight into the columns (the numbers of
             // `load_gradients`, without a vector per column)
             LoadModel::Distributed => {
+                let rod = field_rod(self.robot())?;
                 let (nq, m) = adj.full.shape();
                 let mut jt = DMatrix::zeros(nq, m);
                 for (z, out) in adj
@@ -367,11 +322,13 @@ impl<E: Element> Problem<E> {
                     .chunks_exact(nq.max(1))
                     .zip(jt.as_mut_slice().chunks_exact_mut(nq.max(1)))
                 {
-                    self.robot().apply_load_gram_into(z, out)?;
+                    rod.apply_load_gram_into(z, out)?;
                 }
                 jt
             }
-            LoadModel::Concentrated { .. } => s.load_gradients(&self.load(), &adj)?,
+            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
+                s.load_gradients(&self.load(), &adj)?
+            }
         };
         Ok(Derivs { z: adj.full, jt })
     }
@@ -528,7 +485,7 @@ impl<E: Element> Problem<E> {
                     },
                 ))
             }
-            LoadModel::Concentrated { .. } => {
+            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
                 let jw = weighted_columns(&dv.jt, w);
                 let mut n = &jw * dv.jt.transpose();
                 for i in 0..n.nrows() {
@@ -566,17 +523,22 @@ impl<E: Element> Problem<E> {
         f: &[f64],
         hf: &[f64],
     ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
-        let d = E::DIM;
-        let nd = E::NODE_DOFS;
+        let d = M::Element::DIM;
         let nf = self.n_f;
         let r0 = &q[..d];
         let mut force = vec![0.0; d];
         let mut moment = vec![0.0; if d == 2 { 1 } else { 3 }];
         match self.load() {
-            LoadModel::Concentrated { node } => {
+            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
                 let mut fw = vec![0.0; d * nf];
                 force.copy_from_slice(f);
-                let r: Vec<f64> = (0..d).map(|i| q[node * nd + i] - r0[i]).collect();
+                let site = self.load().site(self.robot())?;
+                let rows = site
+                    .map(|site| self.robot().site_rows("load_model.site", &site))
+                    .transpose()?;
+                let at = rows.map(|r| r.position_at(q)).unwrap_or_default();
+                check_len("load_model.site", d, at.len())?;
+                let r: Vec<f64> = (0..d).map(|i| at[i] - r0[i]).collect();
                 moment = cross(&r, f);
                 for a in 0..d {
                     fw[a * nf + a] = 1.0;
@@ -616,12 +578,12 @@ impl<E: Element> Problem<E> {
         if let Some(m) = self.load_map.get() {
             return Ok(m);
         }
-        let d = E::DIM;
-        let nd = E::NODE_DOFS;
+        let d = M::Element::DIM;
+        let nd = M::Element::NODE_DOFS;
         let nf = self.n_f;
         let mut fw = vec![0.0; d * nf];
         let rule = crate::quadrature::GaussRule::new(5)?;
-        for (e, el) in self.robot().elements().iter().enumerate() {
+        for (e, el) in field_rod(self.robot())?.elements().iter().enumerate() {
             let le = el.length();
             for (xi, wt) in rule.iter() {
                 for (k, sk) in el.shape(xi).iter().enumerate() {
@@ -635,6 +597,18 @@ impl<E: Element> Problem<E> {
             }
         }
         Ok(self.load_map.get_or_init(|| fw))
+    }
+}
+
+impl<E: Element> Problem<Robot<E>> {
+    /// [`Problem::derivs`] on the clamped robot, whose map `q = φ(u)` is
+    /// linear: no point needed.
+    pub(crate) fn derivs_linear(
+        &self,
+        lu: &AutoFactors,
+        op: &ObservationOperator,
+    ) -> Result<Derivs> {
+        self.derivs_of(Sensitivity::new(self.robot(), lu)?, op)
     }
 }
 
@@ -769,8 +743,10 @@ fn same_markers_values(
     let far = MAX_MARKER_SCALE * len;
     let mut y = Vec::with_capacity(last.len() * 2 * dim);
     for (a, b) in last.iter().zip(&obs.markers) {
-        let same = a.node == b.node
+        let same = a.rod == b.rod
+            && a.node == b.node
             && a.s_m == b.s_m
+            && a.body == b.body
             && a.tangent.is_some() == b.tangent.is_some()
             && a.position_weight == b.position_weight
             && a.tangent_weight == b.tangent_weight;

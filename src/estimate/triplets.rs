@@ -2,6 +2,7 @@
 //! and `H` (the sqp backend's linearized equilibrium and penalty), as
 //! triplets, probed instead of formed column by column.
 
+use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::Result;
 
@@ -11,7 +12,7 @@ use super::LoadModel;
 /// Sparse entries `(row, column, value)`, sorted by column then row.
 pub(crate) type Triplets = Vec<(usize, usize, f64)>;
 
-impl<E: Element> Problem<E> {
+impl<E: Element> Problem<Robot<E>> {
     /// The constant matrices of the load over the free coordinates, as
     /// triplets sorted by column then row: `(i, j, (Mᵀ G)_ij)` (nonzero
     /// entries) and the upper triangle of `H`, `(i, j, H_ij)` with `i ≤ j`.

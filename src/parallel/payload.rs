@@ -5,12 +5,16 @@
 //!
 //! The unknown is the force `F ∈ R³` on the platform's centre, its
 //! generalized force `Q_F = A_xᵀ F` (34) with `A_x` the rows of the
-//! platform's position in `q` (32); the equations are the equilibrium (35)
-//! and the measured position `x̄ = A_x q` (32). They are solved by Newton's
-//! method on `(q, F)` with `q` eliminated: at the equilibrium `q(F)`, the
-//! platform moves by `C ΔF` for a force step `ΔF`, `C = A_x T K_u⁻¹ Tᵀ A_xᵀ`
-//! the platform's compliance (3 × 3, from the tangent), so
-//! `ΔF = C⁻¹ (x̄ − A_x q(F))`. The payload's mass is `m = F·g/|g|²`.
+//! platform's position in `q` (32), the rows of its site
+//! ([`crate::site::Site::Body`]); the equations are the equilibrium (35)
+//! and the measured position `x̄ = A_x q` (32). This is the estimation of a
+//! force at a site ([`crate::estimate::LoadModel::AtSite`]) by the one
+//! estimator of every model, with a vanishing penalty (three force
+//! components from the three coordinates of one marker): its reduced
+//! Gauss–Newton steps are `ΔF = C⁻¹ (x̄ − A_x q(F))`, `C = A_x T K_u⁻¹ Tᵀ A_xᵀ`
+//! the platform's compliance (3 × 3, [`ParallelRobot::platform_compliance`]),
+//! and it reports the force's covariance `σ² C⁻¹ C⁻ᵀ` and its fit test.
+//! The payload's mass is `m = F·g/|g|²`.
 //!
 //! Relative displacements (the paper's choice, "to reduce the influence of
 //! the virtual payload"): the target is the model's unloaded platform
@@ -23,30 +27,48 @@ use nalgebra::{DVector, Matrix3, Vector3, Vector6};
 use super::ParallelRobot;
 use crate::element::Element;
 use crate::error::{check_all_finite, Error, Result};
+use crate::estimate::{EstimateStatus, Estimator, EstimatorSettings, LoadModel, NewtonEstimator};
+use crate::observe::{MarkerObservation, Observation};
 use crate::rng::Gaussian;
+use crate::site::Site;
 use crate::statics::Equilibrium;
 
-/// Newton iterations of [`ParallelRobot::estimate_payload`] at most.
-pub const MAX_ITERATIONS: usize = 30;
+/// The regularization weight of [`ParallelRobot::estimate_payload`]:
+/// `α |F|²` against the whitened misfit, so small that the estimate of the
+/// three force components from the three platform coordinates is the
+/// exactly determined one (`α |F|²` ≈ 1e-14 for a 100 g payload).
+pub const PAYLOAD_ALPHA: f64 = 1e-12;
 
-/// An estimated payload.
+/// An estimated payload: the force at the platform's centre by the
+/// estimator ([`crate::estimate::NewtonEstimator`] with the force at the
+/// platform's site, [`crate::estimate::LoadModel::AtSite`]).
 ///
 /// # Example
 /// ```
 /// use nalgebra::Vector3;
-/// let e = softrod::parallel::payload::PayloadEstimate { force_n: Vector3::new(0.0, 0.0, -0.981), mass_kg: 0.1, iterations: 3, residual_m: 1e-12 };
+/// use softrod::estimate::{EstimateCriterion, EstimateStatus};
+/// let e = softrod::parallel::payload::PayloadEstimate {
+///     force_n: Vector3::new(0.0, 0.0, -0.981), std_n: Vector3::new(0.01, 0.01, 0.003), mass_kg: 0.1,
+///     std_kg: 0.0003, iterations: 3, residual_m: 1e-12,
+///     status: EstimateStatus::Converged(EstimateCriterion::WithinNoise) };
 /// assert_eq!(e.mass_kg, 0.1);
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct PayloadEstimate {
     /// The force on the platform's centre (N, world axes).
     pub force_n: Vector3<f64>,
+    /// Its standard deviations (N) under the marker noise given.
+    pub std_n: Vector3<f64>,
     /// Its mass, `F·g/|g|²` (kg).
     pub mass_kg: f64,
-    /// Newton iterations.
+    /// The mass's standard deviation (kg): that of `F·g/|g|²`.
+    pub std_kg: f64,
+    /// Iterations of the estimator.
     pub iterations: usize,
     /// The distance of the model's platform from the target at the end (m).
     pub residual_m: f64,
+    /// The estimator's status (its fit test on the answer).
+    pub status: EstimateStatus,
 }
 
 impl<E: Element> ParallelRobot<E> {
@@ -97,76 +119,80 @@ impl<E: Element> ParallelRobot<E> {
     }
 
     /// The payload force on the platform's centre that puts the platform
-    /// at `target_m` under the chamber pressures `pressures_pa` (32)–(35),
-    /// starting from the equilibrium `start` (without a payload, typically)
-    /// and the force `0`.
+    /// at `target_m` under the chamber pressures `pressures_pa` (32)–(35):
+    /// the estimate of a force at the platform's site from one marker
+    /// there, with the marker noise `noise_sigma_m` (m) for its standard
+    /// deviations, by the one estimator of every model (its warm tracker,
+    /// its fit test, its covariance).
     ///
     /// # Errors
-    /// As [`ParallelRobot::loads`] and [`ParallelRobot::solve`];
-    /// [`Error::InvalidParameter`] (`target_m`) for a non-finite target or
-    /// one the robot does not reach in [`MAX_ITERATIONS`] iterations.
+    /// As [`ParallelRobot::loads`]; [`Error::InvalidParameter`]
+    /// (`target_m`) for a non-finite target; as
+    /// [`crate::estimate::Estimator::step`].
     ///
     /// # Example
     /// ```
     /// let robot = softrod::parallel::ParallelSpec::default().build_full()?;
-    /// // the platform where a 100 g payload puts it
+    /// // the platform where a 10 g payload puts it
     /// let loaded = robot.solve(&robot.loads(&[], [0.0, 0.0, -0.0981], [0.0; 3])?, None)?;
     /// let x = robot.platform_pose(loaded.q.as_slice())?;
-    /// let start = robot.solve(&robot.loads(&[], [0.0; 3], [0.0; 3])?, None)?;
-    /// let e = robot.estimate_payload(&[], x.fixed_rows::<3>(0).into_owned(), &start)?;
-    /// // to the position tolerance (1.2e-10 m) over the compliance (1.4e-4 m/N): 1e-7 kg
+    /// let e = robot.estimate_payload(&[], x.fixed_rows::<3>(0).into_owned(), 5e-5)?;
+    /// assert!(e.status.is_converged());
     /// assert!((e.mass_kg - 0.01).abs() < 1e-6);
+    /// // 0.05 mm of marker noise: grams of uncertainty (the compliance is 1.4e-4 m/N)
+    /// assert!(e.std_kg > 1e-3 && e.std_kg < 0.1);
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn estimate_payload(
         &self,
         pressures_pa: &[f64],
         target_m: impl Into<nalgebra::Vector3<f64>>,
-        start: &Equilibrium,
+        noise_sigma_m: f64,
     ) -> Result<PayloadEstimate> {
         let target_m: [f64; 3] = target_m.into().into();
         check_all_finite("target_m", &target_m)?;
-        let tol = 1e-12 * self.spec.leg_length_m.max(1e-3) * 1e3;
-        let mut f = [0.0; 3];
-        let mut eq = start.clone();
-        let g = &self.spec.gravity_m_per_s2;
-        let g2: f64 = g.iter().map(|v| v * v).sum();
-        for it in 0..=MAX_ITERATIONS {
-            let loads = self.loads(pressures_pa, f, [0.0; 3])?;
-            eq = self.solve(&loads, Some(eq.q.as_slice()))?;
-            let x = self.platform_pose(eq.q.as_slice())?;
-            let r = [0, 1, 2].map(|i| target_m[i] - x[i]);
-            let rn = r.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if rn <= tol {
-                let mass = if g2 > 0.0 {
-                    (0..3).map(|i| f[i] * g[i]).sum::<f64>() / g2
-                } else {
-                    0.0
-                };
-                return Ok(PayloadEstimate {
-                    force_n: Vector3::from(f),
-                    mass_kg: mass,
-                    iterations: it,
-                    residual_m: rn,
-                });
-            }
-            let c = self.platform_compliance(&eq, &loads)?;
-            let df = c.lu().solve(&Vector3::from(r)).ok_or_else(|| {
-                Error::invalid(
-                    "target_m",
-                    format!("{target_m:?}"),
-                    "the platform's compliance is singular",
-                )
-            })?;
-            for i in 0..3 {
-                f[i] += df[i];
-            }
-        }
-        Err(Error::invalid(
-            "target_m",
-            format!("{target_m:?}"),
-            format!("no payload puts the platform there within {MAX_ITERATIONS} Newton iterations"),
-        ))
+        let known = self.loads(pressures_pa, [0.0; 3], [0.0; 3])?;
+        let platform = Site::Body { body: 0 };
+        let settings = EstimatorSettings {
+            load_model: LoadModel::AtSite { site: platform },
+            alpha: Some(PAYLOAD_ALPHA),
+            noise_sigma_m,
+            ..EstimatorSettings::default()
+        };
+        let mut estimator = NewtonEstimator::new(&self.structure, &known, &settings)?;
+        let observation = Observation {
+            markers: vec![MarkerObservation::at_site(&platform, target_m.to_vec())],
+        };
+        let e = estimator.step(&observation)?;
+        let force_n = Vector3::from_iterator(e.f.iter().copied());
+        let cov = e.covariance_f();
+        let std_n = Vector3::from_fn(|k, _| cov[(k, k)].max(0.0).sqrt());
+        let g = Vector3::from_column_slice(&self.spec.gravity_m_per_s2);
+        let g2 = g.norm_squared();
+        let (mass_kg, std_kg) = if g2 > 0.0 {
+            let gm = g / g2;
+            let c3 = cov.view((0, 0), (3, 3));
+            (
+                force_n.dot(&gm),
+                (gm.transpose() * c3 * gm)[(0, 0)].max(0.0).sqrt(),
+            )
+        } else {
+            (0.0, 0.0)
+        };
+        let x = self.platform_pose(e.q.as_slice())?;
+        let residual_m = (0..3)
+            .map(|i| (target_m[i] - x[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        Ok(PayloadEstimate {
+            force_n,
+            std_n,
+            mass_kg,
+            std_kg,
+            iterations: e.report.iterations,
+            residual_m,
+            status: e.report.status,
+        })
     }
 }
 
@@ -277,7 +303,13 @@ pub fn mass_experiment<E: Element, P: Element>(
             let before = measure(plant.platform_pose(plant_free.q.as_slice())?);
             let after = measure(plant.platform_pose(loaded.q.as_slice())?);
             let target = [0, 1, 2].map(|i| x_model[i] + after[i] - before[i]);
-            let e = model.estimate_payload(p, target, &model_free)?;
+            let e = model.estimate_payload(p, target, measurement_sigma(&measurement))?;
+            if !e.status.is_converged() {
+                return Err(Error::EstimateNotConverged {
+                    status: e.status,
+                    iterations: e.iterations,
+                });
+            }
             trials.push(MassTrial {
                 configuration: c,
                 mass_kg: m,
@@ -286,6 +318,14 @@ pub fn mass_experiment<E: Element, P: Element>(
         }
     }
     Ok(trials)
+}
+
+/// The noise of a measured target (m): the model's unloaded platform plus
+/// the difference of two platform measurements, each the mean of `frames`
+/// frames of noise `sigma_m`, so `sigma_m √(2 / frames)`; a noise-free
+/// measurement weighs as 1 nm (the estimator needs a positive noise).
+fn measurement_sigma(m: &Measurement) -> f64 {
+    (m.sigma_m * (2.0 / m.frames.max(1) as f64).sqrt()).max(1e-9)
 }
 
 /// The three configurations of the simulated Fig. 8 experiment (chamber

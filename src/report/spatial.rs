@@ -78,6 +78,7 @@ pub fn run(opts: &ReportOptions) -> Result<(SpatialReport, Vec<PathBuf>)> {
             pressures_pa: p.as_slice().to_vec(),
             platform_force_n: vec![0.0, 0.0, -0.2 * 9.81],
             platform_moment_nm: Vec::new(),
+            marker_sigma_m: 0.05e-3,
         };
         shapes.push(scene.solve()?);
     }

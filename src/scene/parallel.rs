@@ -64,7 +64,20 @@ pub struct ParallelScene {
     /// A known moment on the platform (N·m, world axes; empty for none).
     #[serde(default)]
     pub platform_moment_nm: Vec<f64>,
+    /// The noise of one platform-marker coordinate (m, in `(0, 1e-3]`;
+    /// default 0.05 mm): the estimate's standard deviations (its target, a
+    /// difference of two measurements, has `√2` times this).
+    #[serde(default = "default_marker_sigma")]
+    pub marker_sigma_m: f64,
 }
+
+/// The default [`ParallelScene::marker_sigma_m`]: 0.05 mm.
+fn default_marker_sigma() -> f64 {
+    0.05e-3
+}
+
+/// The largest [`ParallelScene::marker_sigma_m`] (m).
+pub const MAX_MARKER_SIGMA_M: f64 = 1e-3;
 
 /// What a solve of a parallel scene gives (written to JSON; typed by
 /// [`ParallelSolution::platform_position`],
@@ -225,7 +238,21 @@ impl ParallelScene {
             }
             check_all_finite(name, v)?;
         }
+        crate::error::check_positive("marker_sigma_m", self.marker_sigma_m)?;
+        if self.marker_sigma_m > MAX_MARKER_SIGMA_M {
+            return Err(Error::invalid(
+                "marker_sigma_m",
+                self.marker_sigma_m,
+                format!("must be at most {MAX_MARKER_SIGMA_M} m (a motion-capture marker's noise)"),
+            ));
+        }
         Ok(())
+    }
+
+    /// The noise of the estimate's target (m): two measurements of
+    /// [`ParallelScene::marker_sigma_m`] each.
+    fn noise_sigma_m(&self) -> f64 {
+        self.marker_sigma_m * std::f64::consts::SQRT_2
     }
 
     fn vec3(v: &[f64]) -> [f64; 3] {
@@ -312,7 +339,7 @@ impl ParallelScene {
         let free = robot.solve(&self.loads_of(robot, [0.0; 3])?, None)?;
         let x = robot.platform_pose(free.q.as_slice())?;
         let target = [0, 1, 2].map(|i| x[i] + loaded_m[i] - unloaded_m[i]);
-        robot.estimate_payload(&self.pressures_pa, target, &free)
+        robot.estimate_payload(&self.pressures_pa, target, self.noise_sigma_m())
     }
 }
 

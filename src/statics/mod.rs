@@ -59,8 +59,8 @@ mod stability;
 pub mod tracker;
 
 pub use tracker::{
-    EquilibriumTracker, FactoredTangent, LinearLoad, ModelLoad, TrackedEquilibrium, Tracker,
-    WarmCounts, WarmPath, WarmStatus, WarmStrategy,
+    EquilibriumTracker, FactoredTangent, LinearLoad, TrackedEquilibrium, Tracker, WarmCounts,
+    WarmPath, WarmStatus, WarmStrategy,
 };
 
 /// Settings of the static solver; every field has a documented default.

@@ -7,8 +7,7 @@
 //! at many loads close to each other, each from a nearby shape. The loads
 //! are the tracker's known loads ([`Tracker::set_known`], or
 //! [`Tracker::set_loads`] to keep the factors) plus, for an estimator, a
-//! load linear in parameters `F`, `Q_F = G F` ([`ModelLoad`]; on a robot,
-//! every [`LinearLoad`]). The tracker keeps the last factorization of the
+//! load linear in parameters `F`, `Q_F = G F` ([`LinearLoad`]). The tracker keeps the last factorization of the
 //! tangent `K` and the last solved state, so that
 //!
 //! - asked again at the same `(F, q)`, it answers at once;
@@ -56,24 +55,26 @@ use crate::error::{check_len, Error, Result};
 use crate::linsolve::{
     AutoFactors, AutoSolver, FactorOptions, Factorization, SymmetricMatrix, TangentSolver,
 };
-use crate::loads::Loads;
 use crate::numeric::{max_abs, norm2};
 use crate::structure::Assembled;
 
 use super::{residual_floor, Equilibrium, StaticSettings, StaticSolver};
 
-/// A load linear in a parameter vector `F`: its generalized force over all
-/// coordinates is `G F` with a constant `G` (the distributed field (8) with
-/// `G = J_QF` (22), (23), a concentrated force (32)–(35), …).
+/// A load linear in a parameter vector `F` on a model `M`: its generalized
+/// force over all coordinates is `G F` with a constant `G` (the distributed
+/// field (8) with `G = J_QF` (22), (23), a concentrated force at a site
+/// (32)–(35), …). The [`Tracker`] solves with it, the
+/// [`Sensitivity`](crate::sensitivity::Sensitivity) differentiates through
+/// it, the estimators estimate its `F`.
 ///
 /// # Example
-/// A force on node 20's `y` coordinate:
+/// A force on node 20's `y` coordinate of the clamped robot:
 /// ```
 /// use softrod::{assembly::Robot, element::Element, loads::{Loads, PointForce}};
 /// use softrod::statics::LinearLoad;
 /// use nalgebra::DVector;
 /// struct TipY;
-/// impl<E: Element> LinearLoad<E> for TipY {
+/// impl<E: Element> LinearLoad<Robot<E>> for TipY {
 ///     fn n_params(&self, _: &Robot<E>) -> usize { 1 }
 ///     fn force(&self, robot: &Robot<E>, f: &[f64]) -> softrod::Result<DVector<f64>> {
 ///         let mut g = DVector::zeros(robot.n_q());
@@ -93,57 +94,21 @@ use super::{residual_floor, Equilibrium, StaticSettings, StaticSolver};
 /// assert_eq!(LinearLoad::force(&TipY, &robot, &[2.0])?[81], 2.0);
 /// # Ok::<(), softrod::Error>(())
 /// ```
-pub trait LinearLoad<E: Element> {
+pub trait LinearLoad<M: Assembled> {
     /// Number of parameters `n_F`.
-    fn n_params(&self, robot: &Robot<E>) -> usize;
-    /// `G F` over all `n_q` coordinates (N).
-    ///
-    /// # Errors
-    /// [`crate::Error::DimensionMismatch`] if `f` has the wrong length.
-    fn force(&self, robot: &Robot<E>, f: &[f64]) -> Result<DVector<f64>>;
-    /// `Gᵀ v` for `v` over all `n_q` coordinates.
-    ///
-    /// # Errors
-    /// [`crate::Error::DimensionMismatch`] if `v` has the wrong length.
-    fn force_transpose(&self, robot: &Robot<E>, v: &[f64]) -> Result<DVector<f64>>;
-    /// The loads `known` with `F` added, for the globalized static solver.
-    fn add_to(&self, robot: &Robot<E>, known: &Loads, f: &[f64]) -> Loads;
-}
-
-/// What the [`Tracker`] needs of a load linear in parameters `F` on any
-/// model `M`: `G F` over all coordinates, and the model's loads with it
-/// added (for the globalized fallback). Every robot's [`LinearLoad`] is
-/// one.
-///
-/// # Example
-/// ```
-/// use softrod::{estimate::LoadModel, scene::Scene, statics::ModelLoad};
-/// let robot = Scene::two_section().robot()?;
-/// let mut f = vec![0.0; robot.n_q()];
-/// f[5] = 1.0;
-/// // the distributed load model through the robot's LinearLoad
-/// let g = ModelLoad::force(&LoadModel::Distributed, &robot, &f)?;
-/// assert_eq!(g.len(), robot.n_q());
-/// # Ok::<(), softrod::Error>(())
-/// ```
-pub trait ModelLoad<M: Assembled> {
+    fn n_params(&self, model: &M) -> usize;
     /// `G F` over all `n_q` coordinates (N).
     ///
     /// # Errors
     /// [`crate::Error::DimensionMismatch`] if `f` has the wrong length.
     fn force(&self, model: &M, f: &[f64]) -> Result<DVector<f64>>;
-    /// The loads `known` with `F` added.
+    /// `Gᵀ v` for `v` over all `n_q` coordinates.
+    ///
+    /// # Errors
+    /// [`crate::Error::DimensionMismatch`] if `v` has the wrong length.
+    fn force_transpose(&self, model: &M, v: &[f64]) -> Result<DVector<f64>>;
+    /// The loads `known` with `F` added, for the globalized static solver.
     fn add_to(&self, model: &M, known: &M::Loads, f: &[f64]) -> M::Loads;
-}
-
-impl<E: Element, L: LinearLoad<E>> ModelLoad<Robot<E>> for L {
-    fn force(&self, model: &Robot<E>, f: &[f64]) -> Result<DVector<f64>> {
-        LinearLoad::force(self, model, f)
-    }
-
-    fn add_to(&self, model: &Robot<E>, known: &Loads, f: &[f64]) -> Loads {
-        LinearLoad::add_to(self, model, known, f)
-    }
 }
 
 /// How a warm solve ended, by the static solver's residual test evaluated
@@ -416,7 +381,7 @@ struct Target<'a> {
     tolerance_n: f64,
 }
 
-/// Equilibria of a model under known loads (plus a [`ModelLoad`]) at a
+/// Equilibria of a model under known loads (plus a [`LinearLoad`]) at a
 /// sequence of nearby loads (see the [module documentation](self)).
 ///
 /// # Example
@@ -592,7 +557,7 @@ impl<M: Assembled> Tracker<M> {
     /// The dead force of the known loads plus `G F` (`n_q`, N).
     ///
     /// # Errors
-    /// As [`ModelLoad::force`]; [`crate::Error::DimensionMismatch`] if
+    /// As [`LinearLoad::force`]; [`crate::Error::DimensionMismatch`] if
     /// the load's force does not have `n_q` entries.
     ///
     /// # Example
@@ -611,7 +576,11 @@ impl<M: Assembled> Tracker<M> {
     /// assert_eq!(r.len(), tracker.robot().n_free());
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    pub fn dead_with<L: ModelLoad<M> + ?Sized>(&self, load: &L, f: &[f64]) -> Result<DVector<f64>> {
+    pub fn dead_with<L: LinearLoad<M> + ?Sized>(
+        &self,
+        load: &L,
+        f: &[f64],
+    ) -> Result<DVector<f64>> {
         let mut dead = load.force(&self.model, f)?;
         check_len("G F", self.dead_known.len(), dead.len())?;
         dead += &self.dead_known;
@@ -621,11 +590,11 @@ impl<M: Assembled> Tracker<M> {
     /// The residual `R` over the free coordinates at `(q, F)` (N).
     ///
     /// # Errors
-    /// As [`ModelLoad::force`] and [`Assembled::residual_into`].
+    /// As [`LinearLoad::force`] and [`Assembled::residual_into`].
     ///
     /// # Example
     /// See [`Tracker::dead_with`].
-    pub fn residual<L: ModelLoad<M>>(
+    pub fn residual<L: LinearLoad<M>>(
         &self,
         load: &L,
         q: &[f64],
@@ -787,7 +756,7 @@ impl<M: Assembled> Tracker<M> {
     /// # Errors
     /// [`crate::Error::NotConverged`] if the globalized solve fails too; the
     /// errors of [`Tracker::residual`] and of the factorization.
-    pub fn solve<L: ModelLoad<M>>(
+    pub fn solve<L: LinearLoad<M>>(
         &mut self,
         load: &L,
         f: &[f64],
@@ -804,7 +773,7 @@ impl<M: Assembled> Tracker<M> {
     ///
     /// # Errors
     /// As [`Tracker::solve`].
-    pub fn try_solve<L: ModelLoad<M>>(
+    pub fn try_solve<L: LinearLoad<M>>(
         &mut self,
         load: &L,
         f: &[f64],
@@ -823,7 +792,7 @@ impl<M: Assembled> Tracker<M> {
     /// `u0` of the wrong size.
     pub fn solve_free(&mut self, u0: &[f64]) -> Result<TrackedEquilibrium> {
         let q0 = self.configuration(u0)?;
-        self.solve_from(None::<&dyn ModelLoad<M>>, &[], u0, &q0, true)?
+        self.solve_from(None::<&dyn LinearLoad<M>>, &[], u0, &q0, true)?
             .ok_or_else(unreachable_fallback)
     }
 
@@ -834,7 +803,7 @@ impl<M: Assembled> Tracker<M> {
     /// As [`Tracker::solve_free`].
     pub fn try_solve_free(&mut self, u0: &[f64]) -> Result<Option<TrackedEquilibrium>> {
         let q0 = self.configuration(u0)?;
-        self.solve_from(None::<&dyn ModelLoad<M>>, &[], u0, &q0, false)
+        self.solve_from(None::<&dyn LinearLoad<M>>, &[], u0, &q0, false)
     }
 
     /// The equilibrium at `F` from `q0` by chord steps with the kept factors
@@ -844,7 +813,7 @@ impl<M: Assembled> Tracker<M> {
     ///
     /// # Errors
     /// As [`Tracker::residual`].
-    pub fn solve_chord<L: ModelLoad<M>>(
+    pub fn solve_chord<L: LinearLoad<M>>(
         &mut self,
         load: &L,
         f: &[f64],
@@ -922,7 +891,7 @@ impl<M: Assembled> Tracker<M> {
     /// The solve behind the public ones: the remembered answer if asked
     /// again, else the strategy's warm iterations, then (with `fallback`)
     /// the globalized solve.
-    fn solve_from<L: ModelLoad<M> + ?Sized>(
+    fn solve_from<L: LinearLoad<M> + ?Sized>(
         &mut self,
         load: Option<&L>,
         f: &[f64],
@@ -996,7 +965,7 @@ impl<M: Assembled> Tracker<M> {
 
     /// `R(q0, F)` into `r` from the remembered equilibrium if `q0` is its
     /// shape (`R(q, F) = R(q, F_s) + Tᵀ G (F − F_s)`); false otherwise.
-    fn residual_from_state<L: ModelLoad<M> + ?Sized>(
+    fn residual_from_state<L: LinearLoad<M> + ?Sized>(
         &self,
         load: Option<&L>,
         f: &[f64],

@@ -27,6 +27,7 @@ pub mod model;
 pub mod rigid;
 pub mod rod;
 pub mod section;
+mod sites;
 pub mod spec;
 mod triplets;
 

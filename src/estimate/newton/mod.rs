@@ -52,20 +52,17 @@
 //!   when they are known; a large jump of the markers is taken through
 //!   intermediate observations.
 
-mod far;
+pub(crate) mod far;
 mod reduced;
 
-use crate::assembly::Robot;
-use crate::element::Element;
+use super::EstimationModel;
 use crate::error::Result;
 use crate::linsolve::AutoFactors;
-use crate::loads::Loads;
 use crate::observe::{ObsRow, ObservationOperator};
 use nalgebra::{DMatrix, DVector};
 
 use super::driver::{run_step, Method, Solved, Stream};
 use super::problem::{Derivs, GnFactor, Problem};
-use super::sqp::SqpEstimator;
 use super::{Backend, Estimate, Estimator, EstimatorSettings, FarStart, Observation};
 
 /// The derivatives at a shape `q` (first), with the Gauss–Newton factor
@@ -90,8 +87,8 @@ type DerivsCache = (Vec<f64>, Derivs, Option<(Vec<f64>, GnFactor)>);
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone)]
-pub struct NewtonEstimator<E: Element> {
-    stream: Stream<E>,
+pub struct NewtonEstimator<M: EstimationModel> {
+    stream: Stream<M>,
     /// The derivatives at the last converged estimate's shape for the
     /// observation rows `cache_rows`: a warm step's first iteration starts
     /// there.
@@ -104,12 +101,12 @@ pub struct NewtonEstimator<E: Element> {
     hf_cache: Option<(Vec<f64>, Vec<f64>)>,
     /// The full-space iterations of a far start (made when first needed;
     /// see [`full_space`]).
-    full_space: Option<Box<SqpEstimator<E>>>,
+    full_space: Option<far::FullSpaceBox<M>>,
     /// The far starts of the solves since the driver last took the log.
     far_log: FarStart,
 }
 
-impl<E: Element> NewtonEstimator<E> {
+impl<M: EstimationModel> NewtonEstimator<M> {
     /// An estimator for `robot` under the known loads `known` (both
     /// borrowed; the estimator keeps copies). `settings.backend` must be
     /// [`super::Backend::Newton`]: the backend is chosen once, by the
@@ -133,7 +130,7 @@ impl<E: Element> NewtonEstimator<E> {
     /// assert_eq!(err.field(), Some("estimator.backend"));
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    pub fn new(robot: &Robot<E>, known: &Loads, settings: &EstimatorSettings) -> Result<Self> {
+    pub fn new(robot: &M, known: &M::Loads, settings: &EstimatorSettings) -> Result<Self> {
         if settings.backend != super::Backend::Newton {
             return Err(crate::Error::invalid(
                 "estimator.backend",
@@ -163,7 +160,7 @@ impl<E: Element> NewtonEstimator<E> {
     }
 
     /// The robot.
-    pub fn robot(&self) -> &Robot<E> {
+    pub fn robot(&self) -> &M {
         self.stream.problem.robot()
     }
 
@@ -182,7 +179,7 @@ impl<E: Element> NewtonEstimator<E> {
         let (q, lu, op) = self.equilibrium_at(observation, f)?;
         let problem = &self.stream.problem;
         let (wr, pen, e) = problem.objective(&op, &q, f, alpha)?;
-        let dv = problem.derivs(&lu, &op)?;
+        let dv = problem.derivs(&q, &lu, &op)?;
         let g = problem.gradient(&dv, &op, &e, f, alpha)?;
         Ok((wr + pen, DVector::from_vec(g)))
     }
@@ -198,7 +195,7 @@ impl<E: Element> NewtonEstimator<E> {
         f: &[f64],
     ) -> Result<(DVector<f64>, DMatrix<f64>)> {
         let (q, lu, op) = self.equilibrium_at(observation, f)?;
-        let dv = self.stream.problem.derivs(&lu, &op)?;
+        let dv = self.stream.problem.derivs(&q, &lu, &op)?;
         Ok((DVector::from_vec(op.apply(&q)), dv.jt.transpose()))
     }
 
@@ -219,10 +216,10 @@ impl<E: Element> NewtonEstimator<E> {
     }
 }
 
-impl<E: Element> Method<E> for NewtonEstimator<E> {
+impl<M: EstimationModel> Method<M> for NewtonEstimator<M> {
     const BACKEND: Backend = Backend::Newton;
 
-    fn stream(&mut self) -> &mut Stream<E> {
+    fn stream(&mut self) -> &mut Stream<M> {
         &mut self.stream
     }
 
@@ -266,7 +263,7 @@ impl<E: Element> Method<E> for NewtonEstimator<E> {
     }
 }
 
-impl<E: Element> NewtonEstimator<E> {
+impl<M: EstimationModel> NewtonEstimator<M> {
     /// The reduced iteration from `(f0, q0)` at `alpha`; with `far`, a far
     /// start may continue with the full-space iterations (`far` is then
     /// set to the iterations they took when it did). Its phases are
@@ -303,7 +300,7 @@ impl<E: Element> NewtonEstimator<E> {
     }
 }
 
-impl<E: Element + 'static> Estimator for NewtonEstimator<E> {
+impl<M: EstimationModel> Estimator<M::Loads> for NewtonEstimator<M> {
     fn step(&mut self, observation: &Observation) -> Result<Estimate> {
         run_step(self, observation)
     }
@@ -324,7 +321,7 @@ impl<E: Element + 'static> Estimator for NewtonEstimator<E> {
         self.far_log = FarStart::default();
     }
 
-    fn set_known_loads(&mut self, known: Loads) -> Result<()> {
+    fn set_known_loads(&mut self, known: M::Loads) -> Result<()> {
         self.stream.problem.set_known(known)?;
         self.derivs_cache = None;
         self.full_space = None;
@@ -336,9 +333,9 @@ impl<E: Element + 'static> Estimator for NewtonEstimator<E> {
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 mod tests {
     use super::*;
-    use crate::assembly::{Base, Clamp, RobotSpec, Section};
+    use crate::assembly::{Base, Clamp, Robot, RobotSpec, Section};
     use crate::element::PlanarCable;
-    use crate::loads::LineLoad;
+    use crate::loads::{LineLoad, Loads};
     use crate::observe::MarkerObservation;
     use crate::statics::StaticSolver;
 

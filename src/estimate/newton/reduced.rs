@@ -5,7 +5,6 @@
 //! unconfirmed last step, the far start and the Armijo line search.
 //! [`Reduced::run`] strings them together.
 
-use crate::element::Element;
 use crate::error::Result;
 use crate::linsolve::AutoFactors;
 use crate::numeric::{dot, norm2};
@@ -15,14 +14,15 @@ use crate::statics::TrackedEquilibrium;
 
 use super::super::driver::Solved;
 use super::super::problem::{step_cap, Derivs, GnFactor, Problem};
-use super::super::sqp::SqpEstimator;
-use super::super::{Backend, EstimateCriterion, EstimateReport, EstimateStatus, EstimatorSettings};
+use super::super::{
+    Backend, EstimateCriterion, EstimateReport, EstimateStatus, EstimationModel, EstimatorSettings,
+};
 use super::DerivsCache;
 
 /// What a reduced solve works on: the estimator's problem and caches, the
 /// observation and `α`.
-pub(super) struct Reduced<'a, E: Element> {
-    pub(super) core: &'a mut Problem<E>,
+pub(super) struct Reduced<'a, M: EstimationModel> {
+    pub(super) core: &'a mut Problem<M>,
     /// The derivatives at the last converged estimate's shape (see
     /// `NewtonEstimator::derivs_cache`).
     pub(super) derivs_cache: &'a mut Option<DerivsCache>,
@@ -31,7 +31,7 @@ pub(super) struct Reduced<'a, E: Element> {
     /// The last estimate `F` and `H F` there.
     pub(super) hf_cache: &'a mut Option<(Vec<f64>, Vec<f64>)>,
     /// The full-space iterations of a far start.
-    pub(super) inner: &'a mut Option<Box<SqpEstimator<E>>>,
+    pub(super) inner: &'a mut Option<super::far::FullSpaceBox<M>>,
     pub(super) op: &'a ObservationOperator,
     pub(super) alpha: f64,
     pub(super) settings: EstimatorSettings,
@@ -97,7 +97,7 @@ struct CappedStep {
 /// the objective there (which the next iteration starts from).
 type Accepted = (Iterate, Option<ObjectiveAt>);
 
-impl<E: Element> Reduced<'_, E> {
+impl<M: EstimationModel> Reduced<'_, M> {
     /// The solve from `(f0, q0)`: the iterations until a convergence test
     /// holds, the budget runs out or the line search fails; with `far`, a
     /// far start may replace the first linearization of a solve from zero
@@ -227,7 +227,7 @@ impl<E: Element> Reduced<'_, E> {
         };
         let (dv, gn) = match cached {
             Some(x) => x,
-            None => (core.derivs(&it.lu, op)?, None),
+            None => (core.derivs(&it.q, &it.lu, op)?, None),
         };
         let g = core.gradient_hf(&dv, op, &at.e, &at.hf, alpha)?;
         let (step, fac) = core.gn_solve_reusing(&dv, op, &at.e, &it.f, alpha, gn)?;
@@ -361,16 +361,12 @@ impl<E: Element> Reduced<'_, E> {
         let core = &*self.core;
         let jump = self.settings.max_observation_jump_m;
         let mut step = lin.step.clone();
-        let mut dq: Vec<f64> = Sensitivity::new(core.robot(), &it.lu)?
+        let u = core.robot().free_coordinates_of(&it.q)?;
+        let mut dq: Vec<f64> = Sensitivity::at(core.robot(), u.as_slice(), &it.lu)?
             .response(&core.gen_force(&step)?)?
             .data
             .into();
-        let nd = E::NODE_DOFS;
-        let moved = dq
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| i % nd < E::DIM)
-            .fold(0.0f64, |m, (_, v)| m.max(v.abs()));
+        let moved = core.robot().max_position_change(&dq);
         let cap = if moved > jump && moved.is_finite() {
             jump / moved
         } else {

@@ -10,6 +10,7 @@ use clarabel::solver::{
 };
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
+use crate::assembly::Robot;
 use crate::element::{ArcPoint, Element};
 use crate::error::{Error, Result};
 use crate::linsolve::{AutoFactors, Factorization, SymmetricMatrix};
@@ -44,6 +45,14 @@ impl<E: Element> SqpEstimator<E> {
                     let (e, xi) = if node == 0 { (0, 0.0) } else { (node - 1, 1.0) };
                     ArcPoint::new(e, xi, robot.elements()[e].length())
                 }
+                LoadModel::AtSite { site } => match site {
+                    crate::site::Site::Rod { s_m, .. } => {
+                        robot.arc_point("estimator.load_model.site.s_m", s_m)?
+                    }
+                    crate::site::Site::Body { body } => {
+                        return Err(crate::site::no_body("estimator.load_model.site", body))
+                    }
+                },
             };
             let (e, sh) = (p.element, p.values);
             // world direction
@@ -77,7 +86,9 @@ impl<E: Element> SqpEstimator<E> {
                     }
                     c
                 }
-                LoadModel::Concentrated { .. } => dir.iter().copied().enumerate().collect(),
+                LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
+                    dir.iter().copied().enumerate().collect()
+                }
             };
             rows.push((coeffs, b.min_n_per_m, b.max_n_per_m));
         }
@@ -380,7 +391,7 @@ pub(super) struct Reduced<'a> {
 
 impl<'a> Reduced<'a> {
     pub(super) fn new<E: Element>(
-        problem: &Problem<E>,
+        problem: &Problem<Robot<E>>,
         gram_lu: Option<&'a AutoFactors>,
         dv: &'a Derivs,
         op: &ObservationOperator,
@@ -397,7 +408,7 @@ impl<'a> Reduced<'a> {
                     0.5 * (zj[(i, j)] + zj[(j, i)]) + if i == j { alpha / w[i] } else { 0.0 }
                 })
             }
-            LoadModel::Concentrated { .. } => {
+            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
                 let mut n = weighted_columns(&dv.jt, w) * dv.jt.transpose();
                 for i in 0..n.nrows() {
                     n[(i, i)] += alpha;

@@ -339,7 +339,7 @@ impl<E: Element> SqpEstimator<E> {
                 self.warm_qp = None;
                 let problem = &mut self.stream.problem;
                 let eq = problem.equilibrium(&f, &p.q)?;
-                let dv = problem.derivs(&eq.factors, op)?;
+                let dv = problem.derivs(eq.q.as_slice(), &eq.factors, op)?;
                 let e = op.residual(eq.q.as_slice());
                 let (_, gn) = problem.gn_solve(&dv, op, &e, &f, alpha)?;
                 (eq.q.data.into(), dv, Some(gn), eq.residual_n)

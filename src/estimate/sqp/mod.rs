@@ -148,7 +148,7 @@ impl QpError {
 /// ```
 #[derive(Debug, Clone)]
 pub struct SqpEstimator<E: Element> {
-    stream: Stream<E>,
+    stream: Stream<Robot<E>>,
     /// Triplets `(free row, F column, value)` of `Mᵀ G` (constant).
     g_free: Vec<(usize, usize, f64)>,
     /// Upper-triangle triplets of `H` (constant).
@@ -206,7 +206,7 @@ impl<E: Element> SqpEstimator<E> {
     /// The estimator over `problem` (its settings naming the sqp backend):
     /// the constant triplets of `Mᵀ G` and `H` and, for bounds on a
     /// distributed load, the factored load Gram matrix.
-    pub(crate) fn over(problem: Problem<E>) -> Result<Self> {
+    pub(crate) fn over(problem: Problem<Robot<E>>) -> Result<Self> {
         let (g_free, h_upper) = problem.load_triplets()?;
         let gram_lu = match problem.load() {
             LoadModel::Distributed if !problem.settings().bounds.is_empty() => Some(gram_factors(
@@ -378,7 +378,7 @@ impl<E: Element> SqpEstimator<E> {
             .collect();
         let dv = match cached {
             Some(dv) => dv,
-            None => problem.derivs(lu, op)?,
+            None => problem.derivs_linear(lu, op)?,
         };
         let (df0, fac) = problem.gn_solve(&dv, op, &e1, f, alpha)?;
         let g1 = problem.gradient(&dv, op, &e1, f, alpha)?;
@@ -416,10 +416,10 @@ impl<E: Element> SqpEstimator<E> {
     }
 }
 
-impl<E: Element> Method<E> for SqpEstimator<E> {
+impl<E: Element> Method<Robot<E>> for SqpEstimator<E> {
     const BACKEND: Backend = Backend::Sqp;
 
-    fn stream(&mut self) -> &mut Stream<E> {
+    fn stream(&mut self) -> &mut Stream<Robot<E>> {
         &mut self.stream
     }
 

@@ -20,7 +20,7 @@ fn load_at(load: LoadModel, n_f: usize, k: f64) -> Vec<f64> {
         LoadModel::Distributed => (0..n_f)
             .map(|i| if i % 4 == 1 { -0.05 * k } else { 0.0 })
             .collect(),
-        LoadModel::Concentrated { .. } => vec![0.01 * k, -0.02 * k],
+        _ => vec![0.01 * k, -0.02 * k],
     }
 }
 

@@ -1,0 +1,146 @@
+//! `G F` of the load models (a [`LinearLoad`] on every model): the
+//! distributed field (8) with `G = B = ∫ Sᵀ S dX` (22), (23) on the clamped
+//! robot's rod, and a force at a site (32)–(35) with `G = A_xᵀ`, `A_x` the
+//! site's position rows ([`crate::site::SiteRows`]) on any model.
+
+use nalgebra::DVector;
+
+use super::{EstimationModel, LoadModel};
+use crate::error::{check_len, Error, Result};
+use crate::site::{Site, SiteRows, Sites};
+use crate::statics::LinearLoad;
+use crate::structure::Rod;
+
+impl LoadModel {
+    /// The site of a concentrated load on `model` (`None` for the
+    /// distributed field): `Concentrated { node }` at the node of rod 0.
+    ///
+    /// # Errors
+    /// [`Error::IndexOutOfRange`] named `load_model.node` for a node that
+    /// does not exist.
+    pub(crate) fn site<M: Sites>(&self, model: &M) -> Result<Option<Site>> {
+        match *self {
+            LoadModel::Distributed => Ok(None),
+            LoadModel::Concentrated { node } => Ok(Some(Site::Rod {
+                rod: 0,
+                s_m: model.node_arc_m("load_model.node", 0, node)?,
+            })),
+            LoadModel::AtSite { site } => Ok(Some(site)),
+        }
+    }
+
+    /// The position rows `A_x` of a concentrated load's site.
+    fn site_rows<M: Sites>(&self, model: &M) -> Result<Option<SiteRows>> {
+        self.site(model)?
+            .map(|site| model.site_rows("load_model.site", &site))
+            .transpose()
+    }
+}
+
+/// Refuses a concentrated load at a site that does not move (every column
+/// of `Tᵀ G` zero at the reference: the clamp, a body fixed to the
+/// ground): no observation can tell its force.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] named `estimator.load_model`.
+pub(crate) fn check_site_moves<M: EstimationModel>(load: &LoadModel, model: &M) -> Result<()> {
+    if !load.is_concentrated() {
+        return Ok(());
+    }
+    let u = model.reference_free_coordinates();
+    let n = load.n_params(model);
+    let mut out = vec![0.0; model.n_free()];
+    let mut moves = false;
+    for j in 0..n {
+        let mut e = vec![0.0; n];
+        e[j] = 1.0;
+        let g = load.force(model, &e)?;
+        model.restrict_into(u.as_slice(), g.as_slice(), &mut out)?;
+        moves |= out.iter().any(|v| *v != 0.0);
+    }
+    if moves {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            "estimator.load_model",
+            format!("{load:?}"),
+            "the site does not move (the clamp, or a body fixed to the ground): \
+             no observation can tell a force there",
+        ))
+    }
+}
+
+/// `A_xᵀ F` over all `n_q` coordinates (34).
+fn site_force(rows: &SiteRows, n_q: usize, f: &[f64]) -> Result<DVector<f64>> {
+    check_len("f", rows.position.len(), f.len())?;
+    let mut g = DVector::zeros(n_q);
+    for (row, fc) in rows.position.iter().zip(f) {
+        for &(j, w) in row {
+            g[j] += w * fc;
+        }
+    }
+    Ok(g)
+}
+
+/// `A_x v`.
+fn site_force_transpose(rows: &SiteRows, n_q: usize, v: &[f64]) -> Result<DVector<f64>> {
+    check_len("v", n_q, v.len())?;
+    Ok(DVector::from_iterator(
+        rows.position.len(),
+        rows.position.iter().map(|r| crate::site::apply_row(r, v)),
+    ))
+}
+
+/// The distributed field on a model that has none.
+fn no_distributed() -> Error {
+    Error::invalid(
+        "estimator.load_model",
+        "distributed",
+        "the distributed field is defined on the clamped robot's rod only: on a structure, \
+         estimate a force at a site ({\"kind\": \"at_site\", \"site\": …})",
+    )
+}
+
+/// The rod of the distributed field.
+pub(crate) fn field_rod<M: EstimationModel>(model: &M) -> Result<&Rod<M::Element>> {
+    model.field_rod().ok_or_else(no_distributed)
+}
+
+impl<M: EstimationModel> LinearLoad<M> for LoadModel {
+    fn n_params(&self, model: &M) -> usize {
+        match self {
+            LoadModel::Distributed => model.n_q(),
+            _ => model.dim(),
+        }
+    }
+
+    fn force(&self, model: &M, f: &[f64]) -> Result<DVector<f64>> {
+        match self.site_rows(model)? {
+            None => field_rod(model)?.apply_load_gram(f),
+            Some(rows) => site_force(&rows, model.n_q(), f),
+        }
+    }
+
+    fn force_transpose(&self, model: &M, v: &[f64]) -> Result<DVector<f64>> {
+        match self.site_rows(model)? {
+            None => field_rod(model)?.apply_load_gram(v),
+            Some(rows) => site_force_transpose(&rows, model.n_q(), v),
+        }
+    }
+
+    fn add_to(&self, model: &M, known: &M::Loads, f: &[f64]) -> M::Loads {
+        match self.site(model) {
+            Ok(None) => model.with_distributed(known, f),
+            Ok(Some(site)) => model.with_point_force(known, &site, f),
+            // refused by the loads' check (a point off the model)
+            Err(_) => model.with_point_force(
+                known,
+                &Site::Rod {
+                    rod: 0,
+                    s_m: f64::NAN,
+                },
+                f,
+            ),
+        }
+    }
+}

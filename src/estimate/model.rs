@@ -1,0 +1,209 @@
+//! What the estimators need of a model: its equilibrium ([`Assembled`]),
+//! its points ([`Sites`]), and where a distributed field lives. The clamped
+//! [`Robot`] and every [`Structure`] (the parallel robot, the gripper's
+//! fingers) are estimation models: a force at a site is estimated on both;
+//! the distributed field (8) on the robot's rod.
+
+use nalgebra::DVector;
+
+use crate::assembly::Robot;
+use crate::element::Element;
+use crate::loads::{Loads, PointForce};
+use crate::site::{Site, Sites};
+use crate::structure::{Assembled, BodyLoad, Rod, Structure, StructureLoads};
+
+mod sealed {
+    use super::super::newton::far::FullSpaceSolve;
+    use super::super::problem::Problem;
+    use super::EstimationModel;
+
+    /// The estimators' hooks into a model that users need not implement:
+    /// the full-space iterations of the newton backend's far start.
+    pub trait Hooks: Sized {
+        /// The full-space iterations over a copy of `problem`, if the model
+        /// has them.
+        fn full_space(problem: &Problem<Self>) -> Option<Box<dyn FullSpaceSolve<Self>>>
+        where
+            Self: EstimationModel;
+    }
+
+    impl<E: crate::element::Element + 'static> Hooks for crate::assembly::Robot<E> {
+        fn full_space(problem: &Problem<Self>) -> Option<Box<dyn FullSpaceSolve<Self>>> {
+            super::super::newton::far::sqp_full_space(problem)
+        }
+    }
+
+    impl<E: crate::element::Element + 'static> Hooks for crate::structure::Structure<E> {
+        fn full_space(_: &Problem<Self>) -> Option<Box<dyn FullSpaceSolve<Self>>> {
+            None
+        }
+    }
+}
+
+/// A model the estimators run on.
+///
+/// # Example
+/// ```
+/// use softrod::estimate::EstimationModel;
+/// let robot = softrod::scene::Scene::two_section().robot()?;
+/// assert!(robot.field_rod().is_some());
+/// let parallel = softrod::parallel::ParallelSpec::default().build_cable()?;
+/// assert!(parallel.structure().field_rod().is_none());
+/// # Ok::<(), softrod::Error>(())
+/// ```
+pub trait EstimationModel:
+    Assembled<Loads: Clone + Default + PartialEq + std::fmt::Debug + Send + Sync>
+    + Sites
+    + sealed::Hooks
+    + 'static
+    + Clone
+    + std::fmt::Debug
+    + Send
+    + Sync
+{
+    /// The element of the model's rods.
+    type Element: Element;
+
+    /// The rod whose coordinates carry the distributed field `w = S F` (8),
+    /// if the model has one: the clamped robot's rod, whose coordinates are
+    /// the first of `q`.
+    fn field_rod(&self) -> Option<&Rod<Self::Element>>;
+
+    /// The straight reference configuration `q` (the cold start).
+    fn reference_q(&self) -> DVector<f64>;
+
+    /// The loads `known` with a force `force_n` at `site` added.
+    fn with_point_force(&self, known: &Self::Loads, site: &Site, force_n: &[f64]) -> Self::Loads;
+
+    /// The loads `known` with the distributed field `f` added (NaN, and so
+    /// refused by the loads' check, on a model without a field rod).
+    fn with_distributed(&self, known: &Self::Loads, f: &[f64]) -> Self::Loads;
+
+    /// The largest change of a position coordinate in the step `dq` (m):
+    /// the nodes' positions and the bodies' (slopes and angles left out).
+    fn max_position_change(&self, dq: &[f64]) -> f64;
+}
+
+impl<E: Element + 'static> EstimationModel for Robot<E> {
+    type Element = E;
+
+    fn field_rod(&self) -> Option<&Rod<E>> {
+        Some(self.rod())
+    }
+
+    fn reference_q(&self) -> DVector<f64> {
+        self.reference_configuration()
+    }
+
+    fn with_point_force(&self, known: &Loads, site: &Site, force_n: &[f64]) -> Loads {
+        let mut loads = known.clone();
+        let s_m = match *site {
+            Site::Rod { rod: 0, s_m } => s_m,
+            // refused by the loads' check (a point off the robot)
+            _ => f64::NAN,
+        };
+        loads.point_forces.push(PointForce {
+            s_m,
+            force_n: force_n.to_vec(),
+        });
+        loads
+    }
+
+    fn with_distributed(&self, known: &Loads, f: &[f64]) -> Loads {
+        let mut loads = known.clone();
+        if loads.distributed_f.is_empty() {
+            loads.distributed_f = f.to_vec();
+        } else {
+            loads
+                .distributed_f
+                .iter_mut()
+                .zip(f)
+                .for_each(|(a, b)| *a += b);
+        }
+        loads
+    }
+
+    fn max_position_change(&self, dq: &[f64]) -> f64 {
+        let nd = E::NODE_DOFS;
+        dq.iter()
+            .enumerate()
+            .filter(|(i, _)| i % nd < E::DIM)
+            .fold(0.0f64, |m, (_, v)| m.max(v.abs()))
+    }
+}
+
+impl<E: Element + 'static> EstimationModel for Structure<E> {
+    type Element = E;
+
+    fn field_rod(&self) -> Option<&Rod<E>> {
+        None
+    }
+
+    fn reference_q(&self) -> DVector<f64> {
+        let u = self.reference_free_coordinates();
+        let mut q = DVector::zeros(self.n_q());
+        match self.dof_map().configuration_into(u, q.as_mut_slice()) {
+            Ok(()) => q,
+            Err(_) => DVector::from_element(self.n_q(), f64::NAN),
+        }
+    }
+
+    fn with_point_force(
+        &self,
+        known: &StructureLoads,
+        site: &Site,
+        force_n: &[f64],
+    ) -> StructureLoads {
+        let mut loads = known.clone();
+        let rotations = if E::DIM == 2 { 1 } else { 3 };
+        match *site {
+            Site::Body { body } => loads.bodies.push(BodyLoad {
+                body,
+                force_n: force_n.to_vec(),
+                moment_nm: vec![0.0; rotations],
+            }),
+            Site::Rod { rod, s_m } => {
+                if loads.rods.len() <= rod {
+                    loads.rods.resize(rod + 1, Loads::default());
+                }
+                loads.rods[rod].point_forces.push(PointForce {
+                    s_m,
+                    force_n: force_n.to_vec(),
+                });
+            }
+        }
+        loads
+    }
+
+    fn with_distributed(&self, known: &StructureLoads, _f: &[f64]) -> StructureLoads {
+        let mut loads = known.clone();
+        loads.bodies.push(BodyLoad {
+            body: 0,
+            force_n: vec![f64::NAN; E::DIM],
+            moment_nm: vec![0.0; if E::DIM == 2 { 1 } else { 3 }],
+        });
+        loads
+    }
+
+    fn max_position_change(&self, dq: &[f64]) -> f64 {
+        let nd = E::NODE_DOFS;
+        let rods = self.n_rod_nodes() * nd;
+        let mut m = dq
+            .iter()
+            .take(rods)
+            .enumerate()
+            .filter(|(i, _)| i % nd < E::DIM)
+            .fold(0.0f64, |m, (_, v)| m.max(v.abs()));
+        for b in 0..self.spec().rigid_bodies.len() {
+            if let Ok(r) = self.body_coordinates(b) {
+                for v in dq
+                    .get(r.start..(r.start + E::DIM).min(r.end))
+                    .unwrap_or(&[])
+                {
+                    m = m.max(v.abs());
+                }
+            }
+        }
+        m
+    }
+}
