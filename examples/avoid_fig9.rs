@@ -4,7 +4,7 @@
 //! parameters: obstacle placements × goals (`softrod::report::touch::FIG9_*`), with
 //! touch feedback and the baseline without it, 120 s each.
 //!
-//! Run: `cargo run --release --example avoid_fig9 [OUT.json] [--alpha=evidence|discrepancy]
+//! Run: `cargo run --release --features cli --example avoid_fig9 [OUT.json] [--alpha=evidence|discrepancy]
 //! [--disk=X,Y,R ...] [--goal=X,Y ...] [--duration=S]` (prints the table; writes
 //! every row as JSON if a path is given; `--disk`/`--goal` replace the
 //! table's placements/goals, m).

@@ -5,7 +5,7 @@
 //! the paper's peak of the estimated load minus the virtual payload, and the
 //! point-force search on the calibrated model.
 //!
-//! Run: `cargo run --release --example avoid_localization [OUT.json [FRAMES [MARKERS…]]]
+//! Run: `cargo run --release --features cli --example avoid_localization [OUT.json [FRAMES [MARKERS…]]]
 //! [--alpha=evidence|discrepancy]` (prints the table; writes every case as
 //! JSON if a path is given; FRAMES marker frames averaged per measurement,
 //! default 20; marker counts, default 4 6 11; the estimators' α rule,

@@ -6,7 +6,7 @@
 //! ([`softrod::linsolve::LinearWork`], independent of the load), iterations,
 //! the `α` found and the ratio of the two backends' times.
 //!
-//! `cargo run --release --features report --example first_estimate [REPEATS [FILTER]]`
+//! `cargo run --release --features cli --example first_estimate [REPEATS [FILTER]]`
 //! (`FILTER`: only the loads whose name contains it)
 //!
 //! Loads on the two-section robot (its known pressures; the truth solved on

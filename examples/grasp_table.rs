@@ -3,7 +3,7 @@
 //! table and the holding masses, and writes the rows as JSON to the path
 //! given (default `grasp_table.json`).
 //!
-//! `cargo run --release --example grasp_table [-- OUT.json]`
+//! `cargo run --release --features cli --example grasp_table [-- OUT.json]`
 //!
 //! A subset (quick reruns): `GRASP_OBJECTS=0,6` (indices into
 //! [`softrod::report::grasp::table::table_objects`]), `GRASP_STRATEGIES=adaptive`

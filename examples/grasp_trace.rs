@@ -4,7 +4,7 @@
 //! and the object's pose.
 //!
 //! - Table I's objects: `GRASP_OBJECT=0 GRASP_TRY=0,1 GRASP_STRATEGY=adaptive
-//!   cargo run --release --example grasp_trace` (the table's placements).
+//!   cargo run --release --features cli --example grasp_trace` (the table's placements).
 //! - A disc: `GRASP_DISC=RADIUS_M,MASS_KG,MU,OFFSET_M` (unturned, seed 1).
 //!
 //! `GRASP_STRATEGY`: `adaptive` (default), `open-loop` or `both`.

@@ -3,7 +3,7 @@
 //! plant ≠ model (finer mesh, EI +15 %, GJ +10 %, EA +2 %, gain −10 %,
 //! σ = 0.05 mm on the platform marker).
 //!
-//! Run: `cargo run --release --example parallel_track [-- <duration_s> [<model elements per section> [<radius_mm>]]]`.
+//! Run: `cargo run --release --features cli --example parallel_track [-- <duration_s> [<model elements per section> [<radius_mm>]]]`.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use softrod::control::parallel::{run_track, TrackSettings};

@@ -2,7 +2,7 @@
 //! `softrod report --only loop`): payload in robot weights, EI error,
 //! marker noise, control rate; converged or diverged and why.
 //!
-//! Run: `cargo run --release --example track_failure [PAYLOAD EI_ERROR NOISE_M RATE_HZ]`
+//! Run: `cargo run --release --features cli --example track_failure [PAYLOAD EI_ERROR NOISE_M RATE_HZ]`
 //! (no arguments: the corners of the report's grid).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 

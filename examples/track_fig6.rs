@@ -3,7 +3,7 @@
 //! figure-eight and a straight line; five payload conditions; feedforward
 //! only against feedforward + updater (31).
 //!
-//! Run: `cargo run --release --example track_fig6 [quick] [evidence]`
+//! Run: `cargo run --release --features cli --example track_fig6 [quick] [evidence]`
 //! (prints the table; `quick` runs the circle only; `evidence` runs the
 //! estimator with the crate's default `α` rule, the evidence, instead of
 //! the loop's default, the discrepancy principle).

@@ -3,7 +3,7 @@
 //! configurations, read off the end effector's displacement with the
 //! concentrated-load model (32)-(35) (see `softrod::control::MassEstimator`).
 //!
-//! Run: `cargo run --release --example track_mass` (prints the table for the
+//! Run: `cargo run --release --features cli --example track_mass` (prints the table for the
 //! matched and the relative reference, calibrated and raw).
 //!
 //! Measured (seed 1, calibration 150 g straight with seed 99, 10 frames per

@@ -1,7 +1,7 @@
 //! Where the trajectories of `track_fig6` can lie: the model's IK pressures
 //! on a circle about candidate centres (all chambers must stay well inside
 //! their bounds, the plant needing more pressure than the model).
-//! Run: `cargo run --release --example track_workspace`.
+//! Run: `cargo run --release --features cli --example track_workspace`.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 use softrod::control::{IkSettings, InverseKinematics};
 use softrod::scene::Scene;

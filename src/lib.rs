@@ -41,6 +41,27 @@
 //!
 //! All quantities are SI (m, N, Pa, rad).
 //!
+//! Typed inputs and results are [nalgebra] types. The crate re-exports the
+//! nalgebra it is built with as `softrod::nalgebra`, so a user names the
+//! same types without pinning a matching version of their own:
+//! ```
+//! use softrod::element::SpatialCable;
+//! use softrod::nalgebra::{Point2, Vector3};
+//! use softrod::{scene::Scene, statics::StaticSolver};
+//! // a planar result: the tip of the built-in robot as a point (m)
+//! let scene = Scene::two_section();
+//! let robot = scene.robot()?;
+//! let eq = StaticSolver::default().solve(&robot, &scene.loads()?, None)?;
+//! let tip: Point2<f64> = eq.shape(&robot)?.tip_pose()?.position_m;
+//! assert!(tip.coords.norm() < 0.24);
+//! // a spatial one: the curvature vector (1/m) of a straight element
+//! let element = SpatialCable::new(0.1, 300.0, 0.025)?;
+//! let qe = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.1, 0.0, 0.0, 1.0, 0.0, 0.0];
+//! let (axial_strain, curvature_per_m): (f64, Vector3<f64>) = element.strains(&qe, 0.5);
+//! assert!(axial_strain.abs() < 1e-15 && curvature_per_m == Vector3::zeros());
+//! # Ok::<(), softrod::Error>(())
+//! ```
+//!
 //! # Example
 //! ```
 //! use softrod::{scene::Scene, statics::StaticSolver};
@@ -51,6 +72,8 @@
 //! # Ok::<(), softrod::Error>(())
 //! ```
 #![warn(missing_docs)]
+// docs.rs (Cargo.toml: `--cfg docsrs`) marks what a feature gates, e.g. `report`
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
 
 pub mod assembly;
@@ -82,3 +105,7 @@ pub mod structure;
 pub mod touch;
 
 pub use error::{Error, Result};
+/// The linear algebra crate of the typed inputs and results (points, poses,
+/// resultants, covariances), re-exported: `softrod::nalgebra::Vector3` is the
+/// type the library's functions take and return.
+pub use nalgebra;
