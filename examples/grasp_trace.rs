@@ -17,7 +17,7 @@ use softrod::report::grasp::table::{placement, table_objects};
 fn main() -> Result<(), softrod::Error> {
     let env = |k: &str, d: &str| std::env::var(k).unwrap_or_else(|_| d.to_string());
     let strategies = match env("GRASP_STRATEGY", "adaptive").as_str() {
-        "open-loop" => vec![Strategy::OpenLoop],
+        "open-loop" | "open_loop" => vec![Strategy::OpenLoop],
         "both" => vec![Strategy::Adaptive, Strategy::OpenLoop],
         _ => vec![Strategy::Adaptive],
     };

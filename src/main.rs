@@ -16,7 +16,14 @@ fn main() {
             msg.split_whitespace().collect::<Vec<_>>().join(" ")
         );
     }));
+    // Exit codes: 0 success; 2 the run finished and wrote its record but
+    // did not reach its goal (`"outcome": "goal_not_met"`); 1 any other
+    // failure (bad input, a solve that found no answer: no record).
     if let Err(e) = softrod_cli::run() {
+        if let Some(g) = e.downcast_ref::<softrod_cli::output::GoalNotMet>() {
+            eprintln!("softrod: goal not met: {g}");
+            std::process::exit(softrod_cli::output::EXIT_GOAL_NOT_MET);
+        }
         eprintln!("softrod: error: {e:#}");
         std::process::exit(1);
     }

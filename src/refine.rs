@@ -133,6 +133,7 @@ impl Quantity {
 
 /// The outcome of [`auto_elements`].
 #[derive(Debug, Clone, PartialEq, Serialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct Refinement {
     /// The quantity controlled.
     pub quantity: Quantity,

@@ -220,10 +220,11 @@ fn json_reports_carry_a_typed_status() {
         serde_json::json!({"alpha": 1e-2, "max_iterations": 1, "statistical_tolerance": 0.0});
     let path = temp_file("one_iteration.json", &scene.to_string());
     let (code, stdout, stderr) = run(&["estimate", &path]);
-    assert_ne!(code, 0, "{stdout}");
+    // exit code 2: the run finished, its record is written, the goal not met
+    assert_eq!(code, 2, "{stdout}");
     let errors: Vec<&str> = stderr
         .lines()
-        .filter(|l| l.starts_with("softrod: error:"))
+        .filter(|l| l.starts_with("softrod: goal not met:"))
         .collect();
     assert_eq!(errors.len(), 1, "{stderr}");
     assert!(errors[0].contains("did not converge"), "{stderr}");
@@ -234,4 +235,6 @@ fn json_reports_carry_a_typed_status() {
         "{}",
         out["report"]
     );
+    assert_eq!(out["status"], out["report"]["status"]);
+    assert_eq!(out["outcome"], "goal_not_met");
 }

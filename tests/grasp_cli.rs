@@ -24,14 +24,14 @@ fn grasp_writes_the_outcome_and_rejects_bad_objects() {
         "grasp",
         "examples/grasp_apple.json",
         "--strategy",
-        "open-loop",
+        "open_loop",
         "--out",
         out.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
-    assert_eq!(v["strategy"], "open-loop");
+    assert_eq!(v["strategy"], "open_loop");
     assert!(v["success"].is_boolean() && v["frames"].as_array().unwrap().len() > 10);
     let bad = dir.join("bad.json");
     std::fs::write(

@@ -33,7 +33,7 @@ fn track_writes_the_time_series_and_the_updater_beats_feedforward() {
     let out = std::env::temp_dir().join(format!("softrod-track-{}-out.json", std::process::id()));
     let out = out.to_string_lossy().into_owned();
     let mut means = vec![];
-    for controller in ["ff", "ff+updater"] {
+    for controller in ["ff", "ff_updater"] {
         let (code, _, err) = run(&[
             "track",
             &scene,
@@ -72,12 +72,12 @@ fn track_writes_the_time_series_and_the_updater_beats_feedforward() {
         assert_eq!(summary["samples"].as_u64().unwrap(), 540);
         assert_eq!(summary["plant"]["ei_factor"].as_f64().unwrap(), 1.15);
         means.push(summary["mean_error_m"].as_f64().unwrap());
-        if controller == "ff+updater" {
+        if controller == "ff_updater" {
             assert_eq!(s["estimate"]["estimate"], "converged");
             assert_eq!(s["estimated_load_n"].as_array().unwrap().len(), 2);
         }
     }
-    println!("mean error: ff {} m, ff+updater {} m", means[0], means[1]);
+    println!("mean error: ff {} m, ff_updater {} m", means[0], means[1]);
     assert!(means[0] > 5e-3, "feedforward {}", means[0]);
     assert!(means[1] < 0.3e-3, "with the updater {}", means[1]);
 }

@@ -37,6 +37,7 @@ const STRAIN_SAMPLES: usize = 5;
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum ValidityWarning {
     /// The largest axial strain exceeds [`MAX_AXIAL_STRAIN`].

@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 
 use softrod::touch::{AvoidScene, AvoidStatus};
 
+use super::output::{AvoidRecord, CommandName, GoalNotMet, Header, Outcome, SceneKind};
 use super::write_json;
 
 /// Runs the avoidance of the scene file `scene`, writes the run as JSON
@@ -20,7 +21,22 @@ pub(super) fn avoid(scene: PathBuf, out: Option<PathBuf>, baseline: bool) -> Res
         s.avoid.touch_feedback = false;
     }
     let run = s.run()?;
-    write_json(&run, out.as_ref())?;
+    // an avoidance scene has no name: its file's stem
+    let name = scene
+        .file_stem()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let record = AvoidRecord {
+        header: Header::new(
+            CommandName::Avoid,
+            &name,
+            SceneKind::Avoid,
+            Outcome::from_ok(run.status.is_reached()),
+        ),
+        run,
+    };
+    write_json(&record, out.as_ref())?;
+    let run = &record.run;
     for t in &run.touched {
         eprintln!(
             "softrod: touched at {:.2} s: s = {:.4} m, obstacle point ({:.4}, {:.4}) m, force ({:.4}, {:.4}) N",
@@ -37,14 +53,16 @@ pub(super) fn avoid(scene: PathBuf, out: Option<PathBuf>, baseline: bool) -> Res
             );
             Ok(())
         }
-        AvoidStatus::NotReached { distance_m } => anyhow::bail!(
+        AvoidStatus::NotReached { distance_m } => Err(GoalNotMet(format!(
             "goal not reached: the end effector ended {:.2} mm from it (largest contact force {:.4} N)",
             distance_m * 1e3,
             run.max_force_before_n.max(run.max_force_after_n)
-        ),
-        AvoidStatus::GoalUnreachable { distance_m } => anyhow::bail!(
+        ))
+        .into()),
+        AvoidStatus::GoalUnreachable { distance_m } => Err(GoalNotMet(format!(
             "goal unreachable: outside the robot's workspace (the closest pose is {:.2} mm away); not run",
             distance_m * 1e3
-        ),
+        ))
+        .into()),
     }
 }

@@ -1,4 +1,4 @@
-// `softrod grasp SCENE [--strategy adaptive|open-loop] [--out FILE]`: one
+// `softrod grasp SCENE [--strategy adaptive|open_loop] [--out FILE]`: one
 // simulated grasp trial (the two-finger gripper, an object on a table), its
 // outcome as JSON.
 
@@ -9,12 +9,18 @@ use anyhow::{Context, Result};
 use softrod::grasp::scene::GraspScene;
 use softrod::grasp::trial::Strategy;
 
+use super::output::{
+    CommandName, GoalNotMet, GraspRecord, GraspStatus, Header, Outcome, SceneKind,
+};
+
 /// The strategy on the command line.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 pub enum StrategyArg {
     /// (45)–(52) with the estimator.
     Adaptive,
-    /// Proximal segments to a predetermined pressure.
+    /// Proximal segments to a predetermined pressure (`open-loop` is
+    /// accepted too).
+    #[value(name = "open_loop", alias = "open-loop")]
     OpenLoop,
 }
 
@@ -41,15 +47,37 @@ pub fn run(scene: PathBuf, strategy: Option<StrategyArg>, out: Option<PathBuf>) 
         outcome
             .failure
             .as_ref()
-            .map(|f| format!(", {f:?}"))
+            .map(|f| format!(", {}", super::output::json_text(f)))
             .unwrap_or_default()
     );
-    let text = serde_json::to_string_pretty(&outcome)?;
-    match out {
-        Some(path) => super::atomic::write_atomic(&path, (text + "\n").as_bytes()),
-        None => {
-            outln!("{text}");
-            Ok(())
-        }
+    let held = outcome.success;
+    let record = GraspRecord {
+        header: Header::new(
+            CommandName::Grasp,
+            &outcome.object,
+            SceneKind::Grasp,
+            Outcome::from_ok(held),
+        ),
+        status: if held {
+            GraspStatus::Held
+        } else {
+            GraspStatus::Failed
+        },
+        trial: outcome,
+    };
+    super::write_json(&record, out.as_ref())?;
+    if !held {
+        return Err(GoalNotMet(format!(
+            "the grasp of {} did not hold{}; its record is written",
+            record.trial.object,
+            record
+                .trial
+                .failure
+                .as_ref()
+                .map(|f| format!(" ({})", super::output::json_text(f)))
+                .unwrap_or_default()
+        ))
+        .into());
     }
+    Ok(())
 }

@@ -14,6 +14,7 @@ macro_rules! outln {
 mod atomic;
 mod avoid;
 mod demo;
+pub mod output;
 mod replay;
 mod track;
 
@@ -25,11 +26,16 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use serde::Serialize;
 
+use output::{
+    CommandName, EstimateBody, EstimateRecord, GoalNotMet, Header, LoadSample, NodeRecord, Outcome,
+    ResultantRecord, SceneKind, SolveRecord,
+};
 use softrod::assembly::{Robot, ValidityWarning};
 use softrod::element::{Element, PlanarCable};
-use softrod::estimate::{Backend, Estimate, EstimateReport, MarkerObservation, Observation};
+use softrod::estimate::{Backend, Estimate, MarkerObservation, Observation};
 use softrod::loads::{LineLoad, PointForce};
 use softrod::refine::{Quantity, Refinement};
+use softrod::scene::markers::MarkersFile;
 use softrod::scene::{Scene, SceneRobot};
 use softrod::statics::{StaticReport, StaticSolver};
 
@@ -37,11 +43,20 @@ use softrod::statics::{StaticReport, StaticSolver};
 ///
 /// Without a subcommand, runs the built-in two-section robot and prints a summary.
 #[derive(Parser, Debug)]
-#[command(name = "softrod", version, about)]
+#[command(name = "softrod", version, about, after_help = EXIT_CODES)]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
 }
+
+/// The exit codes (also in the README).
+const EXIT_CODES: &str = "\
+Output: every subcommand's JSON record carries \"format_version\" (now \"1\"), \"command\", \"scene\", \"scene_kind\", \"outcome\" and a typed \"status\"; its JSON Schema is written by `softrod schema --out DIR` (committed under schema/).
+
+Exit codes:
+  0  success (\"outcome\": \"success\")
+  1  error: bad input, or no answer found (nothing written; the message names the field or the failed solve)
+  2  goal not met: the run finished and wrote its record (\"outcome\": \"goal_not_met\") but an estimate did not converge, a goal was missed, a grasp did not hold or a tracking run stopped early";
 
 #[derive(Subcommand, Debug)]
 enum Command {
@@ -143,6 +158,15 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// Write the JSON Schema of every output record (the files committed
+    /// under schema/): `solve`, `solve_parallel`, `estimate`,
+    /// `estimate_stream`, `estimate_parallel`, `track`, `avoid`, `grasp`.
+    Schema {
+        /// Directory to write `<name>.schema.json` into (default: print
+        /// them all as one JSON object to standard output).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// One simulated grasp (two-finger gripper, an object on a table) and
     /// its outcome as JSON. The scene file is JSON: {"object": {"name": ...,
     /// "shape": {"shape": "circle", "radius_m": 0.03}, "mass_kg": 0.1, "mu": 0.5},
@@ -215,26 +239,11 @@ impl From<BackendArg> for Backend {
     }
 }
 
-/// One node of a result.
-#[derive(Serialize)]
-struct NodeOut {
-    /// Undeformed arc coordinate (m).
-    s_m: f64,
-    /// Position (m).
-    position_m: Vec<f64>,
-    /// Slope r' (dimensionless; its norm is 1 + axial strain).
-    slope: Vec<f64>,
-    /// Planar: the tangent's angle from the x axis (rad), unwrapped along
-    /// the backbone (a full circle ends at 2π).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    angle_rad: Option<f64>,
-}
-
 /// Fills in the planar robot's unwrapped node angles; returns the tip's.
 fn fill_angles(
     robot: &Robot<PlanarCable>,
     q: &[f64],
-    nodes: &mut [NodeOut],
+    nodes: &mut [NodeRecord],
 ) -> Result<Option<f64>> {
     let angles = robot.node_angles(q)?;
     for (n, a) in nodes.iter_mut().zip(&angles) {
@@ -243,41 +252,14 @@ fn fill_angles(
     Ok(angles.as_slice().last().copied())
 }
 
-/// The result of `softrod solve`.
-#[derive(Serialize)]
-struct SolveOut {
-    scene: String,
-    pressures_pa: Vec<f64>,
-    nodes: Vec<NodeOut>,
-    tip_position_m: Vec<f64>,
-    /// Planar: the tip tangent's angle from the x axis (rad).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    tip_angle_rad: Option<f64>,
-    /// Spatial: the unit tangent at the tip.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    tip_direction: Option<Vec<f64>>,
-    /// Spatial: the angle between the tip tangent and the base tangent (rad).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    tip_angle_from_base_rad: Option<f64>,
-    report: StaticReport,
-    /// The configuration (not written).
-    #[serde(skip)]
-    q: Vec<f64>,
-    /// Where the result leaves the model's validity (also on stderr).
-    warnings: Vec<ValidityWarning>,
-    /// How the counts of "elements": "auto" sections were chosen.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    refinement: Option<Refinement>,
-}
-
 /// The nodes of configuration `q`: arc coordinate, position and slope.
-fn node_outs<E: Element>(robot: &Robot<E>, q: &[f64]) -> Vec<NodeOut> {
+fn node_outs<E: Element>(robot: &Robot<E>, q: &[f64]) -> Vec<NodeRecord> {
     let (d, nd) = (E::DIM, E::NODE_DOFS);
     robot
         .node_arc()
         .iter()
         .enumerate()
-        .map(|(i, &s)| NodeOut {
+        .map(|(i, &s)| NodeRecord {
             s_m: s,
             position_m: q[i * nd..i * nd + d].to_vec(),
             slope: q[i * nd + d..i * nd + 2 * d].to_vec(),
@@ -292,10 +274,16 @@ fn solve_out<E: Element>(
     pressures: Vec<f64>,
     q: &[f64],
     report: StaticReport,
-) -> SolveOut {
+) -> SolveRecord {
     let tip = &q[q.len() - E::NODE_DOFS..];
-    SolveOut {
-        scene: scene.name.clone(),
+    SolveRecord {
+        header: Header::new(
+            CommandName::Solve,
+            &scene.name,
+            SceneKind::of(scene),
+            Outcome::from_ok(report.status.is_converged()),
+        ),
+        status: report.status,
         pressures_pa: pressures,
         tip_position_m: tip[..E::DIM].to_vec(),
         tip_angle_rad: None,
@@ -314,7 +302,7 @@ fn solve_with<E: Element>(
     scene: &Scene,
     robot: &Robot<E>,
     pressures: Option<Vec<f64>>,
-) -> Result<SolveOut> {
+) -> Result<SolveRecord> {
     let mut loads = scene.loads()?;
     if let Some(p) = pressures {
         loads.pressures_pa = p;
@@ -330,7 +318,7 @@ fn solve_with<E: Element>(
     ))
 }
 
-fn solve(scene: &Scene, pressures: Option<Vec<f64>>) -> Result<SolveOut> {
+fn solve(scene: &Scene, pressures: Option<Vec<f64>>) -> Result<SolveRecord> {
     match scene.build()? {
         SceneRobot::Planar(robot) => {
             let mut out = solve_with(scene, &robot, pressures)?;
@@ -376,83 +364,21 @@ fn write_json<T: Serialize>(value: &T, out: Option<&PathBuf>) -> Result<()> {
     }
 }
 
-/// One sample of the estimated load.
-#[derive(Serialize)]
-struct LoadSample {
-    /// Undeformed arc coordinate (m).
-    s: f64,
-    /// Load per undeformed length, world axes (N/m).
-    w: Vec<f64>,
-}
-
-/// Resultant of the estimated load.
-#[derive(Serialize)]
-struct ResultantOut {
-    /// Force (N), world axes.
-    force_n: Vec<f64>,
-    /// Standard deviation of each force component for the stated marker noise (N).
-    force_std_n: Vec<f64>,
-    /// Moment about the base position, in the estimated shape (N·m).
-    moment_nm: Vec<f64>,
-}
-
-/// The result of `softrod estimate`.
-#[derive(Serialize)]
-struct EstimateOut {
-    scene: String,
-    backend: String,
-    /// Where the observation came from.
-    observation: String,
-    /// The known chamber pressures (Pa) the estimate is for.
-    pressures_pa: Vec<f64>,
-    /// Node coordinates of the estimated shape (m).
-    nodes: Vec<NodeOut>,
-    /// The estimated distributed load on an evenly spaced grid of `load_grid_points` arc coordinates.
-    load: Vec<LoadSample>,
-    load_grid_points: usize,
-    /// The raw load parameters F (N/m, N/m², node-major [w, w']; or the force, N).
-    load_parameters: Vec<f64>,
-    resultant: ResultantOut,
-    /// Marker residuals A q - y (m), in observation order.
-    marker_residuals_m: Vec<f64>,
-    /// Standard deviation of the estimated marker-space shape (m), per observed component.
-    marker_std_m: Vec<f64>,
-    /// Largest standard deviation of a load parameter (N/m or N).
-    max_load_parameter_std: f64,
-    /// The marker noise the covariances are stated for (m).
-    noise_sigma_m: f64,
-    /// Load directions the markers determine (the evidence's effective
-    /// number of parameters; null if it could not be computed).
-    determined_directions: f64,
-    /// Fewer than 0.5 load directions determined: the markers barely see
-    /// the load, `force_std_n` is a prior's width, not knowledge (also on stderr).
-    weakly_informed: bool,
-    report: EstimateReport,
-    /// The estimated configuration (not written).
-    #[serde(skip)]
-    q: Vec<f64>,
-    /// Where the estimated shape leaves the model's validity (also on stderr).
-    warnings: Vec<ValidityWarning>,
-    /// How the counts of "elements": "auto" sections were chosen.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    refinement: Option<Refinement>,
-}
-
 const LOAD_GRID: usize = 49;
 
 fn estimate_out<E: Element>(
-    scene: &Scene,
     robot: &Robot<E>,
     pressures_pa: Vec<f64>,
     e: &Estimate,
     observation: String,
-) -> EstimateOut {
+) -> EstimateBody {
     let nodes = node_outs(robot, e.q.as_slice());
     let d = e.resultant_force_n.len();
     let m = e.marker_residuals.len();
-    EstimateOut {
-        scene: scene.name.clone(),
-        backend: e.report.backend.name().to_string(),
+    let cov = e.resultant_force_cov();
+    EstimateBody {
+        status: e.report.status,
+        backend: e.report.backend.into(),
         observation,
         pressures_pa,
         nodes,
@@ -466,10 +392,11 @@ fn estimate_out<E: Element>(
             .collect(),
         load_grid_points: LOAD_GRID,
         load_parameters: e.f.as_slice().to_vec(),
-        resultant: ResultantOut {
+        resultant: ResultantRecord {
             force_n: e.resultant_force_n.as_slice().to_vec(),
-            force_std_n: (0..d)
-                .map(|a| e.resultant_force_cov()[(a, a)].max(0.0).sqrt())
+            force_std_n: (0..d).map(|a| cov[(a, a)].max(0.0).sqrt()).collect(),
+            force_cov_n2: (0..d)
+                .map(|a| (0..d).map(|b| cov[(a, b)]).collect())
                 .collect(),
             moment_nm: e.resultant_moment_nm.as_slice().to_vec(),
         },
@@ -481,7 +408,7 @@ fn estimate_out<E: Element>(
         noise_sigma_m: e.noise_sigma_m,
         determined_directions: e.determined_directions(),
         weakly_informed: e.weakly_informed(),
-        report: e.report.clone(),
+        report: (&e.report).into(),
         q: e.q.as_slice().to_vec(),
         warnings: robot.validity(e.q.as_slice()).unwrap_or_default(),
         refinement: None,
@@ -520,8 +447,8 @@ fn observe<E: Element>(scene: &Scene, robot: &Robot<E>, q: &[f64]) -> Result<Obs
 fn estimate(
     scene: &Scene,
     backend: Option<Backend>,
-    markers: Option<(&PathBuf, replay::Markers)>,
-) -> Result<Vec<(Option<f64>, EstimateOut)>> {
+    markers: Option<(&PathBuf, MarkersFile)>,
+) -> Result<Vec<(Option<f64>, EstimateBody)>> {
     match scene.build()? {
         SceneRobot::Planar(robot) => {
             let mut outs = estimate_with(scene, robot.clone(), backend, markers)?;
@@ -540,15 +467,19 @@ fn estimate_with<E: Element + 'static>(
     scene: &Scene,
     robot: Robot<E>,
     backend: Option<Backend>,
-    markers: Option<(&PathBuf, replay::Markers)>,
-) -> Result<Vec<(Option<f64>, EstimateOut)>> {
+    markers: Option<(&PathBuf, MarkersFile)>,
+) -> Result<Vec<(Option<f64>, EstimateBody)>> {
     let known = scene.loads()?;
     let mut settings = scene.estimator_settings()?;
     if let Some(b) = backend {
         settings.backend = b;
     }
     let (observations, source) = match markers {
-        Some((path, m)) => (m.observations(), format!("markers file {}", path.display())),
+        Some((path, m)) => {
+            m.check_work(robot.n_elements())
+                .with_context(|| path.display().to_string())?;
+            (m.observations(), format!("markers file {}", path.display()))
+        }
         None => {
             let solver = StaticSolver::new(scene.solver.statics.clone())?;
             let eq = solver.solve(&robot, &known, None)?;
@@ -566,10 +497,58 @@ fn estimate_with<E: Element + 'static>(
         })?;
         outs.push((
             t_s,
-            estimate_out(scene, &robot, pressures.clone(), &e, source.clone()),
+            estimate_out(&robot, pressures.clone(), &e, source.clone()),
         ));
     }
     Ok(outs)
+}
+
+/// Writes the record of one estimate (its warnings on standard error); a
+/// record whose estimate did not converge is written and then reported as
+/// [`GoalNotMet`].
+fn write_estimate(
+    scene: &Scene,
+    body: EstimateBody,
+    synthesized: bool,
+    out: Option<&PathBuf>,
+) -> Result<()> {
+    if synthesized {
+        eprintln!("softrod: no markers file: {}", body.observation);
+    }
+    warn_all(&body.warnings);
+    let status = body.status;
+    if body.weakly_informed && status.is_converged() {
+        eprintln!(
+            "softrod: warning: the markers determine {:.3} load directions (fewer than {}): they barely see the load; the estimate stays near zero and `force_std_n` is the width of a prior fitted to markers that show no load, not knowledge of the load",
+            body.determined_directions,
+            softrod::estimate::WEAKLY_INFORMED_DIRECTIONS
+        );
+    }
+    let record = EstimateRecord {
+        header: Header::new(
+            CommandName::Estimate,
+            &scene.name,
+            SceneKind::of(scene),
+            Outcome::from_ok(status.is_converged()),
+        ),
+        body,
+    };
+    write_json(&record, out)?;
+    // the last iterate is written (its status says how it ended); the exit
+    // code says that it is not an estimate
+    if status == softrod::outcome::EstimateStatus::NoInformation {
+        return Err(GoalNotMet(format!(
+            "{status}; the result written is the prior (zero load, the prior's standard deviations), not an estimate"
+        ))
+        .into());
+    }
+    if !status.is_converged() {
+        return Err(GoalNotMet(format!(
+            "estimation did not converge: {status}; the result written is the last iterate"
+        ))
+        .into());
+    }
+    Ok(())
 }
 
 /// Resolves "elements": "auto" sections by refinement (the observation for a
@@ -676,17 +655,13 @@ pub fn run() -> Result<()> {
                 _ => None,
             };
             let (scene, refinement) = refine(scene, observation.as_ref())?;
-            let stream = matches!(file, Some(replay::Markers::Stream(_)));
+            let stream = file.as_ref().is_some_and(MarkersFile::is_stream);
             let mut outs = estimate(
                 &scene,
                 backend.map(Backend::from),
                 markers.as_ref().zip(file),
             )?;
             if stream {
-                let source = outs
-                    .first()
-                    .map(|(_, o)| o.observation.clone())
-                    .unwrap_or_default();
                 let frames = outs
                     .into_iter()
                     .map(|(t, mut o)| {
@@ -694,49 +669,25 @@ pub fn run() -> Result<()> {
                         (t.unwrap_or(0.0), o)
                     })
                     .collect();
-                let result = replay::StreamOut::new(source, frames);
-                result.summarize();
+                let result = replay::stream_record(&scene, frames);
+                replay::summarize(&result);
                 write_json(&result, out.as_ref())?;
                 if let Some(&i) = result.not_converged.first() {
-                    anyhow::bail!(
+                    return Err(GoalNotMet(format!(
                         "{} of {} frames did not converge (the first: frames[{i}], {}); every frame's record is written with its status",
                         result.not_converged.len(),
                         result.n_frames,
                         result.frames[i].status
-                    );
+                    ))
+                    .into());
                 }
                 return Ok(());
             }
-            let Some((_, mut result)) = outs.pop() else {
+            let Some((_, mut body)) = outs.pop() else {
                 anyhow::bail!("no observation to estimate from");
             };
-            result.refinement = refinement;
-            if markers.is_none() {
-                eprintln!("softrod: no markers file: {}", result.observation);
-            }
-            warn_all(&result.warnings);
-            if result.weakly_informed && result.report.status.is_converged() {
-                eprintln!(
-                    "softrod: warning: the markers determine {:.3} load directions (fewer than {}): they barely see the load; the estimate stays near zero and `force_std_n` is the width of a prior fitted to markers that show no load, not knowledge of the load",
-                    result.determined_directions,
-                    softrod::estimate::WEAKLY_INFORMED_DIRECTIONS
-                );
-            }
-            write_json(&result, out.as_ref())?;
-            // the last iterate is written (its report says how it ended); the
-            // exit status says that it is not an estimate
-            let status = result.report.status;
-            if status == softrod::outcome::EstimateStatus::NoInformation {
-                anyhow::bail!(
-                    "{status}; the result written is the prior (zero load, the prior's standard deviations), not an estimate"
-                );
-            }
-            if !status.is_converged() {
-                anyhow::bail!(
-                    "estimation did not converge: {status}; the result written is the last iterate"
-                );
-            }
-            Ok(())
+            body.refinement = refinement;
+            write_estimate(&scene, body, markers.is_none(), out.as_ref())
         }
         Some(Command::Track {
             scene,
@@ -756,6 +707,33 @@ pub fn run() -> Result<()> {
             strategy,
             out,
         }) => grasp::run(scene, strategy, out),
+        Some(Command::Schema { out }) => schema(out),
+    }
+}
+
+/// `softrod schema`: the output records' schemas, into `out` (one file
+/// each, written atomically) or to standard output.
+fn schema(out: Option<PathBuf>) -> Result<()> {
+    let schemas = output::schemas();
+    match out {
+        Some(dir) => {
+            std::fs::create_dir_all(&dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
+            for (name, s) in &schemas {
+                let path = dir.join(format!("{name}.schema.json"));
+                let text = serde_json::to_string_pretty(s)? + "\n";
+                atomic::write_atomic(&path, text.as_bytes())?;
+                eprintln!("softrod: wrote {}", path.display());
+            }
+            Ok(())
+        }
+        None => {
+            let all: serde_json::Map<String, serde_json::Value> = schemas
+                .into_iter()
+                .map(|(n, s)| (n.to_string(), s.to_value()))
+                .collect();
+            write_json(&all, None)
+        }
     }
 }
 

@@ -5,9 +5,13 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use serde::Serialize;
 use softrod::parallel::payload::PayloadEstimate;
 use softrod::scene::parallel::{ParallelScene, ParallelSolution, PlatformMarkers};
+
+use super::output::{
+    CommandName, ControllerName, Header, Outcome, ParallelEstimateRecord, ParallelSolveRecord,
+    ParallelSolveStatus, PoseRecord, SceneKind, TrackRecord, TrackStatus,
+};
 
 /// The scene at `path` if it is a parallel-robot scene.
 pub(super) fn read(path: &Path) -> Result<Option<ParallelScene>> {
@@ -24,14 +28,6 @@ pub(super) fn read(path: &Path) -> Result<Option<ParallelScene>> {
     Ok(Some(ParallelScene::from_json(&text)?))
 }
 
-#[derive(Serialize)]
-struct SolveOut {
-    scene: String,
-    element: softrod::parallel::LegElement,
-    #[serde(flatten)]
-    solution: ParallelSolution,
-}
-
 /// `softrod solve` on a parallel scene (`pressures` override the scene's).
 pub(super) fn solve(
     mut scene: ParallelScene,
@@ -44,23 +40,22 @@ pub(super) fn solve(
     }
     let solution = scene.solve()?;
     super::write_json(
-        &SolveOut {
-            scene: scene.name.clone(),
-            element: scene.element,
-            solution,
+        &ParallelSolveRecord {
+            header: Header::new(
+                CommandName::Solve,
+                &scene.name,
+                SceneKind::Parallel,
+                Outcome::Success,
+            ),
+            status: ParallelSolveStatus::Converged,
+            element: scene.element.into(),
+            pressures_pa: scene.pressures_pa.clone(),
+            platform_pose: PoseRecord::from_six(&solution.platform_pose),
+            legs_m: solution.legs_m,
+            iterations: solution.iterations,
         },
         out,
     )
-}
-
-#[derive(Serialize)]
-struct EstimateOut {
-    scene: String,
-    observation: String,
-    force_n: [f64; 3],
-    mass_kg: f64,
-    iterations: usize,
-    residual_m: f64,
 }
 
 /// `softrod estimate` on a parallel scene: the payload at the platform
@@ -106,17 +101,35 @@ pub(super) fn estimate(
         eprintln!("softrod: no markers file: {source}");
     }
     let e: PayloadEstimate = scene.estimate(m.unloaded_m, m.loaded_m)?;
+    let converged = e.status.is_converged();
     super::write_json(
-        &EstimateOut {
-            scene: scene.name.clone(),
+        &ParallelEstimateRecord {
+            header: Header::new(
+                CommandName::Estimate,
+                &scene.name,
+                SceneKind::Parallel,
+                Outcome::from_ok(converged),
+            ),
+            status: Some(e.status),
+            element: scene.element.into(),
             observation: source,
             force_n: e.force_n.into(),
+            force_std_n: Some(e.std_n.into()),
             mass_kg: e.mass_kg,
+            mass_std_kg: Some(e.std_kg),
             iterations: e.iterations,
             residual_m: e.residual_m,
         },
         out,
-    )
+    )?;
+    if !converged {
+        return Err(super::GoalNotMet(format!(
+            "the payload estimate did not converge: {}; the result written is the last iterate",
+            e.status
+        ))
+        .into());
+    }
+    Ok(())
 }
 
 /// `softrod track` on a parallel scene: the circle about the platform at
@@ -163,10 +176,11 @@ pub(super) fn track(
     }
     let run = track::run_track(&scene.parallel, &scene.pressures_pa, &settings)?;
     let s = &run.summary;
+    let controller = ControllerName::from(s.controller);
     eprintln!(
-        "softrod: track (parallel robot): {:?}, {} samples; from {} s: mean error {:.4} mm, \
+        "softrod: track (parallel robot): {}, {} samples; from {} s: mean error {:.4} mm, \
          max {:.4} mm; median step {:.1} ms; IK not reached {}",
-        s.controller,
+        controller.name(),
         s.samples,
         s.score_from_s,
         s.mean_error_m * 1e3,
@@ -174,5 +188,18 @@ pub(super) fn track(
         s.median_step_time_s * 1e3,
         s.ik_not_reached
     );
-    super::write_json(&run, out)
+    super::write_json(
+        &TrackRecord {
+            header: Header::new(
+                CommandName::Track,
+                &scene.name,
+                SceneKind::Parallel,
+                Outcome::Success,
+            ),
+            status: TrackStatus::Completed,
+            controller,
+            run,
+        },
+        out,
+    )
 }

@@ -10,13 +10,18 @@ use softrod::control::{
 };
 use softrod::scene::Scene;
 
-/// `--controller`.
+use super::output::{
+    CommandName, ControllerName, GoalNotMet, Header, Outcome, SceneKind, TrackRecord, TrackStatus,
+};
+
+/// `--controller`, spelled as in the JSON (`ff_updater`; the older
+/// `ff+updater` is accepted too).
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
 pub(super) enum ControllerArg {
     /// Feedforward only.
     Ff,
     /// Feedforward with the updater (31).
-    #[value(name = "ff+updater")]
+    #[value(name = "ff_updater", alias = "ff+updater")]
     FfUpdater,
 }
 
@@ -89,10 +94,11 @@ pub(super) fn run(
     });
     let run = run_track(&scene, &file, payloads.as_ref(), controller)?;
     let s = &run.summary;
+    let controller = ControllerName::from(s.controller);
     eprintln!(
-        "softrod: track: {:?} at {} Hz, {} samples; from {} s: mean error {:.4} mm, max {:.4} mm; \
+        "softrod: track: {} at {} Hz, {} samples; from {} s: mean error {:.4} mm, max {:.4} mm; \
          median step {:.3} ms; IK not reached {}, pressures saturated {}, estimator kept last {}",
-        s.controller,
+        controller.name(),
         s.control_rate_hz,
         s.samples,
         s.score_from_s,
@@ -103,5 +109,38 @@ pub(super) fn run(
         s.pressure_saturated,
         s.estimator_kept_last
     );
-    super::write_json(&run, out.as_ref())
+    let status = match (s.plant_failed_at_s, s.aborted_at_s) {
+        (Some(at_s), _) => TrackStatus::PlantFailed { at_s },
+        (None, Some(at_s)) => TrackStatus::Aborted { at_s },
+        (None, None) => TrackStatus::Completed,
+    };
+    let ok = matches!(status, TrackStatus::Completed);
+    super::write_json(
+        &TrackRecord {
+            header: Header::new(
+                CommandName::Track,
+                &scene.name,
+                SceneKind::of(&scene),
+                Outcome::from_ok(ok),
+            ),
+            status,
+            controller,
+            run,
+        },
+        out.as_ref(),
+    )?;
+    if !ok {
+        return Err(GoalNotMet(format!(
+            "the run stopped early ({}); the samples up to then are written",
+            match status {
+                TrackStatus::PlantFailed { at_s } =>
+                    format!("the plant's equilibrium failed at {at_s} s"),
+                TrackStatus::Aborted { at_s } =>
+                    format!("the watchdog (loop.abort_error_m) stopped it at {at_s} s"),
+                TrackStatus::Completed => String::new(),
+            }
+        ))
+        .into());
+    }
+    Ok(())
 }

@@ -23,6 +23,7 @@ use crate::structure::{RodSpec, Structure, StructureSpec};
 
 /// Which finger.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum Side {
     /// The finger at `x < 0`.

@@ -109,11 +109,14 @@ use simulate::{simulate, Scene};
 
 /// Which grasp strategy.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[serde(rename_all = "snake_case")]
 pub enum Strategy {
     /// (45)–(52) with the estimator.
     Adaptive,
-    /// Proximal segments to a predetermined pressure, no feedback.
+    /// Proximal segments to a predetermined pressure, no feedback
+    /// (`open_loop`; the older spelling `open-loop` is read too).
+    #[serde(alias = "open-loop")]
     OpenLoop,
 }
 
@@ -122,7 +125,7 @@ impl Strategy {
     pub fn name(self) -> &'static str {
         match self {
             Strategy::Adaptive => "adaptive",
-            Strategy::OpenLoop => "open-loop",
+            Strategy::OpenLoop => "open_loop",
         }
     }
 }
@@ -493,6 +496,7 @@ impl Frame {
 
 /// Why a trial failed.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(tag = "cause", rename_all = "snake_case")]
 pub enum Failure {
     /// The object cannot be held after the lift: it slid by more than

@@ -21,6 +21,7 @@ use super::NonFiniteAt;
 /// assert_eq!(serde_json::to_string(&s).unwrap(), r#"{"infeasible":{"penetration_m":0.002}}"#);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum ContactStatus {
     /// Equilibrium with contact: the KKT conditions hold to the
@@ -36,6 +37,7 @@ pub enum ContactStatus {
     QpFailed {
         /// Clarabel's status.
         #[serde(with = "super::estimate::solver_status")]
+        #[cfg_attr(feature = "schema", schemars(with = "String"))]
         status: SolverStatus,
     },
     /// The SQP iteration budget ran out.

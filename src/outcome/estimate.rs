@@ -15,6 +15,7 @@ use super::NonFiniteAt;
 /// assert_eq!(serde_json::to_string(&s).unwrap(), r#"{"converged":"predicted_decrease"}"#);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum EstimateCriterion {
     /// `dec <= tolerance × scale` (for the SQP backend at a feasible point,
@@ -89,7 +90,9 @@ impl EstimateCriterion {
 /// );
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum EstimateStatus {
     /// Converged; the test that ended it (and the answer passed the fit
     /// test).
@@ -120,7 +123,11 @@ pub enum EstimateStatus {
     LineSearchFailed,
     /// An SQP subproblem was not solved: clarabel's status (infeasible, as
     /// with contradictory bounds, a numerical error, its iteration limit…).
-    QpNotSolved(#[serde(with = "solver_status")] SolverStatus),
+    QpNotSolved(
+        #[serde(with = "solver_status")]
+        #[cfg_attr(feature = "schema", schemars(with = "String"))]
+        SolverStatus,
+    ),
     /// An SQP subproblem's tangent stiffness had a vanishing pivot.
     SingularTangent,
     /// An SQP subproblem's Gauss–Newton matrix was not positive definite.

@@ -49,6 +49,7 @@ use serde::{Deserialize, Serialize};
 /// assert_eq!(s.to_string(), "non-finite residual");
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum NonFiniteAt {
     /// The applied generalized forces (loads whose norm overflows).

@@ -12,6 +12,7 @@ use super::{EstimateStatus, StaticStatus};
 /// assert_eq!((Quantity::TipPosition.name(), Quantity::TipPosition.unit()), ("tip_position", "m"));
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum Quantity {
     /// The tip position of the static equilibrium (m).
@@ -46,6 +47,7 @@ impl Quantity {
 /// assert_eq!(p, softrod::refine::Phase::Doubling);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum Phase {
     /// The doubling of the scale, `1, 2, 4, …`.
@@ -65,6 +67,7 @@ pub enum Phase {
 /// assert_eq!(f.to_string(), "static solve: iteration limit (2000 iterations)");
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum TrialFailure {
     /// The static solve did not converge.
@@ -96,6 +99,7 @@ impl std::fmt::Display for TrialFailure {
 /// # Example
 /// See [`crate::refine::auto_elements`]: its result's `history`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct Trial {
     /// The scale `t` of the candidate ([`crate::refine::Ladder::elements`]).
     pub scale: usize,

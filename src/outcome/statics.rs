@@ -12,6 +12,7 @@ use super::NonFiniteAt;
 /// assert_eq!(serde_json::to_string(&StaticCriterion::RoundOffFloor).unwrap(), "\"round_off_floor\"");
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum StaticCriterion {
     /// `|Q| <= residual_tolerance × load scale`.
@@ -57,7 +58,9 @@ impl StaticCriterion {
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum StaticStatus {
     /// Equilibrium reached; the test that ended the solve.
     Converged(StaticCriterion),
@@ -145,6 +148,7 @@ impl std::fmt::Display for StaticStatus {
 /// assert!(w.to_string().contains("2 negative eigenvalues"));
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum StaticWarning {
     /// The equilibrium is not stable: the tangent at it has negative
@@ -185,6 +189,7 @@ impl std::fmt::Display for StaticWarning {
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct StaticReport {
     /// How the solve ended.
     pub status: StaticStatus,

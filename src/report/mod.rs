@@ -35,6 +35,7 @@
 //! # Ok::<(), softrod::Error>(())
 //! ```
 
+pub mod atomic;
 pub mod auto_point;
 pub mod coverage;
 pub mod grasp;
@@ -196,10 +197,10 @@ pub(crate) fn progress(len: usize, quiet: bool, what: &str) -> indicatif::Progre
     pb
 }
 
-/// Writes `value` as pretty JSON to `path`.
+/// Writes `value` as pretty JSON to `path` (atomically).
 pub(crate) fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
     let text = serde_json::to_string_pretty(value).map_err(|e| io_error(path, e))?;
-    std::fs::write(path, text + "\n").map_err(|e| io_error(path, e))
+    atomic::write_atomic(path, (text + "\n").as_bytes())
 }
 
 /// [`Error::Io`] for `path`.

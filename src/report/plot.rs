@@ -55,16 +55,17 @@ pub(super) fn both(
     register_font()?;
     let png = dir.join(format!("{stem}.png"));
     let svg = dir.join(format!("{stem}.svg"));
-    {
-        let root = BitMapBackend::new(&png, size).into_drawing_area();
+    // drawn into temporary files, renamed when whole (atomic output)
+    super::atomic::with_temp(&png, |tmp| {
+        let root = BitMapBackend::new(tmp, size).into_drawing_area();
         draw_png(&root).map_err(|m| super::io_error(&png, m))?;
-        root.present().map_err(|e| super::io_error(&png, ms(e)))?;
-    }
-    {
-        let root = SVGBackend::new(&svg, size).into_drawing_area();
+        root.present().map_err(|e| super::io_error(&png, ms(e)))
+    })?;
+    super::atomic::with_temp(&svg, |tmp| {
+        let root = SVGBackend::new(tmp, size).into_drawing_area();
         draw_svg(&root).map_err(|m| super::io_error(&svg, m))?;
-        root.present().map_err(|e| super::io_error(&svg, ms(e)))?;
-    }
+        root.present().map_err(|e| super::io_error(&svg, ms(e)))
+    })?;
     Ok(vec![png, svg])
 }
 

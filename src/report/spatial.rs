@@ -98,19 +98,17 @@ pub fn run(opts: &ReportOptions) -> Result<(SpatialReport, Vec<PathBuf>)> {
     let mut files = vec![json];
     super::plot::register_font()?;
     let png = dir.join("spatial.png");
-    {
-        let root = BitMapBackend::new(&png, (1500, 520)).into_drawing_area();
+    super::atomic::with_temp(&png, |tmp| {
+        let root = BitMapBackend::new(tmp, (1500, 520)).into_drawing_area();
         draw(&root, &report).map_err(|e| io_error(&png, e))?;
-        root.present()
-            .map_err(|e| io_error(&png, format!("{e:?}")))?;
-    }
+        root.present().map_err(|e| io_error(&png, format!("{e:?}")))
+    })?;
     let svg = dir.join("spatial.svg");
-    {
-        let root = SVGBackend::new(&svg, (1500, 520)).into_drawing_area();
+    super::atomic::with_temp(&svg, |tmp| {
+        let root = SVGBackend::new(tmp, (1500, 520)).into_drawing_area();
         draw(&root, &report).map_err(|e| io_error(&svg, e))?;
-        root.present()
-            .map_err(|e| io_error(&svg, format!("{e:?}")))?;
-    }
+        root.present().map_err(|e| io_error(&svg, format!("{e:?}")))
+    })?;
     files.push(png);
     files.push(svg);
     Ok((report, files))

@@ -20,7 +20,7 @@ use crate::estimate::Backend;
 
 use super::reference::{family_name, Reference, FAMILY_FACTORS};
 use super::sweep::{run_guarded, CaseSpec, FailureCause, Outcome};
-use super::{io_error, plot, progress, write_json, Machine, ReportOptions};
+use super::{plot, progress, write_json, Machine, ReportOptions};
 
 /// A swept parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -442,7 +442,7 @@ impl StabilityReport {
             self.truth,
             self.markdown()
         );
-        std::fs::write(&md, text).map_err(|e| io_error(&md, e))?;
+        super::atomic::write_atomic(&md, text.as_bytes())?;
         let mut files = vec![json, md];
         for map in &self.maps {
             files.extend(plot::stability_map(self, map, dir)?);

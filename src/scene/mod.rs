@@ -7,6 +7,7 @@
 pub(crate) mod json;
 mod ladder;
 mod load;
+pub mod markers;
 pub mod parallel;
 pub mod ranges;
 mod robot;

@@ -147,6 +147,7 @@ impl AvoidSettings {
 
 /// How a run ended.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(tag = "status", rename_all = "snake_case")]
 pub enum AvoidStatus {
     /// The end effector reached the goal and stayed within the tolerance

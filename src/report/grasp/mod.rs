@@ -121,23 +121,21 @@ pub fn run(opts: &ReportOptions) -> Result<(GraspReport, Vec<PathBuf>)> {
     let json = dir.join("grasp.json");
     write_json(&json, &report)?;
     let md = dir.join("grasp.md");
-    std::fs::write(&md, report.markdown()).map_err(|e| io_error(&md, e))?;
+    crate::report::atomic::write_atomic(&md, report.markdown().as_bytes())?;
     let mut files = vec![json, md];
     crate::report::plot::register_font()?;
     let png = dir.join("grasp.png");
-    {
-        let root = BitMapBackend::new(&png, (1500, 520)).into_drawing_area();
+    crate::report::atomic::with_temp(&png, |tmp| {
+        let root = BitMapBackend::new(tmp, (1500, 520)).into_drawing_area();
         draw(&root, &report).map_err(|e| io_error(&png, e))?;
-        root.present()
-            .map_err(|e| io_error(&png, format!("{e:?}")))?;
-    }
+        root.present().map_err(|e| io_error(&png, format!("{e:?}")))
+    })?;
     let svg = dir.join("grasp.svg");
-    {
-        let root = SVGBackend::new(&svg, (1500, 520)).into_drawing_area();
+    crate::report::atomic::with_temp(&svg, |tmp| {
+        let root = SVGBackend::new(tmp, (1500, 520)).into_drawing_area();
         draw(&root, &report).map_err(|e| io_error(&svg, e))?;
-        root.present()
-            .map_err(|e| io_error(&svg, format!("{e:?}")))?;
-    }
+        root.present().map_err(|e| io_error(&svg, format!("{e:?}")))
+    })?;
     files.push(png);
     files.push(svg);
     Ok((report, files))
