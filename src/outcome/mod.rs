@@ -36,7 +36,7 @@ mod statics;
 pub use contact::{ContactReport, ContactStatus};
 pub use estimate::{EstimateCriterion, EstimateStatus};
 pub use refine::{Phase, Quantity, RefinementFailure, RefinementStop, Trial, TrialFailure};
-pub use statics::{StaticCriterion, StaticReport, StaticStatus, StaticWarning};
+pub use statics::{BranchChoice, StaticCriterion, StaticReport, StaticStatus, StaticWarning};
 
 use serde::{Deserialize, Serialize};
 

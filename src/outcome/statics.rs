@@ -137,17 +137,49 @@ impl std::fmt::Display for StaticStatus {
     }
 }
 
+/// How the branch of a solve that passed a critical point of its load
+/// path (a bifurcation, such as a column's buckling load, or a limit point)
+/// was chosen ([`StaticWarning::Bifurcation`]).
+///
+/// # Example
+/// ```
+/// use softrod::outcome::BranchChoice;
+/// assert_eq!(serde_json::to_string(&BranchChoice::LoadPath).unwrap(), "\"load_path\"");
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[serde(rename_all = "snake_case")]
+pub enum BranchChoice {
+    /// The side toward which the load path leaned before the critical
+    /// point (a lateral load, a tilted base, a load off the axis): the
+    /// branch connected to the unloaded state along the load path (the
+    /// path's tangent at its last stable point, projected on the direction
+    /// of negative curvature, had that sign).
+    LoadPath,
+    /// Ambiguous: the load path did not lean to either side (a symmetric
+    /// load, such as the weight of a perfectly upright column); the side of
+    /// the lower potential was taken, and its mirror image is an
+    /// equilibrium as well.
+    Symmetric,
+    /// The answer was a saddle reached off the load path (the full-load
+    /// Newton runs): it was left toward the side of the lower potential,
+    /// which need not be the branch the load path leads to.
+    LowerPotential,
+}
+
 /// A warning about a converged static answer: the equilibrium holds, but
 /// something about it needs the user's attention.
 ///
 /// # Example
 /// ```
-/// use softrod::outcome::StaticWarning;
+/// use softrod::outcome::{BranchChoice, StaticWarning};
 /// let w = StaticWarning::Unstable { negative_eigenvalues: 2 };
 /// assert_eq!(serde_json::to_string(&w).unwrap(), r#"{"unstable":{"negative_eigenvalues":2}}"#);
 /// assert!(w.to_string().contains("2 negative eigenvalues"));
+/// let b = StaticWarning::Bifurcation { from_load_fraction: 0.5, to_load_fraction: 1.0, branch: BranchChoice::Symmetric };
+/// assert!(b.to_string().contains("ambiguous"));
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum StaticWarning {
@@ -158,6 +190,22 @@ pub enum StaticWarning {
     Unstable {
         /// How many ([`StaticReport::negative_eigenvalues`]).
         negative_eigenvalues: usize,
+    },
+    /// The load path passed a critical point (a bifurcation, such as a
+    /// column's buckling load, or a limit point): a load step from a stable
+    /// equilibrium landed on an unstable one, which was left along its
+    /// direction of negative curvature for a stable branch; `branch` says
+    /// how the side was chosen. The load factors (fractions of the full
+    /// loads) bracket the critical point; `1.0` and `1.0`: a saddle at the
+    /// full load.
+    Bifurcation {
+        /// The load factor of the path's last stable point before it (0:
+        /// the unloaded start).
+        from_load_fraction: f64,
+        /// The load factor at which the path was found unstable and left.
+        to_load_fraction: f64,
+        /// How the branch was chosen.
+        branch: BranchChoice,
     },
 }
 
@@ -172,6 +220,34 @@ impl std::fmt::Display for StaticWarning {
                  eigenvalues (a saddle of the potential the solver could not leave; a small \
                  disturbance moves the robot off it)"
             ),
+            StaticWarning::Bifurcation {
+                from_load_fraction,
+                to_load_fraction,
+                branch,
+            } => {
+                write!(
+                    f,
+                    "bifurcation passed between load factors {from_load_fraction} and \
+                     {to_load_fraction}; "
+                )?;
+                match branch {
+                    BranchChoice::LoadPath => write!(
+                        f,
+                        "branch chosen by the load path's lean (the branch connected to the \
+                         unloaded state)"
+                    ),
+                    BranchChoice::Symmetric => write!(
+                        f,
+                        "ambiguous: symmetric load (the path leans to neither side; the side \
+                         of lower potential was taken, its mirror image is an equilibrium too)"
+                    ),
+                    BranchChoice::LowerPotential => write!(
+                        f,
+                        "a saddle at the full load left for the side of lower potential (not \
+                         traced along the load path)"
+                    ),
+                }
+            }
         }
     }
 }
@@ -216,8 +292,9 @@ pub struct StaticReport {
     #[serde(default)]
     pub negative_eigenvalues: Option<usize>,
     /// Warnings about the answer: [`StaticWarning::Unstable`] whenever
-    /// `negative_eigenvalues` is more than zero (empty: none; not written
-    /// then).
+    /// `negative_eigenvalues` is more than zero, [`StaticWarning::Bifurcation`]
+    /// when the solve passed a critical point and chose a branch (empty:
+    /// none; not written then).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<StaticWarning>,
     /// Wall time (s).

@@ -20,8 +20,11 @@
 //! bifurcation, such as a column's buckling load, where the straight column
 //! goes on as a saddle while the stable path bends away. The saddle is left
 //! at that load along its direction of most negative curvature by a descent
-//! Newton run ([`super::stability`]) and the path goes on from the stable
-//! equilibrium it reaches; only if that fails is the step halved. (Measured
+//! Newton run ([`super::stability`]), toward the side the path's tangent at
+//! its last stable point leans to (the branch connected to the unloaded
+//! state; reported as a [`StaticWarning::Bifurcation`]), and the path goes
+//! on from the stable equilibrium it reaches; only if that fails is the step
+//! halved. (Measured
 //! on a column under `q L³/EI = 12`: halving until the path bends onto the
 //! stable branch took 22 load steps, 100–110 iterations at every mesh; the
 //! escape at the saddle 2 steps, 41 iterations at 8 elements, 45 at 32.)
@@ -45,7 +48,7 @@ use super::StaticSolver;
 use crate::error::Result;
 use crate::linsolve::{AutoFactors, FactorOptions, Factorization, LinsolveError, TangentSolver};
 use crate::numeric::norm2;
-use crate::outcome::{NonFiniteAt, StaticStatus};
+use crate::outcome::{NonFiniteAt, StaticStatus, StaticWarning};
 use crate::structure::Assembled;
 
 /// Largest rotation of a node slope a predictor may make (rad).
@@ -73,6 +76,58 @@ pub(super) struct PathEnd {
     pub status: Option<StaticStatus>,
     /// Load steps taken.
     pub load_steps: usize,
+    /// The critical points passed, and how each branch was chosen
+    /// ([`StaticWarning::Bifurcation`]).
+    pub warnings: Vec<StaticWarning>,
+}
+
+/// A continuation's state along its path.
+struct Path<M: Assembled> {
+    /// `R(u_0; no loads)`: the homotopy's offset at `λ = 0`.
+    r0: Vec<f64>,
+    /// The loads at `λ = 0` and `n_q` zeros (no dead forces).
+    unloaded: M::Loads,
+    zero_dead: Vec<f64>,
+    /// The load factor of the path's last point.
+    lambda: f64,
+    /// The next load step.
+    delta: f64,
+    /// The factors of the last corrector's tangent (the next path
+    /// tangent's, no extra factorization).
+    factors: Option<AutoFactors>,
+    /// The path's tangent `du/dλ` at its last point, and the rotation per
+    /// unit `λ` it makes.
+    tangent: Option<(Vec<f64>, f64)>,
+    /// The tangent at the point before and the load step between them.
+    previous_tangent: Option<(Vec<f64>, f64)>,
+    load_steps: usize,
+    /// Whether the path's last point was a stable equilibrium.
+    stable: bool,
+    warnings: Vec<StaticWarning>,
+    /// Residual buffers of the path tangent.
+    r1: Vec<f64>,
+    rz: Vec<f64>,
+}
+
+impl<M: Assembled> Path<M> {
+    /// The continuation's end with `status` (`None`: `λ = 1` reached).
+    fn end(self, status: Option<StaticStatus>) -> PathEnd {
+        PathEnd {
+            status,
+            load_steps: self.load_steps,
+            warnings: self.warnings,
+        }
+    }
+}
+
+/// What a load step ended with ([`StaticSolver::path_step`]).
+enum Step {
+    /// On to the next load step (taken, or cut).
+    Next,
+    /// `λ = 1` reached.
+    Reached,
+    /// The path ends with this status.
+    Stop(StaticStatus),
 }
 
 impl StaticSolver {
@@ -80,7 +135,11 @@ impl StaticSolver {
     /// success `u` is near the full load's equilibrium (the caller
     /// polishes it with [`StaticSolver::newton`]). Conservative loads only:
     /// the caller sends non-conservative ones to the homotopy, so every
-    /// tangent here is a potential's and its inertia tells stability.
+    /// tangent here is a potential's and its inertia tells stability. Each
+    /// load step in its phases: the path tangent ([`Self::path_tangent`]),
+    /// the predictor ([`Self::predict`]), the corrector
+    /// ([`Self::corrector`]), the step taken or cut ([`Self::path_step`],
+    /// which leaves a saddle the step landed on, [`Self::leave_saddle`]).
     pub(super) fn continuation<M: Assembled>(
         &self,
         model: &M,
@@ -96,93 +155,39 @@ impl StaticSolver {
         let unloaded = model.scaled_loads(loads, 0.0);
         let mut r0 = vec![0.0; n];
         model.residual_into(u, &w.q, &zero_dead, &unloaded, &mut r0)?;
-        let mut lambda = 0.0;
-        let mut delta: f64 = 1.0;
-        let mut factors: Option<AutoFactors> = None;
-        let mut tangent: Option<(Vec<f64>, f64)> = None;
-        let mut previous_tangent: Option<(Vec<f64>, f64)> = None;
-        let mut load_steps = 0;
-        // whether the path's last point was a stable equilibrium
-        let mut stable = false;
-        let (mut r1, mut rz) = (vec![0.0; n], vec![0.0; n]);
+        let mut path = Path::<M> {
+            r0,
+            unloaded,
+            zero_dead,
+            lambda: 0.0,
+            delta: 1.0,
+            factors: None,
+            tangent: None,
+            previous_tangent: None,
+            load_steps: 0,
+            stable: false,
+            warnings: Vec::new(),
+            r1: vec![0.0; n],
+            rz: vec![0.0; n],
+        };
         let mut dq = vec![0.0; nq];
         let (mut u_try, mut q_try) = (u.to_vec(), w.q.clone());
         loop {
             if w.iterations >= self.settings.max_total_iterations {
-                return Ok(PathEnd {
-                    status: Some(StaticStatus::IterationLimit {
-                        iterations: w.iterations,
-                    }),
-                    load_steps,
-                });
-            }
-            // the path's tangent at (u, λ): dH/dλ = R(u; 1) − R(u; 0) + r0
-            if tangent.is_none() {
-                let f = match factors.take() {
-                    Some(f) => f,
-                    None => {
-                        let dead_l: Vec<f64> = dead.iter().map(|v| lambda * v).collect();
-                        let loads_l = model.scaled_loads(loads, lambda);
-                        model.tangent_into(u, &w.q, &dead_l, &loads_l, &mut w.k)?;
-                        w.iterations += 1;
-                        match factor(w) {
-                            Ok(f) => {
-                                // the path is followed on its stable side
-                                // when it starts there
-                                stable = f.is_positive_definite();
-                                f
-                            }
-                            Err(status) => {
-                                return Ok(PathEnd {
-                                    status: Some(status),
-                                    load_steps,
-                                })
-                            }
-                        }
-                    }
+                let status = StaticStatus::IterationLimit {
+                    iterations: w.iterations,
                 };
-                model.residual_into(u, &w.q, dead, loads, &mut r1)?;
-                model.residual_into(u, &w.q, &zero_dead, &unloaded, &mut rz)?;
-                let mut t: Vec<f64> = r1
-                    .iter()
-                    .zip(&rz)
-                    .zip(&r0)
-                    .map(|((a, b), c)| a - b + c)
-                    .collect();
-                f.solve_in_place(&mut t)?;
-                if !t.iter().all(|v| v.is_finite()) {
-                    return Ok(PathEnd {
-                        status: Some(StaticStatus::NonFinite {
-                            at: NonFiniteAt::Tangent,
-                        }),
-                        load_steps,
-                    });
+                return Ok(path.end(Some(status)));
+            }
+            if path.tangent.is_none() {
+                if let Some(status) =
+                    self.path_tangent(model, dead, loads, u, w, &mut path, &mut dq)?
+                {
+                    return Ok(path.end(Some(status)));
                 }
-                model.step_into(u, &t, &mut dq)?;
-                let rate = step_size(model, &dq);
-                tangent = Some((t, rate));
             }
-            let Some((t, rate)) = tangent.as_ref() else {
-                continue;
-            };
-            // the predictor's rotation bounds the step
-            if rate * delta > PREDICTOR_ROTATION {
-                delta = PREDICTOR_ROTATION / rate;
-            }
-            let target = (lambda + delta).min(1.0);
-            let h = target - lambda;
-            // second order when the last step's tangent is known: the
-            // tangent's change over that step estimates d²u/dλ² (a turning
-            // slope's inward pull, which a straight predictor misses)
-            let mut step: Vec<f64> = t.clone();
-            if let Some((t_prev, dl)) = previous_tangent.as_ref() {
-                step.iter_mut()
-                    .zip(t.iter().zip(t_prev))
-                    .for_each(|(s, (a, b))| *s += 0.5 * h * (a - b) / dl);
-            }
-            model.step_into(u, &step, &mut dq)?;
-            model.advance_into(u, &w.q, &step, &dq, h, &mut u_try, &mut q_try)?;
-            let off: Vec<f64> = r0.iter().map(|v| (1.0 - target) * v).collect();
+            let target = self.predict(model, u, w, &mut path, &mut dq, &mut u_try, &mut q_try)?;
+            let off: Vec<f64> = path.r0.iter().map(|v| (1.0 - target) * v).collect();
             let dead_t: Vec<f64> = dead.iter().map(|v| target * v).collect();
             let loads_t = model.scaled_loads(loads, target);
             let tgt = Target::<M> {
@@ -194,97 +199,238 @@ impl StaticSolver {
                 definite_only: false,
                 full: false,
             };
-            match self.corrector(model, &tgt, &mut u_try, &mut q_try, w)? {
-                // a step from a stable point to an unstable one stepped over
-                // a bifurcation (a column's buckling load: the straight
-                // column goes on as a saddle, the path bends away): shorter
-                Corrected::Done { factors: f, .. } if stable && !f.is_positive_definite() => {
-                    // leave the saddle at this load for the stable branch
-                    // (from the unloaded start, whose homotopy offset is nil:
-                    // the escape's descent knows no offset)
-                    if norm2(&r0) <= self.settings.residual_tolerance * scale {
-                        let mut u_s = u_try.clone();
-                        let saved_q = std::mem::replace(&mut w.q, q_try.clone());
-                        let (st, inertia) = self.stabilize(
-                            model,
-                            &dead_t,
-                            &loads_t,
-                            &mut u_s,
-                            w,
-                            scale,
-                            StaticStatus::Converged(crate::outcome::StaticCriterion::Residual),
-                        )?;
-                        if st.is_converged() && inertia.is_some_and(|i| i.negative == 0) {
-                            stable = true;
-                            load_steps += 1;
-                            lambda = target;
-                            u.copy_from_slice(&u_s);
-                            q_try.copy_from_slice(&w.q);
-                            u_try.copy_from_slice(u);
-                            if lambda >= 1.0 {
-                                return Ok(PathEnd {
-                                    status: None,
-                                    load_steps,
-                                });
-                            }
-                            tangent = None;
-                            previous_tangent = None;
-                            continue;
-                        }
-                        w.q = saved_q;
-                    }
-                    u_try.copy_from_slice(u);
-                    q_try.copy_from_slice(&w.q);
-                    delta = 0.5 * h;
-                    if delta < self.settings.min_load_step {
-                        return Ok(PathEnd {
-                            status: Some(StaticStatus::LoadStepTooSmall {
-                                load_fraction: lambda,
-                            }),
-                            load_steps,
-                        });
-                    }
-                }
-                Corrected::Done {
-                    factors: f,
-                    contraction,
-                } => {
-                    stable = f.is_positive_definite();
-                    load_steps += 1;
-                    lambda = target;
-                    u.copy_from_slice(&u_try);
-                    w.q.copy_from_slice(&q_try);
-                    if lambda >= 1.0 {
-                        return Ok(PathEnd {
-                            status: None,
-                            load_steps,
-                        });
-                    }
-                    factors = Some(*f);
-                    previous_tangent = tangent.take().map(|(t, _)| (t, h));
-                    delta = h * step_factor(contraction);
-                }
-                Corrected::Failed(Some(status), _) => {
-                    return Ok(PathEnd {
-                        status: Some(status),
-                        load_steps,
-                    })
-                }
-                Corrected::Failed(None, contraction) => {
-                    u_try.copy_from_slice(u);
-                    q_try.copy_from_slice(&w.q);
-                    delta = h * step_factor(contraction).min(0.5);
-                    if delta < self.settings.min_load_step {
-                        return Ok(PathEnd {
-                            status: Some(StaticStatus::LoadStepTooSmall {
-                                load_fraction: lambda,
-                            }),
-                            load_steps,
-                        });
-                    }
-                }
+            let corrected = self.corrector(model, &tgt, &mut u_try, &mut q_try, w)?;
+            let trial = (&mut u_try[..], &mut q_try[..]);
+            match self.path_step(
+                model, &tgt, target, corrected, u, trial, w, &mut path, scale,
+            )? {
+                Step::Next => {}
+                Step::Reached => return Ok(path.end(None)),
+                Step::Stop(status) => return Ok(path.end(Some(status))),
             }
         }
+    }
+
+    /// The path's tangent at `(u, λ)` into `path.tangent`:
+    /// `dH/dλ = R(u; 1) − R(u; 0) + r0` solved with the last corrector's
+    /// factors, or with the tangent factored here (a new path start: its
+    /// definiteness says whether the path starts on its stable side).
+    /// `Some(status)` when it cannot be had.
+    #[allow(clippy::too_many_arguments)]
+    fn path_tangent<M: Assembled>(
+        &self,
+        model: &M,
+        dead: &[f64],
+        loads: &M::Loads,
+        u: &[f64],
+        w: &mut Work<'_>,
+        path: &mut Path<M>,
+        dq: &mut [f64],
+    ) -> Result<Option<StaticStatus>> {
+        let f = match path.factors.take() {
+            Some(f) => f,
+            None => {
+                let dead_l: Vec<f64> = dead.iter().map(|v| path.lambda * v).collect();
+                let loads_l = model.scaled_loads(loads, path.lambda);
+                model.tangent_into(u, &w.q, &dead_l, &loads_l, &mut w.k)?;
+                w.iterations += 1;
+                match factor(w) {
+                    Ok(f) => {
+                        // the path is followed on its stable side when it
+                        // starts there
+                        path.stable = f.is_positive_definite();
+                        f
+                    }
+                    Err(status) => return Ok(Some(status)),
+                }
+            }
+        };
+        model.residual_into(u, &w.q, dead, loads, &mut path.r1)?;
+        model.residual_into(u, &w.q, &path.zero_dead, &path.unloaded, &mut path.rz)?;
+        let mut t: Vec<f64> = (path.r1.iter())
+            .zip(&path.rz)
+            .zip(&path.r0)
+            .map(|((a, b), c)| a - b + c)
+            .collect();
+        f.solve_in_place(&mut t)?;
+        if !t.iter().all(|v| v.is_finite()) {
+            return Ok(Some(StaticStatus::NonFinite {
+                at: NonFiniteAt::Tangent,
+            }));
+        }
+        model.step_into(u, &t, dq)?;
+        let rate = step_size(model, dq);
+        path.tangent = Some((t, rate));
+        Ok(None)
+    }
+
+    /// The predictor: the next load factor (the step bounded by the
+    /// rotation the predictor makes), returned, and the predicted point in
+    /// `u_try`, `q_try`: along the path tangent, second order when the last
+    /// step's tangent is known (the tangent's change over that step
+    /// estimates d²u/dλ², a turning slope's inward pull, which a straight
+    /// predictor misses).
+    #[allow(clippy::too_many_arguments)]
+    fn predict<M: Assembled>(
+        &self,
+        model: &M,
+        u: &[f64],
+        w: &Work<'_>,
+        path: &mut Path<M>,
+        dq: &mut [f64],
+        u_try: &mut [f64],
+        q_try: &mut [f64],
+    ) -> Result<f64> {
+        let (t, rate) = match path.tangent.as_ref() {
+            Some((t, rate)) => (t, *rate),
+            // (set by the caller before)
+            None => return Ok(path.lambda),
+        };
+        if rate * path.delta > PREDICTOR_ROTATION {
+            path.delta = PREDICTOR_ROTATION / rate;
+        }
+        let target = (path.lambda + path.delta).min(1.0);
+        let h = target - path.lambda;
+        let mut step: Vec<f64> = t.clone();
+        if let Some((t_prev, dl)) = path.previous_tangent.as_ref() {
+            step.iter_mut()
+                .zip(t.iter().zip(t_prev))
+                .for_each(|(s, (a, b))| *s += 0.5 * h * (a - b) / dl);
+        }
+        model.step_into(u, &step, dq)?;
+        model.advance_into(u, &w.q, &step, dq, h, u_try, q_try)?;
+        Ok(target)
+    }
+
+    /// The load step to `target` after its corrector: taken (the path
+    /// moves to the corrected point `trial`, the next step from the
+    /// corrector's contraction), or, from a stable point to an unstable one
+    /// (a bifurcation stepped over: a column's buckling load, where the
+    /// straight column goes on as a saddle while the path bends away), the
+    /// saddle left for the stable branch ([`Self::leave_saddle`]), or cut.
+    #[allow(clippy::too_many_arguments)]
+    fn path_step<M: Assembled>(
+        &self,
+        model: &M,
+        tgt: &Target<'_, M>,
+        target: f64,
+        corrected: Corrected,
+        u: &mut [f64],
+        (u_try, q_try): (&mut [f64], &mut [f64]),
+        w: &mut Work<'_>,
+        path: &mut Path<M>,
+        scale: f64,
+    ) -> Result<Step> {
+        let h = target - path.lambda;
+        match corrected {
+            Corrected::Done { factors: f, .. } if path.stable && !f.is_positive_definite() => {
+                if self.leave_saddle(model, tgt, target, u, (u_try, q_try), w, path, scale)? {
+                    return Ok(if path.lambda >= 1.0 {
+                        Step::Reached
+                    } else {
+                        Step::Next
+                    });
+                }
+                u_try.copy_from_slice(u);
+                q_try.copy_from_slice(&w.q);
+                path.delta = 0.5 * h;
+                if path.delta < self.settings.min_load_step {
+                    return Ok(Step::Stop(StaticStatus::LoadStepTooSmall {
+                        load_fraction: path.lambda,
+                    }));
+                }
+                Ok(Step::Next)
+            }
+            Corrected::Done {
+                factors: f,
+                contraction,
+            } => {
+                path.stable = f.is_positive_definite();
+                path.load_steps += 1;
+                path.lambda = target;
+                u.copy_from_slice(u_try);
+                w.q.copy_from_slice(q_try);
+                if path.lambda >= 1.0 {
+                    return Ok(Step::Reached);
+                }
+                path.factors = Some(*f);
+                path.previous_tangent = path.tangent.take().map(|(t, _)| (t, h));
+                path.delta = h * step_factor(contraction);
+                Ok(Step::Next)
+            }
+            Corrected::Failed(Some(status), _) => Ok(Step::Stop(status)),
+            Corrected::Failed(None, contraction) => {
+                u_try.copy_from_slice(u);
+                q_try.copy_from_slice(&w.q);
+                path.delta = h * step_factor(contraction).min(0.5);
+                if path.delta < self.settings.min_load_step {
+                    return Ok(Step::Stop(StaticStatus::LoadStepTooSmall {
+                        load_fraction: path.lambda,
+                    }));
+                }
+                Ok(Step::Next)
+            }
+        }
+    }
+
+    /// Leaves the saddle `trial` the load step to `target` landed on, at
+    /// that load, for the stable branch ([`super::stability`]), toward the
+    /// side the path's tangent at its last stable point leans to (a
+    /// bifurcation warning says how the side was chosen). Only from the
+    /// unloaded start, whose homotopy offset is nil (the escape's descent
+    /// knows no offset). `true`: the path moved to the stable equilibrium
+    /// found (`u`, `w.q`, `trial` set to it, `λ = target`); `false`: `u`,
+    /// `w.q` as they were.
+    #[allow(clippy::too_many_arguments)]
+    fn leave_saddle<M: Assembled>(
+        &self,
+        model: &M,
+        tgt: &Target<'_, M>,
+        target: f64,
+        u: &mut [f64],
+        (u_try, q_try): (&mut [f64], &mut [f64]),
+        w: &mut Work<'_>,
+        path: &mut Path<M>,
+        scale: f64,
+    ) -> Result<bool> {
+        if norm2(&path.r0) > self.settings.residual_tolerance * scale {
+            return Ok(false);
+        }
+        let mut u_s = u_try.to_vec();
+        let saved_q = std::mem::replace(&mut w.q, q_try.to_vec());
+        // the path's tangent at its last stable point tells the side it
+        // leans to
+        let lean = path.tangent.as_ref().map(|(t, _)| t.as_slice());
+        let st = self.stabilize(
+            model,
+            tgt.dead,
+            tgt.loads,
+            &mut u_s,
+            w,
+            scale,
+            StaticStatus::Converged(crate::outcome::StaticCriterion::Residual),
+            lean,
+        )?;
+        if !(st.status.is_converged() && st.inertia.is_some_and(|i| i.negative == 0)) {
+            w.q = saved_q;
+            return Ok(false);
+        }
+        if let Some(branch) = st.branch {
+            path.warnings.push(StaticWarning::Bifurcation {
+                from_load_fraction: path.lambda,
+                to_load_fraction: target,
+                branch,
+            });
+        }
+        path.stable = true;
+        path.load_steps += 1;
+        path.lambda = target;
+        u.copy_from_slice(&u_s);
+        q_try.copy_from_slice(&w.q);
+        u_try.copy_from_slice(u);
+        path.tangent = None;
+        path.previous_tangent = None;
+        Ok(true)
     }
 
     /// Plain Newton iterations on `R(u) − offset = 0` from the predicted

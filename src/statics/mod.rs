@@ -37,6 +37,17 @@
 //! along its direction of negative curvature by a descent Newton run, so the
 //! answer is a stable equilibrium whenever one is found.
 //!
+//! Branches: a cold solve follows the branch connected to the unloaded state
+//! along the load path. Its quick full-load attempt is kept only when every
+//! tangent it met was positive definite (the `L D Lᵀ` succeeded: no extra
+//! factorization), otherwise the load path decides; a load step that lands
+//! on a saddle left a critical point behind, and the saddle is left toward
+//! the side the path leaned to before it (its tangent at the last stable
+//! point projected on the direction of negative curvature: a lateral load,
+//! a tilt). The report names the choice ([`StaticWarning::Bifurcation`]
+//! with a [`BranchChoice`]), ambiguous when the path leans to neither side
+//! (a symmetric load).
+//!
 //! [`EquilibriumTracker`] (in [`tracker`]) solves the same equilibrium at a
 //! sequence of nearby loads, warm, reusing factorizations: what an estimator
 //! or a controller needs; it falls back to [`StaticSolver`].
@@ -48,7 +59,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{check_at_most, check_len, check_positive, named, Error, Result};
 use crate::linsolve::{AutoSolver, SolverKind, TangentSolver};
-pub use crate::outcome::{NonFiniteAt, StaticCriterion, StaticReport, StaticStatus, StaticWarning};
+pub use crate::outcome::{
+    BranchChoice, NonFiniteAt, StaticCriterion, StaticReport, StaticStatus, StaticWarning,
+};
 use crate::structure::Assembled;
 
 mod continuation;

@@ -133,6 +133,9 @@ pub(super) struct PhaseEnd {
     pub(super) phase: Phase,
     /// Load steps it took.
     pub(super) load_steps: usize,
+    /// The critical points its load path passed, with the branch chosen at
+    /// each ([`StaticWarning::Bifurcation`]).
+    pub(super) warnings: Vec<StaticWarning>,
 }
 
 /// The fixed data of one solve: its loads as dead forces, its scale and
@@ -209,6 +212,7 @@ impl StaticSolver {
                 },
                 phase: Phase::Quick,
                 load_steps: 0,
+                warnings: Vec::new(),
             };
             return self.finish(&p, u, &mut w, end, start);
         }
@@ -219,7 +223,7 @@ impl StaticSolver {
         } else {
             None
         };
-        let mut end = self.quick(&p, &mut u, &mut w, coarse.is_some())?;
+        let mut end = self.quick(&p, &mut u, &mut w, cold)?;
         if let (false, Some(coarse)) = (end.status.is_converged(), coarse) {
             end = self.sequenced(&p, coarse, &mut u, &mut w)?;
         }
@@ -271,8 +275,14 @@ impl StaticSolver {
 
     /// First plain Newton from the start point (a warm start, a robot's
     /// arcs of its actuation), given up at the first step it would have to
-    /// shorten; with the coarse start behind it (`coarse`), also at the
-    /// first tangent that is not positive definite (measured,
+    /// shorten; cold (`cold`), also at the first tangent that is not
+    /// positive definite. A cold solve must follow the branch connected to
+    /// the unloaded state along the load path, and a full-load Newton run
+    /// that met an indefinite tangent may have crossed to another one
+    /// (measured before: the upright column beyond buckling with a 0.01 N
+    /// lateral tip force leaned against the force at 16 elements, its quick
+    /// attempt converging through indefinite tangents); the load path
+    /// (`continuation.rs`) then decides. It also saves work (measured,
     /// `benches/statics_scaling.rs`: such a quick attempt never converged on
     /// the scaling cases at 128 to 2000 elements, and its pivoted LU
     /// factorizations of the fine tangent, up to five in the first
@@ -287,7 +297,7 @@ impl StaticSolver {
         p: &Problem<'_, M>,
         u: &mut [f64],
         w: &mut Work<'_>,
-        coarse: bool,
+        cold: bool,
     ) -> Result<PhaseEnd> {
         let quick = StaticSolver {
             settings: super::StaticSettings {
@@ -295,7 +305,7 @@ impl StaticSolver {
                 ..self.settings.clone()
             },
         };
-        let status = quick.newton(p.model, &p.full(true, coarse), u, w, p.scale)?;
+        let status = quick.newton(p.model, &p.full(true, cold), u, w, p.scale)?;
         let stable = w.iterations == 0 || w.definite;
         Ok(PhaseEnd {
             status: if status.is_converged() && !stable {
@@ -305,6 +315,7 @@ impl StaticSolver {
             },
             phase: Phase::Quick,
             load_steps: 0,
+            warnings: Vec::new(),
         })
     }
 
@@ -336,6 +347,8 @@ impl StaticSolver {
             status,
             phase: Phase::Sequenced,
             load_steps: start.load_steps,
+            // the coarse solve's load path is this one's
+            warnings: start.warnings,
         })
     }
 
@@ -361,6 +374,7 @@ impl StaticSolver {
                 status: StaticStatus::LineSearchFailed,
                 phase: Phase::Continuation,
                 load_steps: 0,
+                warnings: Vec::new(),
             });
         }
         p.restart(u, w);
@@ -379,6 +393,7 @@ impl StaticSolver {
             status,
             phase: Phase::Continuation,
             load_steps: end.load_steps,
+            warnings: end.warnings,
         })
     }
 
@@ -398,6 +413,7 @@ impl StaticSolver {
             status,
             phase: Phase::LineSearch,
             load_steps: 0,
+            warnings: Vec::new(),
         })
     }
 
@@ -477,6 +493,7 @@ impl StaticSolver {
             status,
             phase: Phase::Homotopy,
             load_steps,
+            warnings: Vec::new(),
         })
     }
 
@@ -489,7 +506,7 @@ impl StaticSolver {
         p: &Problem<'_, M>,
         mut u: Vec<f64>,
         w: &mut Work<'_>,
-        end: PhaseEnd,
+        mut end: PhaseEnd,
         start: Instant,
     ) -> Result<Equilibrium> {
         let (model, loads) = (p.model, p.loads);
@@ -513,8 +530,15 @@ impl StaticSolver {
                 negative: 0,
             });
         } else if status.is_converged() {
-            (status, inertia) =
-                self.stabilize(model, &p.dead, loads, &mut u, w, p.scale, status)?;
+            let st = self.stabilize(model, &p.dead, loads, &mut u, w, p.scale, status, None)?;
+            (status, inertia) = (st.status, st.inertia);
+            if let Some(branch) = st.branch {
+                end.warnings.push(StaticWarning::Bifurcation {
+                    from_load_fraction: 1.0,
+                    to_load_fraction: 1.0,
+                    branch,
+                });
+            }
         }
         if !settled {
             // final residual for the report
@@ -547,11 +571,14 @@ impl StaticSolver {
             load_scale_n: finite_or_max(p.scale),
             increment_norm_m: finite_or_max(w.last_step),
             negative_eigenvalues: inertia.map(|i| i.negative),
-            warnings: match inertia {
-                Some(i) if i.negative > 0 => vec![StaticWarning::Unstable {
-                    negative_eigenvalues: i.negative,
-                }],
-                _ => Vec::new(),
+            warnings: {
+                let mut warnings = std::mem::take(&mut end.warnings);
+                if let Some(i) = inertia.filter(|i| i.negative > 0) {
+                    warnings.push(StaticWarning::Unstable {
+                        negative_eigenvalues: i.negative,
+                    });
+                }
+                warnings
             },
             wall_time_s: start.elapsed().as_secs_f64(),
         };
@@ -569,12 +596,12 @@ impl StaticSolver {
     }
 
     /// Newton iterations on `R(u) − offset = 0` from `u` (updated in place,
-    /// `w.q = φ(u)` kept with it).
-    ///
-    /// (Over 120 lines: one iteration's branches — the chord step on the
-    /// floor, the shifted factorizations, the floor steps, the line search —
-    /// share its trial buffers and floor state; splitting it into phase
-    /// functions is left for the issue 28 point 6 follow-up.)
+    /// `w.q = φ(u)` kept with it). Each iteration in its phases: the
+    /// convergence and budget tests, the direction
+    /// ([`Self::newton_direction`]: a chord step on the floor or the
+    /// factored tangent), the rotation cap, a full step on the round-off
+    /// floor ([`Self::floor_step`]) or the line search
+    /// ([`Self::line_search`]), then the increment test.
     pub(super) fn newton<M: Assembled>(
         &self,
         model: &M,
@@ -584,33 +611,29 @@ impl StaticSolver {
         scale: f64,
     ) -> Result<StaticStatus> {
         let n = model.n_free();
-        let nq = model.n_q();
         let tol = self.settings.residual_tolerance * scale;
         let xtol = self.settings.increment_tolerance * model.length_m();
-        let (dead, loads, offset) = (t.dead, t.loads, t.offset);
-        let eval = |u: &[f64], q: &[f64], r: &mut Vec<f64>| -> Result<f64> {
-            model.residual_into(u, q, dead, loads, r)?;
-            r.iter_mut().zip(offset).for_each(|(a, b)| *a -= b);
-            Ok(norm2(r))
-        };
         w.settled = false;
-        let mut rn = eval(u, &w.q, &mut w.r)?;
-        let mut trial = u.to_vec();
-        let mut q_trial = w.q.clone();
-        let mut r_trial = vec![0.0; n];
-        let mut du = vec![0.0; n];
-        let mut dq = vec![0.0; nq];
-        let mut energies = Vec::new();
-        let (mut floor_steps, mut floor_previous) = (0, f64::INFINITY);
-        // the factorization of the first step on the round-off floor
-        let mut floor_lu: Option<AutoFactors> = None;
+        let rn = eval(model, t, u, &w.q, &mut w.r)?;
+        let mut it = Iterate {
+            rn,
+            trial: u.to_vec(),
+            q_trial: w.q.clone(),
+            r_trial: vec![0.0; n],
+            du: vec![0.0; n],
+            dq: vec![0.0; model.n_q()],
+            energies: Vec::new(),
+            floor_steps: 0,
+            floor_previous: f64::INFINITY,
+            floor_lu: None,
+        };
         for _ in 0..self.settings.max_iterations {
-            if !rn.is_finite() {
+            if !it.rn.is_finite() {
                 return Ok(StaticStatus::NonFinite {
                     at: NonFiniteAt::Residual,
                 });
             }
-            if rn <= tol {
+            if it.rn <= tol {
                 return Ok(StaticStatus::Converged(StaticCriterion::Residual));
             }
             if w.iterations >= self.settings.max_total_iterations {
@@ -618,203 +641,319 @@ impl StaticSolver {
                     iterations: w.iterations,
                 });
             }
-            // On the floor after a first step there: a chord step with that
-            // step's factorization (the tangent moves by round-off between
-            // points on the floor; a fresh one cost a tangent and a
-            // factorization per step, up to three steps at 2000 elements).
-            let chord = match (&floor_lu, floor_steps > 0 && rn <= w.floor) {
-                (Some(f), true) => {
-                    du.copy_from_slice(&w.r);
-                    f.solve_in_place(&mut du)?;
-                    let slope: f64 = w.r.iter().zip(&du).map(|(a, b)| a * b).sum();
-                    slope > 0.0 && du.iter().all(|v| v.is_finite())
-                }
-                _ => false,
+            let at_floor = match self.newton_direction(model, t, u, w, &mut it)? {
+                Direction::Found { at_floor } => at_floor,
+                Direction::Stop(status) => return Ok(status),
             };
-            if !chord {
-                model.tangent_into(u, &w.q, dead, loads, &mut w.k)?;
-                let qmax = w.q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                w.floor = residual_floor(w.k.max_abs(), qmax, n);
-            }
-            // At the round-off floor the residual cannot certify more digits,
-            // but one more Newton step still can gain them (the floor does not
-            // shrink with the load; stopping here left small-load solves 1e-11 m
-            // short): take it, keep it unless it raises the residual, stop.
-            let at_floor = rn <= w.floor;
-            w.iterations += 1;
-            // Newton direction from the Jacobi-scaled factorization (the rows
-            // of a fine cable's tangent span many orders of magnitude: bending
-            // ∝ L_e⁻³, axial on the slopes ∝ L_e). If it does not descend the
-            // potential (R·du <= 0: an indefinite tangent far from
-            // equilibrium), shift the scaled diagonal with growing μ until it
-            // does. (The tangent is symmetric: L D Lᵀ when positive definite,
-            // the pivoted LU otherwise, neither consuming it.)
-            let mut found = chord;
-            let shifts: &[f64] = if chord {
-                &[]
-            } else if t.descent {
-                &DESCENT_SHIFTS
-            } else if t.definite_only {
-                &[0.0]
-            } else {
-                &[0.0, 1e-8, 1e-6, 1e-4, 1e-2, 1.0]
-            };
-            for &mu in shifts {
-                let options = FactorOptions {
-                    shift: mu,
-                    require_positive_definite: t.descent || t.definite_only,
-                };
-                let lu = match w.solver.factor(&w.k, options) {
-                    Ok(lu) => lu,
-                    Err(LinsolveError::Singular { .. }) => continue,
-                    Err(LinsolveError::NotPositiveDefinite { .. }) if t.descent => continue,
-                    Err(LinsolveError::NotPositiveDefinite { .. }) if t.definite_only => {
-                        return Ok(StaticStatus::LineSearchFailed);
-                    }
-                    Err(LinsolveError::NonFinite { .. }) => {
-                        return Ok(StaticStatus::NonFinite {
-                            at: NonFiniteAt::Tangent,
-                        });
-                    }
-                    Err(e) => return Err(e.into()),
-                };
-                w.definite = mu == 0.0 && lu.is_positive_definite();
-                w.settled = t.full && at_floor && w.definite;
-                du.copy_from_slice(&w.r);
-                lu.solve_in_place(&mut du)?;
-                let slope: f64 = w.r.iter().zip(&du).map(|(a, b)| a * b).sum();
-                if slope > 0.0 && du.iter().all(|v| v.is_finite()) {
-                    found = true;
-                    if at_floor && mu == 0.0 {
-                        floor_lu = Some(lu);
-                    }
-                    break;
-                }
-            }
-            if !found {
-                return Ok(StaticStatus::SingularTangent);
-            }
-            model.step_into(u, &du, &mut dq)?;
+            model.step_into(u, &it.du, &mut it.dq)?;
             // cap the rotation of the step
-            let rotation = model.step_rotation(&dq);
-            let mut s = if rotation > self.settings.max_step_rotation {
+            let rotation = model.step_rotation(&it.dq);
+            let s = if rotation > self.settings.max_step_rotation {
                 self.settings.max_step_rotation / rotation
             } else {
                 1.0
             };
-            let step_inf = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            // on the floor: a full Newton step, kept unless it leaves the
-            // floor (the first one: unless it lands above it)
-            let mut floor_trial = None;
+            let step_inf = it.dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             if at_floor {
-                model.advance_into(u, &w.q, &du, &dq, 1.0, &mut trial, &mut q_trial)?;
-                let rt = eval(&trial, &q_trial, &mut r_trial)?;
-                if floor_steps > 0 || rt <= w.floor {
-                    floor_trial = Some(rt);
-                } else {
-                    // not an equilibrium to the floor: its factorization
-                    // tells nothing about the answer's inertia
-                    w.settled = false;
-                }
-                // else: a first step that lands above the floor; the start
-                // was below it only because the floor, set by the stiffest
-                // rows, is above what the other rows carry (a stiff section
-                // beside a soft one): an ordinary, line-searched step
-            }
-            if let Some(rt) = floor_trial {
-                // full Newton steps while they shrink (the residual cannot
-                // tell more digits, the step size still can)
-                let shrinking = floor_steps == 0 || step_inf <= 0.5 * floor_previous;
-                // the first step is taken whenever it lands on the floor
-                // (below it the residual cannot tell a good step from a bad
-                // one; a small load on a fine mesh starts below it: left at
-                // the start point, 2000 elements under a 1e-3-scale load
-                // reported the straight rod); the next ones unless they raise
-                // the residual above the floor
-                let kept = floor_steps == 0 || rt <= rn.max(w.floor);
-                if shrinking && rt.is_finite() && kept {
-                    u.copy_from_slice(&trial);
-                    std::mem::swap(&mut w.q, &mut q_trial);
-                    std::mem::swap(&mut w.r, &mut r_trial);
-                    w.last_step = step_inf;
-                    rn = rt;
-                    floor_steps += 1;
-                    floor_previous = step_inf;
-                    if step_inf > xtol && floor_steps < FLOOR_STEPS {
-                        continue;
+                match self.floor_step(model, t, u, w, &mut it, step_inf, xtol)? {
+                    FloorStep::Continue => continue,
+                    FloorStep::Converged => {
+                        return Ok(StaticStatus::Converged(StaticCriterion::RoundOffFloor))
                     }
+                    FloorStep::Ordinary => {}
                 }
-                return Ok(StaticStatus::Converged(StaticCriterion::RoundOffFloor));
             }
             if t.strict && s < 1.0 {
                 // only full steps: this one is capped
                 return Ok(StaticStatus::LineSearchFailed);
             }
-            // the energies at u, once for all trials, when a trial first
-            // needs them (a trial that lowers |R| enough needs none)
-            let mut energies_at_u = false;
-            let offset_slope: f64 = offset.iter().zip(&du).map(|(a, b)| a * b).sum();
-            // Π decreases along du when R·du > 0 (K positive along du).
-            let slope: f64 = w.r.iter().zip(&du).map(|(a, b)| a * b).sum();
-            let mut accepted = false;
-            for _ in 0..30 {
-                model.advance_into(u, &w.q, &du, &dq, s, &mut trial, &mut q_trial)?;
-                let rt = eval(&trial, &q_trial, &mut r_trial)?;
-                if rt.is_finite() {
-                    let residual_ok = !t.descent && rt * rt <= (1.0 - 1e-4 * s) * rn * rn;
-                    if residual_ok {
-                        accepted = true;
-                        break;
-                    }
-                    if !energies_at_u {
-                        model.energies_into(&w.q, &mut energies)?;
-                        energies_at_u = true;
-                    }
-                    let offset_work = s * offset_slope;
-                    let dpi = model
-                        .potential_change_from(u, &w.q, &energies, &trial, &q_trial, dead, loads)?
-                        + offset_work;
-                    if dpi <= -1e-4 * s * slope {
-                        accepted = true;
-                        break;
-                    }
-                }
-                if t.strict {
-                    // only full steps: this one is not accepted
-                    break;
-                }
-                s *= 0.5;
-            }
-            if t.strict && (s < 1.0 || !accepted) {
-                return Ok(StaticStatus::LineSearchFailed);
-            }
             // the increment test, with the residual within its multiple of
             // the tolerance or floor (see `INCREMENT_RESIDUAL_MULTIPLE`)
-            let near = |rn: f64| rn <= INCREMENT_RESIDUAL_MULTIPLE * tol.max(w.floor);
-            if !accepted {
-                // no decrease along the Newton direction: at the floor or stuck
-                if step_inf <= xtol && near(rn) {
-                    return Ok(StaticStatus::Converged(StaticCriterion::Increment));
+            let near = |rn: f64, floor: f64| rn <= INCREMENT_RESIDUAL_MULTIPLE * tol.max(floor);
+            match self.line_search(model, t, u, w, &mut it, s)? {
+                Search::Rejected => {
+                    if t.strict {
+                        // only full steps: this one is not accepted
+                        return Ok(StaticStatus::LineSearchFailed);
+                    }
+                    // no decrease along the Newton direction: at the floor
+                    // or stuck
+                    if step_inf <= xtol && near(it.rn, w.floor) {
+                        return Ok(StaticStatus::Converged(StaticCriterion::Increment));
+                    }
+                    return Ok(StaticStatus::LineSearchFailed);
                 }
-                return Ok(StaticStatus::LineSearchFailed);
-            }
-            u.copy_from_slice(&trial);
-            std::mem::swap(&mut w.q, &mut q_trial);
-            std::mem::swap(&mut w.r, &mut r_trial);
-            rn = norm2(&w.r);
-            w.last_step = s * step_inf;
-            if s == 1.0 && step_inf <= xtol && near(rn) {
-                return Ok(StaticStatus::Converged(StaticCriterion::Increment));
+                Search::Accepted { s } => {
+                    u.copy_from_slice(&it.trial);
+                    std::mem::swap(&mut w.q, &mut it.q_trial);
+                    std::mem::swap(&mut w.r, &mut it.r_trial);
+                    it.rn = norm2(&w.r);
+                    w.last_step = s * step_inf;
+                    if s == 1.0 && step_inf <= xtol && near(it.rn, w.floor) {
+                        return Ok(StaticStatus::Converged(StaticCriterion::Increment));
+                    }
+                }
             }
         }
-        if rn <= tol {
+        if it.rn <= tol {
             return Ok(StaticStatus::Converged(StaticCriterion::Residual));
         }
-        if rn <= w.floor {
+        if it.rn <= w.floor {
             return Ok(StaticStatus::Converged(StaticCriterion::RoundOffFloor));
         }
         Ok(StaticStatus::IterationLimit {
             iterations: w.iterations,
         })
     }
+
+    /// The Newton direction of one iteration into `it.du` (one iteration
+    /// counted). On the floor after a first step there: a chord step with
+    /// that step's factorization (the tangent moves by round-off between
+    /// points on the floor; a fresh one cost a tangent and a factorization
+    /// per step, up to three steps at 2000 elements). Otherwise the tangent
+    /// (and the round-off floor from it), factored Jacobi-scaled (the rows
+    /// of a fine cable's tangent span many orders of magnitude: bending
+    /// ∝ L_e⁻³, axial on the slopes ∝ L_e); if its direction does not
+    /// descend the potential (R·du <= 0: an indefinite tangent far from
+    /// equilibrium), the scaled diagonal is shifted with growing μ until it
+    /// does. (The tangent is symmetric: L D Lᵀ when positive definite, the
+    /// pivoted LU otherwise, neither consuming it.)
+    fn newton_direction<M: Assembled>(
+        &self,
+        model: &M,
+        t: &Target<'_, M>,
+        u: &[f64],
+        w: &mut Work<'_>,
+        it: &mut Iterate,
+    ) -> Result<Direction> {
+        let chord = match (&it.floor_lu, it.floor_steps > 0 && it.rn <= w.floor) {
+            (Some(f), true) => {
+                it.du.copy_from_slice(&w.r);
+                f.solve_in_place(&mut it.du)?;
+                let slope: f64 = w.r.iter().zip(&it.du).map(|(a, b)| a * b).sum();
+                slope > 0.0 && it.du.iter().all(|v| v.is_finite())
+            }
+            _ => false,
+        };
+        if !chord {
+            model.tangent_into(u, &w.q, t.dead, t.loads, &mut w.k)?;
+            let qmax = w.q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            w.floor = residual_floor(w.k.max_abs(), qmax, model.n_free());
+        }
+        // At the round-off floor the residual cannot certify more digits,
+        // but one more Newton step still can gain them (the floor does not
+        // shrink with the load; stopping here left small-load solves 1e-11 m
+        // short): take it, keep it unless it raises the residual, stop.
+        let at_floor = it.rn <= w.floor;
+        w.iterations += 1;
+        if chord {
+            return Ok(Direction::Found { at_floor });
+        }
+        let shifts: &[f64] = if t.descent {
+            &DESCENT_SHIFTS
+        } else if t.definite_only {
+            &[0.0]
+        } else {
+            &[0.0, 1e-8, 1e-6, 1e-4, 1e-2, 1.0]
+        };
+        for &mu in shifts {
+            let options = FactorOptions {
+                shift: mu,
+                require_positive_definite: t.descent || t.definite_only,
+            };
+            let lu = match w.solver.factor(&w.k, options) {
+                Ok(lu) => lu,
+                Err(LinsolveError::Singular { .. }) => continue,
+                Err(LinsolveError::NotPositiveDefinite { .. }) if t.descent => continue,
+                Err(LinsolveError::NotPositiveDefinite { .. }) if t.definite_only => {
+                    return Ok(Direction::Stop(StaticStatus::LineSearchFailed));
+                }
+                Err(LinsolveError::NonFinite { .. }) => {
+                    return Ok(Direction::Stop(StaticStatus::NonFinite {
+                        at: NonFiniteAt::Tangent,
+                    }));
+                }
+                Err(e) => return Err(e.into()),
+            };
+            w.definite = mu == 0.0 && lu.is_positive_definite();
+            w.settled = t.full && at_floor && w.definite;
+            it.du.copy_from_slice(&w.r);
+            lu.solve_in_place(&mut it.du)?;
+            let slope: f64 = w.r.iter().zip(&it.du).map(|(a, b)| a * b).sum();
+            if slope > 0.0 && it.du.iter().all(|v| v.is_finite()) {
+                if at_floor && mu == 0.0 {
+                    it.floor_lu = Some(lu);
+                }
+                return Ok(Direction::Found { at_floor });
+            }
+        }
+        Ok(Direction::Stop(StaticStatus::SingularTangent))
+    }
+
+    /// On the floor: a full Newton step along `it.du` (`it.dq`, of size
+    /// `step_inf`), kept unless it leaves the floor (the first one: unless
+    /// it lands above it).
+    #[allow(clippy::too_many_arguments)]
+    fn floor_step<M: Assembled>(
+        &self,
+        model: &M,
+        t: &Target<'_, M>,
+        u: &mut [f64],
+        w: &mut Work<'_>,
+        it: &mut Iterate,
+        step_inf: f64,
+        xtol: f64,
+    ) -> Result<FloorStep> {
+        model.advance_into(u, &w.q, &it.du, &it.dq, 1.0, &mut it.trial, &mut it.q_trial)?;
+        let rt = eval(model, t, &it.trial, &it.q_trial, &mut it.r_trial)?;
+        if !(it.floor_steps > 0 || rt <= w.floor) {
+            // a first step that lands above the floor; the start was below
+            // it only because the floor, set by the stiffest rows, is above
+            // what the other rows carry (a stiff section beside a soft one):
+            // an ordinary, line-searched step. Not an equilibrium to the
+            // floor: its factorization tells nothing about the answer's
+            // inertia.
+            w.settled = false;
+            return Ok(FloorStep::Ordinary);
+        }
+        // full Newton steps while they shrink (the residual cannot tell more
+        // digits, the step size still can)
+        let shrinking = it.floor_steps == 0 || step_inf <= 0.5 * it.floor_previous;
+        // the first step is taken whenever it lands on the floor (below it
+        // the residual cannot tell a good step from a bad one; a small load
+        // on a fine mesh starts below it: left at the start point, 2000
+        // elements under a 1e-3-scale load reported the straight rod); the
+        // next ones unless they raise the residual above the floor
+        let kept = it.floor_steps == 0 || rt <= it.rn.max(w.floor);
+        if shrinking && rt.is_finite() && kept {
+            u.copy_from_slice(&it.trial);
+            std::mem::swap(&mut w.q, &mut it.q_trial);
+            std::mem::swap(&mut w.r, &mut it.r_trial);
+            w.last_step = step_inf;
+            it.rn = rt;
+            it.floor_steps += 1;
+            it.floor_previous = step_inf;
+            if step_inf > xtol && it.floor_steps < FLOOR_STEPS {
+                return Ok(FloorStep::Continue);
+            }
+        }
+        Ok(FloorStep::Converged)
+    }
+
+    /// The backtracking line search along `it.du` from the step length `s`
+    /// (the rotation cap's): a trial is accepted when it lowers `|R|²`
+    /// enough (not in a descent run) or the total potential `Π` (which
+    /// decreases along `du` when `R·du > 0`); a strict target tries the
+    /// full step only. The accepted trial is left in `it.trial`,
+    /// `it.q_trial`, `it.r_trial`.
+    fn line_search<M: Assembled>(
+        &self,
+        model: &M,
+        t: &Target<'_, M>,
+        u: &[f64],
+        w: &Work<'_>,
+        it: &mut Iterate,
+        mut s: f64,
+    ) -> Result<Search> {
+        // the energies at u, once for all trials, when a trial first needs
+        // them (a trial that lowers |R| enough needs none)
+        let mut energies_at_u = false;
+        let offset_slope: f64 = t.offset.iter().zip(&it.du).map(|(a, b)| a * b).sum();
+        let slope: f64 = w.r.iter().zip(&it.du).map(|(a, b)| a * b).sum();
+        let rn = it.rn;
+        for _ in 0..30 {
+            model.advance_into(u, &w.q, &it.du, &it.dq, s, &mut it.trial, &mut it.q_trial)?;
+            let rt = eval(model, t, &it.trial, &it.q_trial, &mut it.r_trial)?;
+            if rt.is_finite() {
+                let residual_ok = !t.descent && rt * rt <= (1.0 - 1e-4 * s) * rn * rn;
+                if residual_ok {
+                    return Ok(Search::Accepted { s });
+                }
+                if !energies_at_u {
+                    model.energies_into(&w.q, &mut it.energies)?;
+                    energies_at_u = true;
+                }
+                let offset_work = s * offset_slope;
+                let dpi = model.potential_change_from(
+                    u,
+                    &w.q,
+                    &it.energies,
+                    &it.trial,
+                    &it.q_trial,
+                    t.dead,
+                    t.loads,
+                )? + offset_work;
+                if dpi <= -1e-4 * s * slope {
+                    return Ok(Search::Accepted { s });
+                }
+            }
+            if t.strict {
+                // only full steps: this one is not accepted
+                break;
+            }
+            s *= 0.5;
+        }
+        Ok(Search::Rejected)
+    }
+}
+
+/// `|R(u) − offset|_2` of the target `t` at `u` (`q = φ(u)`), the residual
+/// into `r`.
+fn eval<M: Assembled>(
+    model: &M,
+    t: &Target<'_, M>,
+    u: &[f64],
+    q: &[f64],
+    r: &mut [f64],
+) -> Result<f64> {
+    model.residual_into(u, q, t.dead, t.loads, r)?;
+    r.iter_mut().zip(t.offset).for_each(|(a, b)| *a -= b);
+    Ok(norm2(r))
+}
+
+/// The scratch state of one Newton run ([`StaticSolver::newton`]).
+struct Iterate {
+    /// `|R − offset|_2` at the current iterate.
+    rn: f64,
+    /// A trial point, its `φ` and its residual.
+    trial: Vec<f64>,
+    q_trial: Vec<f64>,
+    r_trial: Vec<f64>,
+    /// The Newton direction in free coordinates and in `q`.
+    du: Vec<f64>,
+    dq: Vec<f64>,
+    /// The element energies at the current iterate (the line search's).
+    energies: Vec<f64>,
+    /// Full steps taken on the round-off floor, and the last one's size.
+    floor_steps: usize,
+    floor_previous: f64,
+    /// The factorization of the first step on the round-off floor.
+    floor_lu: Option<AutoFactors>,
+}
+
+/// The direction phase's outcome ([`StaticSolver::newton_direction`]).
+enum Direction {
+    /// In `Iterate::du`; `at_floor`: the iterate is on the round-off floor.
+    Found { at_floor: bool },
+    /// The run ends with this status.
+    Stop(StaticStatus),
+}
+
+/// A full step on the round-off floor's outcome ([`StaticSolver::floor_step`]).
+enum FloorStep {
+    /// Kept; the full steps go on.
+    Continue,
+    /// The run ends on the floor.
+    Converged,
+    /// The first step landed above the floor: an ordinary, line-searched
+    /// step instead.
+    Ordinary,
+}
+
+/// The line search's outcome ([`StaticSolver::line_search`]).
+enum Search {
+    /// The trial at step length `s` (in `Iterate::trial`).
+    Accepted { s: f64 },
+    /// No trial lowered `|R|` or `Π` enough.
+    Rejected,
 }

@@ -19,7 +19,7 @@ use super::newton::{Target, Work};
 use super::StaticSolver;
 use crate::error::{Error, Result};
 use crate::linsolve::AutoSolver;
-use crate::outcome::StaticStatus;
+use crate::outcome::{StaticStatus, StaticWarning};
 use crate::structure::Assembled;
 
 /// Newton iterations on the fine mesh from the interpolated coarse
@@ -36,6 +36,10 @@ pub(super) struct CoarseStart {
     pub(super) iterations: usize,
     /// Its load steps.
     pub(super) load_steps: usize,
+    /// The critical points its load path passed
+    /// ([`StaticWarning::Bifurcation`]; its stability warning is the coarse
+    /// answer's, not the fine one's, and is not carried).
+    pub(super) warnings: Vec<StaticWarning>,
 }
 
 impl StaticSolver {
@@ -62,11 +66,15 @@ impl StaticSolver {
                 u: Some(model.prolong(&coarse, eq.q.as_slice())?.data.into()),
                 iterations: eq.report.iterations,
                 load_steps: eq.report.load_steps,
+                warnings: (eq.report.warnings.into_iter())
+                    .filter(|w| matches!(w, StaticWarning::Bifurcation { .. }))
+                    .collect(),
             }),
             Err(Error::NotConverged { report }) => Ok(CoarseStart {
                 u: None,
                 iterations: report.iterations,
                 load_steps: report.load_steps,
+                warnings: Vec::new(),
             }),
             Err(e) => Err(e),
         }

@@ -16,12 +16,25 @@
 //! accepted only when they lower the potential) goes down to a minimum,
 //! whose inertia is checked again. A saddle the solver cannot leave is
 //! returned as it is, with its negative eigenvalues in the report.
+//!
+//! The side: given the load path's tangent at its last stable point (the
+//! continuation's escape, [`super::continuation`]), the side it leaned to
+//! (the sign of its projection on the direction), which for an imperfect
+//! bifurcation (a lateral load, a tilt: the path bends away smoothly) is the
+//! branch connected to the unloaded state; the side of the lower potential
+//! when the path leans to neither (a symmetric load, [`BranchChoice::Symmetric`])
+//! or no path is known (a saddle at the full load,
+//! [`BranchChoice::LowerPotential`]; [`BranchChoice::Symmetric`] when the
+//! load vector has no component along the direction). Comparing the potentials alone chose
+//! by round-off: on the upright column with a 0.01 N lateral tip force the
+//! two sides' potentials differed by 1e-3 of their change, and the side
+//! flipped from mesh to mesh (+x at 8 elements, −x at 16).
 
 use super::newton::{Target, Work};
 use super::StaticSolver;
 use crate::error::Result;
 use crate::linsolve::{FactorOptions, Factorization, Inertia, LinsolveError, TangentSolver};
-use crate::outcome::StaticStatus;
+use crate::outcome::{BranchChoice, StaticStatus};
 use crate::structure::Assembled;
 
 /// Escapes from a saddle tried at most before the saddle is returned.
@@ -32,12 +45,36 @@ const ESCAPES: usize = 3;
 const ESCAPE_ROTATION: f64 = 0.2;
 /// Inverse iterations for the negative-curvature direction.
 const INVERSE_ITERATIONS: usize = 30;
+/// A path tangent whose projection on the direction of negative curvature
+/// (or the load vector's, for a saddle at the full load) is below this
+/// fraction of the product of their norms leans to neither side
+/// ([`BranchChoice::Symmetric`]). (Measured on the post-buckled columns of
+/// `tests/statics_branch.rs`: 0.5 to 1.0 with a 0.01 N lateral tip force,
+/// a 0.01 rad tilt or a tip mass; the perfectly upright column, whose only
+/// asymmetry is the round-off of `cos(π/2)`, falls below it at 8 and 32
+/// elements and is reported ambiguous.)
+const LEAN_FRACTION: f64 = 1e-8;
+
+/// What [`StaticSolver::stabilize`] gives.
+pub(super) struct Stabilized {
+    /// The status of the answer.
+    pub(super) status: StaticStatus,
+    /// Its inertia (`None` when no `L D Lᵀ` of its tangent exists).
+    pub(super) inertia: Option<Inertia>,
+    /// How the side was chosen when a saddle was left (`None`: none was).
+    pub(super) branch: Option<BranchChoice>,
+}
 
 impl StaticSolver {
     /// The inertia of the tangent at `u` under the full loads (`None` when
     /// no `L D Lᵀ` of it exists); when it has a negative eigenvalue, leaves
-    /// the saddle for a stable equilibrium (`u`, `w.q` updated) if it can.
-    /// Returns the status of the answer and its inertia.
+    /// the saddle for a stable equilibrium (`u`, `w.q` updated) if it can,
+    /// the first time toward the side `path` (the load path's tangent at its
+    /// last stable point) leans to, when given and leaning (see the module
+    /// documentation); without a path, the side of the lower potential, and
+    /// the choice is called symmetric when the load vector has no component
+    /// along the direction. Returns the status of the answer, its inertia and how
+    /// a side was chosen.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn stabilize<M: Assembled>(
         &self,
@@ -48,26 +85,42 @@ impl StaticSolver {
         w: &mut Work<'_>,
         scale: f64,
         status: StaticStatus,
-    ) -> Result<(StaticStatus, Option<Inertia>)> {
+        path: Option<&[f64]>,
+    ) -> Result<Stabilized> {
+        let mut out = Stabilized {
+            status,
+            inertia: None,
+            branch: None,
+        };
         if !model.conservative(loads) {
             // no potential: the symmetric tangent is not the stability
-            return Ok((status, None));
+            return Ok(out);
         }
         let zero = vec![0.0; model.n_free()];
-        let mut status = status;
         for _ in 0..=ESCAPES {
-            let inertia = self.inertia_at(model, dead, loads, u, w)?;
-            let Some(i) = inertia else {
-                return Ok((status, None));
+            out.inertia = self.inertia_at(model, dead, loads, u, w)?;
+            let Some(i) = out.inertia else {
+                return Ok(out);
             };
             if i.negative == 0 {
-                return Ok((status, inertia));
+                return Ok(out);
             }
             let Some(d) = negative_curvature(w)? else {
-                return Ok((status, inertia));
+                return Ok(out);
             };
             let (saddle_u, saddle_q) = (u.clone(), w.q.clone());
-            self.leave_along(model, dead, loads, u, w, &d)?;
+            let (side, choice) = match path {
+                Some(t) => match lean(t, &d) {
+                    Some(sign) => (Some(sign), BranchChoice::LoadPath),
+                    None => (None, BranchChoice::Symmetric),
+                },
+                // no path: whether the loads lean along d at all
+                None => match lean(&self.load_vector(model, dead, loads, u, w)?, &d) {
+                    Some(_) => (None, BranchChoice::LowerPotential),
+                    None => (None, BranchChoice::Symmetric),
+                },
+            };
+            self.leave_along(model, dead, loads, u, w, &d, side)?;
             let descent = Target::<M> {
                 dead,
                 loads,
@@ -77,18 +130,48 @@ impl StaticSolver {
                 definite_only: false,
                 full: true,
             };
-            let next = self.newton(model, &descent, u, w, scale)?;
+            let mut next = self.newton(model, &descent, u, w, scale)?;
+            if !next.is_converged() {
+                // the descent stopped short of the minimum (measured: the
+                // upright column with a lateral tip force at 32 elements,
+                // after 29 iterations): plain Newton from where it stopped;
+                // the inertia test of the next pass tells what it reached
+                let plain = Target::<M> {
+                    descent: false,
+                    ..descent
+                };
+                next = self.newton(model, &plain, u, w, scale)?;
+            }
             if !next.is_converged() {
                 // the saddle, reported with its inertia (the iterations spent
                 // trying stay counted)
                 u.copy_from_slice(&saddle_u);
                 w.q.copy_from_slice(&saddle_q);
-                return Ok((status, inertia));
+                return Ok(out);
             }
-            status = next;
+            out.branch = Some(choice);
+            out.status = next;
         }
-        let inertia = self.inertia_at(model, dead, loads, u, w)?;
-        Ok((status, inertia))
+        out.inertia = self.inertia_at(model, dead, loads, u, w)?;
+        Ok(out)
+    }
+
+    /// The generalized load vector at `u`, `R(u; loads) − R(u; no loads)`.
+    fn load_vector<M: Assembled>(
+        &self,
+        model: &M,
+        dead: &[f64],
+        loads: &M::Loads,
+        u: &[f64],
+        w: &Work<'_>,
+    ) -> Result<Vec<f64>> {
+        let n = model.n_free();
+        let (mut r1, mut r0) = (vec![0.0; n], vec![0.0; n]);
+        model.residual_into(u, &w.q, dead, loads, &mut r1)?;
+        let unloaded = model.scaled_loads(loads, 0.0);
+        model.residual_into(u, &w.q, &vec![0.0; model.n_q()], &unloaded, &mut r0)?;
+        r1.iter_mut().zip(&r0).for_each(|(a, b)| *a -= b);
+        Ok(r1)
     }
 
     /// Factors the tangent at `u` (full loads) for its inertia.
@@ -108,8 +191,9 @@ impl StaticSolver {
         }
     }
 
-    /// Moves `u` from the saddle along `±d` (the sign with the lower
-    /// potential) by [`ESCAPE_ROTATION`].
+    /// Moves `u` from the saddle along `±d` by [`ESCAPE_ROTATION`]: the
+    /// sign `side` when given, else the sign with the lower potential.
+    #[allow(clippy::too_many_arguments)]
     fn leave_along<M: Assembled>(
         &self,
         model: &M,
@@ -118,6 +202,7 @@ impl StaticSolver {
         u: &mut Vec<f64>,
         w: &mut Work<'_>,
         d: &[f64],
+        side: Option<f64>,
     ) -> Result<()> {
         let mut dq = vec![0.0; model.n_q()];
         model.step_into(u, d, &mut dq)?;
@@ -130,7 +215,11 @@ impl StaticSolver {
         let mut energies = Vec::new();
         model.energies_into(&w.q, &mut energies)?;
         let mut best: Option<(f64, Vec<f64>, Vec<f64>)> = None;
-        for sign in [1.0, -1.0] {
+        let signs: &[f64] = match &side {
+            Some(sign) => std::slice::from_ref(sign),
+            None => &[1.0, -1.0],
+        };
+        for &sign in signs {
             let (mut u_try, mut q_try) = (u.clone(), w.q.clone());
             model.advance_into(u, &w.q, d, &dq, sign * s, &mut u_try, &mut q_try)?;
             let dpi =
@@ -145,6 +234,14 @@ impl StaticSolver {
         }
         Ok(())
     }
+}
+
+/// The side (`±1`) the path tangent `t` leans to along `d`, `None` when its
+/// projection is below [`LEAN_FRACTION`] of `|t| |d|`.
+fn lean(t: &[f64], d: &[f64]) -> Option<f64> {
+    let dot: f64 = t.iter().zip(d).map(|(a, b)| a * b).sum();
+    let scale = crate::numeric::norm2(t) * crate::numeric::norm2(d);
+    (dot.abs() > LEAN_FRACTION * scale && dot.is_finite()).then(|| dot.signum())
 }
 
 /// The direction of most negative curvature of the tangent in `w.k` (the

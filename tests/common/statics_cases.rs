@@ -28,9 +28,11 @@ pub const EXUDYN: [&str; 12] = [
 ];
 
 /// The hard cases: their names, in table order.
-pub const HARD: [&str; 4] = [
+pub const HARD: [&str; 6] = [
     "mid_force_vs_moment",
     "buckled_column",
+    "lateral_column",
+    "tip_mass_column",
     "full_circle",
     "estimator_bench",
 ];
@@ -83,6 +85,10 @@ pub fn exudyn(name: &str, n: usize) -> Scene {
 ///   counter-clockwise tip moment (`P L²/EI ≈ 4.6`);
 /// - `buckled_column`: base pointing up (tilted 0.01 rad), a uniform weight
 ///   with `q L³/EI = 12` (buckling starts at 7.84): it falls over;
+/// - `lateral_column`: base pointing straight up, the same weight and a
+///   0.01 N lateral tip force toward +x ([`lateral_column`]);
+/// - `tip_mass_column`: the same column with a 20 g tip mass, tilted
+///   0.01 rad toward +x ([`tip_mass_column`]);
 /// - `full_circle`: a tip moment `2π EI/L` that rolls the rod into a circle;
 /// - `estimator_bench`: the two-section robot with its weight and the
 ///   default pressures plus the estimator bench's unknown loads (a 20 g tip
@@ -107,6 +113,8 @@ pub fn hard(name: &str, n: usize) -> Scene {
                 json!([{"type": "distributed", "profile": "uniform", "w_n_per_m": [0.0, -q]}]),
             )
         }
+        "lateral_column" => lateral_column(n, 0.01),
+        "tip_mass_column" => tip_mass_column(n, 0.01),
         "full_circle" => scene(
             n,
             0.0,
@@ -129,6 +137,37 @@ pub fn hard(name: &str, n: usize) -> Scene {
         }
         other => panic!("unknown case {other}"),
     }
+}
+
+/// The column standing straight up beyond its buckling load
+/// (`q L³/EI = 12`, the weight uniform along it) with a lateral tip force
+/// `lateral_n` (N) toward +x, at `n` elements: the branch connected to the
+/// unloaded state leans with the force.
+pub fn lateral_column(n: usize, lateral_n: f64) -> Scene {
+    let q = 12.0 * EI / L.powi(3);
+    scene(
+        n,
+        0.0,
+        std::f64::consts::FRAC_PI_2,
+        false,
+        json!([{"type": "distributed", "profile": "uniform", "w_n_per_m": [0.0, -q]},
+               {"type": "point_force", "s_m": L, "force_n": [lateral_n, 0.0]}]),
+    )
+}
+
+/// The column of [`lateral_column`] (`q L³/EI = 12`, no lateral force)
+/// with a 20 g tip mass (under gravity), the base tilted by `tilt_rad`
+/// toward +x, at `n` elements: beyond buckling, leaning with the tilt.
+pub fn tip_mass_column(n: usize, tilt_rad: f64) -> Scene {
+    let q = 12.0 * EI / L.powi(3);
+    scene(
+        n,
+        0.0,
+        std::f64::consts::FRAC_PI_2 - tilt_rad,
+        true,
+        json!([{"type": "distributed", "profile": "uniform", "w_n_per_m": [0.0, -q]},
+               {"type": "tip_mass", "mass_kg": 0.02}]),
+    )
 }
 
 /// Every case: `(name, scene)` at `n` elements.
