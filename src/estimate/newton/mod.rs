@@ -5,7 +5,7 @@
 //! `J(F) = (A q(F) − y)ᵀ W (A q(F) − y) + α Fᵀ H F`.
 //!
 //! - Sensitivity (28): `∂u/∂F = K⁻¹ Mᵀ G` over the free coordinates `u`
-//!   (`K = −∂Q/∂q` restricted with [`Robot::restrict`], `G = J_QF`). The
+//!   (`K = −∂Q/∂q` restricted with [`crate::assembly::Robot::restrict`], `G = J_QF`). The
 //!   marker Jacobian `J = A M K⁻¹ Mᵀ G` is formed row by row by adjoint
 //!   solves, `z_i = M K⁻¹ Mᵀ a_iᵀ`, `J_i = Gᵀ z_i` (K is symmetric): `n_ob`
 //!   solves with one factorization of `K` per iteration.
@@ -115,7 +115,7 @@ impl<M: EstimationModel> NewtonEstimator<M> {
     /// # Errors
     /// [`crate::Error::InvalidParameter`] for invalid settings, another
     /// backend (`estimator.backend`) or bounds (bounds need the SQP
-    /// backend); the errors of [`Robot::validate_loads`].
+    /// backend); the errors of [`crate::structure::Assembled::validate_loads`].
     ///
     /// # Example
     /// ```
