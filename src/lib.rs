@@ -18,6 +18,7 @@
 //!   to all coordinates.
 //! - [`sensitivity`]: `∂q/∂F` (28), `∂q/∂P` (43) and output gradients by
 //!   adjoint solves.
+//! - [`site`]: points of any model (a rod at an arc coordinate, a rigid body) as rows over `q`.
 //! - [`observe`]: marker observations and the observation operator `A` (25).
 //! - [`estimate`]: shape and load estimation (25)–(30), backends `newton` and `sqp`.
 //! - [`scene`]: JSON scene files; [`params`]: the values the paper leaves open.
