@@ -140,12 +140,8 @@ impl<E: Element + 'static> EstimationModel for Structure<E> {
     }
 
     fn reference_q(&self) -> DVector<f64> {
-        let u = self.reference_free_coordinates();
-        let mut q = DVector::zeros(self.n_q());
-        match self.dof_map().configuration_into(u, q.as_mut_slice()) {
-            Ok(()) => q,
-            Err(_) => DVector::from_element(self.n_q(), f64::NAN),
-        }
+        self.configuration(self.reference_free_coordinates())
+            .unwrap_or_else(|_| DVector::from_element(self.n_q(), f64::NAN))
     }
 
     fn with_point_force(
@@ -155,12 +151,11 @@ impl<E: Element + 'static> EstimationModel for Structure<E> {
         force_n: &[f64],
     ) -> StructureLoads {
         let mut loads = known.clone();
-        let rotations = if E::DIM == 2 { 1 } else { 3 };
         match *site {
             Site::Body { body } => loads.bodies.push(BodyLoad {
                 body,
                 force_n: force_n.to_vec(),
-                moment_nm: vec![0.0; rotations],
+                moment_nm: vec![0.0; E::MOMENT_DIM],
             }),
             Site::Rod { rod, s_m } => {
                 if loads.rods.len() <= rod {
@@ -180,7 +175,7 @@ impl<E: Element + 'static> EstimationModel for Structure<E> {
         loads.bodies.push(BodyLoad {
             body: 0,
             force_n: vec![f64::NAN; E::DIM],
-            moment_nm: vec![0.0; if E::DIM == 2 { 1 } else { 3 }],
+            moment_nm: vec![0.0; E::MOMENT_DIM],
         });
         loads
     }

@@ -527,7 +527,7 @@ impl<M: EstimationModel> Problem<M> {
         let nf = self.n_f;
         let r0 = &q[..d];
         let mut force = vec![0.0; d];
-        let mut moment = vec![0.0; if d == 2 { 1 } else { 3 }];
+        let mut moment = vec![0.0; M::Element::MOMENT_DIM];
         match self.load() {
             LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
                 let mut fw = vec![0.0; d * nf];
