@@ -175,9 +175,10 @@ pub(crate) fn rod_rows<E: Element>(
     })
 }
 
-/// The rows of a rigid body's reference point: the first `dim` of its pose
-/// coordinates `range`.
-pub(crate) fn body_rows(range: std::ops::Range<usize>, dim: usize) -> SiteRows {
+/// The rows of the first `dim` coordinates of a block `range`, exactly:
+/// a rigid body's reference point (its pose's position) or a node's
+/// position (its coordinates start with it).
+pub(crate) fn block_position_rows(range: std::ops::Range<usize>, dim: usize) -> SiteRows {
     SiteRows {
         position: range.take(dim).map(|j| vec![(j, 1.0)]).collect(),
         tangent: None,

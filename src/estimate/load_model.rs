@@ -7,7 +7,7 @@ use nalgebra::DVector;
 
 use super::{EstimationModel, LoadModel};
 use crate::error::{check_len, Error, Result};
-use crate::site::{Site, SiteRows, Sites};
+use crate::site::{block_position_rows, Site, SiteRows, Sites};
 use crate::statics::LinearLoad;
 use crate::structure::Rod;
 
@@ -29,11 +29,19 @@ impl LoadModel {
         }
     }
 
-    /// The position rows `A_x` of a concentrated load's site.
-    fn site_rows<M: Sites>(&self, model: &M) -> Result<Option<SiteRows>> {
-        self.site(model)?
-            .map(|site| model.site_rows("load_model.site", &site))
-            .transpose()
+    /// The position rows `A_x` of a concentrated load's site (`None` for
+    /// the distributed field): at a node, its position coordinates exactly
+    /// (no interpolation, whose weights at the last node are 1 and 0 only
+    /// to round-off).
+    pub(crate) fn site_rows<M: Sites>(&self, model: &M) -> Result<Option<SiteRows>> {
+        match *self {
+            LoadModel::Distributed => Ok(None),
+            LoadModel::Concentrated { node } => {
+                let r = model.node_coordinates_of("load_model.node", 0, node)?;
+                Ok(Some(block_position_rows(r, model.dim())))
+            }
+            LoadModel::AtSite { site } => model.site_rows("load_model.site", &site).map(Some),
+        }
     }
 }
 

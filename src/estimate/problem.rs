@@ -532,10 +532,7 @@ impl<M: EstimationModel> Problem<M> {
             LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
                 let mut fw = vec![0.0; d * nf];
                 force.copy_from_slice(f);
-                let site = self.load().site(self.robot())?;
-                let rows = site
-                    .map(|site| self.robot().site_rows("load_model.site", &site))
-                    .transpose()?;
+                let rows = self.load().site_rows(self.robot())?;
                 let at = rows.map(|r| r.position_at(q)).unwrap_or_default();
                 check_len("load_model.site", d, at.len())?;
                 let r: Vec<f64> = (0..d).map(|i| at[i] - r0[i]).collect();

@@ -4,7 +4,7 @@
 use super::Structure;
 use crate::element::Element;
 use crate::error::{check_index, Result};
-use crate::site::{body_rows, rod_node_arc, rod_rows, Site, SiteRows, Sites};
+use crate::site::{block_position_rows, rod_node_arc, rod_rows, Site, SiteRows, Sites};
 
 impl<E: Element> Sites for Structure<E> {
     fn dim(&self) -> usize {
@@ -38,7 +38,7 @@ impl<E: Element> Sites for Structure<E> {
             Site::Body { body } => {
                 check_index(&format!("{field}.body"), body, self.spec.rigid_bodies.len())?;
                 let range = self.body_coordinates(body)?;
-                Ok(body_rows(range, E::DIM))
+                Ok(block_position_rows(range, E::DIM))
             }
         }
     }
