@@ -76,7 +76,7 @@ use crate::element::Element;
 use crate::error::{check_len, Error, Result};
 use crate::linsolve::{AutoFactors, Factorization};
 use crate::statics::LinearLoad;
-use crate::structure::Assembled;
+use crate::structure::Model;
 
 /// The sensitivities of one equilibrium of `robot`, from the factors `F` of
 /// its tangent `K` there (as [`crate::statics::EquilibriumTracker`] returns
@@ -85,7 +85,7 @@ use crate::structure::Assembled;
 /// # Example
 /// See the [module documentation](self).
 #[derive(Debug)]
-pub struct Sensitivity<'a, M: Assembled, F: Factorization = AutoFactors> {
+pub struct Sensitivity<'a, M: Model, F: Factorization = AutoFactors> {
     robot: &'a M,
     /// The free coordinates of the equilibrium (the map's Jacobian `T(u)`
     /// is taken there; the clamped robot's map is linear).
@@ -93,13 +93,13 @@ pub struct Sensitivity<'a, M: Assembled, F: Factorization = AutoFactors> {
     factors: &'a F,
 }
 
-impl<M: Assembled, F: Factorization> Clone for Sensitivity<'_, M, F> {
+impl<M: Model, F: Factorization> Clone for Sensitivity<'_, M, F> {
     fn clone(&self) -> Self {
         *self
     }
 }
 
-impl<M: Assembled, F: Factorization> Copy for Sensitivity<'_, M, F> {}
+impl<M: Model, F: Factorization> Copy for Sensitivity<'_, M, F> {}
 
 /// Adjoint fields of `m` outputs `y_i = c_i · q`, column `i` each.
 ///
@@ -159,7 +159,7 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, Robot<E>, F> {
     }
 }
 
-impl<'a, M: Assembled, F: Factorization> Sensitivity<'a, M, F> {
+impl<'a, M: Model, F: Factorization> Sensitivity<'a, M, F> {
     /// The sensitivities of any model at the equilibrium of free
     /// coordinates `u` whose tangent's factors are `factors`.
     ///

@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::element::Element;
 use crate::error::{check_index, Error, Result};
-use crate::structure::{Assembled, Rod};
+use crate::structure::{Model, Rod};
 
 /// A point of a model.
 ///
@@ -116,7 +116,7 @@ pub(crate) fn apply_row(row: &[(usize, f64)], q: &[f64]) -> f64 {
 /// assert!((p[2] - x[2]).abs() < 1e-12);
 /// # Ok::<(), softrod::Error>(())
 /// ```
-pub trait Sites: Assembled {
+pub trait Sites: Model {
     /// The dimension of a position (2 planar, 3 spatial).
     fn dim(&self) -> usize;
 

@@ -22,7 +22,7 @@ use softrod::scene::Scene;
 use softrod::sensitivity::Sensitivity;
 use softrod::site::{Site, Sites};
 use softrod::statics::{LinearLoad, StaticSettings, StaticSolver, Tracker};
-use softrod::structure::{Assembled, RodSpec, StructureSpec};
+use softrod::structure::{RodSpec, Stepping, StructureSpec};
 
 fn sections() -> Vec<Section> {
     vec![

@@ -13,7 +13,7 @@ use super::{Robot, TangentTarget};
 use crate::element::Element;
 use crate::error::Result;
 use crate::linsolve::SymmetricMatrix;
-use crate::structure::Assembled;
+use crate::structure::Stepping;
 
 /// The robot's kept results (see the module documentation).
 pub(super) struct RobotCache<E: Element> {
@@ -87,7 +87,7 @@ impl<E: Element> Robot<E> {
             .unactuated_start
             .get_or_init(|| {
                 let q = self.arc_configuration(&[]);
-                Assembled::free_coordinates_of(self, q.as_slice()).ok()
+                Stepping::free_coordinates_of(self, q.as_slice()).ok()
             })
             .as_ref()
     }

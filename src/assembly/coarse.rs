@@ -145,7 +145,7 @@ impl<E: Element> Robot<E> {
             ));
         }
         let q = coarse.interpolate_to(q_coarse, self.node_arc())?;
-        crate::structure::Assembled::free_coordinates_of(self, &q)
+        crate::structure::Stepping::free_coordinates_of(self, &q)
     }
 
     /// A cable field (`[v, v']` per node, node-major) of this mesh at the

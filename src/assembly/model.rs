@@ -1,4 +1,4 @@
-//! [`Assembled`] for the clamped robot: the equilibrium solvers see a
+//! [`Model`](crate::structure::Model) for the clamped robot: the equilibrium solvers see a
 //! [`Robot`] through the same trait as a multi-body structure.
 
 use std::sync::Arc;
@@ -10,22 +10,10 @@ use crate::element::Element;
 use crate::error::{check_len, Result};
 use crate::linsolve::{SymmetricMatrix, SymmetricPattern};
 use crate::loads::Loads;
-use crate::structure::Assembled;
+use crate::structure::{Assembled, MeshSequencing, ModelLoads, SolverHints, Stepping};
 
 impl<E: Element> Assembled for Robot<E> {
     type Loads = Loads;
-
-    fn conservative(&self, loads: &Loads) -> bool {
-        loads.follower_loads.is_empty()
-    }
-
-    fn coarse_model(&self, loads: &Loads) -> Result<Option<(Self, Loads)>> {
-        self.coarsened(loads)
-    }
-
-    fn prolong(&self, coarse: &Self, q_coarse: &[f64]) -> Result<DVector<f64>> {
-        self.prolong_from(coarse, q_coarse)
-    }
 
     fn n_free(&self) -> usize {
         Robot::n_free(self)
@@ -53,14 +41,6 @@ impl<E: Element> Assembled for Robot<E> {
 
     fn dead_force(&self, loads: &Loads) -> Result<DVector<f64>> {
         Robot::dead_force(self, loads)
-    }
-
-    fn scaled_loads(&self, loads: &Loads, factor: f64) -> Loads {
-        loads.scaled(factor)
-    }
-
-    fn restrict_into(&self, _u: &[f64], f: &[f64], out: &mut [f64]) -> Result<()> {
-        Robot::restrict_into(self, f, out)
     }
 
     fn residual_into(
@@ -101,7 +81,9 @@ impl<E: Element> Assembled for Robot<E> {
     fn tangent_pattern(&self) -> Result<Arc<SymmetricPattern>> {
         Ok(Robot::tangent_pattern(self).clone())
     }
+}
 
+impl<E: Element> Stepping for Robot<E> {
     /// The clamp resets the base position and direction and keeps the
     /// stretch along its free direction; nodes 1 … N are taken as given.
     fn free_coordinates_of(&self, q: &[f64]) -> Result<DVector<f64>> {
@@ -120,44 +102,8 @@ impl<E: Element> Assembled for Robot<E> {
         Ok(DVector::from_vec(u))
     }
 
-    /// The arcs of the actuation ([`Robot::arc_configuration`]).
-    fn start_free_coordinates(&self, loads: &Loads) -> Result<DVector<f64>> {
-        self.validate_loads(loads)?;
-        // no pressure (or only zeros): the arcs of no actuation, kept by the
-        // robot (the same numbers: a zero pressure adds a zero torque)
-        if loads.pressures_pa.iter().all(|p| *p == 0.0) {
-            if let Some(u) = self.unactuated_start() {
-                return Ok(u.clone());
-            }
-        }
-        self.free_coordinates_of(self.arc_configuration(&loads.pressures_pa).as_slice())
-    }
-
-    fn applied_force_into(
-        &self,
-        _u: &[f64],
-        q: &[f64],
-        dead: &[f64],
-        loads: &Loads,
-        out: &mut [f64],
-    ) -> Result<()> {
-        Robot::restrict_into(self, dead, out)?;
-        let mut m = vec![0.0; self.n_free()];
-        self.moment_force_into(q, loads, &mut m)?;
-        out.iter_mut().zip(&m).for_each(|(a, b)| *a += b);
-        Ok(())
-    }
-
-    /// The robot's tangent does not depend on the dead forces.
-    fn tangent_into(
-        &self,
-        _u: &[f64],
-        q: &[f64],
-        _dead: &[f64],
-        loads: &Loads,
-        k: &mut SymmetricMatrix,
-    ) -> Result<()> {
-        Robot::tangent_into(self, q, loads, k)
+    fn restrict_into(&self, _u: &[f64], f: &[f64], out: &mut [f64]) -> Result<()> {
+        Robot::restrict_into(self, f, out)
     }
 
     fn step_into(&self, _u: &[f64], du: &[f64], dq: &mut [f64]) -> Result<()> {
@@ -201,6 +147,48 @@ impl<E: Element> Assembled for Robot<E> {
     fn length_m(&self) -> f64 {
         self.length()
     }
+}
+
+impl<E: Element> SolverHints for Robot<E> {
+    /// The arcs of the actuation ([`Robot::arc_configuration`]).
+    fn start_free_coordinates(&self, loads: &Loads) -> Result<DVector<f64>> {
+        self.validate_loads(loads)?;
+        // no pressure (or only zeros): the arcs of no actuation, kept by the
+        // robot (the same numbers: a zero pressure adds a zero torque)
+        if loads.pressures_pa.iter().all(|p| *p == 0.0) {
+            if let Some(u) = self.unactuated_start() {
+                return Ok(u.clone());
+            }
+        }
+        self.free_coordinates_of(self.arc_configuration(&loads.pressures_pa).as_slice())
+    }
+
+    fn applied_force_into(
+        &self,
+        _u: &[f64],
+        q: &[f64],
+        dead: &[f64],
+        loads: &Loads,
+        out: &mut [f64],
+    ) -> Result<()> {
+        Robot::restrict_into(self, dead, out)?;
+        let mut m = vec![0.0; self.n_free()];
+        self.moment_force_into(q, loads, &mut m)?;
+        out.iter_mut().zip(&m).for_each(|(a, b)| *a += b);
+        Ok(())
+    }
+
+    /// The robot's tangent does not depend on the dead forces.
+    fn tangent_into(
+        &self,
+        _u: &[f64],
+        q: &[f64],
+        _dead: &[f64],
+        loads: &Loads,
+        k: &mut SymmetricMatrix,
+    ) -> Result<()> {
+        Robot::tangent_into(self, q, loads, k)
+    }
 
     /// The element energies ([`Robot::element_energies_into`]).
     fn energies_into(&self, q: &[f64], out: &mut Vec<f64>) -> Result<()> {
@@ -219,5 +207,26 @@ impl<E: Element> Assembled for Robot<E> {
         loads: &Loads,
     ) -> Result<f64> {
         Robot::potential_change_from(self, from_q, from_energies, to_q, dead, loads)
+    }
+}
+
+impl<E: Element> MeshSequencing for Robot<E> {
+    fn coarse_model(&self, loads: &Loads) -> Result<Option<(Self, Loads)>> {
+        self.coarsened(loads)
+    }
+
+    fn prolong(&self, coarse: &Self, q_coarse: &[f64]) -> Result<DVector<f64>> {
+        self.prolong_from(coarse, q_coarse)
+    }
+}
+
+impl ModelLoads for Loads {
+    fn scaled(&self, factor: f64) -> Loads {
+        Loads::scaled(self, factor)
+    }
+
+    /// A follower load does not derive from a potential.
+    fn conservative(&self) -> bool {
+        self.follower_loads.is_empty()
     }
 }

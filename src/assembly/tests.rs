@@ -322,7 +322,7 @@ fn kept_coarse_robot_equals_a_fresh_one() {
 
 #[test]
 fn kept_unactuated_start_equals_the_arcs_of_no_pressure() {
-    use crate::structure::{Assembled, RestCurvatureProfile};
+    use crate::structure::{RestCurvatureProfile, SolverHints, Stepping};
     let mut curved = Section::uniform(0.12, 300.0, 0.025, 6);
     curved.rest_curvature_profile = Some(RestCurvatureProfile {
         s_m: vec![0.0, 0.12],
@@ -336,7 +336,7 @@ fn kept_unactuated_start_equals_the_arcs_of_no_pressure() {
     ];
     for robot in robots {
         let fresh = |p: &[f64]| {
-            Assembled::free_coordinates_of(&robot, robot.arc_configuration(p).as_slice()).unwrap()
+            Stepping::free_coordinates_of(&robot, robot.arc_configuration(p).as_slice()).unwrap()
         };
         let zeros = vec![0.0; robot.n_pressures()];
         let mut minus = zeros.clone();
@@ -348,7 +348,7 @@ fn kept_unactuated_start_equals_the_arcs_of_no_pressure() {
             };
             // twice: formed, then kept; bit for bit the arcs computed afresh
             for _ in 0..2 {
-                let u = Assembled::start_free_coordinates(&robot, &loads).unwrap();
+                let u = SolverHints::start_free_coordinates(&robot, &loads).unwrap();
                 assert_eq!(u, fresh(&p));
                 assert_eq!(u, fresh(&[]));
             }
@@ -362,7 +362,7 @@ fn kept_unactuated_start_equals_the_arcs_of_no_pressure() {
             pressures_pa: p.clone(),
             ..Loads::default()
         };
-        let u = Assembled::start_free_coordinates(&robot, &loads).unwrap();
+        let u = SolverHints::start_free_coordinates(&robot, &loads).unwrap();
         assert_eq!(u, fresh(&p));
         assert_ne!(Some(&u), robot.unactuated_start());
     }

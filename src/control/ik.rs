@@ -66,7 +66,7 @@ use crate::linsolve::AutoFactors;
 use crate::loads::Loads;
 use crate::sensitivity::Sensitivity;
 use crate::statics::{StaticSettings, StaticSolver, TrackedEquilibrium, Tracker, WarmStrategy};
-use crate::structure::Assembled;
+use crate::structure::Stepping;
 
 use super::ik_settings::{IkSettings, IkStatus, PressureBound};
 use super::{adapter, boxqp};

@@ -1,4 +1,4 @@
-//! What the estimators need of a model: its equilibrium ([`Assembled`]),
+//! What the estimators need of a model: its equilibrium ([`Model`](crate::structure::Model)),
 //! its points ([`Sites`]), and where a distributed field lives. The clamped
 //! [`Robot`] and every [`Structure`] (the parallel robot, the gripper's
 //! fingers) are estimation models: a force at a site is estimated on both;
@@ -10,7 +10,7 @@ use crate::assembly::Robot;
 use crate::element::Element;
 use crate::loads::{Loads, PointForce};
 use crate::site::{Site, Sites};
-use crate::structure::{Assembled, BodyLoad, Rod, Structure, StructureLoads};
+use crate::structure::{BodyLoad, Model, Rod, Structure, StructureLoads};
 
 mod sealed {
     use super::super::newton::far::FullSpaceSolve;
@@ -52,7 +52,7 @@ mod sealed {
 /// # Ok::<(), softrod::Error>(())
 /// ```
 pub trait EstimationModel:
-    Assembled<Loads: Clone + Default + PartialEq + std::fmt::Debug + Send + Sync>
+    Model<Loads: Clone + Default + PartialEq + std::fmt::Debug + Send + Sync>
     + Sites
     + sealed::Hooks
     + 'static

@@ -24,6 +24,7 @@ use crate::observe::{MarkerObservation, Observation, ObservationOperator, MAX_MA
 use crate::sensitivity::Sensitivity;
 use crate::statics::tracker::FactoredTangent;
 use crate::statics::{LinearLoad, StaticSolver, TrackedEquilibrium, Tracker};
+use crate::structure::ModelLoads;
 
 use super::load_model::field_rod;
 use super::{BoundFrame, EstimationModel, EstimatorSettings, LoadModel};
@@ -86,7 +87,7 @@ impl<M: EstimationModel> Problem<M> {
                 ));
             }
         }
-        if !robot.conservative(&known) {
+        if !known.conservative() {
             // the sensitivities solve with the symmetric tangent: a follower
             // load's stiffness is not symmetric (assembly::Robot::follower_stiffness)
             return Err(Error::invalid(

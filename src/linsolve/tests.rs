@@ -646,7 +646,7 @@ fn max_diff(a: &[f64], b: &[f64]) -> (f64, f64) {
 }
 
 /// The static solve with the linear solver `kind` at a tolerance of 1e-12.
-fn solve_with<M: crate::structure::Assembled>(
+fn solve_with<M: crate::structure::Model>(
     model: &M,
     loads: &M::Loads,
     kind: SolverKind,

@@ -49,7 +49,7 @@ use crate::error::Result;
 use crate::linsolve::{AutoFactors, FactorOptions, Factorization, LinsolveError, TangentSolver};
 use crate::numeric::norm2;
 use crate::outcome::{NonFiniteAt, StaticStatus, StaticWarning};
-use crate::structure::Assembled;
+use crate::structure::{Model, ModelLoads};
 
 /// Largest rotation of a node slope a predictor may make (rad).
 pub(super) const PREDICTOR_ROTATION: f64 = 1.0;
@@ -82,7 +82,7 @@ pub(super) struct PathEnd {
 }
 
 /// A continuation's state along its path.
-struct Path<M: Assembled> {
+struct Path<M: Model> {
     /// `R(u_0; no loads)`: the homotopy's offset at `λ = 0`.
     r0: Vec<f64>,
     /// The loads at `λ = 0` and `n_q` zeros (no dead forces).
@@ -109,7 +109,7 @@ struct Path<M: Assembled> {
     rz: Vec<f64>,
 }
 
-impl<M: Assembled> Path<M> {
+impl<M: Model> Path<M> {
     /// The continuation's end with `status` (`None`: `λ = 1` reached).
     fn end(self, status: Option<StaticStatus>) -> PathEnd {
         PathEnd {
@@ -140,7 +140,7 @@ impl StaticSolver {
     /// the predictor ([`Self::predict`]), the corrector
     /// ([`Self::corrector`]), the step taken or cut ([`Self::path_step`],
     /// which leaves a saddle the step landed on, [`Self::leave_saddle`]).
-    pub(super) fn continuation<M: Assembled>(
+    pub(super) fn continuation<M: Model>(
         &self,
         model: &M,
         dead: &[f64],
@@ -152,7 +152,7 @@ impl StaticSolver {
         let n = model.n_free();
         let nq = model.n_q();
         let zero_dead = vec![0.0; nq];
-        let unloaded = model.scaled_loads(loads, 0.0);
+        let unloaded = loads.scaled(0.0);
         let mut r0 = vec![0.0; n];
         model.residual_into(u, &w.q, &zero_dead, &unloaded, &mut r0)?;
         let mut path = Path::<M> {
@@ -189,7 +189,7 @@ impl StaticSolver {
             let target = self.predict(model, u, w, &mut path, &mut dq, &mut u_try, &mut q_try)?;
             let off: Vec<f64> = path.r0.iter().map(|v| (1.0 - target) * v).collect();
             let dead_t: Vec<f64> = dead.iter().map(|v| target * v).collect();
-            let loads_t = model.scaled_loads(loads, target);
+            let loads_t = loads.scaled(target);
             let tgt = Target::<M> {
                 dead: &dead_t,
                 loads: &loads_t,
@@ -217,7 +217,7 @@ impl StaticSolver {
     /// definiteness says whether the path starts on its stable side).
     /// `Some(status)` when it cannot be had.
     #[allow(clippy::too_many_arguments)]
-    fn path_tangent<M: Assembled>(
+    fn path_tangent<M: Model>(
         &self,
         model: &M,
         dead: &[f64],
@@ -231,7 +231,7 @@ impl StaticSolver {
             Some(f) => f,
             None => {
                 let dead_l: Vec<f64> = dead.iter().map(|v| path.lambda * v).collect();
-                let loads_l = model.scaled_loads(loads, path.lambda);
+                let loads_l = loads.scaled(path.lambda);
                 model.tangent_into(u, &w.q, &dead_l, &loads_l, &mut w.k)?;
                 w.iterations += 1;
                 match factor(w) {
@@ -271,7 +271,7 @@ impl StaticSolver {
     /// estimates d²u/dλ², a turning slope's inward pull, which a straight
     /// predictor misses).
     #[allow(clippy::too_many_arguments)]
-    fn predict<M: Assembled>(
+    fn predict<M: Model>(
         &self,
         model: &M,
         u: &[f64],
@@ -309,7 +309,7 @@ impl StaticSolver {
     /// straight column goes on as a saddle while the path bends away), the
     /// saddle left for the stable branch ([`Self::leave_saddle`]), or cut.
     #[allow(clippy::too_many_arguments)]
-    fn path_step<M: Assembled>(
+    fn path_step<M: Model>(
         &self,
         model: &M,
         tgt: &Target<'_, M>,
@@ -382,7 +382,7 @@ impl StaticSolver {
     /// found (`u`, `w.q`, `trial` set to it, `λ = target`); `false`: `u`,
     /// `w.q` as they were.
     #[allow(clippy::too_many_arguments)]
-    fn leave_saddle<M: Assembled>(
+    fn leave_saddle<M: Model>(
         &self,
         model: &M,
         tgt: &Target<'_, M>,
@@ -435,7 +435,7 @@ impl StaticSolver {
 
     /// Plain Newton iterations on `R(u) − offset = 0` from the predicted
     /// `u` (`q = φ(u)`), which must contract.
-    fn corrector<M: Assembled>(
+    fn corrector<M: Model>(
         &self,
         model: &M,
         t: &Target<'_, M>,
@@ -527,9 +527,9 @@ enum Corrected {
 }
 
 /// The size of a step `dq` over all coordinates: its rotation
-/// ([`Assembled::step_rotation`]; a position change over the length counted
+/// ([`Stepping::step_rotation`](crate::structure::Stepping::step_rotation); a position change over the length counted
 /// too would weigh the slopes' own change `1/L` times).
-fn step_size<M: Assembled>(model: &M, dq: &[f64]) -> f64 {
+fn step_size<M: Model>(model: &M, dq: &[f64]) -> f64 {
     model.step_rotation(dq)
 }
 

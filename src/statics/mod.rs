@@ -1,6 +1,6 @@
 //! Static equilibrium: Newton's method on `Q(F, q, P) = 0` (17), the one
 //! equilibrium solver of every model: a clamped [`Robot`](crate::assembly::Robot), a multi-body
-//! [`crate::structure::Structure`], any [`Assembled`] model, iterated in its
+//! [`crate::structure::Structure`], any [`Model`] model, iterated in its
 //! free coordinates `u` with `q = φ(u)` (the equilibrium is
 //! `R(u) = T(u)ᵀ Q(φ(u)) = 0`).
 //!
@@ -62,7 +62,7 @@ use crate::linsolve::{AutoSolver, SolverKind, TangentSolver};
 pub use crate::outcome::{
     BranchChoice, NonFiniteAt, StaticCriterion, StaticReport, StaticStatus, StaticWarning,
 };
-use crate::structure::Assembled;
+use crate::structure::Model;
 
 mod continuation;
 mod newton;
@@ -224,7 +224,7 @@ pub struct Equilibrium {
 }
 
 /// Newton solver for the static equilibrium of a [`Robot`](crate::assembly::Robot) or any other
-/// [`Assembled`] model (see [`StaticSolver::solve`] for a structure).
+/// [`Model`] model (see [`StaticSolver::solve`] for a structure).
 ///
 /// # Example
 /// ```
@@ -259,17 +259,17 @@ impl StaticSolver {
     }
 
     /// Solves the equilibrium `R(u) = 0` of `model` (a [`Robot`](crate::assembly::Robot), a
-    /// [`crate::structure::Structure`], any [`Assembled`] model) for the
+    /// [`crate::structure::Structure`], any [`Model`] model) for the
     /// given loads, in its free coordinates `u` with `q = φ(u)`, starting
     /// from `q0` (all `n_q` coordinates, taken to the map by
-    /// [`Assembled::free_coordinates_of`]: a robot's clamp resets its base
+    /// [`Stepping::free_coordinates_of`](crate::structure::Stepping::free_coordinates_of): a robot's clamp resets its base
     /// position and direction) or, cold, from
-    /// [`Assembled::start_free_coordinates`] (a robot: the arcs of its
+    /// [`SolverHints::start_free_coordinates`](crate::structure::SolverHints::start_free_coordinates) (a robot: the arcs of its
     /// actuation, [`Robot::arc_configuration`](crate::assembly::Robot::arc_configuration)).
     ///
     /// # Errors
     /// [`Error::NotConverged`] with the report when no equilibrium is found
-    /// within the budget; the errors of [`Assembled::validate_loads`] for
+    /// within the budget; the errors of [`Assembled::validate_loads`](crate::structure::Assembled::validate_loads) for
     /// bad loads; [`Error::DimensionMismatch`] or
     /// [`Error::InvalidParameter`] for a bad `q0`; the settings' errors
     /// ([`StaticSettings::validate`]).
@@ -302,7 +302,7 @@ impl StaticSolver {
     /// assert!(warm.u[x] > eq.u[x]);
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    pub fn solve<M: Assembled>(
+    pub fn solve<M: Model>(
         &self,
         model: &M,
         loads: &M::Loads,
@@ -316,7 +316,7 @@ impl StaticSolver {
     }
 
     /// [`StaticSolver::solve`] with a linear solver analyzed before on the
-    /// model's [`Assembled::tangent_pattern`] (a robot's
+    /// model's [`Assembled::tangent_pattern`](crate::structure::Assembled::tangent_pattern) (a robot's
     /// [`Robot::tangent_pattern`](crate::assembly::Robot::tangent_pattern)): a caller that solves one model many
     /// times analyzes its pattern once (`settings.linear_solver` is then not
     /// read).
@@ -336,7 +336,7 @@ impl StaticSolver {
     /// assert!(eq.report.status.is_converged());
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
-    pub fn solve_with<M: Assembled>(
+    pub fn solve_with<M: Model>(
         &self,
         model: &M,
         loads: &M::Loads,
@@ -359,12 +359,7 @@ impl StaticSolver {
 
     /// The start point in free coordinates: `q0` taken to the map, or the
     /// model's cold start.
-    fn start<M: Assembled>(
-        &self,
-        model: &M,
-        loads: &M::Loads,
-        q0: Option<&[f64]>,
-    ) -> Result<Vec<f64>> {
+    fn start<M: Model>(&self, model: &M, loads: &M::Loads, q0: Option<&[f64]>) -> Result<Vec<f64>> {
         match q0 {
             Some(q0) => {
                 check_len("q0", model.n_q(), q0.len())?;

@@ -1,5 +1,5 @@
 //! The static solver's Newton iterations and load homotopy, for any
-//! [`Assembled`] model, in its free coordinates `u` (`q = φ(u)`).
+//! [`Model`](crate::structure::Model) model, in its free coordinates `u` (`q = φ(u)`).
 //!
 //! Per iteration: the tangent `K_u` on the model's pattern, factored by the
 //! caller's [`AutoSolver`] (analyzed once), the Newton direction
@@ -21,7 +21,7 @@ use crate::linsolve::{
 };
 use crate::numeric::norm2;
 use crate::outcome::{NonFiniteAt, StaticCriterion, StaticReport, StaticStatus, StaticWarning};
-use crate::structure::Assembled;
+use crate::structure::{Model, ModelLoads};
 
 /// Iterations of the first, plain Newton attempt from the start point.
 const QUICK_ITERATIONS: usize = 8;
@@ -90,7 +90,7 @@ pub(super) struct Work<'a> {
 
 /// The loads of one Newton run: the dead forces, the model's loads and
 /// the homotopy's offset.
-pub(super) struct Target<'a, M: Assembled> {
+pub(super) struct Target<'a, M: Model> {
     pub dead: &'a [f64],
     pub loads: &'a M::Loads,
     pub offset: &'a [f64],
@@ -140,7 +140,7 @@ pub(super) struct PhaseEnd {
 
 /// The fixed data of one solve: its loads as dead forces, its scale and
 /// its start point.
-pub(super) struct Problem<'a, M: Assembled> {
+pub(super) struct Problem<'a, M: Model> {
     pub(super) model: &'a M,
     pub(super) loads: &'a M::Loads,
     pub(super) dead: Vec<f64>,
@@ -152,7 +152,7 @@ pub(super) struct Problem<'a, M: Assembled> {
     pub(super) q_start: Vec<f64>,
 }
 
-impl<M: Assembled> Problem<'_, M> {
+impl<M: Model> Problem<'_, M> {
     /// The full problem as a Newton target.
     pub(super) fn full(&self, strict: bool, definite_only: bool) -> Target<'_, M> {
         Target {
@@ -181,7 +181,7 @@ impl StaticSolver {
     /// tried when the one before did not converge: [`Self::quick`],
     /// [`Self::sequenced`], [`Self::continued`], [`Self::line_searched`],
     /// [`Self::homotopy`]; then [`Self::finish`] (stability, the report).
-    pub(super) fn run<M: Assembled>(
+    pub(super) fn run<M: Model>(
         &self,
         model: &M,
         loads: &M::Loads,
@@ -247,7 +247,7 @@ impl StaticSolver {
 
     /// The dead forces, the load scale and the start point of a solve from
     /// `u` (`w.q` set to `φ(u)`).
-    fn problem<'a, M: Assembled>(
+    fn problem<'a, M: Model>(
         &self,
         model: &'a M,
         loads: &'a M::Loads,
@@ -292,7 +292,7 @@ impl StaticSolver {
     /// (plain Newton also finds the unstable ones, e.g. a column standing
     /// straight above its buckling load): otherwise the status is
     /// [`StaticStatus::LineSearchFailed`].
-    fn quick<M: Assembled>(
+    fn quick<M: Model>(
         &self,
         p: &Problem<'_, M>,
         u: &mut [f64],
@@ -323,7 +323,7 @@ impl StaticSolver {
     /// `super::sequence`), kept when plain Newton reaches a stable
     /// equilibrium from it (`u` is then that equilibrium; otherwise where
     /// Newton stopped, and the status [`StaticStatus::LineSearchFailed`]).
-    fn sequenced<M: Assembled>(
+    fn sequenced<M: Model>(
         &self,
         p: &Problem<'_, M>,
         coarse: (M, M::Loads),
@@ -361,7 +361,7 @@ impl StaticSolver {
     /// part only, Newton converges linearly and the continuation's
     /// contraction test would halve every step; the globalized homotopy
     /// handles them.
-    fn continued<M: Assembled>(
+    fn continued<M: Model>(
         &self,
         p: &Problem<'_, M>,
         u: &mut Vec<f64>,
@@ -369,7 +369,7 @@ impl StaticSolver {
         cold: bool,
     ) -> Result<PhaseEnd> {
         let (model, loads) = (p.model, p.loads);
-        if !model.conservative(loads) {
+        if !loads.conservative() {
             return Ok(PhaseEnd {
                 status: StaticStatus::LineSearchFailed,
                 phase: Phase::Continuation,
@@ -401,7 +401,7 @@ impl StaticSolver {
     /// problem from the start point (slower on fine meshes, but it reaches
     /// some equilibria the plain corrector cannot: see the module
     /// documentation).
-    fn line_searched<M: Assembled>(
+    fn line_searched<M: Model>(
         &self,
         p: &Problem<'_, M>,
         u: &mut [f64],
@@ -423,7 +423,7 @@ impl StaticSolver {
     /// adaptive steps. Its last Newton run is on `λ = 1`, whose offset
     /// vanishes, but `w.r` may be an intermediate problem's residual when it
     /// fails (the report's residual is evaluated again).
-    fn homotopy<M: Assembled>(
+    fn homotopy<M: Model>(
         &self,
         p: &Problem<'_, M>,
         u: &mut Vec<f64>,
@@ -431,7 +431,7 @@ impl StaticSolver {
     ) -> Result<PhaseEnd> {
         let model = p.model;
         p.restart(u, w);
-        let unloaded = model.scaled_loads(p.loads, 0.0);
+        let unloaded = p.loads.scaled(0.0);
         let zero_dead = vec![0.0; model.n_q()];
         let mut r0 = vec![0.0; model.n_free()];
         model.residual_into(u, &w.q, &zero_dead, &unloaded, &mut r0)?;
@@ -443,7 +443,7 @@ impl StaticSolver {
             let target = (lambda + step).min(1.0);
             let off: Vec<f64> = r0.iter().map(|v| (1.0 - target) * v).collect();
             let dead_t: Vec<f64> = p.dead.iter().map(|v| target * v).collect();
-            let loads_t = model.scaled_loads(p.loads, target);
+            let loads_t = p.loads.scaled(target);
             let saved = (u.clone(), w.q.clone());
             let before = w.iterations;
             let t = Target::<M> {
@@ -501,7 +501,7 @@ impl StaticSolver {
     /// beyond buckling, is left for a stable equilibrium; see
     /// [`super::stability`]), its residual, the check that the test its
     /// status names holds on that residual, and the report.
-    fn finish<M: Assembled>(
+    fn finish<M: Model>(
         &self,
         p: &Problem<'_, M>,
         mut u: Vec<f64>,
@@ -514,7 +514,7 @@ impl StaticSolver {
         // the answer's inertia goes into the report, read off the last
         // Newton factorization when it was made at an equilibrium to the
         // floor (see `Work::settled`: then `w.r` is the answer's residual too)
-        let settled = status.is_converged() && w.settled && model.conservative(loads);
+        let settled = status.is_converged() && w.settled && loads.conservative();
         // every Newton run leaves `w.r` the residual of its target at `u`;
         // the last one's target was the full problem (zero offset) unless
         // the homotopy ran: that residual is the report's while the
@@ -602,7 +602,7 @@ impl StaticSolver {
     /// factored tangent), the rotation cap, a full step on the round-off
     /// floor ([`Self::floor_step`]) or the line search
     /// ([`Self::line_search`]), then the increment test.
-    pub(super) fn newton<M: Assembled>(
+    pub(super) fn newton<M: Model>(
         &self,
         model: &M,
         t: &Target<'_, M>,
@@ -718,7 +718,7 @@ impl StaticSolver {
     /// equilibrium), the scaled diagonal is shifted with growing μ until it
     /// does. (The tangent is symmetric: L D Lᵀ when positive definite, the
     /// pivoted LU otherwise, neither consuming it.)
-    fn newton_direction<M: Assembled>(
+    fn newton_direction<M: Model>(
         &self,
         model: &M,
         t: &Target<'_, M>,
@@ -794,7 +794,7 @@ impl StaticSolver {
     /// `step_inf`), kept unless it leaves the floor (the first one: unless
     /// it lands above it).
     #[allow(clippy::too_many_arguments)]
-    fn floor_step<M: Assembled>(
+    fn floor_step<M: Model>(
         &self,
         model: &M,
         t: &Target<'_, M>,
@@ -846,7 +846,7 @@ impl StaticSolver {
     /// decreases along `du` when `R·du > 0`); a strict target tries the
     /// full step only. The accepted trial is left in `it.trial`,
     /// `it.q_trial`, `it.r_trial`.
-    fn line_search<M: Assembled>(
+    fn line_search<M: Model>(
         &self,
         model: &M,
         t: &Target<'_, M>,
@@ -899,7 +899,7 @@ impl StaticSolver {
 
 /// `|R(u) − offset|_2` of the target `t` at `u` (`q = φ(u)`), the residual
 /// into `r`.
-fn eval<M: Assembled>(
+fn eval<M: Model>(
     model: &M,
     t: &Target<'_, M>,
     u: &[f64],

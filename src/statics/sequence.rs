@@ -1,7 +1,7 @@
 //! Mesh sequencing: a cold solve of a fine mesh starts from the
 //! equilibrium of a coarse mesh of the same model
-//! ([`Assembled::coarse_model`]), interpolated onto the fine one
-//! ([`Assembled::prolong`]).
+//! ([`MeshSequencing::coarse_model`](crate::structure::MeshSequencing::coarse_model)), interpolated onto the fine one
+//! ([`MeshSequencing::prolong`](crate::structure::MeshSequencing::prolong)).
 //!
 //! Why (measured, `benches/statics_scaling.rs`): the continuation's load
 //! steps are set by the rotation of the solution, not by the mesh, but on a
@@ -20,7 +20,7 @@ use super::StaticSolver;
 use crate::error::{Error, Result};
 use crate::linsolve::AutoSolver;
 use crate::outcome::{StaticStatus, StaticWarning};
-use crate::structure::Assembled;
+use crate::structure::Model;
 
 /// Newton iterations on the fine mesh from the interpolated coarse
 /// equilibrium (full steps only); past them the solve goes on as without a
@@ -44,9 +44,9 @@ pub(super) struct CoarseStart {
 
 impl StaticSolver {
     /// Solves `coarse`, the coarse model of `model` with its loads
-    /// ([`Assembled::coarse_model`]), cold and interpolates its equilibrium
+    /// ([`MeshSequencing::coarse_model`](crate::structure::MeshSequencing::coarse_model)), cold and interpolates its equilibrium
     /// onto `model`.
-    pub(super) fn coarse_start<M: Assembled>(
+    pub(super) fn coarse_start<M: Model>(
         &self,
         model: &M,
         (coarse, coarse_loads): (M, M::Loads),
@@ -82,7 +82,7 @@ impl StaticSolver {
 
     /// Plain Newton (full steps) on the full loads from the prolonged
     /// coarse equilibrium in `u` (`w.q = φ(u)`).
-    pub(super) fn fine_newton<M: Assembled>(
+    pub(super) fn fine_newton<M: Model>(
         &self,
         model: &M,
         full: &Target<'_, M>,

@@ -35,7 +35,7 @@ use super::StaticSolver;
 use crate::error::Result;
 use crate::linsolve::{FactorOptions, Factorization, Inertia, LinsolveError, TangentSolver};
 use crate::outcome::{BranchChoice, StaticStatus};
-use crate::structure::Assembled;
+use crate::structure::{Model, ModelLoads};
 
 /// Escapes from a saddle tried at most before the saddle is returned.
 const ESCAPES: usize = 3;
@@ -76,7 +76,7 @@ impl StaticSolver {
     /// along the direction. Returns the status of the answer, its inertia and how
     /// a side was chosen.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn stabilize<M: Assembled>(
+    pub(super) fn stabilize<M: Model>(
         &self,
         model: &M,
         dead: &[f64],
@@ -92,7 +92,7 @@ impl StaticSolver {
             inertia: None,
             branch: None,
         };
-        if !model.conservative(loads) {
+        if !loads.conservative() {
             // no potential: the symmetric tangent is not the stability
             return Ok(out);
         }
@@ -157,7 +157,7 @@ impl StaticSolver {
     }
 
     /// The generalized load vector at `u`, `R(u; loads) − R(u; no loads)`.
-    fn load_vector<M: Assembled>(
+    fn load_vector<M: Model>(
         &self,
         model: &M,
         dead: &[f64],
@@ -168,14 +168,14 @@ impl StaticSolver {
         let n = model.n_free();
         let (mut r1, mut r0) = (vec![0.0; n], vec![0.0; n]);
         model.residual_into(u, &w.q, dead, loads, &mut r1)?;
-        let unloaded = model.scaled_loads(loads, 0.0);
+        let unloaded = loads.scaled(0.0);
         model.residual_into(u, &w.q, &vec![0.0; model.n_q()], &unloaded, &mut r0)?;
         r1.iter_mut().zip(&r0).for_each(|(a, b)| *a -= b);
         Ok(r1)
     }
 
     /// Factors the tangent at `u` (full loads) for its inertia.
-    fn inertia_at<M: Assembled>(
+    fn inertia_at<M: Model>(
         &self,
         model: &M,
         dead: &[f64],
@@ -194,7 +194,7 @@ impl StaticSolver {
     /// Moves `u` from the saddle along `±d` by [`ESCAPE_ROTATION`]: the
     /// sign `side` when given, else the sign with the lower potential.
     #[allow(clippy::too_many_arguments)]
-    fn leave_along<M: Assembled>(
+    fn leave_along<M: Model>(
         &self,
         model: &M,
         dead: &[f64],

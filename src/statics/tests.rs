@@ -156,6 +156,7 @@ fn a_structure_restarts_from_its_configuration() {
 fn a_definite_only_attempt_gives_up_at_an_indefinite_tangent() {
     use super::newton::{Target, Work};
     use crate::linsolve::{AutoSolver, LinearWork, SymmetricMatrix};
+    use crate::structure::{Assembled, MeshSequencing, SolverHints};
     let scene: crate::scene::Scene = serde_json::from_value(serde_json::json!({
         "robot": {"sections": [
             {"length_m": 0.12, "ea_n": 300.0, "ei_nm2": 0.025, "elements": 64},
@@ -167,7 +168,10 @@ fn a_definite_only_attempt_gives_up_at_an_indefinite_tangent() {
     .unwrap();
     let (robot, loads) = (scene.robot().unwrap(), scene.loads().unwrap());
     assert!(robot.coarse_model(&loads).unwrap().is_some());
-    let dead: Vec<f64> = Assembled::dead_force(&robot, &loads).unwrap().data.into();
+    let dead: Vec<f64> = crate::structure::Assembled::dead_force(&robot, &loads)
+        .unwrap()
+        .data
+        .into();
     let zero = vec![0.0; robot.n_free()];
     let attempt = |definite_only: bool| {
         let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), SolverKind::Auto).unwrap();
@@ -219,7 +223,7 @@ fn a_definite_only_attempt_gives_up_at_an_indefinite_tangent() {
 
 /// `|R|₂` at the answer `eq` of `model` under `loads`, evaluated afresh:
 /// what the report's `residual_norm_n` must equal bit for bit.
-fn residual_norm_at<M: Assembled>(model: &M, eq: &Equilibrium, loads: &M::Loads) -> f64 {
+fn residual_norm_at<M: Model>(model: &M, eq: &Equilibrium, loads: &M::Loads) -> f64 {
     let dead = model.dead_force(loads).unwrap();
     let mut r = vec![0.0; model.n_free()];
     model
@@ -263,8 +267,8 @@ fn a_small_load_reads_its_stability_off_the_last_newton_factorization() {
     assert_eq!(work.factorizations, eq.report.iterations, "{}", eq.report);
     // what a factorization at the answer says
     let mut k = SymmetricMatrix::zeros(robot.tangent_pattern().clone());
-    let dead = Assembled::dead_force(&robot, &loads).unwrap();
-    Assembled::tangent_into(
+    let dead = crate::structure::Assembled::dead_force(&robot, &loads).unwrap();
+    crate::structure::SolverHints::tangent_into(
         &robot,
         eq.u.as_slice(),
         eq.q.as_slice(),

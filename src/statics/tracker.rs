@@ -1,5 +1,5 @@
 //! Equilibria at a sequence of nearby loads: the static solver's warm
-//! tracker, one for every model ([`Tracker`] over any [`Assembled`]: the
+//! tracker, one for every model ([`Tracker`] over any [`Model`]: the
 //! clamped [`Robot`] of the estimators, a [`crate::structure::Structure`]
 //! such as the parallel robot, the robot of the inverse kinematics).
 //!
@@ -56,7 +56,7 @@ use crate::linsolve::{
     AutoFactors, AutoSolver, FactorOptions, Factorization, SymmetricMatrix, TangentSolver,
 };
 use crate::numeric::{max_abs, norm2};
-use crate::structure::Assembled;
+use crate::structure::Model;
 
 use super::{residual_floor, Equilibrium, StaticSettings, StaticSolver};
 
@@ -94,7 +94,7 @@ use super::{residual_floor, Equilibrium, StaticSettings, StaticSolver};
 /// assert_eq!(LinearLoad::force(&TipY, &robot, &[2.0])?[81], 2.0);
 /// # Ok::<(), softrod::Error>(())
 /// ```
-pub trait LinearLoad<M: Assembled> {
+pub trait LinearLoad<M: Model> {
     /// Number of parameters `n_F`.
     fn n_params(&self, model: &M) -> usize;
     /// `G F` over all `n_q` coordinates (N).
@@ -408,7 +408,7 @@ struct Target<'a> {
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone)]
-pub struct Tracker<M: Assembled> {
+pub struct Tracker<M: Model> {
     model: M,
     known: M::Loads,
     /// Dead force of the known loads (`n_q`).
@@ -453,7 +453,7 @@ impl<E: Element> Tracker<Robot<E>> {
     }
 }
 
-impl<M: Assembled> Tracker<M> {
+impl<M: Model> Tracker<M> {
     /// A tracker for `model` under the known loads `known`, with the
     /// estimators' [`WarmStrategy::ChordThenNewton`]; `settings` are those
     /// of the globalized fallback solve and of the residual test, and
@@ -462,7 +462,7 @@ impl<M: Assembled> Tracker<M> {
     ///
     /// # Errors
     /// [`crate::Error::InvalidParameter`] for invalid settings; the errors of
-    /// [`Assembled::dead_force`]; [`crate::Error::TooLarge`] if the tangent's
+    /// [`Assembled::dead_force`](crate::structure::Assembled::dead_force); [`crate::Error::TooLarge`] if the tangent's
     /// factors cannot be stored.
     ///
     /// # Example
@@ -590,7 +590,7 @@ impl<M: Assembled> Tracker<M> {
     /// The residual `R` over the free coordinates at `(q, F)` (N).
     ///
     /// # Errors
-    /// As [`LinearLoad::force`] and [`Assembled::residual_into`].
+    /// As [`LinearLoad::force`] and [`Assembled::residual_into`](crate::structure::Assembled::residual_into).
     ///
     /// # Example
     /// See [`Tracker::dead_with`].
@@ -689,7 +689,7 @@ impl<M: Assembled> Tracker<M> {
     /// under the old loads, are dropped.
     ///
     /// # Errors
-    /// As [`Assembled::validate_loads`] and [`Assembled::dead_force`]; on
+    /// As [`Assembled::validate_loads`](crate::structure::Assembled::validate_loads) and [`Assembled::dead_force`](crate::structure::Assembled::dead_force); on
     /// an error the tracker is unchanged.
     ///
     /// # Example
@@ -749,7 +749,7 @@ impl<M: Assembled> Tracker<M> {
     }
 
     /// The equilibrium at `F` from `q0` (all coordinates, taken as they
-    /// are; their free coordinates by [`Assembled::free_coordinates_of`]):
+    /// are; their free coordinates by [`Stepping::free_coordinates_of`](crate::structure::Stepping::free_coordinates_of)):
     /// the warm iterations of the strategy, then the globalized
     /// [`StaticSolver`].
     ///

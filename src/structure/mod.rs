@@ -18,7 +18,7 @@
 //!   `R(u) = T(u)ᵀ Q(φ(u))` of the equilibrium (17) and tangent
 //!   `K_u = Tᵀ K T + Σ_i g_i ∂²φ_i/∂u²` as a [`Triplets`] list.
 //! - [`model`]: what an equilibrium solver needs of a model
-//!   ([`Assembled`], implemented by the structure and the clamped robot);
+//!   ([`Model`], implemented by the structure and the clamped robot);
 //!   the solver is [`crate::statics::StaticSolver`], one for every model.
 
 mod assemble;
@@ -29,6 +29,7 @@ pub mod rod;
 pub mod section;
 mod sites;
 pub mod spec;
+mod strategy;
 mod triplets;
 
 use std::ops::Range;
@@ -36,13 +37,14 @@ use std::sync::Arc;
 
 pub use assemble::JointReaction;
 pub use dofmap::{BlockRule, DofMap};
-pub use model::Assembled;
+pub use model::{Assembled, Model, ModelLoads};
 pub use rod::Rod;
 pub use section::{Chamber, RestCurvatureProfile, Section};
 pub use spec::{
     BodyLoad, Clamp, EndSupport, JointSpec, RigidBodySpec, RodEnd, RodSpec, StructureLoads,
     StructureSpec,
 };
+pub use strategy::{MeshSequencing, SolverHints, Stepping};
 pub use triplets::Triplets;
 
 use crate::element::Element;

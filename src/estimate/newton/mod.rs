@@ -115,7 +115,7 @@ impl<M: EstimationModel> NewtonEstimator<M> {
     /// # Errors
     /// [`crate::Error::InvalidParameter`] for invalid settings, another
     /// backend (`estimator.backend`) or bounds (bounds need the SQP
-    /// backend); the errors of [`crate::structure::Assembled::validate_loads`].
+    /// backend); the errors of [`Assembled::validate_loads`](crate::structure::Assembled::validate_loads).
     ///
     /// # Example
     /// ```

@@ -12,6 +12,7 @@
 use super::*;
 use crate::estimate::LoadModel;
 use crate::scene::Scene;
+use crate::structure::Stepping;
 
 /// A load of size `k` of the model: every node pulled down (distributed) or
 /// a force at node 12.
