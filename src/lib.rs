@@ -78,6 +78,7 @@
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
 
 pub mod assembly;
+mod cone;
 pub mod contact;
 pub mod control;
 pub mod element;

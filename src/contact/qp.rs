@@ -2,9 +2,9 @@
 //! linearization, by clarabel.
 
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{
-    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus, SupportedConeT,
-};
+use clarabel::solver::{NonnegativeConeT, SolverStatus, SupportedConeT};
+
+use crate::cone::{self, Tolerances};
 use nalgebra::DMatrix;
 
 use super::Gap;
@@ -95,24 +95,8 @@ pub(super) fn solve_qp(
     }
     let a_mat = CscMatrix::new_from_triplets(m + 2 * n, n, ri, ci, vi);
     let cones: Vec<SupportedConeT<f64>> = vec![NonnegativeConeT(m + 2 * n)];
-    let settings = DefaultSettingsBuilder::default()
-        .verbose(false)
-        .tol_gap_abs(1e-12)
-        .tol_gap_rel(1e-12)
-        .tol_feas(1e-12)
-        .max_iter(200)
-        .build()
-        .map_err(|_| SolverStatus::Unsolved)?;
-    let mut solver = DefaultSolver::new(&p_mat, &c, &a_mat, &b, &cones, settings)
-        .map_err(|_| SolverStatus::Unsolved)?;
-    solver.solve();
-    let sol = &solver.solution;
-    if !matches!(
-        sol.status,
-        SolverStatus::Solved | SolverStatus::AlmostSolved
-    ) {
-        return Err(sol.status);
-    }
+    let sol = cone::solve(&p_mat, &c, &a_mat, &b, &cones, Tolerances::all(1e-12))
+        .map_err(|f| f.status())?;
     let du: Vec<f64> = sol.x.iter().zip(&d).map(|(x, d)| x * d).collect();
     // complementarity: the multiplier of a gap the step leaves open (its
     // slack above its multiplier, both in the scaled problem's units) is

@@ -41,10 +41,9 @@
 //! ```
 
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{
-    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SecondOrderConeT,
-    SolverStatus, SupportedConeT, ZeroConeT,
-};
+use clarabel::solver::{NonnegativeConeT, SecondOrderConeT, SupportedConeT, ZeroConeT};
+
+use crate::cone::{self, Failure, Tolerances};
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
@@ -335,30 +334,19 @@ pub(crate) fn solve_cone_program(
     cones: &[SupportedConeT<f64>],
     tol_gap_abs: f64,
 ) -> Result<Vec<f64>> {
-    let settings = DefaultSettingsBuilder::default()
-        .verbose(false)
-        .tol_gap_abs(tol_gap_abs)
-        .tol_gap_rel(1e-10)
-        .tol_feas(1e-10)
-        .max_iter(200)
-        .build()
-        .map_err(|e| Error::invalid(format!("{what} settings"), format!("{e:?}"), "rejected"))?;
-    let mut solver = DefaultSolver::new(p, q, a, b, cones, settings)
-        .map_err(|e| Error::invalid(what, format!("{e:?}"), "clarabel rejected the program"))?;
-    solver.solve();
-    let sol = &solver.solution;
-    if !matches!(
-        sol.status,
-        SolverStatus::Solved | SolverStatus::AlmostSolved
-    ) || !sol.x.iter().all(|v| v.is_finite())
-    {
-        return Err(Error::invalid(
+    let tol = Tolerances {
+        gap_abs: tol_gap_abs,
+        ..Tolerances::all(1e-10)
+    };
+    match cone::solve(p, q, a, b, cones, tol) {
+        Ok(sol) => Ok(sol.x),
+        Err(Failure::Rejected(e)) => Err(Error::invalid(what, e, "clarabel rejected the program")),
+        Err(Failure::Status(s)) => Err(Error::invalid(
             what,
-            format!("{:?}", sol.status),
+            format!("{s:?}"),
             "clarabel did not solve the program",
-        ));
+        )),
     }
-    Ok(sol.x.clone())
 }
 
 #[cfg(test)]

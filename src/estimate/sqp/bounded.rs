@@ -4,10 +4,9 @@
 //! (see the [parent module](super)).
 
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{
-    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
-    SupportedConeT, ZeroConeT,
-};
+use clarabel::solver::{NonnegativeConeT, SupportedConeT, ZeroConeT};
+
+use crate::cone::{self, Failure, Tolerances};
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use crate::assembly::Robot;
@@ -279,24 +278,14 @@ impl<E: Element> SqpEstimator<E> {
         if !ineq.is_empty() {
             cones.push(NonnegativeConeT(ineq.len()));
         }
-        let settings = DefaultSettingsBuilder::default()
-            .verbose(false)
-            .tol_gap_abs(1e-10)
-            .tol_gap_rel(1e-10)
-            .tol_feas(1e-10)
-            .max_iter(200)
-            .build()
-            .map_err(|e| Error::invalid("clarabel settings", format!("{e:?}"), "internal"))?;
-        let mut solver = DefaultSolver::new(&p_mat, &c_s, &a_mat, &b, &cones, settings)
-            .map_err(|e| Error::invalid("clarabel problem", format!("{e:?}"), "internal"))?;
-        solver.solve();
-        let sol = &solver.solution;
-        if !matches!(
-            sol.status,
-            SolverStatus::Solved | SolverStatus::AlmostSolved
-        ) {
-            return Err(QpError::Clarabel(sol.status));
-        }
+        let sol = match cone::solve(&p_mat, &c_s, &a_mat, &b, &cones, Tolerances::all(1e-10)) {
+            Ok(sol) => sol,
+            Err(Failure::Status(s)) => return Err(QpError::Clarabel(s)),
+            Err(Failure::Rejected(e)) => {
+                return Err(Error::invalid("clarabel problem", e, "internal").into())
+            }
+        };
+        let sol = &sol;
         let df: Vec<f64> = sol.x[nfree..].iter().map(|v| v * gamma).collect();
         let act: Vec<usize> = sol.s[m_eq..]
             .iter()
