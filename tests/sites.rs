@@ -12,6 +12,9 @@
 //!   (`ParallelRobot::platform_compliance`, another code path).
 //! - On the robot, a force at the node's site is the concentrated load at
 //!   the node, bit for bit, through the estimator.
+//! - The one-rod structure estimates the robot's tip force through the same
+//!   estimator: the same iterations, status, force and shape as the robot
+//!   to 1e-10 (the two assemblies differ in round-off only).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use nalgebra::{DMatrix, Vector2};
@@ -22,7 +25,8 @@ use softrod::scene::Scene;
 use softrod::sensitivity::Sensitivity;
 use softrod::site::{Site, Sites};
 use softrod::statics::{LinearLoad, StaticSettings, StaticSolver, Tracker};
-use softrod::structure::{RodSpec, Stepping, StructureSpec};
+use softrod::loads::{Loads, PointForce};
+use softrod::structure::{RodSpec, Stepping, StructureLoads, StructureSpec};
 
 fn sections() -> Vec<Section> {
     vec![
@@ -279,4 +283,56 @@ fn the_parallel_payload_is_a_force_at_the_platform_site() {
             std[k]
         );
     }
+}
+
+/// The same estimate through the robot and through the one-rod structure
+/// built from the same sections (a tip force of (0.01, −0.03) N under
+/// weight, markers at a third, two thirds and the tip): equal to 1e-10
+/// relative, so the estimator's generic path is the robot's.
+#[test]
+fn the_one_rod_structure_estimates_the_robots_load() {
+    let robot = RobotSpec::new(sections()).build_planar().unwrap();
+    let rod = RodSpec::clamped(sections(), Vector2::zeros(), Vector2::new(1.0, 0.0));
+    let mut spec = StructureSpec::new(vec![rod], vec![], vec![]);
+    spec.gravity_m_per_s2 = robot.spec().gravity_m_per_s2.clone();
+    let structure = spec.build_planar().unwrap();
+    let truth = Loads {
+        point_forces: vec![PointForce {
+            s_m: 0.24,
+            force_n: vec![0.01, -0.03],
+        }],
+        ..Loads::default()
+    };
+    let eq = StaticSolver::default().solve(&robot, &truth, None).unwrap();
+    let sites: Vec<Site> = [0.08, 0.16, 0.24]
+        .map(|s_m| Site::Rod { rod: 0, s_m })
+        .to_vec();
+    let obs = Observation::of_sites(&robot, eq.q.as_slice(), &sites).unwrap();
+    let settings = EstimatorSettings {
+        load_model: LoadModel::AtSite {
+            site: Site::Rod { rod: 0, s_m: 0.24 },
+        },
+        alpha: Some(1e-6),
+        ..EstimatorSettings::default()
+    };
+    let a = NewtonEstimator::new(&robot, &Loads::default(), &settings)
+        .unwrap()
+        .step(&obs)
+        .unwrap();
+    let known = StructureLoads {
+        rods: vec![Loads::default()],
+        ..StructureLoads::default()
+    };
+    let b = NewtonEstimator::new(&structure, &known, &settings)
+        .unwrap()
+        .step(&obs)
+        .unwrap();
+    assert!(a.report.status.is_converged(), "{}", a.report);
+    assert_eq!(a.report.status, b.report.status);
+    assert_eq!(a.report.iterations, b.report.iterations);
+    assert!((a.f[1] + 0.03).abs() < 1e-4, "{}", a.f);
+    let df = (&a.f - &b.f).amax() / a.f.amax();
+    let dq = (&a.q - &b.q).amax() / 0.24;
+    println!("one-rod structure vs robot: force {df:.1e}, shape {dq:.1e} (relative)");
+    assert!(df < 1e-10 && dq < 1e-10, "{df:.1e} {dq:.1e}");
 }
