@@ -20,12 +20,12 @@
 use nalgebra::{DMatrix, Vector2};
 use softrod::assembly::{RobotSpec, Section};
 use softrod::estimate::{Estimator, EstimatorSettings, LoadModel, NewtonEstimator};
+use softrod::loads::{Loads, PointForce};
 use softrod::observe::{MarkerObservation, Observation, ObservationOperator};
 use softrod::scene::Scene;
 use softrod::sensitivity::Sensitivity;
 use softrod::site::{Site, Sites};
 use softrod::statics::{LinearLoad, StaticSettings, StaticSolver, Tracker};
-use softrod::loads::{Loads, PointForce};
 use softrod::structure::{RodSpec, Stepping, StructureLoads, StructureSpec};
 
 fn sections() -> Vec<Section> {

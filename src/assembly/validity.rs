@@ -6,7 +6,10 @@
 //! converges (the equations have a solution) but the answer describes the
 //! model, not a robot. The clamp's body is not modelled either: a node behind
 //! the base plane sits where the clamp would be (legitimate for a rod curling
-//! back on itself, a mistake for a rod pushed through its base).
+//! back on itself, a mistake for a rod pushed through its base). The cable
+//! is a slender rod: a section whose radius of gyration `√(EI/EA)` exceeds
+//! the robot's length (EA and EI swapped, say) is outside it whatever the
+//! configuration.
 
 use serde::{Deserialize, Serialize};
 
@@ -59,6 +62,17 @@ pub enum ValidityWarning {
         /// How many nodes are behind.
         nodes: usize,
     },
+    /// A section's radius of gyration `√(EI/EA)` exceeds the robot's
+    /// length: not a slender rod (a section larger than the robot; EA and
+    /// EI swapped give this).
+    Slenderness {
+        /// The section (0-based, as in the spec).
+        section: usize,
+        /// Its radius of gyration `√(EI/EA)` (m).
+        radius_of_gyration_m: f64,
+        /// The robot's length (m).
+        length_m: f64,
+    },
 }
 
 impl std::fmt::Display for ValidityWarning {
@@ -79,6 +93,15 @@ impl std::fmt::Display for ValidityWarning {
                 f,
                 "{nodes} node(s) behind the clamp's plane (node {node} by {distance_m:.4e} m): \
                  the clamp's body is not modelled"
+            ),
+            ValidityWarning::Slenderness {
+                section,
+                radius_of_gyration_m,
+                length_m,
+            } => write!(
+                f,
+                "section {section}'s radius of gyration √(EI/EA) = {radius_of_gyration_m:.4e} m \
+                 exceeds the robot's length {length_m:.4} m: not a slender rod (EA and EI swapped?)"
             ),
         }
     }
@@ -156,7 +179,27 @@ impl<E: Element> Robot<E> {
                 nodes: behind,
             });
         }
+        out.extend(self.slenderness());
         Ok(out)
+    }
+
+    /// The sections that are not slender rods (see
+    /// [`ValidityWarning::Slenderness`]).
+    fn slenderness(&self) -> Vec<ValidityWarning> {
+        let length_m = self.length();
+        self.spec()
+            .sections
+            .iter()
+            .enumerate()
+            .filter_map(|(section, s)| {
+                let radius_of_gyration_m = (s.ei_nm2 / s.ea_n).sqrt();
+                (radius_of_gyration_m > length_m).then_some(ValidityWarning::Slenderness {
+                    section,
+                    radius_of_gyration_m,
+                    length_m,
+                })
+            })
+            .collect()
     }
 }
 
@@ -201,5 +244,34 @@ mod tests {
             "{w:?}"
         );
         assert!(robot.validity(&q.as_slice()[1..]).is_err());
+    }
+
+    /// EA = 0.025 N and EI = 300 N·m² (the two swapped): a radius of
+    /// gyration of √(300/0.025) = 109.5 m against 0.24 m of robot, flagged
+    /// at every configuration; the unswapped section (9.1 mm) is not.
+    #[test]
+    fn a_section_with_ea_and_ei_swapped_is_not_a_slender_rod() {
+        let swapped = RobotSpec::new(vec![
+            Section::uniform(0.12, 300.0, 0.025, 3),
+            Section::uniform(0.12, 0.025, 300.0, 3),
+        ])
+        .build_planar()
+        .unwrap();
+        let w = swapped
+            .validity(swapped.reference_configuration().as_slice())
+            .unwrap();
+        assert_eq!(w.len(), 1, "{w:?}");
+        let ValidityWarning::Slenderness {
+            section,
+            radius_of_gyration_m,
+            length_m,
+        } = w[0]
+        else {
+            panic!("{w:?}")
+        };
+        assert_eq!(section, 1);
+        assert!((radius_of_gyration_m - (300.0f64 / 0.025).sqrt()).abs() < 1e-9);
+        assert!((length_m - 0.24).abs() < 1e-15);
+        assert!(w[0].to_string().contains("EA and EI swapped"));
     }
 }
