@@ -217,7 +217,7 @@ pub trait SolverHints: Stepping {
     /// let (u, q) = (robot.reference_free_coordinates().as_slice().to_vec(), robot.reference_configuration().as_slice().to_vec());
     /// let dead = robot.dead_force(&loads)?;
     /// let mut k = softrod::linsolve::SymmetricMatrix::zeros(Assembled::tangent_pattern(&robot)?);
-    /// Assembled::tangent_into(&robot, &u, &q, dead.as_slice(), &loads, &mut k)?;
+    /// SolverHints::tangent_into(&robot, &u, &q, dead.as_slice(), &loads, &mut k)?;
     /// assert!(k.get(1, 1) > 0.0);
     /// # Ok::<(), softrod::Error>(())
     /// ```
@@ -277,7 +277,7 @@ pub trait SolverHints: Stepping {
     /// q1[5] += 1e-3; // node 1 lifted: bending stores energy
     /// let mut e = Vec::new();
     /// robot.energies_into(&q, &mut e)?;
-    /// let d = Assembled::potential_change_from(&robot, &u, &q, &e, &u1, &q1, dead.as_slice(), &loads)?;
+    /// let d = SolverHints::potential_change_from(&robot, &u, &q, &e, &u1, &q1, dead.as_slice(), &loads)?;
     /// assert!(d > 0.0 && d == Assembled::potential_change(&robot, &u, &q, &u1, &q1, dead.as_slice(), &loads)?);
     /// # Ok::<(), softrod::Error>(())
     /// ```
