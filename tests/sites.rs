@@ -13,8 +13,9 @@
 //! - On the robot, a force at the node's site is the concentrated load at
 //!   the node, bit for bit, through the estimator.
 //! - The one-rod structure estimates the robot's tip force through the same
-//!   estimator: the same iterations, status, force and shape as the robot
-//!   to 1e-10 (the two assemblies differ in round-off only).
+//!   estimator: the same optimum, force to 1e-9 and shape to 1e-10 of the robot's
+//!   (the robot's cold estimate takes the sqp far start, the structure's
+//!   the reduced iteration alone).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use nalgebra::{DMatrix, Vector2};
@@ -287,8 +288,9 @@ fn the_parallel_payload_is_a_force_at_the_platform_site() {
 
 /// The same estimate through the robot and through the one-rod structure
 /// built from the same sections (a tip force of (0.01, −0.03) N under
-/// weight, markers at a third, two thirds and the tip): equal to 1e-10
-/// relative, so the estimator's generic path is the robot's.
+/// weight, markers at a third, two thirds and the tip), iterated to the
+/// optimum: force equal to 1e-9 and shape to 1e-10 relative, so the
+/// estimator's generic path finds the robot's answer.
 #[test]
 fn the_one_rod_structure_estimates_the_robots_load() {
     let robot = RobotSpec::new(sections()).build_planar().unwrap();
@@ -313,6 +315,9 @@ fn the_one_rod_structure_estimates_the_robots_load() {
             site: Site::Rod { rod: 0, s_m: 0.24 },
         },
         alpha: Some(1e-6),
+        // to the optimum, not to a tenth of its standard deviation: the
+        // robot's cold estimate takes the far start, the structure's not
+        statistical_tolerance: 0.0,
         ..EstimatorSettings::default()
     };
     let a = NewtonEstimator::new(&robot, &Loads::default(), &settings)
@@ -328,11 +333,14 @@ fn the_one_rod_structure_estimates_the_robots_load() {
         .step(&obs)
         .unwrap();
     assert!(a.report.status.is_converged(), "{}", a.report);
-    assert_eq!(a.report.status, b.report.status);
-    assert_eq!(a.report.iterations, b.report.iterations);
-    assert!((a.f[1] + 0.03).abs() < 1e-4, "{}", a.f);
     let df = (&a.f - &b.f).amax() / a.f.amax();
     let dq = (&a.q - &b.q).amax() / 0.24;
     println!("one-rod structure vs robot: force {df:.1e}, shape {dq:.1e} (relative)");
-    assert!(df < 1e-10 && dq < 1e-10, "{df:.1e} {dq:.1e}");
+    println!("robot: {}\nstructure: {}", a.report, b.report);
+    assert!(b.report.status.is_converged(), "{}", b.report);
+    assert!((a.f[1] + 0.03).abs() < 1e-4, "{}", a.f);
+    // measured: force 2.7e-10, shape 1.1e-11 (the two stop at the tight
+    // test's predicted decrease, 1e-15 of the objective's scale, at
+    // different iterates)
+    assert!(df < 1e-9 && dq < 1e-10, "{df:.1e} {dq:.1e}");
 }

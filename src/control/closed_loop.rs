@@ -366,9 +366,10 @@ impl TimeSeries {
 /// 30 Hz (feedforward + updater) against a simulated plant that is not the
 /// model ([`PlantSettings::default`](crate::plant::PlantSettings): EI
 /// +15 %, chamber gain −10 %, a finer mesh, marker noise and lag) carrying
-/// a 10 g tip mass the controller is not told about. The plant's true tip
-/// scores the run; the controller sees its markers only. (A longer run:
-/// `examples/track_fig6.rs`.)
+/// a 10 g tip mass the controller is not told about: the tip error peaks
+/// near 6 mm and the updater takes it below 0.5 mm within 3 s. The plant's
+/// true tip scores the run; the controller sees its markers only. (A
+/// trajectory: `examples/track_fig6.rs`.)
 /// ```
 /// use softrod::control::{ClosedLoop, LoopSettings, Trajectory};
 /// use softrod::plant::{PayloadSchedule, PlantSettings, SimulatedPlant};
@@ -378,13 +379,15 @@ impl TimeSeries {
 /// let arcs: Vec<f64> = scene.markers.iter().filter_map(|m| m.node).map(|n| robot.node_arc()[n]).collect();
 /// let plant_settings = PlantSettings { payloads: PayloadSchedule::tip_mass(0.01, 0.24), ..PlantSettings::default() };
 /// let mut plant = SimulatedPlant::new(&scene, &arcs, plant_settings)?;
-/// let hold = Trajectory::new(&[0.0, 1.0], &[nalgebra::Vector2::new(0.21, 0.095); 2])?;
+/// let hold = Trajectory::new(&[0.0, 4.0], &[nalgebra::Vector2::new(0.21, 0.095); 2])?;
 /// let mut lp = ClosedLoop::new(robot, scene.loads()?, &arcs, LoopSettings::default())?;
 /// let ts = lp.run(&mut plant, &hold, |p| p.true_tip_m().ok())?;
-/// assert_eq!(ts.samples.len(), 30);
+/// assert_eq!(ts.samples.len(), 120);
 /// assert!(ts.samples.iter().all(|s| s.ik.is_reached()));
-/// let (mean_m, _max_m) = ts.mean_max_after(0.5); // tip error over the last 0.5 s
-/// assert!(mean_m < 1e-3, "{mean_m} m");
+/// // the payload pulls the tip 6 mm off before the updater has learnt it
+/// let (_, peak_m) = ts.mean_max_after(0.5);
+/// let (mean_m, _) = ts.mean_max_after(3.0); // over the last second
+/// assert!(peak_m > 3e-3 && mean_m < 0.5e-3, "{peak_m} m, then {mean_m} m");
 /// # Ok::<(), softrod::Error>(())
 /// ```
 ///
