@@ -6,6 +6,7 @@ use std::sync::{Arc, OnceLock};
 
 use nalgebra::DMatrix;
 
+use super::super::gn_form::GnForm;
 use super::super::problem::{Derivs, GnFactor};
 use super::super::LoadModel;
 use super::{cov_factor, noise_cov, posterior, posterior_alpha_marginal};
@@ -19,6 +20,8 @@ use super::{cov_factor, noise_cov, posterior, posterior_alpha_marginal};
 pub(crate) struct CovarianceInputs {
     /// The load model.
     pub(crate) load: LoadModel,
+    /// The form of its Gauss–Newton systems ([`super::super::gn_form`]).
+    pub(crate) form: GnForm,
     /// Coordinates per node (the first `DIM` of them the position).
     pub(crate) nd: usize,
     /// Load slots per node that carry a load (`2 DIM`): the rows of `L`
@@ -53,7 +56,7 @@ impl CovarianceInputs {
     fn factor(&self) -> DMatrix<f64> {
         let (nf, m) = (self.dv.jt.nrows(), self.weights.len());
         let Some(mut l) = cov_factor(
-            self.load,
+            &self.form,
             self.sigma,
             &self.dv,
             &self.weights,
@@ -78,7 +81,7 @@ impl CovarianceInputs {
     /// the noise alone causes, from the covariance factor `l()`.
     fn posterior(&self, l: impl FnOnce() -> DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64>) {
         let (load, nd, fw, dv, w, alpha) = (
-            self.load,
+            &self.form,
             self.nd,
             &self.fw[..],
             &self.dv,
@@ -136,7 +139,7 @@ impl LazyCovariances {
             let i = &self.inputs;
             match i.gamma {
                 Some((objective, pen)) => super::super::evidence::evidence(
-                    i.load, &i.dv, &i.weights, objective, pen, i.alpha,
+                    &i.form, &i.dv, &i.weights, objective, pen, i.alpha,
                 )
                 .map_or(f64::NAN, |ev| ev.gamma),
                 None => 0.0,

@@ -107,6 +107,12 @@ pub struct NewtonEstimator<M: EstimationModel> {
 }
 
 impl<M: EstimationModel> NewtonEstimator<M> {
+    /// The estimation problem (tests set its Gauss–Newton form).
+    #[cfg(test)]
+    pub(crate) fn problem_mut(&mut self) -> &mut super::problem::Problem<M> {
+        &mut self.stream.problem
+    }
+
     /// An estimator for `robot` under the known loads `known` (both
     /// borrowed; the estimator keeps copies). `settings.backend` must be
     /// [`super::Backend::Newton`]: the backend is chosen once, by the

@@ -176,6 +176,12 @@ struct WarmQp {
 }
 
 impl<E: Element> SqpEstimator<E> {
+    /// The estimation problem (tests set its Gauss–Newton form).
+    #[cfg(test)]
+    pub(crate) fn problem_mut(&mut self) -> &mut super::problem::Problem<Robot<E>> {
+        &mut self.stream.problem
+    }
+
     /// An estimator for `robot` under the known loads `known` (both
     /// borrowed; the estimator keeps copies). `settings.backend` must be
     /// [`super::Backend::Sqp`]: the backend is chosen once, by the settings
