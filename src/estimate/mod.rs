@@ -104,8 +104,8 @@
 mod covariance;
 mod driver;
 mod evidence;
-mod gn_form;
 mod fit;
+mod gn_form;
 mod load_model;
 mod model;
 pub mod newton;

@@ -550,7 +550,9 @@ impl<M: EstimationModel> Problem<M> {
             GnForm::Primal(h) => {
                 // N = Jᵀ W J + α H accumulated over the marker rows
                 let reuse = reuse.filter(|fac| {
-                    fac.gram.is_none() && fac.alpha == alpha && fac.chol.l_dirty().nrows() == self.n_f
+                    fac.gram.is_none()
+                        && fac.alpha == alpha
+                        && fac.chol.l_dirty().nrows() == self.n_f
                 });
                 let chol = match reuse {
                     Some(fac) => fac.chol,
