@@ -114,6 +114,9 @@ fn primal_factor(
 /// the form of the system, `nd` coordinates per node (the first `DIM` of them the
 /// position), `w` the weights; `gn`: the factor of the Gauss–Newton system
 /// at the same derivatives, if at hand (used when formed at this `α`).
+/// `markers`: whether to form `Cov(A q)` (`O(n_ob² n_F)` work and
+/// `n_ob²` numbers; empty otherwise).
+#[allow(clippy::too_many_arguments)]
 fn posterior(
     form: &GnForm,
     nd: usize,
@@ -122,6 +125,7 @@ fn posterior(
     w: &[f64],
     alpha: f64,
     gn: Option<&GnFactor>,
+    markers: bool,
 ) -> Option<(Vec<f64>, Vec<f64>)> {
     let m = w.len();
     let nf = dv.jt.nrows();
@@ -141,6 +145,9 @@ fn posterior(
             let s_inv_czt = chol.solve(&cz.transpose());
             let r = (ce - &cz * s_inv_czt) / alpha;
             let r = (&r + r.transpose()) * 0.5;
+            if !markers {
+                return Some((row_major(&r), Vec::new()));
+            }
             // Zᵀ B Z S⁻¹ W⁻¹
             let mut winv = DMatrix::zeros(m, m);
             for i in 0..m {
@@ -154,6 +161,9 @@ fn posterior(
             let chol = primal_factor(dv, w, alpha, h, gn)?;
             let ninv = chol.inverse();
             let r = &c * &ninv * c.transpose();
+            if !markers {
+                return Some((row_major(&r), Vec::new()));
+            }
             let mk = dv.jt.transpose() * &ninv * &dv.jt;
             Some((row_major(&r), row_major(&mk)))
         }
@@ -297,6 +307,7 @@ pub(crate) fn alpha_spread(
 /// `ln α̂ ± √3 σ`, weights 2/3, 1/6, 1/6) and the spread of the estimate
 /// itself added, `σ² g gᵀ` with `g = d(C F̂)/d ln α` (or `d(J F̂)/d ln α`).
 /// That is the mean squared error about the reported estimate `F̂(α̂)`.
+/// `markers` as in [`posterior`].
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn posterior_alpha_marginal(
     form: &GnForm,
@@ -308,6 +319,7 @@ pub(crate) fn posterior_alpha_marginal(
     f: &[f64],
     pen: f64,
     gn: Option<&GnFactor>,
+    markers: bool,
 ) -> Option<(Vec<f64>, Vec<f64>)> {
     let sp = alpha_spread(form, fw, dv, w, alpha, f, pen, gn)?;
     let h = 3f64.sqrt() * sp.sigma_ln;
@@ -318,9 +330,9 @@ pub(crate) fn posterior_alpha_marginal(
         (alpha * h.exp(), 1.0 / 6.0),
         (alpha * (-h).exp(), 1.0 / 6.0),
     ] {
-        let (ri, mi) = posterior(form, nd, fw, dv, w, a, gn)?;
+        let (ri, mi) = posterior(form, nd, fw, dv, w, a, gn, markers)?;
         let d = sp.force.len();
-        let m = sp.marker.len();
+        let m = if markers { sp.marker.len() } else { 0 };
         let ri = DMatrix::from_row_slice(d, d, &ri) * wt;
         let mi = DMatrix::from_row_slice(m, m, &mi) * wt;
         r = Some(r.map_or(ri.clone(), |x| x + ri));
@@ -328,18 +340,29 @@ pub(crate) fn posterior_alpha_marginal(
     }
     let s2 = sp.sigma_ln * sp.sigma_ln;
     let r = r? + &sp.force * sp.force.transpose() * s2;
-    let mk = mk? + &sp.marker * sp.marker.transpose() * s2;
+    let mut mk = mk?;
+    if markers {
+        mk += &sp.marker * sp.marker.transpose() * s2;
+    }
     Some((row_major(&r), row_major(&mk)))
 }
 
 /// `Cov(resultant force)` (`DIM × DIM`) and `Cov(A q)` (`n_ob × n_ob`) of
 /// the noise alone, from the covariance factor `L` (`n_F × n_ob`), the map
 /// `C: F → ∫ w dX` (row-major `DIM × n_F`) and the marker Jacobian:
-/// `(C L)(C L)ᵀ` and `(J L)(J L)ᵀ`.
-fn noise_cov(l: &DMatrix<f64>, fw: &[f64], dv: &Derivs) -> (DMatrix<f64>, DMatrix<f64>) {
+/// `(C L)(C L)ᵀ` and `(J L)(J L)ᵀ` (empty without `markers`).
+fn noise_cov(
+    l: &DMatrix<f64>,
+    fw: &[f64],
+    dv: &Derivs,
+    markers: bool,
+) -> (DMatrix<f64>, DMatrix<f64>) {
     let nf = dv.jt.nrows();
     let d = fw.len().checked_div(nf).unwrap_or(0);
     let cl = DMatrix::from_row_slice(d, nf, fw) * l;
+    if !markers {
+        return (&cl * cl.transpose(), DMatrix::zeros(0, 0));
+    }
     // J L = Jtᵀ L
     let jl = dv.jt.tr_mul(l);
     (&cl * cl.transpose(), &jl * jl.transpose())
@@ -426,12 +449,14 @@ impl Estimate {
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn resultant_force_cov(&self) -> &DMatrix<f64> {
-        &self.cov.posterior().0
+        self.cov.resultant()
     }
 
     /// Posterior covariance of the estimated marker-space shape `A q`
     /// (`n_ob × n_ob`; m², tangents dimensionless), in observation order;
-    /// formed on request like [`Estimate::resultant_force_cov`].
+    /// formed on request like [`Estimate::resultant_force_cov`] (its work
+    /// and size grow as `n_ob²`: the resultant's covariance alone does not
+    /// form it).
     ///
     /// # Example
     /// See [`Estimate::resultant_force_cov`].
@@ -516,7 +541,7 @@ mod tests {
             .try_inverse()
             .unwrap();
         for form in [GnForm::Representer, primal(b.clone())] {
-            let (rc, mc) = posterior(&form, nd, &fw, &dv, &w, alpha, None).unwrap();
+            let (rc, mc) = posterior(&form, nd, &fw, &dv, &w, alpha, None, true).unwrap();
             assert!(close(&rc, &(&c * &post * c.transpose())), "{form:?}");
             assert!(close(&mc, &(jt.transpose() * &post * &jt)), "{form:?}");
         }
@@ -528,7 +553,7 @@ mod tests {
         };
         let fw = vec![1.0, 0.0, 0.0, 1.0];
         let eye = primal(DMatrix::identity(d, d));
-        let (rc, mc) = posterior(&eye, nd, &fw, &dv, &w, alpha, None).unwrap();
+        let (rc, mc) = posterior(&eye, nd, &fw, &dv, &w, alpha, None, true).unwrap();
         let post = (&jt * &wm * jt.transpose() + DMatrix::identity(d, d) * alpha)
             .try_inverse()
             .unwrap();
@@ -576,21 +601,23 @@ mod tests {
         };
         let load = &GnForm::Representer;
         let gn = fac(&k, alpha);
-        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None).unwrap();
-        let reused = posterior(load, nd, &fw, &dv, &w, alpha, Some(&gn)).unwrap();
+        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None, true).unwrap();
+        let reused = posterior(load, nd, &fw, &dv, &w, alpha, Some(&gn), true).unwrap();
         assert!(close(&reused.0, &fresh.0) && close(&reused.1, &fresh.1));
-        let fresh = posterior_alpha_marginal(load, nd, &fw, &dv, &w, alpha, &f, 0.3, None).unwrap();
+        let fresh =
+            posterior_alpha_marginal(load, nd, &fw, &dv, &w, alpha, &f, 0.3, None, true).unwrap();
         let reused =
-            posterior_alpha_marginal(load, nd, &fw, &dv, &w, alpha, &f, 0.3, Some(&gn)).unwrap();
+            posterior_alpha_marginal(load, nd, &fw, &dv, &w, alpha, &f, 0.3, Some(&gn), true)
+                .unwrap();
         assert!(close(&reused.0, &fresh.0) && close(&reused.1, &fresh.1));
         // a factor at another α is not used: a wrong gram there would show
         let wrong = fac(&(&k * 2.0), 2.0 * alpha);
-        let other = posterior(load, nd, &fw, &dv, &w, alpha, Some(&wrong)).unwrap();
-        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None).unwrap();
+        let other = posterior(load, nd, &fw, &dv, &w, alpha, Some(&wrong), true).unwrap();
+        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None, true).unwrap();
         assert!(close(&other.0, &fresh.0) && close(&other.1, &fresh.1));
         // and a wrong factor at this α would: the test can fail
         let wrong = fac(&(&k * 2.0), alpha);
-        let bad = posterior(load, nd, &fw, &dv, &w, alpha, Some(&wrong)).unwrap();
+        let bad = posterior(load, nd, &fw, &dv, &w, alpha, Some(&wrong), true).unwrap();
         assert!(!close(&bad.1, &fresh.1));
         // concentrated: N = Jᵀ W J + α I
         let jt = DMatrix::from_vec(2, m, lcg(16, 2 * m));
@@ -609,8 +636,8 @@ mod tests {
         };
         let load = &primal(DMatrix::identity(2, 2));
         let fw = vec![1.0, 0.0, 0.0, 1.0];
-        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None).unwrap();
-        let reused = posterior(load, nd, &fw, &dv, &w, alpha, Some(&gn)).unwrap();
+        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None, true).unwrap();
+        let reused = posterior(load, nd, &fw, &dv, &w, alpha, Some(&gn), true).unwrap();
         assert!(close(&reused.0, &fresh.0) && close(&reused.1, &fresh.1));
     }
 

@@ -187,6 +187,11 @@ fn primal_form_gives_the_representer_forms_estimates() {
                     a.report.status
                 );
                 assert_same(&a, &b, &what);
+                // the resultant's covariance alone is the one formed with
+                // the markers' (n_ob × n_ob)
+                let r = a.resultant_force_cov().clone();
+                assert_eq!(a.marker_cov().shape(), (120, 120));
+                assert_eq!(&r, a.resultant_force_cov(), "{what}");
             }
         }
     }
