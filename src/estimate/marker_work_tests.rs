@@ -70,6 +70,17 @@ fn estimator(
         alpha,
         ..EstimatorSettings::default()
     };
+    estimator_with(settings, robot, known, representer_max)
+}
+
+/// [`estimator`] with the given settings.
+fn estimator_with(
+    settings: EstimatorSettings,
+    robot: &Robot<PlanarCable>,
+    known: &Loads,
+    representer_max: Option<usize>,
+) -> Box<dyn Estimator> {
+    let backend = settings.backend;
     let set = |p: &mut Problem<Robot<PlanarCable>>| {
         if let Some(r) = representer_max {
             p.set_representer_max(r);
@@ -194,6 +205,33 @@ fn primal_form_gives_the_representer_forms_estimates() {
                 assert_eq!(&r, a.resultant_force_cov(), "{what}");
             }
         }
+    }
+    // the sqp backend with a load bound active at the solution (w_y ≥ −0.3
+    // N/m at mid-length, the benches' bound): its QP's reduced system in
+    // either form
+    let bounded = EstimatorSettings {
+        backend: Backend::Sqp,
+        alpha: Some(31.0),
+        bounds: vec![crate::estimate::LoadBound {
+            s_m: 0.5 * robot.length(),
+            frame: crate::estimate::BoundFrame::World,
+            direction: vec![0.0, 1.0],
+            min_n_per_m: Some(-0.3),
+            max_n_per_m: None,
+        }],
+        ..EstimatorSettings::default()
+    };
+    let mut new = estimator_with(bounded.clone(), &robot, &known, None);
+    let mut old = estimator_with(bounded, &robot, &known, Some(usize::MAX));
+    for (k, frame) in frames.iter().enumerate() {
+        let what = format!("sqp bounded frame {k}");
+        let (a, b) = (new.step(frame).unwrap(), old.step(frame).unwrap());
+        assert!(
+            a.report.status.is_converged(),
+            "{what}: {:?}",
+            a.report.status
+        );
+        assert_same(&a, &b, &what);
     }
     // the test compares the two forms: the default takes the primal one
     let settings = EstimatorSettings::default();
