@@ -176,7 +176,8 @@ fn assert_same(new: &Estimate, old: &Estimate, what: &str) {
 /// At 60 markers on 20 elements (120 observed components, 84 load
 /// parameters) the default estimator solves its Gauss–Newton systems in
 /// the primal form; its estimates (a first step and a warm one, `α` given
-/// and by the evidence, both backends) equal those of the representer
+/// and by the evidence, both backends, and the sqp backend with a load
+/// bound active at the solution) equal those of the representer
 /// form, the code path of every marker count before, within 1e-10
 /// relative: shape, resultant and objective (the load parameters within
 /// 1e-7, `γ` and the resultant's posterior covariance within 1e-8, see
