@@ -12,33 +12,34 @@
 
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
+use super::gn_form::{count_dense, primal_system, GnForm, PenaltyMatrix};
 use super::problem::{jittered_cholesky, weighted_columns, Derivs, GnFactor};
-use super::{Estimate, LoadModel};
+use super::Estimate;
 
 mod lazy;
 pub(crate) use lazy::{CovarianceInputs, LazyCovariances};
 
 /// The covariance factor `L = σ (JᵀWJ + αH)⁻¹ JᵀW` (`n_F × n_ob`), from
 /// the Gauss–Newton system's factor at the same derivatives when it was
-/// formed at `alpha` (else anew): `σ Z S⁻¹` for the distributed load (the
-/// representer form, `S = α W⁻¹ + Zᵀ B Z`), `σ N⁻¹ JᵀW` for a concentrated
-/// one. `None` if that system cannot be factored.
+/// formed at `alpha` (else anew): `σ Z S⁻¹` in the representer form
+/// (`S = α W⁻¹ + Zᵀ B Z`), `σ N⁻¹ JᵀW` in the primal form. `None` if that
+/// system cannot be factored.
 fn cov_factor(
-    load: LoadModel,
+    form: &GnForm,
     sigma: f64,
     dv: &Derivs,
     w: &[f64],
     alpha: f64,
     gn: Option<&GnFactor>,
 ) -> Option<DMatrix<f64>> {
-    Some(match load {
+    Some(match form {
         // σ Z S⁻¹: the small inverse, then one product
-        LoadModel::Distributed => {
+        GnForm::Representer => {
             let (_, chol) = representer_system(dv, w, alpha, gn)?;
             &dv.z * (chol.inverse() * sigma)
         }
-        LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
-            concentrated_system(dv, w, alpha, gn)?.solve(&weighted_columns(&dv.jt, w)) * sigma
+        GnForm::Primal(h) => {
+            primal_factor(dv, w, alpha, h, gn)?.solve(&weighted_columns(&dv.jt, w)) * sigma
         }
     })
 }
@@ -61,6 +62,8 @@ fn representer_system(
             return Some((k.clone(), chol.clone()));
         }
     }
+    let m = w.len();
+    count_dense(m * m * dv.jt.nrows() + m * m * m / 3);
     let k = dv.z.tr_mul(&dv.jt);
     let k = (&k + k.transpose()) * 0.5;
     let mut s = k.clone();
@@ -70,12 +73,13 @@ fn representer_system(
     Some((k, jittered_cholesky(s)?))
 }
 
-/// The factor of `N = Jᵀ W J + α I` for a concentrated load: from `gn`
-/// when it was formed at `alpha`, else anew.
-fn concentrated_system(
+/// The factor of `N = Jᵀ W J + α H` (the primal form): from `gn` when it
+/// was formed at `alpha`, else anew.
+fn primal_factor(
     dv: &Derivs,
     w: &[f64],
     alpha: f64,
+    h: &PenaltyMatrix,
     gn: Option<&GnFactor>,
 ) -> Option<Cholesky<f64, Dyn>> {
     if let Some(GnFactor {
@@ -88,11 +92,7 @@ fn concentrated_system(
             return Some(chol.clone());
         }
     }
-    let mut n = weighted_columns(&dv.jt, w) * dv.jt.transpose();
-    for i in 0..n.nrows() {
-        n[(i, i)] += alpha;
-    }
-    jittered_cholesky(n)
+    primal_system(dv, w, alpha, h)
 }
 
 /// The posterior covariances of the resultant force (`DIM × DIM`) and of
@@ -102,33 +102,37 @@ fn concentrated_system(
 /// the penalty puts in. With the map `C: F → ∫ w dX` (`fw`, row-major
 /// `DIM × n_F`):
 ///
-/// - distributed (`H = B`, `J = Zᵀ B`; representer form, no `n_q³` work):
+/// - representer form (distributed, `H = B`, `J = Zᵀ B`; no `n_q³` work):
 ///   `Cov(F | y) = (B⁻¹ − Z S⁻¹ Zᵀ)/α`, `S = α W⁻¹ + Zᵀ B Z`; since
 ///   `C = E_dᵀ B` (`E_d` the coordinates of a constant unit field),
 ///   `C B⁻¹ Cᵀ = C E_d` and `Cov(∫w) = (C E_d − (CZ) S⁻¹ (CZ)ᵀ)/α`,
 ///   `Cov(Aq) = Zᵀ B Z S⁻¹ W⁻¹`;
-/// - concentrated (`H = I`): `Cov(F | y) = N⁻¹`, `N = JᵀWJ + αI`,
-///   `Cov(A q) = J N⁻¹ Jᵀ`.
+/// - primal form (concentrated, `H = I`, or distributed, `H = B`):
+///   `Cov(F | y) = N⁻¹`, `N = JᵀWJ + αH`, `Cov(A q) = J N⁻¹ Jᵀ`.
 ///
-/// `None` if the Gauss–Newton matrix is not positive definite. `load`:
-/// the load model, `nd` coordinates per node (the first `DIM` of them the
+/// `None` if the Gauss–Newton matrix is not positive definite. `form`:
+/// the form of the system, `nd` coordinates per node (the first `DIM` of them the
 /// position), `w` the weights; `gn`: the factor of the Gauss–Newton system
 /// at the same derivatives, if at hand (used when formed at this `α`).
+/// `markers`: whether to form `Cov(A q)` (`O(n_ob² n_F)` work and
+/// `n_ob²` numbers; empty otherwise).
+#[allow(clippy::too_many_arguments)]
 fn posterior(
-    load: LoadModel,
+    form: &GnForm,
     nd: usize,
     fw: &[f64],
     dv: &Derivs,
     w: &[f64],
     alpha: f64,
     gn: Option<&GnFactor>,
+    markers: bool,
 ) -> Option<(Vec<f64>, Vec<f64>)> {
     let m = w.len();
     let nf = dv.jt.nrows();
     let d = fw.len().checked_div(nf).unwrap_or(0);
     let c = DMatrix::from_row_slice(d, nf, fw);
-    match load {
-        LoadModel::Distributed => {
+    match form {
+        GnForm::Representer => {
             let (k, chol) = representer_system(dv, w, alpha, gn)?;
             // C E_d: the columns of C at the position slots of component b
             let mut ce = DMatrix::zeros(d, d);
@@ -141,6 +145,9 @@ fn posterior(
             let s_inv_czt = chol.solve(&cz.transpose());
             let r = (ce - &cz * s_inv_czt) / alpha;
             let r = (&r + r.transpose()) * 0.5;
+            if !markers {
+                return Some((row_major(&r), Vec::new()));
+            }
             // Zᵀ B Z S⁻¹ W⁻¹
             let mut winv = DMatrix::zeros(m, m);
             for i in 0..m {
@@ -150,10 +157,13 @@ fn posterior(
             let mk = (&mk + mk.transpose()) * 0.5;
             Some((row_major(&r), row_major(&mk)))
         }
-        LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
-            let chol = concentrated_system(dv, w, alpha, gn)?;
+        GnForm::Primal(h) => {
+            let chol = primal_factor(dv, w, alpha, h, gn)?;
             let ninv = chol.inverse();
             let r = &c * &ninv * c.transpose();
+            if !markers {
+                return Some((row_major(&r), Vec::new()));
+            }
             let mk = dv.jt.transpose() * &ninv * &dv.jt;
             Some((row_major(&r), row_major(&mk)))
         }
@@ -212,15 +222,43 @@ pub(crate) fn evidence_curvature(
     Some(2.0 * u.dot(&pu) - alpha * pen - tt + gamma)
 }
 
+/// [`evidence_curvature`] in the primal form, without `m × m` matrices:
+/// with `N = JᵀWJ + αH` (factor `chol`), Woodbury gives `P = W − W J N⁻¹
+/// Jᵀ W` (so `uᵀ P u = uᵀ W u − aᵀ N⁻¹ a`, `a = Jᵀ W u`), and `T` has the
+/// nonzero eigenvalues of `T' = N⁻¹ JᵀWJ = I − α N⁻¹ H`: `γ = tr T'`,
+/// `tr(T²) = tr(T'²)`.
+fn evidence_curvature_primal(
+    dv: &Derivs,
+    w: &[f64],
+    alpha: f64,
+    chol: &Cholesky<f64, Dyn>,
+    h: &PenaltyMatrix,
+    u: &DVector<f64>,
+    pen: f64,
+) -> f64 {
+    let nf = dv.jt.nrows();
+    let wu = DVector::from_iterator(u.len(), u.iter().zip(w).map(|(a, b)| a * b));
+    let a = &dv.jt * &wu;
+    let upu = u.dot(&wu) - a.dot(&chol.solve(&a));
+    // T' = I − α N⁻¹ H
+    let mut t = chol.solve(&h.h) * (-alpha);
+    for i in 0..nf {
+        t[(i, i)] += 1.0;
+    }
+    count_dense(nf * nf * nf);
+    let gamma = t.trace();
+    let tt: f64 = t.iter().zip(t.transpose().iter()).map(|(a, b)| a * b).sum();
+    2.0 * upu - alpha * pen - tt + gamma
+}
+
 /// The [`AlphaSpread`] of the estimate `f` (penalty `pen = fᵀ H f`) at
-/// `alpha`, for the load model `load` (see [`posterior`] for `nd`, `fw`,
-/// `dv`, `w`). At a fixed linearization the minimizer moves as
-/// `dF̂/d ln α = −N⁻¹ α H F̂` (`N = JᵀWJ + αH`): for the distributed field
-/// `−(F̂ − Z S⁻¹ J F̂)` (representer form), for a concentrated force
-/// `−α N⁻¹ F̂`.
+/// `alpha`, in the system's form `form` (see [`posterior`] for `fw`, `dv`,
+/// `w`). At a fixed linearization the minimizer moves as
+/// `dF̂/d ln α = −N⁻¹ α H F̂` (`N = JᵀWJ + αH`): `−(F̂ − Z S⁻¹ J F̂)` in
+/// the representer form, `−α N⁻¹ H F̂` in the primal form.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn alpha_spread(
-    load: LoadModel,
+    form: &GnForm,
     fw: &[f64],
     dv: &Derivs,
     w: &[f64],
@@ -238,20 +276,19 @@ pub(crate) fn alpha_spread(
     let cm = DMatrix::from_row_slice(d, nf, fw);
     let fv = DVector::from_column_slice(f);
     let u = dv.jt.tr_mul(&fv);
-    let (k, df) = match load {
-        LoadModel::Distributed => {
+    let (curv, df) = match form {
+        GnForm::Representer => {
             let (k, chol) = representer_system(dv, w, alpha, gn)?;
             let df = -(&fv - &dv.z * chol.solve(&u));
-            (k, df)
+            (evidence_curvature(&k, w, alpha, &u, pen)?, df)
         }
-        LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
-            let k = dv.jt.tr_mul(&dv.jt);
-            let chol = concentrated_system(dv, w, alpha, gn)?;
-            let df = -chol.solve(&fv) * alpha;
-            (k, df)
+        GnForm::Primal(h) => {
+            let chol = primal_factor(dv, w, alpha, h, gn)?;
+            let df = -chol.solve(&(&h.h * &fv)) * alpha;
+            let curv = evidence_curvature_primal(dv, w, alpha, &chol, h, &u, pen);
+            (curv, df)
         }
     };
-    let curv = evidence_curvature(&k, w, alpha, &u, pen)?;
     let sigma_ln = if curv > 2.0 / (SIGMA_LN_ALPHA_MAX * SIGMA_LN_ALPHA_MAX) {
         (2.0 / curv).sqrt()
     } else {
@@ -270,9 +307,10 @@ pub(crate) fn alpha_spread(
 /// `ln α̂ ± √3 σ`, weights 2/3, 1/6, 1/6) and the spread of the estimate
 /// itself added, `σ² g gᵀ` with `g = d(C F̂)/d ln α` (or `d(J F̂)/d ln α`).
 /// That is the mean squared error about the reported estimate `F̂(α̂)`.
+/// `markers` as in [`posterior`].
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn posterior_alpha_marginal(
-    load: LoadModel,
+    form: &GnForm,
     nd: usize,
     fw: &[f64],
     dv: &Derivs,
@@ -281,8 +319,9 @@ pub(crate) fn posterior_alpha_marginal(
     f: &[f64],
     pen: f64,
     gn: Option<&GnFactor>,
+    markers: bool,
 ) -> Option<(Vec<f64>, Vec<f64>)> {
-    let sp = alpha_spread(load, fw, dv, w, alpha, f, pen, gn)?;
+    let sp = alpha_spread(form, fw, dv, w, alpha, f, pen, gn)?;
     let h = 3f64.sqrt() * sp.sigma_ln;
     let mut r: Option<DMatrix<f64>> = None;
     let mut mk: Option<DMatrix<f64>> = None;
@@ -291,9 +330,9 @@ pub(crate) fn posterior_alpha_marginal(
         (alpha * h.exp(), 1.0 / 6.0),
         (alpha * (-h).exp(), 1.0 / 6.0),
     ] {
-        let (ri, mi) = posterior(load, nd, fw, dv, w, a, gn)?;
+        let (ri, mi) = posterior(form, nd, fw, dv, w, a, gn, markers)?;
         let d = sp.force.len();
-        let m = sp.marker.len();
+        let m = if markers { sp.marker.len() } else { 0 };
         let ri = DMatrix::from_row_slice(d, d, &ri) * wt;
         let mi = DMatrix::from_row_slice(m, m, &mi) * wt;
         r = Some(r.map_or(ri.clone(), |x| x + ri));
@@ -301,18 +340,29 @@ pub(crate) fn posterior_alpha_marginal(
     }
     let s2 = sp.sigma_ln * sp.sigma_ln;
     let r = r? + &sp.force * sp.force.transpose() * s2;
-    let mk = mk? + &sp.marker * sp.marker.transpose() * s2;
+    let mut mk = mk?;
+    if markers {
+        mk += &sp.marker * sp.marker.transpose() * s2;
+    }
     Some((row_major(&r), row_major(&mk)))
 }
 
 /// `Cov(resultant force)` (`DIM × DIM`) and `Cov(A q)` (`n_ob × n_ob`) of
 /// the noise alone, from the covariance factor `L` (`n_F × n_ob`), the map
 /// `C: F → ∫ w dX` (row-major `DIM × n_F`) and the marker Jacobian:
-/// `(C L)(C L)ᵀ` and `(J L)(J L)ᵀ`.
-fn noise_cov(l: &DMatrix<f64>, fw: &[f64], dv: &Derivs) -> (DMatrix<f64>, DMatrix<f64>) {
+/// `(C L)(C L)ᵀ` and `(J L)(J L)ᵀ` (empty without `markers`).
+fn noise_cov(
+    l: &DMatrix<f64>,
+    fw: &[f64],
+    dv: &Derivs,
+    markers: bool,
+) -> (DMatrix<f64>, DMatrix<f64>) {
     let nf = dv.jt.nrows();
     let d = fw.len().checked_div(nf).unwrap_or(0);
     let cl = DMatrix::from_row_slice(d, nf, fw) * l;
+    if !markers {
+        return (&cl * cl.transpose(), DMatrix::zeros(0, 0));
+    }
     // J L = Jtᵀ L
     let jl = dv.jt.tr_mul(l);
     (&cl * cl.transpose(), &jl * jl.transpose())
@@ -399,12 +449,14 @@ impl Estimate {
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn resultant_force_cov(&self) -> &DMatrix<f64> {
-        &self.cov.posterior().0
+        self.cov.resultant()
     }
 
     /// Posterior covariance of the estimated marker-space shape `A q`
     /// (`n_ob × n_ob`; m², tangents dimensionless), in observation order;
-    /// formed on request like [`Estimate::resultant_force_cov`].
+    /// formed on request like [`Estimate::resultant_force_cov`] (its work
+    /// and size grow as `n_ob²`: the resultant's covariance alone does not
+    /// form it).
     ///
     /// # Example
     /// See [`Estimate::resultant_force_cov`].
@@ -429,6 +481,12 @@ impl Estimate {
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 mod tests {
     use super::*;
+    use crate::estimate::LoadModel;
+
+    /// The primal form with the penalty matrix `h`.
+    fn primal(h: DMatrix<f64>) -> GnForm {
+        GnForm::Primal(std::sync::Arc::new(PenaltyMatrix::new(h).unwrap()))
+    }
 
     fn lcg(seed: u64, n: usize) -> Vec<f64> {
         let mut s = seed;
@@ -445,8 +503,9 @@ mod tests {
     /// The representer forms of the posterior covariances equal the dense
     /// `(JᵀWJ + αH)⁻¹` mapped by `C` and `J`: a planar layout of 5 nodes ×
     /// 4 coordinates, `B` symmetric positive definite, `C = E_dᵀ B`, for
-    /// both load models. Bound 1e-9 relative (a missing `1/α` or a
-    /// transposed factor is off by O(1)).
+    /// both load models and both forms of the distributed load's system.
+    /// Bound 1e-9 relative (a missing `1/α` or a transposed factor is off
+    /// by O(1)).
     #[test]
     fn posterior_matches_the_dense_inverse() {
         let (nd, d, nodes, m) = (4, 2, 5, 3);
@@ -478,12 +537,14 @@ mod tests {
             z: z.clone(),
             jt: jt.clone(),
         };
-        let (rc, mc) = posterior(LoadModel::Distributed, nd, &fw, &dv, &w, alpha, None).unwrap();
         let post = (&jt * &wm * jt.transpose() + &b * alpha)
             .try_inverse()
             .unwrap();
-        assert!(close(&rc, &(&c * &post * c.transpose())));
-        assert!(close(&mc, &(jt.transpose() * &post * &jt)));
+        for form in [GnForm::Representer, primal(b.clone())] {
+            let (rc, mc) = posterior(&form, nd, &fw, &dv, &w, alpha, None, true).unwrap();
+            assert!(close(&rc, &(&c * &post * c.transpose())), "{form:?}");
+            assert!(close(&mc, &(jt.transpose() * &post * &jt)), "{form:?}");
+        }
         // concentrated: H = I, C = I
         let jt = DMatrix::from_vec(d, m, lcg(4, d * m));
         let dv = Derivs {
@@ -491,16 +552,8 @@ mod tests {
             jt: jt.clone(),
         };
         let fw = vec![1.0, 0.0, 0.0, 1.0];
-        let (rc, mc) = posterior(
-            LoadModel::Concentrated { node: 1 },
-            nd,
-            &fw,
-            &dv,
-            &w,
-            alpha,
-            None,
-        )
-        .unwrap();
+        let eye = primal(DMatrix::identity(d, d));
+        let (rc, mc) = posterior(&eye, nd, &fw, &dv, &w, alpha, None, true).unwrap();
         let post = (&jt * &wm * jt.transpose() + DMatrix::identity(d, d) * alpha)
             .try_inverse()
             .unwrap();
@@ -546,23 +599,25 @@ mod tests {
                 alpha: a,
             }
         };
-        let load = LoadModel::Distributed;
+        let load = &GnForm::Representer;
         let gn = fac(&k, alpha);
-        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None).unwrap();
-        let reused = posterior(load, nd, &fw, &dv, &w, alpha, Some(&gn)).unwrap();
+        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None, true).unwrap();
+        let reused = posterior(load, nd, &fw, &dv, &w, alpha, Some(&gn), true).unwrap();
         assert!(close(&reused.0, &fresh.0) && close(&reused.1, &fresh.1));
-        let fresh = posterior_alpha_marginal(load, nd, &fw, &dv, &w, alpha, &f, 0.3, None).unwrap();
+        let fresh =
+            posterior_alpha_marginal(load, nd, &fw, &dv, &w, alpha, &f, 0.3, None, true).unwrap();
         let reused =
-            posterior_alpha_marginal(load, nd, &fw, &dv, &w, alpha, &f, 0.3, Some(&gn)).unwrap();
+            posterior_alpha_marginal(load, nd, &fw, &dv, &w, alpha, &f, 0.3, Some(&gn), true)
+                .unwrap();
         assert!(close(&reused.0, &fresh.0) && close(&reused.1, &fresh.1));
         // a factor at another α is not used: a wrong gram there would show
         let wrong = fac(&(&k * 2.0), 2.0 * alpha);
-        let other = posterior(load, nd, &fw, &dv, &w, alpha, Some(&wrong)).unwrap();
-        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None).unwrap();
+        let other = posterior(load, nd, &fw, &dv, &w, alpha, Some(&wrong), true).unwrap();
+        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None, true).unwrap();
         assert!(close(&other.0, &fresh.0) && close(&other.1, &fresh.1));
         // and a wrong factor at this α would: the test can fail
         let wrong = fac(&(&k * 2.0), alpha);
-        let bad = posterior(load, nd, &fw, &dv, &w, alpha, Some(&wrong)).unwrap();
+        let bad = posterior(load, nd, &fw, &dv, &w, alpha, Some(&wrong), true).unwrap();
         assert!(!close(&bad.1, &fresh.1));
         // concentrated: N = Jᵀ W J + α I
         let jt = DMatrix::from_vec(2, m, lcg(16, 2 * m));
@@ -579,10 +634,10 @@ mod tests {
             gram: None,
             alpha,
         };
-        let load = LoadModel::Concentrated { node: 1 };
+        let load = &primal(DMatrix::identity(2, 2));
         let fw = vec![1.0, 0.0, 0.0, 1.0];
-        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None).unwrap();
-        let reused = posterior(load, nd, &fw, &dv, &w, alpha, Some(&gn)).unwrap();
+        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None, true).unwrap();
+        let reused = posterior(load, nd, &fw, &dv, &w, alpha, Some(&gn), true).unwrap();
         assert!(close(&reused.0, &fresh.0) && close(&reused.1, &fresh.1));
     }
 
@@ -640,21 +695,66 @@ mod tests {
         }
     }
 
-    const MODELS: [LoadModel; 2] = [LoadModel::Distributed, LoadModel::Concentrated { node: 1 }];
+    /// A load model and whether its system is solved in the primal form.
+    type Case = (LoadModel, bool);
+
+    /// The distributed load in both forms, the concentrated one (primal).
+    const MODELS: [Case; 3] = [
+        (LoadModel::Distributed, false),
+        (LoadModel::Distributed, true),
+        (LoadModel::Concentrated { node: 1 }, true),
+    ];
+
+    impl Lin {
+        fn form(&self, (load, is_primal): Case) -> GnForm {
+            if is_primal {
+                primal(self.h(load))
+            } else {
+                GnForm::Representer
+            }
+        }
+        /// The evidence's curvature in the form of `case`.
+        fn curvature(&self, case: Case, alpha: f64, u: &DVector<f64>, pen: f64) -> f64 {
+            let load = case.0;
+            match self.form(case) {
+                GnForm::Representer => {
+                    evidence_curvature(&self.k(load), &self.w, alpha, u, pen).unwrap()
+                }
+                GnForm::Primal(h) => {
+                    let dv = Derivs {
+                        z: self.z.clone(),
+                        jt: self.jt(load),
+                    };
+                    let chol = primal_system(&dv, &self.w, alpha, &h).unwrap();
+                    evidence_curvature_primal(&dv, &self.w, alpha, &chol, &h, u, pen)
+                }
+            }
+        }
+    }
 
     /// The evidence's curvature in `ln α` equals central second differences
     /// of the evidence written out (each side re-minimized), for both load
-    /// models over five decades. Bound 1e-5 relative to `max(|curv|, 1)`
+    /// models (the distributed one in both forms), with fewer and with more
+    /// observed components than parameters, over five decades. Bound 1e-5 relative to `max(|curv|, 1)`
     /// (a missing term, `2 uᵀPu` or `tr T²`, is off by O(1)).
     #[test]
     fn evidence_curvature_matches_finite_differences() {
-        for load in MODELS {
-            let p = Lin::new(6, 4, 21);
-            for alpha in [1e-3, 1e-2, 0.3, 5.0, 80.0] {
+        // with more components than parameters the written-out evidence
+        // (`W⁻¹ + K/α`, `K` of rank `n_F`) loses digits as `α → 0`: its
+        // second differences disagree between steps 1e-3 and 1e-4 at
+        // `α = 1e-3`; there the two forms are compared with each other
+        for (case, p, alphas) in MODELS.into_iter().flat_map(|c| {
+            [
+                (c, Lin::new(6, 4, 21), &[1e-3, 1e-2, 0.3, 5.0, 80.0][..]),
+                (c, Lin::new(3, 7, 22), &[0.3, 5.0, 80.0][..]),
+            ]
+        }) {
+            let load = case.0;
+            for &alpha in alphas {
                 let (f, _) = p.at(load, alpha);
                 let u = p.jt(load).tr_mul(&f);
                 let pen = (f.transpose() * p.h(load) * &f)[(0, 0)];
-                let curv = evidence_curvature(&p.k(load), &p.w, alpha, &u, pen).unwrap();
+                let curv = p.curvature(case, alpha, &u, pen);
                 let h: f64 = 1e-3;
                 let up = p.at(load, alpha * h.exp()).1;
                 let mid = p.at(load, alpha).1;
@@ -662,19 +762,34 @@ mod tests {
                 let fd = (up - 2.0 * mid + dn) / (h * h);
                 assert!(
                     (curv - fd).abs() <= 1e-5 * curv.abs().max(1.0),
-                    "{load:?} alpha {alpha}: {curv} vs fd {fd}"
+                    "{case:?} alpha {alpha}: {curv} vs fd {fd}"
                 );
             }
+        }
+        let p = Lin::new(3, 7, 22);
+        let load = LoadModel::Distributed;
+        for alpha in [1e-3, 1e-2, 0.3] {
+            let (f, _) = p.at(load, alpha);
+            let u = p.jt(load).tr_mul(&f);
+            let pen = (f.transpose() * p.h(load) * &f)[(0, 0)];
+            let rep = p.curvature((load, false), alpha, &u, pen);
+            let pri = p.curvature((load, true), alpha, &u, pen);
+            assert!(
+                (rep - pri).abs() <= 1e-8 * rep.abs().max(1.0),
+                "{alpha}: {rep} vs {pri}"
+            );
         }
     }
 
     /// `d(C F̂)/d ln α` and `d(J F̂)/d ln α` of [`alpha_spread`] equal
-    /// central differences of the re-minimized `F̂`, for both load models.
+    /// central differences of the re-minimized `F̂`, for both load models
+    /// (the distributed one in both forms).
     /// Bound 1e-6 relative to the largest entry (a sign or a missing `α` is
     /// off by O(1)).
     #[test]
     fn estimate_slope_in_alpha_matches_finite_differences() {
-        for load in MODELS {
+        for case in MODELS {
+            let load = case.0;
             let p = Lin::new(6, 4, 33);
             let fw: Vec<f64> = p.c.transpose().as_slice().to_vec();
             for alpha in [1e-2, 0.3, 5.0] {
@@ -685,8 +800,9 @@ mod tests {
                     jt: jt.clone(),
                 };
                 let pen = (f.transpose() * p.h(load) * &f)[(0, 0)];
+                let form = p.form(case);
                 let sp =
-                    alpha_spread(load, &fw, &dv, &p.w, alpha, f.as_slice(), pen, None).unwrap();
+                    alpha_spread(&form, &fw, &dv, &p.w, alpha, f.as_slice(), pen, None).unwrap();
                 let h: f64 = 1e-5;
                 let df =
                     (p.at(load, alpha * h.exp()).0 - p.at(load, alpha * (-h).exp()).0) / (2.0 * h);
@@ -695,13 +811,13 @@ mod tests {
                 let scale = fd_force.amax().max(fd_marker.amax());
                 assert!(
                     (&sp.force - &fd_force).amax() <= 1e-6 * scale,
-                    "{load:?} {alpha}: {} vs {}",
+                    "{case:?} {alpha}: {} vs {}",
                     sp.force,
                     fd_force
                 );
                 assert!(
                     (&sp.marker - &fd_marker).amax() <= 1e-6 * scale,
-                    "{load:?} {alpha}"
+                    "{case:?} {alpha}"
                 );
                 assert!(sp.sigma_ln > 0.0 && sp.sigma_ln <= SIGMA_LN_ALPHA_MAX);
             }

@@ -151,6 +151,7 @@ impl<M: EstimationModel> Stream<M> {
         };
         let cov = LazyCovariances::new(CovarianceInputs {
             load: problem.load(),
+            form: problem.gn_form(op.len())?,
             nd: M::Element::NODE_DOFS,
             used_slots: 2 * M::Element::DIM,
             sigma: settings.noise_sigma_m,

@@ -18,6 +18,12 @@
 //!
 //! with `Φ` the minimal objective, `m = n_ob`, `S = α W⁻¹ + Zᵀ B Z` the
 //! Gauss–Newton system of the representer form, `N = JᵀWJ + α I`, `d = n_F`.
+//! The distributed load observed by more components than it has parameters
+//! (the primal form, [`super::gn_form`]) takes the second line with
+//! `N = JᵀWJ + α B` and `− log det B` added: by Sylvester's determinant
+//! identity `det(I_m + W J B⁻¹ Jᵀ/α) = det(I_n + B⁻¹ JᵀWJ/α)`, so
+//! `log det S − m log α = log det N − d log α − log det B − log det W`,
+//! and `γ = d − α tr(N⁻¹ B)`. No `m × m` matrix then.
 //! Its derivative in `log α` at a fixed linearization (the minimizer `F̂`
 //! moves with `α`, but `Φ` is stationary in `F`) is
 //!
@@ -47,8 +53,8 @@ use crate::error::Result;
 use crate::observe::ObservationOperator;
 
 use super::driver::{Method, Warm, ALPHA_CONTINUATION_START};
-use super::problem::{columns, jittered_cholesky, weighted_columns, Derivs, Problem};
-use super::LoadModel;
+use super::gn_form::{count_dense, primal_system, GnForm};
+use super::problem::{columns, jittered_cholesky, Derivs, Problem};
 
 /// How `α` is chosen when the settings leave it unset.
 ///
@@ -84,10 +90,10 @@ pub(crate) struct Evidence {
 
 /// The evidence at an estimate: derivatives `dv` (marker Jacobian `Jᵀ` and
 /// adjoint fields `Z`), weights `w`, the objective `phi`, the penalty
-/// `pen = Fᵀ H F`, at `alpha`. `None` if the Gauss–Newton matrix is not
-/// positive definite.
+/// `pen = Fᵀ H F`, at `alpha`, in the Gauss–Newton system's form `form`.
+/// `None` if the Gauss–Newton matrix is not positive definite.
 pub(crate) fn evidence(
-    load: LoadModel,
+    form: &GnForm,
     dv: &Derivs,
     w: &[f64],
     phi: f64,
@@ -96,9 +102,10 @@ pub(crate) fn evidence(
 ) -> Option<Evidence> {
     let m = w.len();
     let ln2pi = (2.0 * std::f64::consts::PI).ln();
-    let (logdet, trace, count, extra) = match load {
-        LoadModel::Distributed => {
+    let (logdet, trace, count, extra) = match form {
+        GnForm::Representer => {
             // S = Zᵀ B Z + α W⁻¹ (B z_j = J_j)
+            count_dense(m * m * dv.jt.nrows() + m * m * m);
             let mut s = dv.z.tr_mul(&dv.jt);
             s = (&s + s.transpose()) * 0.5;
             for i in 0..m {
@@ -109,17 +116,15 @@ pub(crate) fn evidence(
             let tr: f64 = (0..m).map(|i| inv[(i, i)] / w[i]).sum();
             (log_det(&chol), tr, m as f64, 0.0)
         }
-        LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
+        GnForm::Primal(h) => {
+            // N = Jᵀ W J + α H, tr(N⁻¹ H)
             let d = dv.jt.nrows();
-            let mut n = weighted_columns(&dv.jt, w) * dv.jt.transpose();
-            for i in 0..d {
-                n[(i, i)] += alpha;
-            }
-            let chol = jittered_cholesky(n)?;
+            let chol = primal_system(dv, w, alpha, h)?;
             let inv = chol.inverse();
-            let tr: f64 = (0..d).map(|i| inv[(i, i)]).sum();
+            count_dense(d * d * d);
+            let tr: f64 = inv.iter().zip(h.h.iter()).map(|(a, b)| a * b).sum();
             let logdet_w: f64 = w.iter().map(|v| v.ln()).sum();
-            (log_det(&chol), tr, d as f64, -logdet_w)
+            (log_det(&chol), tr, d as f64, -logdet_w - h.log_det)
         }
     };
     let gamma = count - alpha * trace;
@@ -214,7 +219,7 @@ pub(crate) fn evidence_alpha<Mo: super::EstimationModel, Me: Method<Mo>>(
         let problem: &Problem<Mo> = &method.stream().problem;
         let pen = problem.penalty(&s.f)?;
         let ev = evidence(
-            problem.load(),
+            &problem.gn_form(op.len())?,
             &s.derivs,
             op.weights(),
             s.report.objective,
@@ -242,7 +247,12 @@ pub(crate) fn evidence_alpha<Mo: super::EstimationModel, Me: Method<Mo>>(
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 mod tests {
     use super::*;
+    use crate::estimate::gn_form::PenaltyMatrix;
+    use crate::estimate::LoadModel;
     use nalgebra::DMatrix;
+
+    /// A load model and whether its system is solved in the primal form.
+    type Case = (LoadModel, bool);
 
     /// Seeded numbers in [-1, 1).
     fn lcg(seed: u64, n: usize) -> Vec<f64> {
@@ -292,7 +302,17 @@ mod tests {
         }
         /// The minimizer of `(JF − y)ᵀW(JF − y) + α FᵀHF` and the
         /// evidence there, by dense linear algebra.
-        fn at(&self, load: LoadModel, alpha: f64) -> (Evidence, f64) {
+        fn form(&self, (load, primal): Case) -> GnForm {
+            if primal {
+                GnForm::Primal(std::sync::Arc::new(
+                    PenaltyMatrix::new(self.h(load)).unwrap(),
+                ))
+            } else {
+                GnForm::Representer
+            }
+        }
+        fn at(&self, case: Case, alpha: f64) -> (Evidence, f64) {
+            let load = case.0;
             let jt = self.jt(load);
             let h = self.h(load);
             let wm = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&self.w));
@@ -306,10 +326,11 @@ mod tests {
                 z: self.z.clone(),
                 jt,
             };
-            (evidence(load, &dv, &self.w, phi, pen, alpha).unwrap(), pen)
+            let form = self.form(case);
+            (evidence(&form, &dv, &self.w, phi, pen, alpha).unwrap(), pen)
         }
         /// `−2 log N(y; 0, W⁻¹ + J (αH)⁻¹ Jᵀ)`, directly.
-        fn direct(&self, load: LoadModel, alpha: f64) -> f64 {
+        fn direct(&self, (load, _): Case, alpha: f64) -> f64 {
             let jt = self.jt(load);
             let hinv = self.h(load).try_inverse().unwrap() / alpha;
             let winv = DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(
@@ -326,31 +347,39 @@ mod tests {
         }
     }
 
-    const MODELS: [LoadModel; 2] = [LoadModel::Distributed, LoadModel::Concentrated { node: 1 }];
+    /// The distributed load in both forms, the concentrated one (primal).
+    const MODELS: [Case; 3] = [
+        (LoadModel::Distributed, false),
+        (LoadModel::Distributed, true),
+        (LoadModel::Concentrated { node: 1 }, true),
+    ];
 
     /// The evidence equals the Gaussian marginal likelihood written out
-    /// (`y ~ N(0, W⁻¹ + J (αH)⁻¹ Jᵀ)`), for both load models.
+    /// (`y ~ N(0, W⁻¹ + J (αH)⁻¹ Jᵀ)`), for both load models and both
+    /// forms of the distributed load's system, with fewer and with more
+    /// observed components than parameters.
     /// Bound 1e-9 relative (a missing `log α` term is off by O(m)).
     #[test]
     fn evidence_is_the_marginal_likelihood() {
         for load in MODELS {
-            let p = linear(7, 4, 11);
-            for alpha in [1e-3, 0.1, 3.0, 100.0] {
-                let (ev, _) = p.at(load, alpha);
-                let direct = p.direct(load, alpha);
-                let err = (ev.minus_two_log - direct).abs() / direct.abs().max(1.0);
-                assert!(
-                    err < 1e-9,
-                    "{load:?} alpha {alpha}: {} vs {direct}",
-                    ev.minus_two_log
-                );
+            for p in [linear(7, 4, 11), linear(5, 9, 12)] {
+                for alpha in [1e-3, 0.1, 3.0, 100.0] {
+                    let (ev, _) = p.at(load, alpha);
+                    let direct = p.direct(load, alpha);
+                    let err = (ev.minus_two_log - direct).abs() / direct.abs().max(1.0);
+                    assert!(
+                        err < 1e-9,
+                        "{load:?} alpha {alpha}: {} vs {direct}",
+                        ev.minus_two_log
+                    );
+                }
             }
         }
     }
 
     /// The slope `d(−2 log p)/d log α = α FᵀHF − γ` equals central finite
     /// differences of the evidence (each side re-minimized), for both load
-    /// models over five decades. Bound 1e-6 relative to `max(|slope|, 1)`
+    /// models (the distributed one in both forms) over five decades. Bound 1e-6 relative to `max(|slope|, 1)`
     /// (a wrong sign or a missing trace term is off by O(1)).
     #[test]
     fn evidence_slope_matches_finite_differences() {

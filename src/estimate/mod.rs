@@ -105,6 +105,7 @@ mod covariance;
 mod driver;
 mod evidence;
 mod fit;
+mod gn_form;
 mod load_model;
 mod model;
 pub mod newton;
@@ -791,3 +792,5 @@ pub trait Estimator<L = Loads> {
 // (last: the public-API snapshot reads a file up to its first test item)
 #[cfg(test)]
 mod gn_tests;
+#[cfg(test)]
+mod marker_work_tests;

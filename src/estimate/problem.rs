@@ -26,6 +26,7 @@ use crate::statics::tracker::FactoredTangent;
 use crate::statics::{LinearLoad, StaticSolver, TrackedEquilibrium, Tracker};
 use crate::structure::ModelLoads;
 
+use super::gn_form::{count_dense, primal_system, GnForm, PenaltyMatrix};
 use super::load_model::field_rod;
 use super::{BoundFrame, EstimationModel, EstimatorSettings, LoadModel};
 
@@ -40,16 +41,18 @@ pub struct Derivs {
 }
 
 /// The Cholesky factor of a Gauss–Newton system ([`Problem::gn_solve`]):
-/// `S = α W⁻¹ + Zᵀ B Z` (`n_ob × n_ob`) for the distributed load, `N = Jᵀ W J
-/// + α I` (`n_F × n_F`) for a concentrated one; with the `α` it was formed
-/// at and, for the distributed load, `Zᵀ B Z` itself: the posterior
-/// covariances at that `α` are formed from them
+/// `S = α W⁻¹ + Zᵀ B Z` (`n_ob × n_ob`) for the distributed load in the
+/// representer form (`n_ob ≤ n_F`), `N = Jᵀ W J + α H` (`n_F × n_F`) in
+/// the primal form (a concentrated load, or a distributed one observed by
+/// more components than it has parameters); with the `α` it was formed at
+/// and, in the representer form, `Zᵀ B Z` itself (`None` in the primal
+/// form): the posterior covariances at that `α` are formed from them
 /// ([`super::covariance::posterior_cov`]) instead of again.
 #[derive(Debug, Clone)]
 pub struct GnFactor {
     /// The factor of `S` or `N`.
     pub chol: Cholesky<f64, Dyn>,
-    /// `Zᵀ B Z` (distributed load; `None` for a concentrated one).
+    /// `Zᵀ B Z` (the representer form; `None` in the primal form).
     pub gram: Option<DMatrix<f64>>,
     /// The `α` of the system.
     pub alpha: f64,
@@ -71,6 +74,12 @@ pub struct Problem<M: EstimationModel> {
     /// The map `F → ∫ w dX` of the distributed load ([`Problem::resultants`]),
     /// once formed (it depends on the mesh alone).
     load_map: std::sync::OnceLock<Vec<f64>>,
+    /// The dense penalty matrix of the primal form ([`Problem::gn_form`]),
+    /// once formed; `None` inside when it is singular.
+    penalty_matrix: std::sync::OnceLock<Option<std::sync::Arc<PenaltyMatrix>>>,
+    /// The most observed components a distributed load is solved for in
+    /// the representer form (default `n_F`; beyond it the primal form).
+    representer_max: usize,
 }
 
 impl<M: EstimationModel> Problem<M> {
@@ -125,6 +134,8 @@ impl<M: EstimationModel> Problem<M> {
             last_operator: None,
             unloaded: None,
             load_map: std::sync::OnceLock::new(),
+            penalty_matrix: std::sync::OnceLock::new(),
+            representer_max: n_f,
         })
     }
 
@@ -293,6 +304,53 @@ impl<M: EstimationModel> Problem<M> {
         Ok(())
     }
 
+    /// The form the Gauss–Newton systems of `m` observed components are
+    /// solved in ([`super::gn_form`]): the representer form for the
+    /// distributed load while `m ≤ n_F` (or when its load Gram matrix is
+    /// singular), the primal form otherwise.
+    pub(crate) fn gn_form(&self, m: usize) -> Result<GnForm> {
+        let primal = match self.load() {
+            LoadModel::Distributed if m <= self.representer_max => None,
+            _ => self.penalty_matrix()?,
+        };
+        Ok(primal.map_or(GnForm::Representer, GnForm::Primal))
+    }
+
+    /// Solves the distributed load in the representer form up to `m`
+    /// observed components (default `n_F`): the tests compare the two
+    /// forms on the same estimates.
+    #[cfg(test)]
+    pub(crate) fn set_representer_max(&mut self, m: usize) {
+        self.representer_max = m;
+    }
+
+    /// The dense penalty matrix `H` and `log det H`: `B` of the distributed
+    /// load (its columns `B e_j`, the numbers of [`Problem::penalty_grad`]),
+    /// `I` for a concentrated force; formed at the first call and kept.
+    /// `None` if `H` is not positive definite.
+    fn penalty_matrix(&self) -> Result<Option<std::sync::Arc<PenaltyMatrix>>> {
+        if let Some(h) = self.penalty_matrix.get() {
+            return Ok(h.clone());
+        }
+        let nf = self.n_f;
+        let h = match self.load() {
+            LoadModel::Distributed => {
+                let rod = field_rod(self.robot())?;
+                let mut h = DMatrix::zeros(nf, nf);
+                let mut e = vec![0.0; nf];
+                for (j, col) in h.as_mut_slice().chunks_exact_mut(nf.max(1)).enumerate() {
+                    e[j] = 1.0;
+                    rod.apply_load_gram_into(&e, col)?;
+                    e[j] = 0.0;
+                }
+                h
+            }
+            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => DMatrix::identity(nf, nf),
+        };
+        let h = PenaltyMatrix::new(h).map(std::sync::Arc::new);
+        Ok(self.penalty_matrix.get_or_init(|| h).clone())
+    }
+
     /// Adjoint fields and the marker Jacobian (28) at an equilibrium with
     /// the tangent's factors `lu`: row `i` of `∂(Aq)/∂F` is
     /// `Gᵀ M K⁻¹ Mᵀ a_iᵀ` (K symmetric), the `n_ob` adjoint systems in one
@@ -406,10 +464,12 @@ impl<M: EstimationModel> Problem<M> {
     }
 
     /// The Gauss–Newton step (30): solves `(JᵀWJ + αH) dF = −(JᵀWe + αHF)`,
-    /// and the Cholesky factor of its system. Distributed loads use the
-    /// representer form `F + dF = Σ_i z_i c_i`, `(α W⁻¹ + Zᵀ B Z) c = J F − e`
-    /// (an `n_ob × n_ob` Cholesky, no `n_q³` work); concentrated loads solve
-    /// the small `n_F × n_F` system.
+    /// and the Cholesky factor of its system, in the form of
+    /// [`Problem::gn_form`]: the representer form `F + dF = Σ_i z_i c_i`,
+    /// `(α W⁻¹ + Zᵀ B Z) c = J F − e` (an `n_ob × n_ob` Cholesky, no `n_q³`
+    /// work) for a distributed load observed by at most `n_F` components;
+    /// otherwise the `n_F × n_F` system itself, its matrix accumulated over
+    /// the marker rows (work linear in the markers).
     pub(crate) fn gn_solve(
         &self,
         dv: &Derivs,
@@ -421,12 +481,12 @@ impl<M: EstimationModel> Problem<M> {
         self.gn_solve_reusing(dv, op, e, f, alpha, None)
     }
 
-    /// As [`Problem::gn_solve`], with the factor `reuse` of the distributed
-    /// load's system when the caller has it: formed by `gn_solve` from the
-    /// same `dv` and the same weights of `op` (a warm step's first
-    /// iteration, at the last estimate's cached derivatives). It is used
-    /// when its `α` is `alpha` (the same numbers: `S` depends on nothing
-    /// else), formed anew otherwise.
+    /// As [`Problem::gn_solve`], with the factor `reuse` of the system when
+    /// the caller has it: formed by `gn_solve` from the same `dv` and the
+    /// same weights of `op` (a warm step's first iteration, at the last
+    /// estimate's cached derivatives). It is used when its `α` is `alpha`
+    /// and its form is this one (the same numbers: `S` or `N` depends on
+    /// nothing else), formed anew otherwise.
     pub(crate) fn gn_solve_reusing(
         &self,
         dv: &Derivs,
@@ -440,8 +500,8 @@ impl<M: EstimationModel> Problem<M> {
         let not_spd = || Error::NotPositiveDefinite {
             context: "the Gauss-Newton matrix of the estimator".into(),
         };
-        match self.load() {
-            LoadModel::Distributed => {
+        match self.gn_form(w.len())? {
+            GnForm::Representer => {
                 // S = Zᵀ B Z + α W⁻¹ (B z_j = J_j; symmetric: the upper
                 // triangle by dot products of the contiguous columns,
                 // mirrored)
@@ -455,6 +515,7 @@ impl<M: EstimationModel> Problem<M> {
                 let (chol, k) = match reuse {
                     Some(x) => x,
                     None => {
+                        count_dense(m * m * self.n_f / 2 + m * m * m / 3);
                         let mut k = DMatrix::zeros(m, m);
                         for i in 0..m {
                             for j in i..m {
@@ -486,15 +547,20 @@ impl<M: EstimationModel> Problem<M> {
                     },
                 ))
             }
-            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
-                let jw = weighted_columns(&dv.jt, w);
-                let mut n = &jw * dv.jt.transpose();
-                for i in 0..n.nrows() {
-                    n[(i, i)] += alpha;
-                }
-                let chol = jittered_cholesky(n).ok_or_else(not_spd)?;
-                let (fv, ev) = (DVector::from_column_slice(f), DVector::from_column_slice(e));
-                let mut step = -(&jw * ev) - fv * alpha;
+            GnForm::Primal(h) => {
+                // N = Jᵀ W J + α H accumulated over the marker rows
+                let reuse = reuse.filter(|fac| {
+                    fac.gram.is_none()
+                        && fac.alpha == alpha
+                        && fac.chol.l_dirty().nrows() == self.n_f
+                });
+                let chol = match reuse {
+                    Some(fac) => fac.chol,
+                    None => primal_system(dv, w, alpha, &h).ok_or_else(not_spd)?,
+                };
+                let hf = DVector::from_vec(self.penalty_grad(f)?);
+                let mut step = -weighted_columns(&dv.jt, w) * DVector::from_column_slice(e);
+                step -= hf * alpha;
                 chol.solve_mut(&mut step);
                 Ok((
                     step.as_slice().to_vec(),

@@ -31,15 +31,23 @@ pub const MAX_GRAVITY_M_PER_S2: f64 = 981.0;
 /// 10 MPa = 100 bar, ten times what a pneumatic elastomer takes.
 pub const MAX_PRESSURE_PA: f64 = 1e7;
 
-/// The most markers a scene may have: motion capture has tens; the
-/// estimator's cost grows faster than linearly in the markers (measured on
-/// 20 elements, both backends: 10 markers 0.07 s, 100 markers 1.6–2.0 s,
-/// 200 markers 11 s, so 250 about 20 s; 1 000 markers over 118 s).
-pub const MAX_MARKERS: usize = 250;
+/// The most markers a scene or a markers file may have: motion capture has
+/// tens. The estimator's work is linear in the markers at a given mesh
+/// (its Gauss–Newton systems in the `n_F × n_F` form beyond `n_F` observed
+/// components; `benches/estimate_markers.rs`, README "Cost in the number
+/// of markers": 20 elements, a first estimate with `α` by the evidence
+/// 0.4–0.5 s at 1 000 markers, a warm step 13–18 ms). The command line's
+/// `marker_std_m` comes from the markers' posterior covariance, an
+/// `n_ob × n_ob` matrix (32 MB at 1 000 planar markers): that, not the
+/// estimate, sets this bound.
+pub const MAX_MARKERS: usize = 1_000;
 
 /// The largest `markers × elements` of a scene's markers (the ones an
 /// estimate or a tracking loop observes): 9 markers on the largest mesh
-/// (2 048 elements), 250 on 80.
+/// (2 048 elements), 250 on 80, 1 000 on 20 (the benches' case). A
+/// linearization's dense work is `O(min(m, n_F)² max(m, n_F))` for `m`
+/// observed components and `n_F ≈ 4 × elements` load parameters, so this
+/// product bounds it up front.
 pub const MAX_MARKER_ELEMENT_PRODUCT: usize = 20_000;
 
 /// `|v| ≤ max` and finite, or the error naming `name`.

@@ -6,6 +6,7 @@ use std::sync::{Arc, OnceLock};
 
 use nalgebra::DMatrix;
 
+use super::super::gn_form::GnForm;
 use super::super::problem::{Derivs, GnFactor};
 use super::super::LoadModel;
 use super::{cov_factor, noise_cov, posterior, posterior_alpha_marginal};
@@ -19,6 +20,8 @@ use super::{cov_factor, noise_cov, posterior, posterior_alpha_marginal};
 pub(crate) struct CovarianceInputs {
     /// The load model.
     pub(crate) load: LoadModel,
+    /// The form of its Gauss–Newton systems ([`super::super::gn_form`]).
+    pub(crate) form: GnForm,
     /// Coordinates per node (the first `DIM` of them the position).
     pub(crate) nd: usize,
     /// Load slots per node that carry a load (`2 DIM`): the rows of `L`
@@ -53,7 +56,7 @@ impl CovarianceInputs {
     fn factor(&self) -> DMatrix<f64> {
         let (nf, m) = (self.dv.jt.nrows(), self.weights.len());
         let Some(mut l) = cov_factor(
-            self.load,
+            &self.form,
             self.sigma,
             &self.dv,
             &self.weights,
@@ -75,10 +78,15 @@ impl CovarianceInputs {
     /// `Cov(resultant force)` (`DIM × DIM`) and `Cov(A q)` (`n_ob ×
     /// n_ob`): the posterior's ([`posterior`], averaged over `α` when it is
     /// the evidence's), or, when its matrix cannot be factored, the spread
-    /// the noise alone causes, from the covariance factor `l()`.
-    fn posterior(&self, l: impl FnOnce() -> DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64>) {
+    /// the noise alone causes, from the covariance factor `l()`. Without
+    /// `markers`, `Cov(A q)` is not formed (empty).
+    fn posterior(
+        &self,
+        markers: bool,
+        l: impl FnOnce() -> DMatrix<f64>,
+    ) -> (DMatrix<f64>, DMatrix<f64>) {
         let (load, nd, fw, dv, w, alpha) = (
-            self.load,
+            &self.form,
             self.nd,
             &self.fw[..],
             &self.dv,
@@ -87,7 +95,7 @@ impl CovarianceInputs {
         );
         let gn = self.gn.as_ref();
         let d = fw.len().checked_div(dv.jt.nrows()).unwrap_or(0);
-        let m = w.len();
+        let m = if markers { w.len() } else { 0 };
         let typed = |(r, mk): (Vec<f64>, Vec<f64>)| {
             (
                 DMatrix::from_row_slice(d, d, &r),
@@ -95,14 +103,15 @@ impl CovarianceInputs {
             )
         };
         if let Some((f, pen)) = &self.evidence {
-            if let Some(c) = posterior_alpha_marginal(load, nd, fw, dv, w, alpha, f, *pen, gn) {
+            let c = posterior_alpha_marginal(load, nd, fw, dv, w, alpha, f, *pen, gn, markers);
+            if let Some(c) = c {
                 return typed(c);
             }
         }
-        if let Some(c) = posterior(load, nd, fw, dv, w, alpha, gn) {
+        if let Some(c) = posterior(load, nd, fw, dv, w, alpha, gn, markers) {
             return typed(c);
         }
-        noise_cov(&l(), fw, dv)
+        noise_cov(&l(), fw, dv, markers)
     }
 }
 
@@ -114,6 +123,9 @@ pub(crate) struct LazyCovariances {
     inputs: Arc<CovarianceInputs>,
     factor: OnceLock<DMatrix<f64>>,
     posterior: OnceLock<(DMatrix<f64>, DMatrix<f64>)>,
+    /// The resultant's posterior covariance when asked for alone (without
+    /// `Cov(A q)`, whose work grows as `n_ob²`).
+    resultant: OnceLock<DMatrix<f64>>,
     gamma: OnceLock<f64>,
 }
 
@@ -124,6 +136,7 @@ impl LazyCovariances {
             inputs: Arc::new(inputs),
             factor: OnceLock::new(),
             posterior: OnceLock::new(),
+            resultant: OnceLock::new(),
             gamma: OnceLock::new(),
         }
     }
@@ -136,7 +149,7 @@ impl LazyCovariances {
             let i = &self.inputs;
             match i.gamma {
                 Some((objective, pen)) => super::super::evidence::evidence(
-                    i.load, &i.dv, &i.weights, objective, pen, i.alpha,
+                    &i.form, &i.dv, &i.weights, objective, pen, i.alpha,
                 )
                 .map_or(f64::NAN, |ev| ev.gamma),
                 None => 0.0,
@@ -152,7 +165,18 @@ impl LazyCovariances {
     /// The posterior covariances of the resultant force and of `A q`.
     pub(super) fn posterior(&self) -> &(DMatrix<f64>, DMatrix<f64>) {
         self.posterior
-            .get_or_init(|| self.inputs.posterior(|| self.factor().clone()))
+            .get_or_init(|| self.inputs.posterior(true, || self.factor().clone()))
+    }
+
+    /// The posterior covariance of the resultant force: from
+    /// [`LazyCovariances::posterior`] if formed, else alone (the same
+    /// numbers, without `Cov(A q)`).
+    pub(super) fn resultant(&self) -> &DMatrix<f64> {
+        if let Some(p) = self.posterior.get() {
+            return &p.0;
+        }
+        self.resultant
+            .get_or_init(|| self.inputs.posterior(false, || self.factor().clone()).0)
     }
 }
 

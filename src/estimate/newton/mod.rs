@@ -13,7 +13,10 @@
 //! - Gauss–Newton Hessian (30): `2 (Jᵀ W J + α H)`. For the distributed
 //!   load (`G = H = B`) the step is solved in the representer form
 //!   `F + dF = Σ_i c_i z_i`, `(α W⁻¹ + Zᵀ B Z) c = J F − e`: a Cholesky of an
-//!   `n_ob × n_ob` matrix, nothing of size `n_q³`.
+//!   `n_ob × n_ob` matrix, nothing of size `n_q³`, while the observed
+//!   components are at most `n_F`; beyond, `Jᵀ W J + α B` itself, accumulated
+//!   over the marker rows (`n_F × n_F`): the work is linear in the markers
+//!   (`estimate::gn_form`).
 //! - Globalization: Armijo backtracking on `J`, each trial a warm static solve
 //!   from the linearized prediction `q + t M K⁻¹ Mᵀ G dF` (chord steps with
 //!   the last factorization of `K`, then one fresh factorization at the
@@ -107,6 +110,12 @@ pub struct NewtonEstimator<M: EstimationModel> {
 }
 
 impl<M: EstimationModel> NewtonEstimator<M> {
+    /// The estimation problem (tests set its Gauss–Newton form).
+    #[cfg(test)]
+    pub(crate) fn problem_mut(&mut self) -> &mut super::problem::Problem<M> {
+        &mut self.stream.problem
+    }
+
     /// An estimator for `robot` under the known loads `known` (both
     /// borrowed; the estimator keeps copies). `settings.backend` must be
     /// [`super::Backend::Newton`]: the backend is chosen once, by the

@@ -16,6 +16,7 @@ use crate::linsolve::{AutoFactors, Factorization, SymmetricMatrix};
 use crate::numeric::{dot, norm2};
 use crate::observe::ObservationOperator;
 
+use super::super::gn_form::{count_dense, GnForm};
 use super::super::problem::{weighted_columns, Derivs, Problem};
 use super::super::{BoundFrame, LoadModel};
 use super::{QpError, QpStep, SqpEstimator, Unconstrained};
@@ -366,10 +367,12 @@ pub(super) fn active_set_solve(
 }
 
 /// The reduced Gauss–Newton Hessian (30) `N = Jᵀ W J + α H` at one
-/// linearization, applied as `N⁻¹`: for the distributed load
-/// (`J = Z B`, `H = B`) by Woodbury,
+/// linearization, applied as `N⁻¹`, in the problem's form
+/// ([`Problem::gn_form`]): in the representer form (the distributed load,
+/// `J = Z B`, `H = B`, at most `n_F` observed components) by Woodbury,
 /// `N⁻¹ = α⁻¹ (B⁻¹ − Zᵀ S⁻¹ Z)`, `S = α W⁻¹ + Z B Zᵀ` (`n_ob × n_ob`);
-/// for a concentrated load `N` itself (`DIM × DIM`).
+/// in the primal form `N` itself (`n_F × n_F`, accumulated over the marker
+/// rows).
 pub(super) struct Reduced<'a> {
     /// The adjoint fields, column `i` each.
     z: &'a DMatrix<f64>,
@@ -388,21 +391,24 @@ impl<'a> Reduced<'a> {
     ) -> Option<Self> {
         let m = op.len();
         let w = op.weights();
-        let mat = match problem.load() {
-            LoadModel::Distributed => {
+        let (mat, gram_lu) = match problem.gn_form(m).ok()? {
+            GnForm::Representer => {
                 gram_lu?;
                 // Zᵀ B Z (B z_j = J_j), symmetrized
+                count_dense(m * m * dv.jt.nrows() + m * m * m / 3);
                 let zj = dv.z.tr_mul(&dv.jt);
-                DMatrix::from_fn(m, m, |i, j| {
+                let s = DMatrix::from_fn(m, m, |i, j| {
                     0.5 * (zj[(i, j)] + zj[(j, i)]) + if i == j { alpha / w[i] } else { 0.0 }
-                })
+                });
+                (s, gram_lu)
             }
-            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
+            GnForm::Primal(h) => {
+                // N = Jᵀ W J + α H over the marker rows
+                let nf = dv.jt.nrows();
+                count_dense(m * nf * nf + nf * nf * nf / 3);
                 let mut n = weighted_columns(&dv.jt, w) * dv.jt.transpose();
-                for i in 0..n.nrows() {
-                    n[(i, i)] += alpha;
-                }
-                n
+                n.zip_apply(&h.h, |a, b| *a += alpha * b);
+                (n, None)
             }
         };
         Some(Reduced {

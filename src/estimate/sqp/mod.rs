@@ -22,7 +22,9 @@
 //!   (`du = K⁻¹ (Q + Mᵀ G dF)`) leaves for `dF` the Gauss–Newton system of
 //!   the reduced problem at the linearized residual `e' = e + A M K⁻¹ Q`,
 //!   solved in the representer form (an `n_ob × n_ob` Cholesky, see
-//!   the Gauss–Newton step (30)). One tangent factorization per iteration; the
+//!   the Gauss–Newton step (30)) up to `n_F` observed components, beyond in
+//!   the `n_F × n_F` form accumulated over the marker rows (work linear in
+//!   the markers; the QP's size does not grow with them). One tangent factorization per iteration; the
 //!   equality multipliers follow from the `du` rows, `K λ = 2 Mᵀ AᵀW (e + A M du)`.
 //! - **With bounds**: the bounds act on `F` only, so on a known active set
 //!   the QP is again equality-constrained and solved exactly through the
@@ -176,6 +178,12 @@ struct WarmQp {
 }
 
 impl<E: Element> SqpEstimator<E> {
+    /// The estimation problem (tests set its Gauss–Newton form).
+    #[cfg(test)]
+    pub(crate) fn problem_mut(&mut self) -> &mut super::problem::Problem<Robot<E>> {
+        &mut self.stream.problem
+    }
+
     /// An estimator for `robot` under the known loads `known` (both
     /// borrowed; the estimator keeps copies). `settings.backend` must be
     /// [`super::Backend::Sqp`]: the backend is chosen once, by the settings

@@ -1,0 +1,97 @@
+//! The two forms of the Gauss–Newton system (30) and which one a
+//! linearization is solved in, so that the work is linear in the markers.
+//!
+//! With `m = n_ob` observed components and `n_F` load parameters the same
+//! system has two forms:
+//!
+//! - **primal**: `N = Jᵀ W J + α H` (`n_F × n_F`), formed by accumulating
+//!   the weighted marker rows, `O(m n_F² + n_F³)`;
+//! - **representer** (distributed load, `J = Zᵀ B`, `H = B`):
+//!   `S = α W⁻¹ + Zᵀ B Z` (`m × m`), `O(m² n_F + m³)`, no `n_F³` work.
+//!
+//! They are the same linear algebra (Woodbury; Sylvester for the
+//! determinants, see [`super::evidence`]). The problem takes the smaller:
+//! the representer form while `m ≤ n_F` (few markers on a fine mesh, as
+//! before), the primal one beyond (many markers), so a step's dense work is
+//! `O(min(m, n_F)² max(m, n_F))`, linear in `m` at a given mesh. A
+//! concentrated force (`n_F = DIM`, `H = I`) is always primal. Nothing of
+//! size `m × m` is formed in the primal form.
+//!
+//! The dense work is counted (flops of forming and factoring the systems,
+//! per thread) so tests hold the estimator to its cost without timing it.
+
+use std::cell::Cell;
+use std::sync::Arc;
+
+use nalgebra::{Cholesky, DMatrix, Dyn};
+
+use super::problem::{jittered_cholesky, weighted_columns, Derivs};
+
+thread_local! {
+    static DENSE_FLOPS: Cell<u64> = const { Cell::new(0) };
+}
+
+/// Counts `flops` of dense work in the estimator's systems.
+pub(crate) fn count_dense(flops: usize) {
+    let _ = DENSE_FLOPS.try_with(|c| c.set(c.get().wrapping_add(flops as u64)));
+}
+
+/// The dense work of this thread since it started (flops counted by
+/// [`count_dense`]).
+#[cfg_attr(not(test), allow(dead_code))]
+pub(crate) fn dense_work() -> u64 {
+    DENSE_FLOPS.try_with(Cell::get).unwrap_or(0)
+}
+
+/// The dense penalty matrix `H` (`n_F × n_F`, symmetric positive definite)
+/// of the primal form and `log det H`.
+#[derive(Debug, Clone)]
+pub(crate) struct PenaltyMatrix {
+    /// `H`.
+    pub(crate) h: DMatrix<f64>,
+    /// `log det H`.
+    pub(crate) log_det: f64,
+}
+
+impl PenaltyMatrix {
+    /// `H` and its log-determinant; `None` unless it is positive definite
+    /// (the full 3-D element's load Gram matrix is singular on the node
+    /// numbers no load is made of: that load stays in the representer form).
+    pub(crate) fn new(h: DMatrix<f64>) -> Option<Self> {
+        let chol = h.clone().cholesky()?;
+        let log_det = 2.0
+            * chol
+                .l_dirty()
+                .diagonal()
+                .iter()
+                .map(|v| v.ln())
+                .sum::<f64>();
+        log_det.is_finite().then_some(PenaltyMatrix { h, log_det })
+    }
+}
+
+/// The form a Gauss–Newton system is solved in (see the module docs).
+#[derive(Debug, Clone)]
+pub(crate) enum GnForm {
+    /// `S = α W⁻¹ + Zᵀ B Z` (`n_ob × n_ob`), the distributed load.
+    Representer,
+    /// `N = Jᵀ W J + α H` (`n_F × n_F`) with the dense `H`.
+    Primal(Arc<PenaltyMatrix>),
+}
+
+/// The factor of `N = Jᵀ W J + α H` from the derivatives `dv` (`Jᵀ` its
+/// columns) and weights `w`: the weighted marker rows accumulated into the
+/// `n_F × n_F` matrix (one product), then a Cholesky factorization with the
+/// jitter of [`jittered_cholesky`]. `None` if it cannot be factored.
+pub(crate) fn primal_system(
+    dv: &Derivs,
+    w: &[f64],
+    alpha: f64,
+    h: &PenaltyMatrix,
+) -> Option<Cholesky<f64, Dyn>> {
+    let (nf, m) = dv.jt.shape();
+    let mut n = weighted_columns(&dv.jt, w) * dv.jt.transpose();
+    n.zip_apply(&h.h, |a, b| *a += alpha * b);
+    count_dense(m * nf * nf + nf * nf * nf / 3);
+    jittered_cholesky(n)
+}
