@@ -146,6 +146,21 @@ pub enum Error {
         /// What went wrong.
         message: String,
     },
+    /// A result record (the input of `softrod plot`) that has no picture:
+    /// not a softrod record of format "1", or a kind that is not drawn.
+    #[error(
+        "`{path}`: a record of format_version `{format_version}`, command `{command}`, scene_kind `{scene_kind}` has no picture (`softrod plot` draws format \"1\" records of `solve` and `estimate` on robot scenes, `solve` on parallel robots and `avoid`)"
+    )]
+    UnsupportedRecord {
+        /// The file read.
+        path: String,
+        /// Its `format_version` (`(none)` if absent).
+        format_version: String,
+        /// Its `command` (`(none)` if absent).
+        command: String,
+        /// Its `scene_kind` (`(none)` if absent).
+        scene_kind: String,
+    },
     /// A computation produced a value that is not finite.
     #[error("non-finite value in {context}")]
     NonFinite {

@@ -60,6 +60,9 @@ fn quick_report_writes_every_file_and_records_every_case() {
         ..ReportOptions::new(&dir)
     };
     let summary = run(&opts, &[]).unwrap();
+    // every chart passes the layout check (no text off its canvas or over
+    // another label, no data outside its axes)
+    assert!(summary.layout.is_empty(), "{:#?}", summary.layout);
     let names: Vec<String> = summary
         .files
         .iter()

@@ -27,8 +27,8 @@ use clap::{Parser, Subcommand};
 use serde::Serialize;
 
 use output::{
-    CommandName, EstimateBody, EstimateRecord, GoalNotMet, Header, LoadSample, NodeRecord, Outcome,
-    ResultantRecord, SceneKind, SolveRecord,
+    CommandName, EstimateBody, EstimateRecord, GoalNotMet, Header, LoadSample, MarkerFitRecord,
+    NodeRecord, Outcome, PointForceRecord, ResultantRecord, SceneKind, SolveRecord,
 };
 use softrod::assembly::{Robot, ValidityWarning};
 use softrod::element::{Element, PlanarCable};
@@ -157,6 +157,22 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+    },
+    /// Draw a result: the record written by `solve` or `estimate` (a robot
+    /// scene: the backbone, the markers measured and fitted, the estimated
+    /// load along the backbone with its ±1σ band, the marker residuals),
+    /// by `solve` on a parallel robot (legs and platform) or by `avoid`
+    /// (the shapes, the goal, the obstacle points learnt by touch and the
+    /// contact forces). One x–y view for a planar robot, three orthogonal
+    /// views (x–y, x–z, y–z) in 3-D. A record of another kind is refused
+    /// (exit code 1) with what was read.
+    Plot {
+        /// The result record (JSON, format_version "1").
+        record: PathBuf,
+        /// The picture: a .png or .svg file (default: the record's path
+        /// with the extension .png).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Write the JSON Schema of every output record (the files committed
     /// under schema/): `solve`, `solve_parallel`, `estimate`,
@@ -366,10 +382,55 @@ fn write_json<T: Serialize>(value: &T, out: Option<&PathBuf>) -> Result<()> {
 
 const LOAD_GRID: usize = 49;
 
+/// Each marker of `obs`: where it was measured and where the estimated
+/// shape `q` puts it (a marker on a body, or one that cannot be placed, is
+/// left out: the residuals keep it).
+fn marker_fits<E: Element>(robot: &Robot<E>, q: &[f64], obs: &Observation) -> Vec<MarkerFitRecord> {
+    obs.markers
+        .iter()
+        .filter_map(|m| {
+            let s = match (m.node, m.s_m) {
+                (Some(n), _) => *robot.node_arc().get(n)?,
+                (None, Some(s)) => s,
+                _ => return None,
+            };
+            let fitted = robot.position_at(q, s).ok()?;
+            Some(MarkerFitRecord {
+                s_m: s,
+                node: m.node,
+                measured_position_m: m.position_m.clone(),
+                fitted_position_m: fitted.as_slice().to_vec(),
+            })
+        })
+        .collect()
+}
+
+/// The 1σ of `w(s)` per component from the noise covariance factor `L` of
+/// the load parameters, `sqrt(diag(S L Lᵀ Sᵀ))` (`w = S(s) F`, (8)): `S`
+/// applied to each column of `L`. `None` for a concentrated load.
+fn load_std<E: Element>(e: &Estimate, s: f64) -> Option<Vec<f64>> {
+    if e.load_model != softrod::estimate::LoadModel::Distributed {
+        return None;
+    }
+    let l = e.cov_factor();
+    let p = softrod::element::ArcPoint::locate(e.node_arc(), s)?;
+    let mut var = vec![0.0; E::DIM];
+    let mut col = vec![0.0; E::DIM];
+    let n = l.nrows();
+    for j in 0..l.ncols() {
+        // DMatrix storage is column-major: column j is one slice
+        p.node_value_into(&l.as_slice()[j * n..(j + 1) * n], E::NODE_DOFS, &mut col)
+            .ok()?;
+        var.iter_mut().zip(&col).for_each(|(v, c)| *v += c * c);
+    }
+    Some(var.into_iter().map(f64::sqrt).collect())
+}
+
 fn estimate_out<E: Element>(
     robot: &Robot<E>,
     pressures_pa: Vec<f64>,
     e: &Estimate,
+    obs: &Observation,
     observation: String,
 ) -> EstimateBody {
     let nodes = node_outs(robot, e.q.as_slice());
@@ -388,10 +449,22 @@ fn estimate_out<E: Element>(
             .map(|(s, w)| LoadSample {
                 s,
                 w: w.as_slice().to_vec(),
+                w_std: load_std::<E>(e, s),
             })
             .collect(),
         load_grid_points: LOAD_GRID,
         load_parameters: e.f.as_slice().to_vec(),
+        point_force: match e.load_model {
+            softrod::estimate::LoadModel::Concentrated { node } => {
+                robot.node_arc().get(node).map(|&s| PointForceRecord {
+                    node,
+                    s_m: s,
+                    position_m: e.q.as_slice()[node * E::NODE_DOFS..node * E::NODE_DOFS + E::DIM]
+                        .to_vec(),
+                })
+            }
+            _ => None,
+        },
         resultant: ResultantRecord {
             force_n: e.resultant_force_n.as_slice().to_vec(),
             force_std_n: (0..d).map(|a| cov[(a, a)].max(0.0).sqrt()).collect(),
@@ -401,6 +474,7 @@ fn estimate_out<E: Element>(
             moment_nm: e.resultant_moment_nm.as_slice().to_vec(),
         },
         marker_residuals_m: e.marker_residuals.as_slice().to_vec(),
+        markers: marker_fits(robot, e.q.as_slice(), obs),
         marker_std_m: (0..m)
             .map(|i| e.marker_cov()[(i, i)].max(0.0).sqrt())
             .collect(),
@@ -497,7 +571,7 @@ fn estimate_with<E: Element + 'static>(
         })?;
         outs.push((
             t_s,
-            estimate_out(&robot, pressures.clone(), &e, source.clone()),
+            estimate_out(&robot, pressures.clone(), &e, &obs, source.clone()),
         ));
     }
     Ok(outs)
@@ -708,6 +782,16 @@ pub fn run() -> Result<()> {
             out,
         }) => grasp::run(scene, strategy, out),
         Some(Command::Schema { out }) => schema(out),
+        Some(Command::Plot { record, out }) => {
+            let summary = softrod::report::plot_result(&record, out.as_deref())?;
+            outln!(
+                "wrote {} ({}: {})",
+                summary.path.display(),
+                summary.record,
+                summary.panels.join(", ")
+            );
+            Ok(())
+        }
     }
 }
 

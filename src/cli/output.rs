@@ -232,6 +232,41 @@ pub struct LoadSample {
     pub s: f64,
     /// Load per undeformed length, world axes (N/m).
     pub w: Vec<f64>,
+    /// Standard deviation (1σ) of each component of `w` from the stated
+    /// marker noise alone (N/m): the square roots of the diagonal of
+    /// `S(s) L Lᵀ S(s)ᵀ`, `w = S(s) F` (8) and `L` the estimate's noise
+    /// covariance factor (`softrod::estimate::Estimate::cov_factor`; the
+    /// penalty's bias is not in it). Absent for a concentrated load.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub w_std: Option<Vec<f64>>,
+}
+
+/// Where an estimated point force acts (the estimator's concentrated load
+/// model).
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct PointForceRecord {
+    /// The node it acts at.
+    pub node: usize,
+    /// The node's undeformed arc coordinate (m).
+    pub s_m: f64,
+    /// The node's position in the estimated shape (m), world axes.
+    pub position_m: Vec<f64>,
+}
+
+/// A marker the estimate was fitted to.
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct MarkerFitRecord {
+    /// Undeformed arc coordinate of the marker (m).
+    pub s_m: f64,
+    /// Its node, if it was given by node.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub node: Option<usize>,
+    /// Where it was measured (m), world axes.
+    pub measured_position_m: Vec<f64>,
+    /// Where the estimated shape puts it (m), world axes.
+    pub fitted_position_m: Vec<f64>,
 }
 
 /// Resultant of the estimated load, with its uncertainty.
@@ -343,9 +378,17 @@ pub struct EstimateBody {
     pub load_grid_points: usize,
     /// The raw load parameters F (N/m, N/m², node-major [w, w']; or the force, N).
     pub load_parameters: Vec<f64>,
+    /// A concentrated load model: where the force (`load_parameters`, also
+    /// `resultant.force_n`) acts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub point_force: Option<PointForceRecord>,
     pub resultant: ResultantRecord,
     /// Marker residuals A q - y (m), in observation order.
     pub marker_residuals_m: Vec<f64>,
+    /// Each marker measured and fitted (positions only), in observation
+    /// order (what `softrod plot` draws).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub markers: Vec<MarkerFitRecord>,
     /// Standard deviation (1σ) of the estimated marker-space shape (m), per
     /// observed component.
     pub marker_std_m: Vec<f64>,

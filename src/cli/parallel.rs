@@ -174,7 +174,18 @@ pub(super) fn track(
     if let Some(c) = controller {
         settings.controller = c;
     }
-    let run = track::run_track(&scene.parallel, &scene.pressures_pa, &settings)?;
+    let bar = softrod::report::progress(0, false, "track");
+    let run = track::run_track_observed(
+        &scene.parallel,
+        &scene.pressures_pa,
+        &settings,
+        &mut |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        },
+    );
+    bar.finish_and_clear();
+    let run = run?;
     let s = &run.summary;
     let controller = ControllerName::from(s.controller);
     eprintln!(

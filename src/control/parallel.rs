@@ -535,6 +535,30 @@ pub fn run_track(
     centre_pa: &[f64],
     settings: &TrackSettings,
 ) -> Result<TrackRun> {
+    run_track_observed(spec, centre_pa, settings, &mut |_, _| {})
+}
+
+/// [`run_track`], calling `on_sample(done, total)` after each control
+/// instant (a progress bar: `total` is the run's number of instants).
+///
+/// # Errors
+/// As [`run_track`].
+///
+/// # Example
+/// ```no_run
+/// use softrod::control::parallel::{run_track_observed, TrackSettings};
+/// let spec = softrod::parallel::ParallelSpec::default();
+/// let mut last = 0;
+/// let run = run_track_observed(&spec, &[], &TrackSettings::default(), &mut |done, _| last = done)?;
+/// assert_eq!(last, run.samples.len());
+/// # Ok::<(), softrod::Error>(())
+/// ```
+pub fn run_track_observed(
+    spec: &ParallelSpec,
+    centre_pa: &[f64],
+    settings: &TrackSettings,
+    on_sample: &mut dyn FnMut(usize, usize),
+) -> Result<TrackRun> {
     settings.validate()?;
     spec.validate()?;
     let mut model_spec = spec.clone();
@@ -600,6 +624,7 @@ pub fn run_track(
             control,
             step_time_s,
         });
+        on_sample(k + 1, n);
     }
     let mut summary = summarize(settings, &samples);
     summary.model_solves = ctl.warm.counts();

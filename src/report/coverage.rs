@@ -29,6 +29,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::Vector2;
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -555,19 +556,38 @@ fn draw<DB: DrawingBackend>(
     root.fill(&WHITE).map_err(ms)?;
     let (left, right) = root.split_horizontally(560);
     let n = r.rows.len().max(1);
+    // binomial standard error (%) of a row's rate
+    let se_of = |row: &CoverageRow| {
+        let p = row.coverage;
+        100.0 * (p * (1.0 - p) / row.trials.max(1) as f64).sqrt()
+    };
+    // room above the highest interval for its label
+    let ymax = r
+        .rows
+        .iter()
+        .map(|row| 100.0 * row.coverage + 1.96 * se_of(row) + 9.0)
+        .fold(110.0, f64::max);
     let mut c = ChartBuilder::on(&left)
         .caption("(a) truth in the reported 95 % region", ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(55)
-        .build_cartesian_2d(0f64..n as f64, 0f64..100f64)
+        .build_cartesian_2d(0f64..n as f64, 0f64..ymax)
         .map_err(ms)?;
     c.configure_mesh()
         .disable_x_mesh()
         .x_labels(0)
         .y_desc("coverage (%)")
+        .y_label_formatter(&|v| {
+            if *v <= 100.0 {
+                format!("{v}")
+            } else {
+                String::new()
+            }
+        })
         .draw()
         .map_err(ms)?;
+    super::layout::data_in(c.plotting_area());
     c.draw_series([Rectangle::new(
         [(0.0, 90.0), (n as f64, 99.0)],
         RGBColor(200, 230, 200).filled(),
@@ -586,9 +606,8 @@ fn draw<DB: DrawingBackend>(
             col.filled(),
         )])
         .map_err(ms)?;
-        // binomial standard error
         let p = row.coverage;
-        let se = 100.0 * (p * (1.0 - p) / row.trials.max(1) as f64).sqrt();
+        let se = se_of(row);
         c.draw_series([PathElement::new(
             vec![
                 (x + 0.5, 100.0 * p - 1.96 * se),
@@ -597,17 +616,30 @@ fn draw<DB: DrawingBackend>(
             BLACK.stroke_width(2),
         )])
         .map_err(ms)?;
-        c.draw_series([Text::new(
-            format!("{} {}", row.family.name(), row.backend.name()),
-            (x + 0.2, 8.0),
-            ("sans-serif", 15).into_font().color(&WHITE),
-        )])
-        .map_err(ms)?;
+        // the rate above the bar and its interval (inside the axes)
+        let top = 100.0 * p + 1.96 * se;
         c.draw_series([Text::new(
             format!("{:.1} %", 100.0 * p),
-            (x + 0.25, 100.0 * p - 6.0),
-            ("sans-serif", 15).into_font().color(&WHITE),
+            (x + 0.5, top + 3.0),
+            ("sans-serif", 15)
+                .into_font()
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Center, VPos::Bottom)),
         )])
+        .map_err(ms)?;
+    }
+    // the bars' names below the axis
+    super::layout::annotations();
+    for (i, row) in r.rows.iter().enumerate() {
+        c.draw_series([EmptyElement::at((i as f64 + 0.5, 0.0))
+            + Text::new(
+                format!("{} {}", row.family.name(), row.backend.name()),
+                (0, 8),
+                ("sans-serif", 15)
+                    .into_font()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Center, VPos::Top)),
+            )])
         .map_err(ms)?;
     }
     let xmax = 16.0;
@@ -623,6 +655,7 @@ fn draw<DB: DrawingBackend>(
         .y_desc("fraction of trials")
         .draw()
         .map_err(ms)?;
+    super::layout::data_in(c.plotting_area());
     c.draw_series(LineSeries::new(
         (0..=160).map(|i| {
             let x = xmax * i as f64 / 160.0;
@@ -660,6 +693,7 @@ fn draw<DB: DrawingBackend>(
         .label(format!("{} {}", row.family.name(), row.backend.name()))
         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], col.stroke_width(2)));
     }
+    super::layout::annotations();
     c.configure_series_labels()
         .position(SeriesLabelPosition::LowerRight)
         .background_style(WHITE.mix(0.8))

@@ -233,6 +233,9 @@ fn draw<DB: DrawingBackend>(
         .y_desc("mean tracking error after the hold (mm)")
         .label_style((FONT, 13))
         .axis_desc_style((FONT, 14))
+        // rounded (a log axis's key points print as 0.30000000000000004)
+        .x_label_formatter(&|v| super::plot::fmt_tick(*v))
+        .y_label_formatter(&|v| super::plot::fmt_tick(*v))
         .draw()
         .map_err(ms)?;
     for (b, colour) in [

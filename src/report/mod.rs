@@ -39,11 +39,13 @@ pub mod atomic;
 pub mod auto_point;
 pub mod coverage;
 pub mod grasp;
+pub mod layout;
 pub mod loop_failure;
 pub mod loop_pareto;
 pub mod pareto;
 pub mod plot;
 pub mod reference;
+pub mod result_plot;
 pub mod spatial;
 pub mod stability;
 pub mod sweep;
@@ -59,6 +61,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 
 pub use pareto::{LabelledPoint, ParetoReport};
+pub use result_plot::{plot_result, PlotSummary};
 pub use stability::StabilityReport;
 
 /// Which part of the report runs.
@@ -122,6 +125,10 @@ pub struct ReportSummary {
     pub tracking: Option<tracking::TrackingReport>,
     /// The files written.
     pub files: Vec<PathBuf>,
+    /// What the layout check ([`layout`](mod@layout)) found in the charts
+    /// written: empty when no text leaves its canvas or covers another and
+    /// no data mark leaves its axes.
+    pub layout: Vec<layout::ChartIssue>,
     /// Wall time of the whole run (s).
     pub wall_time_s: f64,
 }
@@ -181,14 +188,27 @@ fn load_average() -> Option<f64> {
         .and_then(|t| t.split_whitespace().next().and_then(|v| v.parse().ok()))
 }
 
-/// A progress bar on standard error (hidden when quiet or not a terminal).
-pub(crate) fn progress(len: usize, quiet: bool, what: &str) -> indicatif::ProgressBar {
+/// The progress bar of every run longer than a few seconds (the report's
+/// parts, `softrod track` on a parallel robot): on standard error, `what`
+/// before it, `len` steps (`set_length` when it is known later); hidden
+/// when `quiet` or when standard error is not a terminal (a log file, a
+/// pipe, a test).
+///
+/// # Example
+/// ```
+/// let bar = softrod::report::progress(10, false, "sweep");
+/// for _ in 0..10 {
+///     bar.inc(1);
+/// }
+/// bar.finish_and_clear();
+/// ```
+pub fn progress(len: usize, quiet: bool, what: &str) -> indicatif::ProgressBar {
     if quiet || !std::io::stderr().is_terminal() {
         return indicatif::ProgressBar::hidden();
     }
     let pb = indicatif::ProgressBar::new(len as u64);
     let style = indicatif::ProgressStyle::with_template(
-        "{prefix:>10} [{bar:40}] {pos}/{len} cases, {elapsed} elapsed, ~{eta} left {msg}",
+        "{prefix:>10} [{bar:40}] {pos}/{len}, {elapsed} elapsed, ~{eta} left {msg}",
     )
     .map(|s| s.progress_chars("=> "))
     .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
@@ -220,6 +240,7 @@ pub(crate) fn io_error(path: &Path, e: impl std::fmt::Display) -> Error {
 /// A failing case is not an error: it is an outcome in the report.
 pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummary> {
     let start = Instant::now();
+    let _ = layout::take_chart_issues();
     std::fs::create_dir_all(&opts.out_dir).map_err(|e| io_error(&opts.out_dir, e))?;
     let mut files = Vec::new();
     let pareto = if matches!(opts.only, None | Some(Part::Pareto)) {
@@ -271,6 +292,7 @@ pub fn run(opts: &ReportOptions, extra: &[LabelledPoint]) -> Result<ReportSummar
         stability,
         tracking,
         files,
+        layout: layout::take_chart_issues(),
         wall_time_s: start.elapsed().as_secs_f64(),
     })
 }

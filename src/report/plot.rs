@@ -14,6 +14,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use crate::error::{Error, Result};
 use crate::estimate::Backend;
 
+use super::layout::{self, LayoutIssue, Recorder};
 use super::pareto::{LabelledPoint, ParetoPoint, ParetoReport};
 use super::stability::{MapSpec, StabilityReport};
 use super::sweep::FailureCause;
@@ -44,29 +45,73 @@ pub(super) fn ms<E: std::fmt::Debug>(e: E) -> String {
     format!("{e:?}")
 }
 
-/// Draws with `draw` into `<dir>/<stem>.png` and `<dir>/<stem>.svg`.
+/// Draws with `draw` through the layout [`Recorder`]: the drawing's
+/// result and what the layout check found (see [`super::layout`]).
+pub(super) fn draw_recorded<DB: DrawingBackend>(
+    backend: DB,
+    draw: impl FnOnce(&DrawingArea<Recorder<DB>, Shift>) -> std::result::Result<(), String>,
+) -> (std::result::Result<(), String>, Vec<LayoutIssue>) {
+    let size = backend.get_size();
+    layout::recorded(size, || {
+        let root = Recorder(backend).into_drawing_area();
+        draw(&root)?;
+        root.present().map_err(ms)
+    })
+}
+
+/// Each layout issue of the chart at `path` as a warning on standard error
+/// (and kept for the report's summary).
+pub(super) fn warn_layout(path: &Path, issues: &[LayoutIssue]) {
+    layout::keep_chart_issues(path, issues);
+    for i in issues {
+        eprintln!("softrod: warning: chart {}: layout: {i}", path.display());
+    }
+}
+
+/// A PNG drawing function through the layout recorder.
+pub(super) type PngArea<'a> = DrawingArea<Recorder<BitMapBackend<'a>>, Shift>;
+/// An SVG drawing function through the layout recorder.
+pub(super) type SvgArea<'a> = DrawingArea<Recorder<SVGBackend<'a>>, Shift>;
+
+/// Draws with `draw` into `<dir>/<stem>.png` and `<dir>/<stem>.svg`; the
+/// PNG's drawing is layout-checked, its issues warned on standard error
+/// and returned.
+pub(super) fn both_checked(
+    dir: &Path,
+    stem: &str,
+    size: (u32, u32),
+    draw_png: impl Fn(&PngArea) -> std::result::Result<(), String>,
+    draw_svg: impl Fn(&SvgArea) -> std::result::Result<(), String>,
+) -> Result<(Vec<PathBuf>, Vec<LayoutIssue>)> {
+    register_font()?;
+    let png = dir.join(format!("{stem}.png"));
+    let svg = dir.join(format!("{stem}.svg"));
+    let mut issues = Vec::new();
+    // drawn into temporary files, renamed when whole (atomic output)
+    super::atomic::with_temp(&png, |tmp| {
+        let (r, found) = draw_recorded(BitMapBackend::new(tmp, size), &draw_png);
+        issues = found;
+        r.map_err(|m| super::io_error(&png, m))
+    })?;
+    super::atomic::with_temp(&svg, |tmp| {
+        // the same drawing: not recorded again
+        let root = Recorder(SVGBackend::new(tmp, size)).into_drawing_area();
+        draw_svg(&root).map_err(|m| super::io_error(&svg, m))?;
+        root.present().map_err(|e| super::io_error(&svg, ms(e)))
+    })?;
+    warn_layout(&png, &issues);
+    Ok((vec![png, svg], issues))
+}
+
+/// [`both_checked`] without its issues (warned on standard error).
 pub(super) fn both(
     dir: &Path,
     stem: &str,
     size: (u32, u32),
-    draw_png: impl Fn(&DrawingArea<BitMapBackend, Shift>) -> std::result::Result<(), String>,
-    draw_svg: impl Fn(&DrawingArea<SVGBackend, Shift>) -> std::result::Result<(), String>,
+    draw_png: impl Fn(&PngArea) -> std::result::Result<(), String>,
+    draw_svg: impl Fn(&SvgArea) -> std::result::Result<(), String>,
 ) -> Result<Vec<PathBuf>> {
-    register_font()?;
-    let png = dir.join(format!("{stem}.png"));
-    let svg = dir.join(format!("{stem}.svg"));
-    // drawn into temporary files, renamed when whole (atomic output)
-    super::atomic::with_temp(&png, |tmp| {
-        let root = BitMapBackend::new(tmp, size).into_drawing_area();
-        draw_png(&root).map_err(|m| super::io_error(&png, m))?;
-        root.present().map_err(|e| super::io_error(&png, ms(e)))
-    })?;
-    super::atomic::with_temp(&svg, |tmp| {
-        let root = SVGBackend::new(tmp, size).into_drawing_area();
-        draw_svg(&root).map_err(|m| super::io_error(&svg, m))?;
-        root.present().map_err(|e| super::io_error(&svg, ms(e)))
-    })?;
-    Ok(vec![png, svg])
+    Ok(both_checked(dir, stem, size, draw_png, draw_svg)?.0)
 }
 
 fn backend_colour(b: Backend) -> RGBColor {
@@ -177,6 +222,9 @@ fn pareto_draw<DB: DrawingBackend>(
             .light_line_style(RGBColor(235, 235, 235))
             .draw()
             .map_err(ms)?;
+        layout::data_in(chart.plotting_area());
+        // labels go where they cover no other label and stay in the axes
+        let mut labels = Labels::new(chart.plotting_area().get_pixel_range());
         // the front: a staircase through its members, fastest first
         let mut front: Vec<&&ParetoPoint> = pts.iter().filter(|p| (metric.front)(p)).collect();
         front.sort_by(|a, b| a.median_step_s.total_cmp(&b.median_step_s));
@@ -229,16 +277,15 @@ fn pareto_draw<DB: DrawingBackend>(
                     .map(|_| ()),
             }
             .map_err(ms)?;
-            chart
-                .draw_series(std::iter::once(Text::new(
-                    format!("{}", p.elements),
-                    xy,
-                    (FONT, 13)
-                        .into_font()
-                        .color(&c)
-                        .pos(Pos::new(HPos::Left, VPos::Bottom)),
-                )))
-                .map_err(ms)?;
+            let text = format!("{}", p.elements);
+            if let Some((dx, dy, pos)) = labels.place(area, &text, 13, chart.backend_coord(&xy)) {
+                chart
+                    .draw_series(std::iter::once(
+                        EmptyElement::at(xy)
+                            + Text::new(text, (dx, dy), (FONT, 13).into_font().color(&c).pos(pos)),
+                    ))
+                    .map_err(ms)?;
+            }
         }
         for e in extra {
             let xy = (e.median_step_s * 1e3, (metric.extra)(e) * metric.scale);
@@ -250,85 +297,147 @@ fn pareto_draw<DB: DrawingBackend>(
                         RGBColor(0, 150, 0).stroke_width(3),
                     )))
                     .map_err(ms)?;
-                chart
-                    .draw_series(std::iter::once(Text::new(
-                        e.label.clone(),
-                        xy,
-                        (FONT, 14)
-                            .into_font()
-                            .color(&RGBColor(0, 120, 0))
-                            .pos(Pos::new(HPos::Left, VPos::Top)),
-                    )))
-                    .map_err(ms)?;
+                let at = chart.backend_coord(&xy);
+                if let Some((dx, dy, pos)) = labels.place(area, &e.label, 14, at) {
+                    chart
+                        .draw_series(std::iter::once(
+                            EmptyElement::at(xy)
+                                + Text::new(
+                                    e.label.clone(),
+                                    (dx, dy),
+                                    (FONT, 14).into_font().color(&RGBColor(0, 120, 0)).pos(pos),
+                                ),
+                        ))
+                        .map_err(ms)?;
+                }
             }
         }
+        layout::annotations();
     }
-    // legend row
+    pareto_legend(&legend_area, marker_counts, !extra.is_empty())
+}
+
+/// The legend rows under the Pareto panels: items placed one after the
+/// other by their measured widths, a new row when one would leave the
+/// canvas.
+fn pareto_legend<'a, DB: DrawingBackend + 'a>(
+    area: &DrawingArea<DB, Shift>,
+    marker_counts: &[usize],
+    marked: bool,
+) -> std::result::Result<(), String> {
     let style = |c: &RGBColor| (FONT, 15).into_font().color(c);
-    let mut x = 30;
-    let y = 25;
+    let width = area.dim_in_pixel().0 as i32;
+    let (mut x, mut y) = (30, 18);
+    // one item: its glyph drawn by `glyph` at (x, y) and its text after it
+    let mut item = |text: &str,
+                    colour: RGBColor,
+                    glyph: &dyn Fn((i32, i32)) -> DynElement<'a, DB, (i32, i32)>|
+     -> std::result::Result<(), String> {
+        let w = area
+            .estimate_text_size(text, &style(&colour))
+            .map_err(ms)?
+            .0 as i32;
+        if x + 26 + w > width - 10 {
+            x = 30;
+            y += 28;
+        }
+        area.draw(&glyph((x + 8, y))).map_err(ms)?;
+        area.draw(&Text::new(
+            text.to_string(),
+            (x + 24, y - 9),
+            style(&colour),
+        ))
+        .map_err(ms)?;
+        x += 24 + w + 36;
+        Ok(())
+    };
     for b in [Backend::Newton, Backend::Sqp] {
         let c = backend_colour(b);
-        legend_area
-            .draw(&Rectangle::new([(x, y - 6), (x + 22, y + 6)], c.filled()))
-            .map_err(ms)?;
-        legend_area
-            .draw(&Text::new(
-                format!("backend {}", b.name()),
-                (x + 30, y - 9),
-                style(&BLACK),
-            ))
-            .map_err(ms)?;
-        x += 170;
+        item(&format!("backend {}", b.name()), BLACK, &|(x, y)| {
+            Rectangle::new([(x - 8, y - 6), (x + 12, y + 6)], c.filled()).into_dyn()
+        })?;
     }
     for (k, m) in marker_counts.iter().enumerate() {
-        legend_area
-            .draw(&shape_px(k, (x + 8, y), RGBColor(90, 90, 90)))
-            .map_err(ms)?;
-        legend_area
-            .draw(&Text::new(
-                format!("{m} markers"),
-                (x + 22, y - 9),
-                style(&BLACK),
-            ))
-            .map_err(ms)?;
-        x += 125;
+        item(&format!("{m} markers"), BLACK, &|xy| {
+            shape_px(k, xy, RGBColor(90, 90, 90))
+        })?;
     }
-    legend_area
-        .draw(&Circle::new((x + 8, y), 9, BLACK.stroke_width(2)))
-        .map_err(ms)?;
-    legend_area
-        .draw(&Text::new(
-            "Pareto front (faster or more accurate than every other)",
-            (x + 24, y - 9),
-            style(&BLACK),
-        ))
-        .map_err(ms)?;
-    x += 470;
-    legend_area
-        .draw(&Text::new(
-            "number next to a point: elements of the model",
-            (x, y - 9),
-            style(&RGBColor(80, 80, 80)),
-        ))
-        .map_err(ms)?;
-    if !extra.is_empty() {
-        legend_area
-            .draw(&Cross::new(
-                (x + 400, y),
-                9,
-                RGBColor(0, 150, 0).stroke_width(3),
-            ))
-            .map_err(ms)?;
-        legend_area
-            .draw(&Text::new(
-                "elements: \"auto\" (marked points)",
-                (x + 415, y - 9),
-                style(&BLACK),
-            ))
-            .map_err(ms)?;
+    item(
+        "Pareto front (faster or more accurate than every other)",
+        BLACK,
+        &|xy| Circle::new(xy, 9, BLACK.stroke_width(2)).into_dyn(),
+    )?;
+    item(
+        "number next to a point: elements of the model (where there is room)",
+        RGBColor(80, 80, 80),
+        &|xy| EmptyElement::at(xy).into_dyn(),
+    )?;
+    if marked {
+        item("elements: \"auto\" (marked points)", BLACK, &|xy| {
+            Cross::new(xy, 9, RGBColor(0, 150, 0).stroke_width(3)).into_dyn()
+        })?;
     }
     Ok(())
+}
+
+/// Labels placed next to their points where they cover no other label and
+/// stay inside the plotting area (pixels).
+struct Labels {
+    area: (std::ops::Range<i32>, std::ops::Range<i32>),
+    placed: Vec<(i32, i32, i32, i32)>,
+}
+
+impl Labels {
+    fn new(area: (std::ops::Range<i32>, std::ops::Range<i32>)) -> Self {
+        Labels {
+            area,
+            placed: Vec::new(),
+        }
+    }
+
+    /// Where `text` (font size `size`) goes next to the point at pixel
+    /// `at`: the offset and anchor of the first free spot (right above,
+    /// right below, left above, left below), or `None`.
+    fn place<DB: DrawingBackend>(
+        &mut self,
+        canvas: &DrawingArea<DB, Shift>,
+        text: &str,
+        size: u32,
+        at: (i32, i32),
+    ) -> Option<(i32, i32, Pos)> {
+        let (w, h) = canvas
+            .estimate_text_size(text, &TextStyle::from((FONT, size).into_font()))
+            .ok()?;
+        let (w, h) = (w as i32, h as i32 + 2);
+        // (dx, dy, to the right, below)
+        // clear of the point's glyph (up to 9 px)
+        let spots = [
+            (8, -5, true, false),
+            (8, 5, true, true),
+            (-8, -5, false, false),
+            (-8, 5, false, true),
+        ];
+        for (dx, dy, right, below) in spots {
+            let x0 = if right { at.0 + dx } else { at.0 + dx - w };
+            let y0 = if below { at.1 + dy } else { at.1 + dy - h };
+            let b = (x0, y0, x0 + w, y0 + h);
+            let inside = b.0 >= self.area.0.start
+                && b.2 < self.area.0.end
+                && b.1 >= self.area.1.start
+                && b.3 < self.area.1.end;
+            let free = self
+                .placed
+                .iter()
+                .all(|p| b.2 <= p.0 || p.2 <= b.0 || b.3 <= p.1 || p.3 <= b.1);
+            if inside && free {
+                self.placed.push(b);
+                let hp = if right { HPos::Left } else { HPos::Right };
+                let vp = if below { VPos::Top } else { VPos::Bottom };
+                return Some((dx, dy, Pos::new(hp, vp)));
+            }
+        }
+        None
+    }
 }
 
 /// The same glyph at a pixel position (legend).
@@ -347,7 +456,7 @@ fn shape_px<'a, DB: DrawingBackend + 'a>(
     }
 }
 
-fn fmt_tick(v: f64) -> String {
+pub(super) fn fmt_tick(v: f64) -> String {
     if (1.0..1e4).contains(&v) {
         format!("{}", (v * 1e3).round() / 1e3)
     } else if (0.01..1.0).contains(&v) {

@@ -10,7 +10,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Serialize;
 
-use super::{io_error, write_json, ReportOptions};
+use super::{write_json, ReportOptions};
 use crate::error::Result;
 use crate::parallel::payload::{
     fig8_configurations, mass_experiment, plant_spec, MassTrial, Measurement, FIG8_FRAMES,
@@ -57,7 +57,12 @@ pub fn run(opts: &ReportOptions) -> Result<(SpatialReport, Vec<PathBuf>)> {
         frames: FIG8_FRAMES,
         seed: 3,
     };
+    // the mass experiment, then the shape of each configuration
+    let pb = super::progress(1 + configs.len(), opts.quiet, "spatial");
+    pb.set_message("payload mass (Fig. 8)");
     let trials: Vec<MassTrial> = mass_experiment(&model, &plant, &configs, &masses, m)?;
+    pb.inc(1);
+    pb.set_message("shapes with 200 g");
     let mean_error_g = (0..configs.len())
         .map(|c| {
             let e: Vec<f64> = trials
@@ -81,7 +86,9 @@ pub fn run(opts: &ReportOptions) -> Result<(SpatialReport, Vec<PathBuf>)> {
             marker_sigma_m: 0.05e-3,
         };
         shapes.push(scene.solve()?);
+        pb.inc(1);
     }
+    pb.finish_and_clear();
     let report = SpatialReport {
         trials: trials
             .iter()
@@ -96,21 +103,13 @@ pub fn run(opts: &ReportOptions) -> Result<(SpatialReport, Vec<PathBuf>)> {
     let json = dir.join("spatial.json");
     write_json(&json, &report)?;
     let mut files = vec![json];
-    super::plot::register_font()?;
-    let png = dir.join("spatial.png");
-    super::atomic::with_temp(&png, |tmp| {
-        let root = BitMapBackend::new(tmp, (1500, 520)).into_drawing_area();
-        draw(&root, &report).map_err(|e| io_error(&png, e))?;
-        root.present().map_err(|e| io_error(&png, format!("{e:?}")))
-    })?;
-    let svg = dir.join("spatial.svg");
-    super::atomic::with_temp(&svg, |tmp| {
-        let root = SVGBackend::new(tmp, (1500, 520)).into_drawing_area();
-        draw(&root, &report).map_err(|e| io_error(&svg, e))?;
-        root.present().map_err(|e| io_error(&svg, format!("{e:?}")))
-    })?;
-    files.push(png);
-    files.push(svg);
+    files.extend(super::plot::both(
+        dir,
+        "spatial",
+        (1500, 520),
+        |a| draw(a, &report),
+        |a| draw(a, &report),
+    )?);
     Ok((report, files))
 }
 
@@ -134,6 +133,7 @@ fn draw<DB: DrawingBackend>(
         .y_desc("estimated mass (g)")
         .draw()
         .map_err(e)?;
+    super::layout::data_in(c.plotting_area());
     c.draw_series(LineSeries::new(
         [(0.0, 0.0), (210.0, 210.0)],
         BLACK.mix(0.4),
@@ -152,6 +152,7 @@ fn draw<DB: DrawingBackend>(
             .label(format!("configuration {} (mean error {mean:.1} g)", k + 1))
             .legend(move |(x, y)| Circle::new((x, y), 5, colour.filled()));
     }
+    super::layout::annotations();
     c.configure_series_labels()
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
@@ -163,23 +164,36 @@ fn draw<DB: DrawingBackend>(
         ("side view (x–z), 200 g payload", 2usize),
         ("top view (x–y)", 1usize),
     ]) {
-        let (ylo, yhi) = if axis == 2 {
-            (-0.13, 0.01)
-        } else {
-            (-0.08, 0.08)
+        // the axes hold every leg (they once were fixed, and a leg left them)
+        let span = |k: usize| {
+            let (lo, hi) = r
+                .shapes
+                .iter()
+                .flat_map(|s| s.legs_m.iter().flatten().map(move |p| p[k]))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                    (a.min(v), b.max(v))
+                });
+            if lo.is_finite() {
+                let pad = 0.08 * (hi - lo).max(1e-3);
+                (lo - pad, hi + pad)
+            } else {
+                (-0.1, 0.1)
+            }
         };
+        let ((xlo, xhi), (ylo, yhi)) = (span(0), span(axis));
         let mut c = ChartBuilder::on(panel)
             .caption(title, ("sans-serif", 20))
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(55)
-            .build_cartesian_2d(-0.08..0.08, ylo..yhi)
+            .build_cartesian_2d(xlo..xhi, ylo..yhi)
             .map_err(e)?;
         c.configure_mesh()
             .x_desc("x (m)")
             .y_desc(if axis == 2 { "z (m)" } else { "y (m)" })
             .draw()
             .map_err(e)?;
+        super::layout::data_in(c.plotting_area());
         for (k, s) in r.shapes.iter().enumerate() {
             let colour = COLOURS[k % COLOURS.len()];
             for leg in &s.legs_m {
@@ -189,18 +203,21 @@ fn draw<DB: DrawingBackend>(
                 ))
                 .map_err(e)?;
             }
-            // the platform: the legs' ends joined
-            let mut ring: Vec<(f64, f64)> = s
+            // the platform: the legs' ends joined, edge by edge (a wide
+            // polyline's miter join at the 180° turn of a platform seen
+            // edge-on spikes out of the axes)
+            let ends: Vec<(f64, f64)> = s
                 .legs_m
                 .iter()
                 .filter_map(|l| l.last().map(|p| (p[0], p[axis])))
                 .collect();
-            if let Some(&first) = ring.first() {
-                ring.push(first);
-            }
-            c.draw_series(LineSeries::new(ring, colour.stroke_width(4)))
-                .map_err(e)?;
+            let n = ends.len();
+            c.draw_series((0..n).map(|i| {
+                PathElement::new(vec![ends[i], ends[(i + 1) % n]], colour.stroke_width(4))
+            }))
+            .map_err(e)?;
         }
+        super::layout::annotations();
     }
     Ok(())
 }

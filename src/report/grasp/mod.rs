@@ -16,7 +16,7 @@ use crate::contact::Obstacle;
 use crate::error::Result;
 use crate::grasp::gripper::GripperSpec;
 use crate::grasp::object::GraspObject;
-use crate::report::{io_error, write_json, ReportOptions};
+use crate::report::{write_json, ReportOptions};
 
 pub mod table;
 
@@ -123,21 +123,13 @@ pub fn run(opts: &ReportOptions) -> Result<(GraspReport, Vec<PathBuf>)> {
     let md = dir.join("grasp.md");
     crate::report::atomic::write_atomic(&md, report.markdown().as_bytes())?;
     let mut files = vec![json, md];
-    crate::report::plot::register_font()?;
-    let png = dir.join("grasp.png");
-    crate::report::atomic::with_temp(&png, |tmp| {
-        let root = BitMapBackend::new(tmp, (1500, 520)).into_drawing_area();
-        draw(&root, &report).map_err(|e| io_error(&png, e))?;
-        root.present().map_err(|e| io_error(&png, format!("{e:?}")))
-    })?;
-    let svg = dir.join("grasp.svg");
-    crate::report::atomic::with_temp(&svg, |tmp| {
-        let root = SVGBackend::new(tmp, (1500, 520)).into_drawing_area();
-        draw(&root, &report).map_err(|e| io_error(&svg, e))?;
-        root.present().map_err(|e| io_error(&svg, format!("{e:?}")))
-    })?;
-    files.push(png);
-    files.push(svg);
+    files.extend(crate::report::plot::both(
+        dir,
+        "grasp",
+        (1500, 520),
+        |a| draw(a, &report),
+        |a| draw(a, &report),
+    )?);
     Ok((report, files))
 }
 

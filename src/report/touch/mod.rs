@@ -88,9 +88,13 @@ pub fn run(opts: &ReportOptions) -> Result<(TouchReport, Vec<PathBuf>)> {
             vec![0.005, 0.01],
         )
     };
+    // localization cases, the calibration, the avoidance run, the table
+    let pb = super::progress(positions.len() * depths.len() + 3, opts.quiet, "touch");
+    pb.set_message("contact localization");
     let mut localization = Vec::new();
     for &s in &positions {
         for &d in &depths {
+            pb.inc(1);
             if let Ok(r) = run_localization(
                 &LocalizationCase::new(s, d, 6, 1),
                 4,
@@ -113,7 +117,9 @@ pub fn run(opts: &ReportOptions) -> Result<(TouchReport, Vec<PathBuf>)> {
     let arcs = marker_arcs(6);
     let arcs = arcs.as_slice();
     let ps = PlantSettings::default();
+    pb.set_message("calibration on the free plant");
     let cal = calibrate_on_free_plant(&scene, arcs, &ps)?;
+    pb.inc(1);
     let (c, radius) = AVOID_DISK;
     let obstacles = Obstacles::new(
         vec![Obstacle::Circle {
@@ -128,12 +134,15 @@ pub fn run(opts: &ReportOptions) -> Result<(TouchReport, Vec<PathBuf>)> {
         shape_interval_s: 5.0,
         ..AvoidSettings::default()
     };
+    pb.set_message("avoidance by touch (Fig. 9)");
     let avoidance = run_avoidance(&scene, &cal, arcs, &mut plant, AVOID_GOAL, &settings)?;
+    pb.inc(1);
     let (placements, goals, table_duration_s) = if opts.quick {
         (&FIG9_PLACEMENTS[..1], &FIG9_GOALS[..1], 70.0)
     } else {
         (&FIG9_PLACEMENTS[..], &FIG9_GOALS[..], 120.0)
     };
+    pb.set_message("avoidance table");
     let table = avoidance_table(
         placements,
         goals,
@@ -143,6 +152,7 @@ pub fn run(opts: &ReportOptions) -> Result<(TouchReport, Vec<PathBuf>)> {
             ..AvoidSettings::default()
         },
     )?;
+    pb.finish_and_clear();
     let report = TouchReport {
         localization,
         peak_mean_max_m,
