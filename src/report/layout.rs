@@ -1,9 +1,15 @@
 //! The chart layout check: every chart the project draws goes through a
-//! [`Recorder`] backend that notes where each text lands (its box, measured
-//! with the font plotters draws it with) and, between [`data_in`] and
-//! [`annotations`], every data mark of a chart's plotting area. A
+//! recording backend (`Recorder`, crate-internal) that notes where each text
+//! lands (its box, measured with the font plotters draws it with) and,
+//! between `data_in` and `annotations`, every data mark of a chart's
+//! plotting area. A
 //! [`LayoutIssue`] is a text outside the canvas, two texts that overlap, or
 //! a data mark outside its axes.
+//!
+//! plotters clamps a series' vertices to its plotting area (a point beyond
+//! the range is drawn on the border); what can leave the axes is what is
+//! drawn in pixels from a point (a label, a glyph) or a wide stroke's
+//! polygon (its miter joins), and these are what the data check sees.
 //!
 //! The chart code says where data starts: after a chart's mesh (axes, ticks
 //! and their labels) is drawn, `layout::data_in(&chart.plotting_area())`;
@@ -468,6 +474,8 @@ mod tests {
     // the checker sees each kind of fault it is for, and passes a clean chart
     #[test]
     fn finds_text_off_canvas_overlaps_and_data_outside_axes() {
+        // a font looked up before the bundled one is registered stays unavailable
+        super::super::plot::register_font().unwrap();
         let font = ("sans-serif", 20).into_font();
         let found = issues_of((300, 200), |root| {
             root.fill(&WHITE).unwrap();
@@ -488,7 +496,11 @@ mod tests {
             matches!(&found[1], LayoutIssue::TextOverlap { first, second, .. } if first == "one" && second == "two")
         );
 
-        let chart_with = |ys: Vec<f64>| {
+        // a point's label drawn as data at x: inside the axes, or running
+        // out of them (plotters clamps a series' vertices to its plotting
+        // area, so what leaves the axes is what is drawn in pixels from a
+        // point: a label, a glyph, a wide stroke's join)
+        let chart_with = |x: f64| {
             issues_of((400, 300), |root| {
                 root.fill(&WHITE).unwrap();
                 let mut c = ChartBuilder::on(root)
@@ -502,40 +514,22 @@ mod tests {
                     .draw()
                     .unwrap();
                 data_in(c.plotting_area());
-                c.draw_series(LineSeries::new(
-                    ys.iter().enumerate().map(|(i, y)| (i as f64 / 4.0, *y)),
-                    BLUE,
-                ))
+                c.draw_series(LineSeries::new([(0.0, 0.0), (0.5, 0.9), (1.0, 0.2)], BLUE))
+                    .unwrap();
+                c.draw_series(std::iter::once(Text::new(
+                    "a point's label",
+                    (x, 0.5),
+                    ("sans-serif", 14),
+                )))
                 .unwrap();
                 annotations();
             })
         };
-        assert_eq!(chart_with(vec![0.0, 0.5, 1.0, 0.2, 0.9]), vec![]);
-        // a wide line turning back on itself inside the axes: its miter
-        // join spikes out of them (what once left spatial.png's axes)
-        let spike = issues_of((400, 300), |root| {
-            root.fill(&WHITE).unwrap();
-            let mut c = ChartBuilder::on(root)
-                .margin(10)
-                .build_cartesian_2d(0.0..1.0, 0.0..1.0)
-                .unwrap();
-            data_in(c.plotting_area());
-            c.draw_series(LineSeries::new(
-                [(0.2, 0.5), (0.8, 0.5), (0.3, 0.5)],
-                BLACK.stroke_width(4),
-            ))
-            .unwrap();
-        });
+        assert_eq!(chart_with(0.1), vec![]);
+        let out = chart_with(0.9);
         assert!(
-            matches!(spike.as_slice(), [LayoutIssue::DataOutsideAxes { .. }]),
-            "{spike:?}"
-        );
-        let out = chart_with(vec![0.0, 0.5, 1.3, 1.4, 0.9]);
-        assert!(
-            matches!(
-                out.as_slice(),
-                [LayoutIssue::DataOutsideAxes { count: 2, .. }]
-            ),
+            out.iter()
+                .any(|i| matches!(i, LayoutIssue::DataOutsideAxes { count: 1, .. })),
             "{out:?}"
         );
     }
