@@ -26,7 +26,7 @@
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
+use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use softrod::control::{ClosedLoop, IkSettings, InverseKinematics, LoopSettings};
 use softrod::estimate::{Estimator, EstimatorSettings, NewtonEstimator};
 use softrod::plant::{MarkerFrame, PayloadSchedule, Plant, PlantSettings, SimulatedPlant};

@@ -45,7 +45,7 @@ use std::time::Duration;
 #[path = "../tests/common/streaming.rs"]
 mod streaming;
 
-use criterion::{criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion};
+use criterion::{BatchSize, BenchmarkId, Criterion, criterion_group, criterion_main};
 use softrod::assembly::Robot;
 use softrod::element::PlanarCable;
 use softrod::estimate::{

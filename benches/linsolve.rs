@@ -20,7 +20,7 @@
 use std::hint::black_box;
 use std::sync::Arc;
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use softrod::assembly::{Robot, RobotSpec};
 use softrod::element::PlanarCable;
 use softrod::linsolve::sparse::Ordering;

@@ -25,11 +25,11 @@
 use std::hint::black_box;
 use std::time::Duration;
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{Criterion, criterion_group, criterion_main};
 use softrod::control::parallel::ParallelController;
 use softrod::control::{ControllerKind, UpdaterGains};
-use softrod::parallel::payload::fig8_configurations;
 use softrod::parallel::ParallelSpec;
+use softrod::parallel::payload::fig8_configurations;
 
 fn bench(c: &mut Criterion) {
     let spec = ParallelSpec::default();

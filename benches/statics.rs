@@ -17,7 +17,7 @@
 
 use std::hint::black_box;
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use softrod::assembly::Robot;
 use softrod::element::PlanarCable;
 use softrod::linsolve::{AutoSolver, FactorOptions, Factorization, SymmetricMatrix, TangentSolver};

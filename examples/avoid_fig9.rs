@@ -12,7 +12,7 @@
 
 use softrod::estimate::AlphaRule;
 use softrod::plant::PlantSettings;
-use softrod::report::touch::{avoidance_table, AvoidSummary, FIG9_GOALS, FIG9_PLACEMENTS};
+use softrod::report::touch::{AvoidSummary, FIG9_GOALS, FIG9_PLACEMENTS, avoidance_table};
 use softrod::touch::{AvoidSettings, AvoidStatus};
 
 fn numbers(s: &str) -> Vec<f64> {

@@ -13,7 +13,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use softrod::plant::PlantSettings;
-use softrod::report::touch::{run_localization, LocalizationCase};
+use softrod::report::touch::{LocalizationCase, run_localization};
 
 fn main() {
     let mut alpha_rule = softrod::touch::ALPHA_RULE;
@@ -40,7 +40,9 @@ fn main() {
     };
     println!("{frames} frames averaged per measurement, α rule {alpha_rule:?}");
     let mut results = Vec::new();
-    println!("markers  s_c(m)  depth(mm)  true_s(m)  |f|(N)  | peak: err(mm) ferr(N) | point: err(mm) ferr(N)");
+    println!(
+        "markers  s_c(m)  depth(mm)  true_s(m)  |f|(N)  | peak: err(mm) ferr(N) | point: err(mm) ferr(N)"
+    );
     for &n_markers in &counts {
         let mut worst = (0.0f64, 0.0f64);
         let mut sum = (0.0, 0.0);

@@ -10,7 +10,7 @@
 //! (or `open-loop`), `GRASP_TRIES=5`.
 use softrod::grasp::gripper::GripperSpec;
 use softrod::grasp::trial::{GraspSettings, Strategy};
-use softrod::report::grasp::table::{run_row, table_objects, TableRow};
+use softrod::report::grasp::table::{TableRow, run_row, table_objects};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = std::env::args()

@@ -8,10 +8,10 @@
 //! - A disc: `GRASP_DISC=RADIUS_M,MASS_KG,MU,OFFSET_M` (unturned, seed 1).
 //!
 //! `GRASP_STRATEGY`: `adaptive` (default), `open-loop` or `both`.
-use softrod::grasp::friction::{hold_check, FrictionContact};
+use softrod::grasp::friction::{FrictionContact, hold_check};
 use softrod::grasp::gripper::GripperSpec;
 use softrod::grasp::object::{GraspObject, Pose, Shape};
-use softrod::grasp::trial::{run_trial, GraspSettings, Placement, Strategy};
+use softrod::grasp::trial::{GraspSettings, Placement, Strategy, run_trial};
 use softrod::report::grasp::table::{placement, table_objects};
 
 fn main() -> Result<(), softrod::Error> {
@@ -66,17 +66,17 @@ fn main() -> Result<(), softrod::Error> {
             let t = std::time::Instant::now();
             let out = run_trial(&g, o, p, strategy, &s, *seed)?;
             println!(
-            "== {label} {} offset {:+.4} turn {:+.3}: success {} {:?} slip {:.4} holding {:.3} est err {:?} ({:.1} s)",
-            strategy.name(),
-            p.offset_m,
-            p.angle_rad,
-            out.success,
-            out.failure,
-            out.slip_m,
-            out.holding_mass_kg,
-            out.contact_estimate_error_m,
-            t.elapsed().as_secs_f64()
-        );
+                "== {label} {} offset {:+.4} turn {:+.3}: success {} {:?} slip {:.4} holding {:.3} est err {:?} ({:.1} s)",
+                strategy.name(),
+                p.offset_m,
+                p.angle_rad,
+                out.success,
+                out.failure,
+                out.slip_m,
+                out.holding_mass_kg,
+                out.contact_estimate_error_m,
+                t.elapsed().as_secs_f64()
+            );
             println!("   start pose {:?} final {:?}", out.pose, out.final_pose);
             let n = out.frames.len();
             for (j, f) in out.frames.iter().enumerate() {
@@ -109,48 +109,48 @@ fn main() -> Result<(), softrod::Error> {
                     g.gravity_m_per_s2.into(),
                 )?;
                 println!(
-                "  t {:6.2} {:?} P {:?}/{:?} xc {:?}/{:?} obj [{:.2},{:.2}] mm {:.3} rad wf {:.3}",
-                f.time_s,
-                f.phases,
-                f.pressures_pa[0]
-                    .iter()
-                    .map(|p| (p / 1e3).round())
-                    .collect::<Vec<_>>(),
-                f.pressures_pa[1]
-                    .iter()
-                    .map(|p| (p / 1e3).round())
-                    .collect::<Vec<_>>(),
-                f.contact_pose[0].map(|p| [
-                    (p[0] * 1e4).round() / 10.0,
-                    (p[1] * 1e4).round() / 10.0,
-                    (p[2] * 1e3).round() / 1e3
-                ]),
-                f.contact_pose[1].map(|p| [
-                    (p[0] * 1e4).round() / 10.0,
-                    (p[1] * 1e4).round() / 10.0,
-                    (p[2] * 1e3).round() / 1e3
-                ]),
-                f.object_position_m[0] * 1e3,
-                f.object_position_m[1] * 1e3,
-                f.object_angle_rad,
-                h.weight_factor
-            );
+                    "  t {:6.2} {:?} P {:?}/{:?} xc {:?}/{:?} obj [{:.2},{:.2}] mm {:.3} rad wf {:.3}",
+                    f.time_s,
+                    f.phases,
+                    f.pressures_pa[0]
+                        .iter()
+                        .map(|p| (p / 1e3).round())
+                        .collect::<Vec<_>>(),
+                    f.pressures_pa[1]
+                        .iter()
+                        .map(|p| (p / 1e3).round())
+                        .collect::<Vec<_>>(),
+                    f.contact_pose[0].map(|p| [
+                        (p[0] * 1e4).round() / 10.0,
+                        (p[1] * 1e4).round() / 10.0,
+                        (p[2] * 1e3).round() / 1e3
+                    ]),
+                    f.contact_pose[1].map(|p| [
+                        (p[0] * 1e4).round() / 10.0,
+                        (p[1] * 1e4).round() / 10.0,
+                        (p[2] * 1e3).round() / 1e3
+                    ]),
+                    f.object_position_m[0] * 1e3,
+                    f.object_position_m[1] * 1e3,
+                    f.object_angle_rad,
+                    h.weight_factor
+                );
                 for (c, (lam, tau)) in f
                     .contacts
                     .iter()
                     .zip(h.normal_forces_n.iter().zip(&h.friction_forces_n))
                 {
                     println!(
-                    "      {:?} p [{:.2},{:.2}] mm n [{:.3},{:.3}] N {:.3} -> lam {:.3} tau {:.3}",
-                    c.side,
-                    c.point_m[0] * 1e3,
-                    c.point_m[1] * 1e3,
-                    c.normal[0],
-                    c.normal[1],
-                    c.force_n,
-                    lam,
-                    tau
-                );
+                        "      {:?} p [{:.2},{:.2}] mm n [{:.3},{:.3}] N {:.3} -> lam {:.3} tau {:.3}",
+                        c.side,
+                        c.point_m[0] * 1e3,
+                        c.point_m[1] * 1e3,
+                        c.normal[0],
+                        c.normal[1],
+                        c.force_n,
+                        lam,
+                        tau
+                    );
                 }
                 // fingertip positions and angles from the centrelines
                 let tip = |cl: &Vec<[f64; 2]>| {

@@ -6,8 +6,8 @@
 //! Run: `cargo run --release --features cli --example parallel_track [-- <duration_s> [<model elements per section> [<radius_mm>]]]`.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
-use softrod::control::parallel::{run_track, TrackSettings};
 use softrod::control::ControllerKind;
+use softrod::control::parallel::{TrackSettings, run_track};
 use softrod::parallel::ParallelSpec;
 
 fn main() -> Result<(), softrod::Error> {

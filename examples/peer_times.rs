@@ -27,7 +27,7 @@
 
 use std::time::Instant;
 
-use serde_json::{json, Value};
+use serde_json::{Value, json};
 use softrod::assembly::Clamp;
 use softrod::estimate::{Backend, EstimatorSettings};
 use softrod::loads::Loads;

@@ -6,7 +6,7 @@
 //! (no arguments: the corners of the report's grid).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use softrod::report::loop_failure::{run_case, FailureSettings, LoopCase};
+use softrod::report::loop_failure::{FailureSettings, LoopCase, run_case};
 use softrod::scene::Scene;
 
 fn main() -> softrod::Result<()> {
@@ -44,7 +44,9 @@ fn main() -> softrod::Result<()> {
         v
     };
     let settings = FailureSettings::default();
-    println!("payload_W  EI_err  noise_mm  rate_Hz  verdict   cause                 mean_mm   max_mm  ik!  sat  est!  wall_s");
+    println!(
+        "payload_W  EI_err  noise_mm  rate_Hz  verdict   cause                 mean_mm   max_mm  ik!  sat  est!  wall_s"
+    );
     for c in &cases {
         let t = std::time::Instant::now();
         let o = run_case(&scene, c, &settings)?;

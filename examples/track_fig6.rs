@@ -123,7 +123,9 @@ fn main() -> softrod::Result<()> {
             },
         ),
     ];
-    println!("| trajectory | payload | FF mean / max (mm) | FF+updater mean / max (mm) | FF+updater step (ms) | IK not reached | estimator kept last |");
+    println!(
+        "| trajectory | payload | FF mean / max (mm) | FF+updater mean / max (mm) | FF+updater step (ms) | IK not reached | estimator kept last |"
+    );
     println!("|---|---|---|---|---|---|---|");
     for (tname, traj) in &trajectories {
         for (pname, schedule) in &payloads {

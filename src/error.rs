@@ -71,9 +71,7 @@ pub enum Error {
         got: usize,
     },
     /// A linear system could not be solved: a pivot vanished.
-    #[error(
-        "singular matrix in {context}: pivot {index} is {pivot:e} (its row's scale {scale:e})"
-    )]
+    #[error("singular matrix in {context}: pivot {index} is {pivot:e} (its row's scale {scale:e})")]
     Singular {
         /// Which matrix (e.g. "tangent stiffness").
         context: String,
@@ -187,10 +185,10 @@ impl Error {
     ) -> Self {
         let mut value = value.to_string();
         // `f64`'s Display writes 1e-320 with 320 digits: keep messages short
-        if value.len() > 24 {
-            if let Ok(v) = value.parse::<f64>() {
-                value = format!("{v:e}");
-            }
+        if value.len() > 24
+            && let Ok(v) = value.parse::<f64>()
+        {
+            value = format!("{v:e}");
         }
         Error::InvalidParameter {
             name: name.into(),

@@ -17,7 +17,7 @@
 use nalgebra::{Dim, RawStorage, SVector, Vector};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_all_finite, check_len, check_positive, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_len, check_positive};
 use crate::rng::Gaussian;
 use crate::site::{Site, Sites};
 

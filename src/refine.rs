@@ -264,7 +264,7 @@ pub fn auto_elements(scene: &Scene, observation: Option<&Observation>) -> Result
                 "observation",
                 "given",
                 "a tip_position refinement solves the scene's statics and uses no observation",
-            ))
+            ));
         }
         (Quantity::LoadResultant, None) => {
             return Err(Error::invalid(
@@ -272,7 +272,7 @@ pub fn auto_elements(scene: &Scene, observation: Option<&Observation>) -> Result
                 "none",
                 "a load_resultant refinement fits the estimator to an observation: give the \
                  marker positions",
-            ))
+            ));
         }
         (Quantity::LoadResultant, Some(o)) => {
             if let Some((i, m)) = o.markers.iter().enumerate().find(|(_, m)| m.node.is_some()) {

@@ -73,7 +73,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::assembly::Robot;
 use crate::element::Element;
-use crate::error::{check_len, Error, Result};
+use crate::error::{Error, Result, check_len};
 use crate::linsolve::{AutoFactors, Factorization};
 use crate::statics::LinearLoad;
 use crate::structure::Model;

@@ -37,7 +37,7 @@ use nalgebra::{DVector, Point2, SMatrix, SVector, Vector2};
 
 use crate::assembly::Robot;
 use crate::element::{Element, NodeKinematics, PlanarCable};
-use crate::error::{check_len, Error, Result};
+use crate::error::{Error, Result, check_len};
 use crate::estimate::{
     Backend, Estimate, Estimator, EstimatorSettings, NewtonEstimator, SqpEstimator,
 };

@@ -19,7 +19,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::element::Element;
-use crate::error::{check_index, Error, Result};
+use crate::error::{Error, Result, check_index};
 use crate::structure::{Model, Rod};
 
 /// A point of a model.

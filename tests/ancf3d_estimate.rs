@@ -155,11 +155,12 @@ fn a_uniform_line_load_from_beam_theory_markers() {
             assert!(std(&e, a) < truth[a].abs() / 3.0, "{}", std(&e, a));
         }
         assert!(e.f.iter().enumerate().all(|(i, v)| i % 12 < 6 || *v == 0.0));
-        assert!(e
-            .std_f()
-            .iter()
-            .enumerate()
-            .all(|(i, v)| i % 12 < 6 || *v == 0.0));
+        assert!(
+            e.std_f()
+                .iter()
+                .enumerate()
+                .all(|(i, v)| i % 12 < 6 || *v == 0.0)
+        );
         let samples = e.sample_load(9);
         assert!(samples.iter().all(|(_, x)| x.iter().all(|c| c.is_finite())));
         assert!(samples[0].1.iter().all(|c| *c == 0.0), "{:?}", samples[0]);

@@ -6,13 +6,13 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use nalgebra::{Vector2, Vector4};
+use softrod::Error;
 use softrod::assembly::{RobotSpec, Section};
 use softrod::element::Element;
 use softrod::estimate::{Backend, EstimatorSettings, Observation};
 use softrod::loads::{FollowerLoad, LineLoad, Loads, NodeMoment, PointForce, PointMoment};
 use softrod::scene::Scene;
 use softrod::statics::{StaticSettings, StaticSolver};
-use softrod::Error;
 
 /// The clamp reaction (global balance of the external loads, in the
 /// deformed shape) equals minus the generalized force on the base node at

@@ -263,14 +263,18 @@ fn the_listing_notices_a_change() {
         std::fs::write(src.join("mod.rs"), body).unwrap();
         listing(&dir, false)
     };
-    let base = write("pub struct A {\n    pub x_m: f64,\n    y: f64,\n}\nimpl A {\n    pub fn f(&self, a: Vec<f64>) -> f64 {\n        0.0\n    }\n    fn g() {}\n}\n#[cfg(test)]\nmod tests {\n    pub fn t() {}\n}\n");
+    let base = write(
+        "pub struct A {\n    pub x_m: f64,\n    y: f64,\n}\nimpl A {\n    pub fn f(&self, a: Vec<f64>) -> f64 {\n        0.0\n    }\n    fn g() {}\n}\n#[cfg(test)]\nmod tests {\n    pub fn t() {}\n}\n",
+    );
     assert_eq!(base.len(), 3, "{base:?}");
     assert!(
         base.contains("m | impl A | pub fn f(&self, a: Vec<f64>) -> f64"),
         "{base:?}"
     );
     assert!(base.contains("m | pub struct A | pub x_m: f64"), "{base:?}");
-    let changed = write("pub struct A {\n    pub x_m: f32,\n    y: f64,\n}\nimpl A {\n    pub fn f(&self, a: &[f64]) -> f64 {\n        0.0\n    }\n    fn g() {}\n    fn h() {}\n}\n");
+    let changed = write(
+        "pub struct A {\n    pub x_m: f32,\n    y: f64,\n}\nimpl A {\n    pub fn f(&self, a: &[f64]) -> f64 {\n        0.0\n    }\n    fn g() {}\n    fn h() {}\n}\n",
+    );
     assert_eq!(changed.len(), 3);
     assert_eq!(base.intersection(&changed).count(), 1, "{changed:?}");
     // the report tree is listed apart from the library

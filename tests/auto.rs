@@ -14,12 +14,12 @@
 mod common;
 use common::reference;
 
-use serde_json::{json, Value};
+use serde_json::{Value, json};
+use softrod::Error;
 use softrod::estimate::{EstimatorSettings, LoadModel, MarkerObservation, Observation};
-use softrod::refine::{auto_elements, Ladder, Phase, Quantity, Refinement};
+use softrod::refine::{Ladder, Phase, Quantity, Refinement, auto_elements};
 use softrod::scene::{Scene, UnknownLoad};
 use softrod::statics::StaticSolver;
-use softrod::Error;
 
 const L: f64 = 0.24;
 const EI: f64 = 0.025;

@@ -13,8 +13,9 @@ mod common;
 
 use std::time::{Duration, Instant};
 
-use serde_json::{json, Value};
-use softrod::assembly::{RobotSpec, Section, MAX_ELEMENTS};
+use serde_json::{Value, json};
+use softrod::Error;
+use softrod::assembly::{MAX_ELEMENTS, RobotSpec, Section};
 use softrod::element::{PlanarCable, SpatialCable};
 use softrod::estimate::{
     Backend, BoundFrame, EstimatorSettings, LoadBound, MarkerObservation, Observation,
@@ -31,7 +32,6 @@ use softrod::statics::{StaticSettings, StaticSolver, StaticStatus};
 use softrod::structure::{
     BodyLoad, EndSupport, JointSpec, RigidBodySpec, RodEnd, StructureLoads, StructureSpec,
 };
-use softrod::Error;
 
 /// The error variant a case must produce.
 #[derive(Debug, Clone, Copy, PartialEq)]

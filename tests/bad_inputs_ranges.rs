@@ -5,7 +5,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use serde_json::Value;
-use softrod::control::{check_track, run_track, TrackFile};
+use softrod::control::{TrackFile, check_track, run_track};
 use softrod::scene::Scene;
 
 const EXAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");

@@ -224,7 +224,10 @@ fn propped_cantilever_with_the_support_inside_an_element_converges_in_the_mesh()
         check_solution(&sol);
         let c = &sol.contacts[0];
         let rel = (c.force_n / r_ref - 1.0).abs();
-        println!("a = {a} (inside an element), {n} elements: R = {:.12e} N, closed form {r_ref:.12e} N, relative error {rel:.2e}, contact at s = {:.9} m", c.force_n, c.s_m);
+        println!(
+            "a = {a} (inside an element), {n} elements: R = {:.12e} N, closed form {r_ref:.12e} N, relative error {rel:.2e}, contact at s = {:.9} m",
+            c.force_n, c.s_m
+        );
         errors.push(rel);
     }
     assert!(errors[3] < 1e-6, "{errors:?}");

@@ -426,7 +426,9 @@ fn virtual_payload_recorded_without_payload_leaves_the_real_one() {
     }
     let (raw, sub) = (raw / k, sub / k);
     let virtual_y = raw - sub;
-    println!("resultant y: estimated {raw:.4} N, minus the virtual payload {sub:.4} N, true {weight:.4} N");
+    println!(
+        "resultant y: estimated {raw:.4} N, minus the virtual payload {sub:.4} N, true {weight:.4} N"
+    );
     assert!(
         virtual_y.abs() > 0.02,
         "the virtual payload is only {virtual_y} N"

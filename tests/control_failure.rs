@@ -7,7 +7,7 @@
 use softrod::control::{ClosedLoop, LoopSettings, StepStatus, Trajectory};
 use softrod::plant::{MarkerFrame, Plant, PlantSettings, SimulatedPlant};
 use softrod::report::loop_failure::{
-    plant_reach_m, run_case, FailureSettings, LoopCase, LoopCause, LoopVerdict,
+    FailureSettings, LoopCase, LoopCause, LoopVerdict, plant_reach_m, run_case,
 };
 use softrod::scene::Scene;
 

@@ -141,11 +141,13 @@ fn mass_bad_input_names_the_field() {
     assert_eq!(field(new(0.24, g, bad).unwrap_err()), "mass.scale");
     let mut est = new(0.24, g, MassSettings::default()).unwrap();
     let p = [0.0; 4];
-    assert!(field(
-        est.estimate(&p, &[0.24, f64::NAN], &[0.24, 0.0])
-            .unwrap_err()
-    )
-    .starts_with("unloaded_m"));
+    assert!(
+        field(
+            est.estimate(&p, &[0.24, f64::NAN], &[0.24, 0.0])
+                .unwrap_err()
+        )
+        .starts_with("unloaded_m")
+    );
     assert_eq!(
         field(
             est.calibrate(&p, &[0.24, 0.0], &[0.24, 0.0], 0.0)
@@ -153,9 +155,11 @@ fn mass_bad_input_names_the_field() {
         ),
         "known_kg"
     );
-    assert!(field(
-        est.estimate(&[200e3, 0.0, 0.0, 0.0], &[0.24, 0.0], &[0.24, 0.0])
-            .unwrap_err()
-    )
-    .starts_with("pressures_pa"));
+    assert!(
+        field(
+            est.estimate(&[200e3, 0.0, 0.0, 0.0], &[0.24, 0.0], &[0.24, 0.0])
+                .unwrap_err()
+        )
+        .starts_with("pressures_pa")
+    );
 }

@@ -6,11 +6,11 @@
 //! trials per family, both backends) is `softrod report --only coverage`.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+use softrod::Error;
 use softrod::estimate::MarkerObservation;
 use softrod::estimate::{AlphaRule, Backend, EstimateStatus, EstimatorSettings, Observation};
-use softrod::report::coverage::{sweep, Family};
+use softrod::report::coverage::{Family, sweep};
 use softrod::scene::Scene;
-use softrod::Error;
 
 /// The full study of `softrod report --only coverage` (3.6 s in release on
 /// a loaded 2-core machine): 200 seeded trials per load family (3–11

@@ -284,7 +284,17 @@ fn synthetic_truth_is_recovered() {
                 .0;
             eprintln!(
                 "{:>8} {:2} markers: rms {:.3e} m, |dF| {:.3e} N ({:.1} % of {:.3}), |dM| {:.3e} N m ({:.1} %), peak at {:.3} m, alpha {:.2e}, {} it",
-                truth.name, n, rms, df, 100.0 * df / fnorm, fnorm, dm, 100.0 * dm / m_true.abs(), peak, e.report.alpha, e.report.iterations
+                truth.name,
+                n,
+                rms,
+                df,
+                100.0 * df / fnorm,
+                fnorm,
+                dm,
+                100.0 * dm / m_true.abs(),
+                peak,
+                e.report.alpha,
+                e.report.iterations
             );
             assert!(e.report.status.is_converged());
             assert!(rms < 1e-4, "{} {n}: rms {rms}", truth.name);
@@ -464,12 +474,14 @@ fn sqp_respects_load_bounds() {
         bounds: bounds.clone(),
         ..EstimatorSettings::default()
     };
-    assert!(softrod::estimate::EstimatorSettings {
-        backend: Backend::Newton,
-        ..settings.clone()
-    }
-    .build_for(&robot, &k)
-    .is_err());
+    assert!(
+        softrod::estimate::EstimatorSettings {
+            backend: Backend::Newton,
+            ..settings.clone()
+        }
+        .build_for(&robot, &k)
+        .is_err()
+    );
     let (e, free) = sqp_bounded_and_free(&robot, &k, &obs, settings);
     let worst = bounds
         .iter()

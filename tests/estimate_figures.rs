@@ -8,7 +8,7 @@
 use softrod::assembly::{Chamber, Robot, RobotSpec, Section};
 use softrod::element::PlanarCable;
 use softrod::estimate::{
-    direct_solution, Backend, Estimate, EstimatorSettings, MarkerObservation, Observation,
+    Backend, Estimate, EstimatorSettings, MarkerObservation, Observation, direct_solution,
 };
 use softrod::loads::{LineLoad, Loads, PointForce};
 use softrod::scene::Scene;
@@ -94,7 +94,10 @@ fn fig3_direct_solution_amplifies_a_marker_error() {
         axial_error(e.f.as_slice()),
         axial_error(f_clean.as_slice()),
     );
-    eprintln!("Fig. 3: max axial load error: direct (24) {ed:.3e} N/m (without the marker error {ec:.3e}), estimator {ee:.3e} N/m, ratio {:.0}", ed / ee);
+    eprintln!(
+        "Fig. 3: max axial load error: direct (24) {ed:.3e} N/m (without the marker error {ec:.3e}), estimator {ee:.3e} N/m, ratio {:.0}",
+        ed / ee
+    );
     assert!(
         ec < 1e-3 * ed,
         "the direct solution must be exact without the error"
@@ -165,7 +168,9 @@ fn fig4_error_against_feature_points() {
     let truth = [0.0, -0.2 - 0.05]; // 1 N/m over 0.2 m plus the tip force
     let eq = StaticSolver::default().solve(&fine, &loads, None).unwrap();
     let mut rows = Vec::new();
-    let mut table = String::from("| points | backend | backbone RMS (mm) | resultant error (N) | alpha |\n|---|---|---|---|---|\n");
+    let mut table = String::from(
+        "| points | backend | backbone RMS (mm) | resultant error (N) | alpha |\n|---|---|---|---|---|\n",
+    );
     for &k in &[2usize, 3, 4, 5, 7, 10, 20] {
         let nodes: Vec<usize> = (1..=k).map(|j| j * 20 / k).collect();
         let obs = observe(&coarse, &fine, eq.q.as_slice(), &nodes, 7 + k as u64);
@@ -293,7 +298,13 @@ fn fig5_virtual_payload_from_model_error() {
         let fy = with.resultant_force_n[1] - virt.resultant_force_n[1];
         eprintln!(
             "Fig. 5 ({case}): virtual payload ({:+.4}, {:+.4}) N, backbone rms {:.3e} m unloaded / {:.3e} m loaded; payload estimate {:+.4} N (true {:+.4} N, error {:.1} %)",
-            virt.resultant_force_n[0], virt.resultant_force_n[1], rms0, rms1, fy, -weight, 100.0 * (fy + weight).abs() / weight
+            virt.resultant_force_n[0],
+            virt.resultant_force_n[1],
+            rms0,
+            rms1,
+            fy,
+            -weight,
+            100.0 * (fy + weight).abs() / weight
         );
         assert!(rms0 < 1e-4 && rms1 < 1e-4, "{case}: {rms0} {rms1}");
         assert!((fy + weight).abs() < 0.25 * weight, "{case}: {fy}");

@@ -16,8 +16,8 @@ use common::lcg;
 use softrod::assembly::Robot;
 use softrod::element::PlanarCable;
 use softrod::estimate::{
-    chi2_quantile, AlphaRule, Backend, Estimate, EstimateStatus, EstimatorSettings,
-    MarkerObservation, Observation, FIT_QUANTILE,
+    AlphaRule, Backend, Estimate, EstimateStatus, EstimatorSettings, FIT_QUANTILE,
+    MarkerObservation, Observation, chi2_quantile,
 };
 use softrod::loads::{LineLoad, Loads, PointForce};
 use softrod::scene::Scene;

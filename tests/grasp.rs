@@ -8,7 +8,7 @@ use softrod::grasp::gripper::GripperSpec;
 #[cfg(feature = "report")]
 use softrod::grasp::gripper::Side;
 use softrod::grasp::object::{GraspObject, Shape};
-use softrod::grasp::trial::{run_trial, Failure, GraspSettings, Placement, Strategy};
+use softrod::grasp::trial::{Failure, GraspSettings, Placement, Strategy, run_trial};
 #[cfg(feature = "report")]
 use softrod::report::grasp::table::{placement, table_objects};
 
@@ -260,12 +260,14 @@ fn noise_alone_does_not_make_a_contact() {
     .unwrap();
     assert!(out.success, "{:?}", out.failure);
     let last = out.frames.last().unwrap();
-    assert!(last
-        .contacts
-        .iter()
-        .any(|c| c.point_m[0] < out.final_pose.position_m[0]));
-    assert!(last
-        .contacts
-        .iter()
-        .any(|c| c.point_m[0] > out.final_pose.position_m[0]));
+    assert!(
+        last.contacts
+            .iter()
+            .any(|c| c.point_m[0] < out.final_pose.position_m[0])
+    );
+    assert!(
+        last.contacts
+            .iter()
+            .any(|c| c.point_m[0] > out.final_pose.position_m[0])
+    );
 }

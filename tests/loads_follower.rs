@@ -84,7 +84,9 @@ fn the_follower_force_and_its_non_symmetric_stiffness_are_the_derivatives() {
             worst_sym = worst_sym.max((fd - ks.get(i, j)).abs());
         }
     }
-    println!("residual {worst_r:.1e} of {rs:.1e}; tangent {worst_k:.1e}, symmetric part alone {worst_sym:.1e}, of {kscale:.1e}");
+    println!(
+        "residual {worst_r:.1e} of {rs:.1e}; tangent {worst_k:.1e}, symmetric part alone {worst_sym:.1e}, of {kscale:.1e}"
+    );
     assert!(worst_r < 1e-7 * rs, "residual: {worst_r} vs {rs}");
     assert!(worst_k < 1e-6 * kscale, "tangent: {worst_k} vs {kscale}");
     // the skew part is what the symmetric tangent leaves out: p/2 at the ends

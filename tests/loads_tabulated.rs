@@ -107,7 +107,12 @@ fn small_tabulated_loads_match_euler_bernoulli() {
             let want = -f * delta;
             rel.push((q[q.len() - 3] - want).abs() / (f * delta));
         }
-        println!("{name}: relative tip error {:.3e} at δ = 1e-4 L, {:.3e} at twice the load (ratio {:.2})", rel[0], rel[1], rel[1] / rel[0]);
+        println!(
+            "{name}: relative tip error {:.3e} at δ = 1e-4 L, {:.3e} at twice the load (ratio {:.2})",
+            rel[0],
+            rel[1],
+            rel[1] / rel[0]
+        );
         assert!(rel[0] < 1e-6, "{name}: {rel:?}");
         let ratio = rel[1] / rel[0];
         assert!((3.5..4.5).contains(&ratio), "{name}: {rel:?}");

@@ -549,7 +549,7 @@ fn sweep_inputs(
 /// (`payloads_from_json`, then `check_track` with the circle's file).
 #[test]
 fn every_refused_track_mutation_names_its_field() {
-    use softrod::control::{check_track, payloads_from_json, TrackFile};
+    use softrod::control::{TrackFile, check_track, payloads_from_json};
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
     let scene =
         Scene::from_json(&std::fs::read_to_string(format!("{dir}/track_scene.json")).unwrap())
@@ -617,7 +617,7 @@ type Check = Box<dyn Fn(&str) -> Result<(), softrod::Error>>;
 /// checks run against.
 fn checker(name: &str, text: &str) -> Option<Check> {
     use softrod::control::parallel::TrackSettings;
-    use softrod::control::{check_track, payloads_from_json, TrackFile};
+    use softrod::control::{TrackFile, check_track, payloads_from_json};
     use softrod::grasp::scene::GraspScene;
     use softrod::scene::parallel::{ParallelScene, PlatformMarkers};
     use softrod::touch::AvoidScene;

@@ -139,10 +139,10 @@ fn validate(root: &Value, s: &Value, v: &Value, at: &str, errors: &mut Vec<Strin
                 }
             }
             "minimum" => {
-                if let Some(x) = v.as_f64() {
-                    if x < kv.as_f64().unwrap() {
-                        errors.push(format!("{at}: {x} below {kv}"));
-                    }
+                if let Some(x) = v.as_f64()
+                    && x < kv.as_f64().unwrap()
+                {
+                    errors.push(format!("{at}: {x} below {kv}"));
                 }
             }
             "enum" => {

@@ -7,10 +7,10 @@
 //! 7.9 g).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use softrod::parallel::payload::{
-    fig8_configurations, mass_experiment, plant_spec, Measurement, FIG8_FRAMES,
-};
 use softrod::parallel::ParallelSpec;
+use softrod::parallel::payload::{
+    FIG8_FRAMES, Measurement, fig8_configurations, mass_experiment, plant_spec,
+};
 
 #[test]
 fn payload_mass_within_5_g_mean_in_three_configurations() {

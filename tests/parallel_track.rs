@@ -12,8 +12,8 @@
 //! from `elements_per_section = 1` doubled) 2.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
-use softrod::control::parallel::{run_track, TrackSettings};
 use softrod::control::ControllerKind;
+use softrod::control::parallel::{TrackSettings, run_track};
 use softrod::parallel::ParallelSpec;
 
 #[test]

@@ -11,8 +11,8 @@ use std::process::Command;
 
 use serde_json::Value;
 use softrod::report::result_plot::plot_result;
-use softrod::scene::markers::MarkersFile;
 use softrod::scene::Scene;
+use softrod::scene::markers::MarkersFile;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 

@@ -7,6 +7,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use proptest::prelude::*;
+use softrod::Error;
 use softrod::assembly::Robot;
 use softrod::element::PlanarCable;
 use softrod::linsolve::BandedMatrix;
@@ -14,7 +15,6 @@ use softrod::loads::Load;
 use softrod::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use softrod::scene::{Marker, Scene};
 use softrod::statics::StaticSolver;
-use softrod::Error;
 
 fn config(cases: u32) -> ProptestConfig {
     ProptestConfig {

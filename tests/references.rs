@@ -115,10 +115,12 @@ fn converged_tips_match_exudyn_and_the_elastica() {
     for case in CASES {
         let ex = reference(&format!("exudyn_{case}"));
         let el = reference(&format!("elastica_{case}"));
-        assert!(el["values"]["model"]
-            .as_str()
-            .unwrap_or("")
-            .contains("extensible"));
+        assert!(
+            el["values"]["model"]
+                .as_str()
+                .unwrap_or("")
+                .contains("extensible")
+        );
         let fine = tip(&solve(&scene(&ex, 256, 5, Clamp::PositionAndDirection)));
         let e_ex = dist(fine, &ex["values"]["tip_position_m"]) / L;
         let e_el = dist(fine, &el["values"]["tip_position_m"]) / L;
@@ -163,7 +165,10 @@ fn slender_strip_matches_the_rod_within_a_quarter_percent() {
                     .unwrap_or(f64::INFINITY),
             )
         };
-        println!("{case:26} scikit-fem slender strip: {err:.3e} m = {:.4} % of L (reference bound {own:.3e} m)", 100.0 * err / L);
+        println!(
+            "{case:26} scikit-fem slender strip: {err:.3e} m = {:.4} % of L (reference bound {own:.3e} m)",
+            100.0 * err / L
+        );
         assert!(err < 0.0025 * L, "{case}: {err}");
         assert!(err <= own, "{case}: {err} > {own}");
         checked += 1;

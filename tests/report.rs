@@ -9,20 +9,20 @@ use std::time::Duration;
 use clarabel::solver::SolverStatus;
 use proptest::prelude::*;
 use serde_json::Value;
+use softrod::Error;
 use softrod::estimate::{
     Backend, EstimateStatus, EstimatorSettings, LoadBound, MarkerObservation, Observation,
 };
 use softrod::loads::Loads;
-use softrod::report::auto_point::{auto_scene, AUTO_FORCE_FRACTION};
+use softrod::report::auto_point::{AUTO_FORCE_FRACTION, auto_scene};
 use softrod::report::pareto::{pareto_front, pareto_front_tol};
-use softrod::report::reference::{embedded_names, Reference};
+use softrod::report::reference::{Reference, embedded_names};
 use softrod::report::sweep::{
-    marker_arcs, model_robot, observe, run_case, run_guarded, run_guarded_with, CaseSpec,
-    FailureCause, Outcome, Stage,
+    CaseSpec, FailureCause, Outcome, Stage, marker_arcs, model_robot, observe, run_case,
+    run_guarded, run_guarded_with,
 };
-use softrod::report::{run, Part, ReportOptions};
+use softrod::report::{Part, ReportOptions, run};
 use softrod::statics::StaticStatus;
-use softrod::Error;
 
 fn spec(backend: Backend) -> CaseSpec {
     CaseSpec {
@@ -127,9 +127,11 @@ fn quick_report_writes_every_file_and_records_every_case() {
     );
     let chosen = softrod::refine::auto_elements(&scene, Some(&obs)).unwrap();
     assert!(chosen.estimated_error <= tol);
-    assert!(p.auto_points[0]
-        .label
-        .ends_with(&format!(": {} el", chosen.total_elements)));
+    assert!(
+        p.auto_points[0]
+            .label
+            .ends_with(&format!(": {} el", chosen.total_elements))
+    );
     // the stability sweep: every cell of every map for every backend, each
     // with an outcome: converged with finite errors, or a cause
     let s = summary.stability.unwrap();

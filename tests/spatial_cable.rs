@@ -10,12 +10,12 @@ mod common;
 
 use common::reference;
 use serde_json::Value;
+use softrod::Error;
 use softrod::assembly::{Base, Chamber, Clamp, Robot, RobotSpec, Section};
 use softrod::element::{NodeKinematics, SpatialCable};
 use softrod::linsolve::BandedMatrix;
 use softrod::loads::{LineLoad, Loads, NodeMoment, PointForce};
 use softrod::statics::{StaticSettings, StaticSolver};
-use softrod::Error;
 
 const L: f64 = 0.24;
 const EA: f64 = 300.0;

@@ -80,7 +80,9 @@ fn solve_of_the_spatial_example_matches_exudyn_node_by_node() {
     let tip = vector(&out["tip_position_m"]);
     let tip_err = dist(&tip, &vector(&run["tip_position_m"]));
     let dir_err = dist(&vector(&out["tip_direction"]), &vector(&run["tip_tangent"]));
-    println!("nodes vs exudyn (16 elements): max {worst:.2e} m; tip {tip_err:.2e} m; tip direction {dir_err:.2e}");
+    println!(
+        "nodes vs exudyn (16 elements): max {worst:.2e} m; tip {tip_err:.2e} m; tip direction {dir_err:.2e}"
+    );
     assert!(worst <= 1e-9, "{worst} m");
     assert!(tip_err <= 1e-9, "{tip_err} m");
     assert!(dir_err <= 1e-9, "{dir_err}");

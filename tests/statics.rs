@@ -2,10 +2,10 @@
 //! as a reported outcome.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+use softrod::Error;
 use softrod::loads::{Loads, PointForce};
 use softrod::scene::Scene;
 use softrod::statics::{StaticSettings, StaticSolver, StaticStatus};
-use softrod::Error;
 
 fn scene(elements_per_section: usize) -> Scene {
     let mut s = Scene::two_section();

@@ -10,15 +10,15 @@
 use std::time::{Duration, Instant};
 
 use serde_json::json;
-use softrod::assembly::{RobotSpec, Section, MAX_ELEMENTS};
+use softrod::Error;
+use softrod::assembly::{MAX_ELEMENTS, RobotSpec, Section};
 use softrod::control::{LoopSettings, MassSettings};
 use softrod::estimate::EstimatorSettings;
 use softrod::parallel::ParallelSpec;
-use softrod::scene::parallel::ParallelScene;
 use softrod::scene::Scene;
+use softrod::scene::parallel::ParallelScene;
 use softrod::statics::{StaticSettings, StaticSolver};
 use softrod::structure::{RodSpec, StructureSpec};
-use softrod::Error;
 
 fn scene(elements: [usize; 2]) -> serde_json::Value {
     let section =

@@ -11,12 +11,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use proptest::prelude::*;
+use softrod::Error;
 use softrod::assembly::Robot;
 use softrod::element::PlanarCable;
 use softrod::loads::Loads;
 use softrod::scene::Scene;
 use softrod::statics::{StaticCriterion, StaticReport, StaticSolver, StaticStatus};
-use softrod::Error;
 
 fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
@@ -243,11 +243,10 @@ proptest! {
         if let Err(e) = check(&robot, &loads) {
             return Err(TestCaseError::fail(e));
         }
-        if let Ok(eq) = StaticSolver::default().solve(&robot, &loads, None) {
-            if eq.report.is_stable() {
+        if let Ok(eq) = StaticSolver::default().solve(&robot, &loads, None)
+            && eq.report.is_stable() {
                 let x = eq.q[eq.q.len() - 4];
                 prop_assert!(x * c.lateral_n > 0.0, "tip x {x} m: {}", eq.report);
             }
-        }
     }
 }

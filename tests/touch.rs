@@ -7,16 +7,16 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use nalgebra::Vector2;
+use softrod::Error;
 use softrod::contact::{ContactSettings, Obstacle, Obstacles};
 use softrod::loads::PointForce;
 use softrod::plant::{Plant, PlantContact, PlantSettings, SimulatedPlant};
 #[cfg(feature = "report")]
-use softrod::report::touch::{run_localization, LocalizationCase};
+use softrod::report::touch::{LocalizationCase, run_localization};
 use softrod::statics::StaticSolver;
 use softrod::touch::{
-    calibrate, five_section_scene, marker_arcs, FreeFrame, MarkerResponse, ROD_RADIUS_M,
+    FreeFrame, MarkerResponse, ROD_RADIUS_M, calibrate, five_section_scene, marker_arcs,
 };
-use softrod::Error;
 
 fn bent() -> Vec<f64> {
     let mut p = vec![0.0; 10];
@@ -257,7 +257,7 @@ fn point_search_locates_contacts_within_5_mm_with_six_markers() {
 
 #[test]
 fn repulsive_gradient_is_the_exact_gradient_of_38_not_the_printed_39() {
-    use softrod::touch::{repulsive, FieldParams};
+    use softrod::touch::{FieldParams, repulsive};
     let p = FieldParams::default();
     let obs = Vector2::new(0.01, -0.02);
     let h = 1e-7;
@@ -287,7 +287,7 @@ fn repulsive_gradient_is_the_exact_gradient_of_38_not_the_printed_39() {
 
 #[test]
 fn field_gradient_in_the_shape_matches_finite_differences() {
-    use softrod::touch::{field_gradient, FieldParams};
+    use softrod::touch::{FieldParams, field_gradient};
     let scene = five_section_scene(4);
     let (robot, mut loads) = (scene.robot().unwrap(), scene.loads().unwrap());
     loads.pressures_pa = bent();
@@ -326,7 +326,7 @@ fn avoid(
     feedback: bool,
     duration_s: f64,
 ) -> softrod::Result<softrod::touch::AvoidRun> {
-    use softrod::touch::{calibrate_on_free_plant, run_avoidance, AvoidSettings};
+    use softrod::touch::{AvoidSettings, calibrate_on_free_plant, run_avoidance};
     let scene = five_section_scene(4);
     let arcs = marker_arcs(6);
     let arcs = arcs.as_slice();

@@ -2,7 +2,7 @@
 //! avoidance figure is written (PNG, SVG, JSON) and says what was measured.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use softrod::report::{touch, ReportOptions};
+use softrod::report::{ReportOptions, touch};
 
 #[test]
 fn quick_touch_report_writes_the_figure_and_its_data() {

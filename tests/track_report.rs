@@ -4,7 +4,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use softrod::control::ControllerKind;
-use softrod::report::{run, Part, ReportOptions};
+use softrod::report::{Part, ReportOptions, run};
 
 #[test]
 fn quick_tracking_report_writes_both_figures() {

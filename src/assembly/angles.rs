@@ -9,7 +9,7 @@
 
 use super::Robot;
 use crate::element::PlanarCable;
-use crate::error::{check_len, Result};
+use crate::error::{Result, check_len};
 
 /// The wrapped difference `a − b` in `(−π, π]`.
 fn turn(a: f64, b: f64) -> f64 {

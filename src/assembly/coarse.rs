@@ -14,7 +14,7 @@ use nalgebra::DVector;
 
 use super::Robot;
 use crate::element::{ArcPoint, Element};
-use crate::error::{check_len, Error, Result};
+use crate::error::{Error, Result, check_len};
 use crate::loads::{Loads, PointMoment};
 use crate::structure::section::Section;
 

@@ -5,7 +5,7 @@
 
 use super::Robot;
 use crate::element::Element;
-use crate::error::{check_index, check_len, Error, Result};
+use crate::error::{Error, Result, check_index, check_len};
 use crate::loads::{LineLoad, Load, Loads};
 
 impl Load {

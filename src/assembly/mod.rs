@@ -21,7 +21,7 @@
 use std::sync::Arc;
 
 use crate::element::{ArcPoint, Element};
-use crate::error::{check_all_finite, check_finite, check_len, Result};
+use crate::error::{Result, check_all_finite, check_finite, check_len};
 use crate::linsolve::{BandedMatrix, SymmetricMatrix, SymmetricPattern};
 use crate::loads::Loads;
 use crate::structure::rod::MAX_EDOF;
@@ -40,13 +40,13 @@ mod tangent;
 mod typed;
 mod validity;
 
+pub use crate::structure::Clamp;
 pub use crate::structure::rod::MAX_ELEMENTS;
 pub use crate::structure::section::{Chamber, RestCurvatureProfile, Section};
-pub use crate::structure::Clamp;
 use spec::base_direction;
 pub use spec::{Base, RobotSpec};
 pub use tangent::TangentTarget;
-pub use validity::{ValidityWarning, MAX_AXIAL_STRAIN};
+pub use validity::{MAX_AXIAL_STRAIN, ValidityWarning};
 
 /// A robot assembled from elements of type `E`.
 #[derive(Debug, Clone)]

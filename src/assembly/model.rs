@@ -7,7 +7,7 @@ use nalgebra::DVector;
 
 use super::Robot;
 use crate::element::Element;
-use crate::error::{check_len, Result};
+use crate::error::{Result, check_len};
 use crate::linsolve::{SymmetricMatrix, SymmetricPattern};
 use crate::loads::Loads;
 use crate::structure::{Assembled, MeshSequencing, ModelLoads, SolverHints, Stepping};
@@ -155,10 +155,10 @@ impl<E: Element> SolverHints for Robot<E> {
         self.validate_loads(loads)?;
         // no pressure (or only zeros): the arcs of no actuation, kept by the
         // robot (the same numbers: a zero pressure adds a zero torque)
-        if loads.pressures_pa.iter().all(|p| *p == 0.0) {
-            if let Some(u) = self.unactuated_start() {
-                return Ok(u.clone());
-            }
+        if loads.pressures_pa.iter().all(|p| *p == 0.0)
+            && let Some(u) = self.unactuated_start()
+        {
+            return Ok(u.clone());
         }
         self.free_coordinates_of(self.arc_configuration(&loads.pressures_pa).as_slice())
     }

@@ -3,8 +3,8 @@
 
 use super::Robot;
 use crate::element::Element;
-use crate::error::{check_index, Result};
-use crate::site::{no_body, rod_node_arc, rod_rows, Site, SiteRows, Sites};
+use crate::error::{Result, check_index};
+use crate::site::{Site, SiteRows, Sites, no_body, rod_node_arc, rod_rows};
 
 impl<E: Element> Sites for Robot<E> {
     fn dim(&self) -> usize {

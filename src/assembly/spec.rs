@@ -5,8 +5,8 @@ use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
 
 use super::{Clamp, Robot, Section};
-use crate::element::{PlanarCable, SpatialCable, DEFAULT_GAUSS_POINTS};
-use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::element::{DEFAULT_GAUSS_POINTS, PlanarCable, SpatialCable};
+use crate::error::{Error, Result, check_all_finite, check_len};
 use crate::structure::spec::{default_gauss, default_gravity};
 
 /// Pose of the clamped base.

@@ -7,7 +7,7 @@ use nalgebra::{DMatrix, DVector, SVector};
 
 use super::Robot;
 use crate::element::Element;
-use crate::error::{check_len, Result};
+use crate::error::{Result, check_len};
 use crate::loads::Loads;
 use crate::structure::rod::MAX_EDOF;
 

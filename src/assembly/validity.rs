@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use super::Robot;
 use crate::element::Element;
-use crate::error::{check_len, Result};
+use crate::error::{Result, check_len};
 
 /// Largest axial strain `|ε|` (dimensionless) inside the model's validity.
 pub const MAX_AXIAL_STRAIN: f64 = 0.1;

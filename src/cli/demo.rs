@@ -48,7 +48,11 @@ fn estimation_demo() -> Result<()> {
     ];
     let tip = |q: &[f64]| (q[q.len() - 4], q[q.len() - 3]);
     let (tx, ty) = tip(eq.q.as_slice());
-    outln!("Estimation (Sec. III): unknown payload = {:.0} g tip mass + uniform {:.2} N/m, not known to the estimator", tip_mass_kg * 1e3, uniform[1]);
+    outln!(
+        "Estimation (Sec. III): unknown payload = {:.0} g tip mass + uniform {:.2} N/m, not known to the estimator",
+        tip_mass_kg * 1e3,
+        uniform[1]
+    );
     outln!(
         "  {} markers at nodes {:?}, seeded noise {:.2} mm; alpha by the discrepancy principle",
         nodes.len(),
@@ -75,7 +79,18 @@ fn estimation_demo() -> Result<()> {
             .collect();
         outln!(
             "  {:<6}    tip ({:+.5}, {:+.5}) m (error {:.3} mm), resultant ({:+.4} ± {:.4}, {:+.4} ± {:.4}) N, moment {:+.4} N·m; {} iterations, alpha {:.3e}, first step {:.1} ms",
-            backend.name(), ex, ey, (ex - tx).hypot(ey - ty) * 1e3, e.resultant_force_n[0], sd[0], e.resultant_force_n[1], sd[1], e.resultant_moment_nm[0], e.report.iterations, e.report.alpha, e.report.wall_time_s * 1e3
+            backend.name(),
+            ex,
+            ey,
+            (ex - tx).hypot(ey - ty) * 1e3,
+            e.resultant_force_n[0],
+            sd[0],
+            e.resultant_force_n[1],
+            sd[1],
+            e.resultant_moment_nm[0],
+            e.report.iterations,
+            e.report.alpha,
+            e.report.wall_time_s * 1e3
         );
         // streaming: 50 new noisy frames of the same scene, warm-started
         let frames: Vec<Observation> = (0..50)
@@ -90,7 +105,9 @@ fn estimation_demo() -> Result<()> {
             t * 1e6
         );
     }
-    outln!("Run `softrod estimate examples/two_section.json --backend newton --out estimate.json` for a full result.");
+    outln!(
+        "Run `softrod estimate examples/two_section.json --backend newton --out estimate.json` for a full result."
+    );
     Ok(())
 }
 

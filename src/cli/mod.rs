@@ -850,7 +850,13 @@ fn report(out: PathBuf, quick: bool, only: Option<PartArg>, quiet: bool) -> Resu
         for q in p.front_backbone() {
             outln!(
                 "  {:<6} {:3} elements {:2} markers: {:8.3} ms, backbone {:.4} mm, load {:.1} %, force {:.1} %",
-                q.backend.name(), q.elements, q.markers, q.median_step_s * 1e3, q.backbone_rms_m * 1e3, q.load_rel_l2 * 100.0, q.force_rel * 100.0
+                q.backend.name(),
+                q.elements,
+                q.markers,
+                q.median_step_s * 1e3,
+                q.backbone_rms_m * 1e3,
+                q.load_rel_l2 * 100.0,
+                q.force_rel * 100.0
             );
         }
     }

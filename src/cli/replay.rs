@@ -6,8 +6,8 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use softrod::scene::markers::MarkersFile;
 use softrod::scene::Scene;
+use softrod::scene::markers::MarkersFile;
 
 use super::output::{
     CommandName, EstimateBody, FrameRecord, Header, Outcome, SceneKind, StreamRecord, StreamStatus,

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 
 use softrod::control::{
-    payloads_from_json, run_track, CircleSpec, ControllerKind, TrackFile, TrajectorySpec,
+    CircleSpec, ControllerKind, TrackFile, TrajectorySpec, payloads_from_json, run_track,
 };
 use softrod::scene::Scene;
 

@@ -55,13 +55,13 @@ mod solver;
 mod start;
 
 pub use gap::Gap;
-pub use obstacle::{Obstacle, SignedDistance, MAX_OBSTACLE_EXTENT_M};
+pub use obstacle::{MAX_OBSTACLE_EXTENT_M, Obstacle, SignedDistance};
 pub use solver::{ContactForce, ContactSettings, ContactSolution, ContactSolver};
 
 use crate::assembly::Robot;
 use crate::element::{Element, PlanarCable};
-use crate::error::{check_len, Error, Result};
-use gap::{element_candidates, gap_at, gap_value, Cubic};
+use crate::error::{Error, Result, check_len};
+use gap::{Cubic, element_candidates, gap_at, gap_value};
 
 /// Validated obstacles and the rod radius the gaps are measured from.
 ///

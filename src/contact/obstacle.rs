@@ -4,7 +4,7 @@
 use nalgebra::{Matrix2, Vector2};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_positive, Error, Result};
+use crate::error::{Error, Result, check_positive};
 
 /// Largest coordinate or radius (m) an obstacle may have: beyond it the gap
 /// arithmetic (squared lengths, cross products) can only overflow, so

@@ -66,11 +66,7 @@ pub(super) fn solve_qp(
                 .map(|(a, b)| (a * b).powi(2))
                 .sum::<f64>()
                 .sqrt();
-            if v > 0.0 && v.is_finite() {
-                v
-            } else {
-                1.0
-            }
+            if v > 0.0 && v.is_finite() { v } else { 1.0 }
         })
         .collect();
     let (mut ri, mut ci, mut vi) = (Vec::new(), Vec::new(), Vec::new());

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_at_most, check_positive, Error, Result};
+use crate::error::{Error, Result, check_at_most, check_positive};
 
 /// Settings of the contact solver; every field has a documented default.
 ///

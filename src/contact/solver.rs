@@ -14,7 +14,7 @@ use super::start::cold_start;
 use super::{Gap, Obstacles};
 use crate::assembly::Robot;
 use crate::element::PlanarCable;
-use crate::error::{check_all_finite, check_len, Result};
+use crate::error::{Result, check_all_finite, check_len};
 use crate::linsolve::BandedMatrix;
 use crate::loads::Loads;
 use crate::numeric::norm2;
@@ -206,11 +206,7 @@ impl ElementMap {
                 } else {
                     (j - self.nbf) % 4 < 2
                 };
-                if moves_position {
-                    position_m
-                } else {
-                    slope
-                }
+                if moves_position { position_m } else { slope }
             })
             .collect()
     }
@@ -520,11 +516,9 @@ impl ContactSolver {
             let step = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             // polish once the step is small or the active set settled
             let polished = step <= 1e-6 * l || (set == prev_set && step <= 1e-2 * l);
-            if polished {
-                if let Some((qp, act)) = self.try_polish(ctx, q, &active, report)? {
-                    *q = qp;
-                    return Ok((ContactStatus::Converged, act));
-                }
+            if polished && let Some((qp, act)) = self.try_polish(ctx, q, &active, report)? {
+                *q = qp;
+                return Ok((ContactStatus::Converged, act));
             }
             prev_set = set;
             // line search on Π + ν Σ max(0, −g)
@@ -555,21 +549,17 @@ impl ContactSolver {
                 t *= 0.5;
             }
             if !accepted {
-                if !polished {
-                    if let Some((qp, act)) = self.try_polish(ctx, q, &active, report)? {
-                        *q = qp;
-                        return Ok((ContactStatus::Converged, act));
-                    }
+                if !polished && let Some((qp, act)) = self.try_polish(ctx, q, &active, report)? {
+                    *q = qp;
+                    return Ok((ContactStatus::Converged, act));
                 }
                 return Ok((ContactStatus::LineSearchFailed, active));
             }
             q.copy_from_slice(&trial);
             if step * t <= 1e-13 * l {
-                if !polished {
-                    if let Some((qp, act)) = self.try_polish(ctx, q, &active, report)? {
-                        *q = qp;
-                        return Ok((ContactStatus::Converged, act));
-                    }
+                if !polished && let Some((qp, act)) = self.try_polish(ctx, q, &active, report)? {
+                    *q = qp;
+                    return Ok((ContactStatus::Converged, act));
                 }
                 // the iterate no longer moves and its polish failed: more
                 // iterations repeat the same QP and the same polish
@@ -743,11 +733,10 @@ impl ContactSolver {
                 .iter()
                 .enumerate()
                 .min_by(|x, y| x.1.lambda.total_cmp(&y.1.lambda))
+                && a.lambda < -1e-9 * lmax.max(ctx.scale)
             {
-                if a.lambda < -1e-9 * lmax.max(ctx.scale) {
-                    act.remove(j);
-                    continue;
-                }
+                act.remove(j);
+                continue;
             }
             // no other gap is closed
             let gaps = ctx.obstacles.gaps(ctx.robot, q)?;

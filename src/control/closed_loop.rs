@@ -21,12 +21,12 @@ use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
 use crate::element::Element;
-use crate::error::{check_len, Error, Result};
+use crate::error::{Error, Result, check_len};
 use crate::estimate::{EstimateStatus, EstimatorSettings};
 use crate::loads::Loads;
 use crate::plant::Plant;
 
-use super::{adapter, IkSettings, IkStatus, InverseKinematics, ParameterUpdater, Trajectory};
+use super::{IkSettings, IkStatus, InverseKinematics, ParameterUpdater, Trajectory, adapter};
 use super::{UpdaterGains, VirtualPayload};
 
 /// The highest control rate accepted (Hz).
@@ -119,14 +119,14 @@ impl LoopSettings {
             ));
         }
         self.gains.validate_at("loop.gains.")?;
-        if let Some(a) = self.abort_error_m {
-            if !(a.is_finite() && a > 0.0) {
-                return Err(Error::invalid(
-                    "loop.abort_error_m",
-                    a,
-                    "must be finite and > 0",
-                ));
-            }
+        if let Some(a) = self.abort_error_m
+            && !(a.is_finite() && a > 0.0)
+        {
+            return Err(Error::invalid(
+                "loop.abort_error_m",
+                a,
+                "must be finite and > 0",
+            ));
         }
         self.ik.validate().map_err(|e| e.with_prefix("loop."))?;
         self.estimator
@@ -582,10 +582,10 @@ impl<E: Element + 'static> ClosedLoop<E> {
             ControllerKind::Ff => (zeros.clone(), EstimateFlag::NotRun, zeros),
             ControllerKind::FfUpdater => {
                 let (mut f_bar, flag) = self.estimate(frame);
-                if let Some(vp) = &self.virtual_payload {
-                    if let Ok(f) = vp.subtract(x_now, &f_bar) {
-                        f_bar = f.data.into();
-                    }
+                if let Some(vp) = &self.virtual_payload
+                    && let Ok(f) = vp.subtract(x_now, &f_bar)
+                {
+                    f_bar = f.data.into();
                 }
                 let f_hat = self.updater.step(&f_bar)?.to_vec();
                 (f_bar, flag, f_hat)

@@ -61,7 +61,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::assembly::Robot;
 use crate::element::Element;
-use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_len};
 use crate::linsolve::AutoFactors;
 use crate::loads::Loads;
 use crate::sensitivity::Sensitivity;
@@ -697,11 +697,7 @@ impl<E: Element> InverseKinematics<E> {
                         damping = if t < 1.0 || ratio < 0.25 {
                             (4.0 * damping).max(1e-4)
                         } else if ratio > 0.75 {
-                            if damping < 1e-10 {
-                                0.0
-                            } else {
-                                damping / 4.0
-                            }
+                            if damping < 1e-10 { 0.0 } else { damping / 4.0 }
                         } else {
                             damping
                         };

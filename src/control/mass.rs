@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
 use crate::element::Element;
-use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_len};
 use crate::estimate::LoadModel;
 use crate::loads::Loads;
 use crate::sensitivity::Sensitivity;

@@ -41,11 +41,11 @@ pub use ik::{IkSolution, InverseKinematics, RESTART_RADIUS_M};
 pub use ik_settings::{IkSettings, IkStatus, PressureBound};
 pub use mass::{MassEstimate, MassEstimator, MassForce, MassReference, MassSettings};
 pub use track::{
-    build_trajectory, check_track, payloads_from_json, run_track, CircleSpec, FigureEightSpec,
-    LineSpec, PressuresSpec, SamplesSpec, TrackFile, TrackRun, TrackSample, TrackSummary,
-    TrajectorySpec, MAX_TRACK_STEPS,
+    CircleSpec, FigureEightSpec, LineSpec, MAX_TRACK_STEPS, PressuresSpec, SamplesSpec, TrackFile,
+    TrackRun, TrackSample, TrackSummary, TrajectorySpec, build_trajectory, check_track,
+    payloads_from_json, run_track,
 };
 pub use trajectory::Trajectory;
-pub use updater::{ParameterUpdater, UpdaterGains, MAX_K_I_PER_S2, MAX_K_P_PER_S};
+pub use updater::{MAX_K_I_PER_S2, MAX_K_P_PER_S, ParameterUpdater, UpdaterGains};
 pub use virtual_payload::VirtualPayload;
 pub use weighing::{MassConfiguration, MassRow, MassTable, WeighingExperiment};

@@ -50,7 +50,7 @@ use serde::Serialize;
 
 use super::{ControllerKind, ParameterUpdater, Trajectory, UpdaterGains};
 use crate::element::{Ancf3d, Element};
-use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_len};
 use crate::parallel::warm::{WarmCounts, WarmStatics};
 use crate::parallel::{ParallelRobot, ParallelSpec};
 use crate::rng::Gaussian;
@@ -69,7 +69,7 @@ const MAX_STEP: f64 = 0.25;
 const ESTIMATOR_ITERATIONS: usize = 8;
 
 mod settings;
-pub use settings::{TrackSettings, MAX_PARALLEL_TRACK_STEPS};
+pub use settings::{MAX_PARALLEL_TRACK_STEPS, TrackSettings};
 
 /// The controller of one robot model: estimator, updater, inverse
 /// kinematics, with their warm states (see the [module

@@ -31,7 +31,7 @@
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_len};
 use crate::plant::{PayloadSchedule, PlantSettings, SimulatedPlant};
 use crate::scene::Scene;
 
@@ -468,10 +468,10 @@ fn placed_by(with: Option<&str>) -> String {
 fn validate_file(file: &TrackFile, payloads: &PayloadSchedule, length_m: f64) -> Result<()> {
     file.loop_settings.validate()?;
     file.plant.validate()?;
-    if let Some(t) = file.score_from_s {
-        if !(t.is_finite() && t >= 0.0) {
-            return Err(Error::invalid("score_from_s", t, "must be finite and >= 0"));
-        }
+    if let Some(t) = file.score_from_s
+        && !(t.is_finite() && t >= 0.0)
+    {
+        return Err(Error::invalid("score_from_s", t, "must be finite and >= 0"));
     }
     payloads.validate(length_m)
 }

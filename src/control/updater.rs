@@ -18,7 +18,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_len};
 
 /// The largest proportional gain of the updater (1/s): a time constant of
 /// 0.1 ms, one period of the fastest control rate a loop accepts (10 kHz);

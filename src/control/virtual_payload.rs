@@ -5,7 +5,7 @@
 
 use nalgebra::DVector;
 
-use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_len};
 
 /// Recorded estimates `F(c)` at configurations `c` (any fixed-length
 /// vector: the pressures, the end-effector position), interpolated by
@@ -116,10 +116,10 @@ impl VirtualPayload {
             })
             .collect();
         d.sort_by(|a, b| a.0.total_cmp(&b.0));
-        if let Some(&(d2, i)) = d.first() {
-            if d2 == 0.0 {
-                return Ok(DVector::from_column_slice(&self.values[i]));
-            }
+        if let Some(&(d2, i)) = d.first()
+            && d2 == 0.0
+        {
+            return Ok(DVector::from_column_slice(&self.values[i]));
         }
         let mut out = vec![0.0; v0.len()];
         let mut wsum = 0.0;

@@ -14,7 +14,7 @@
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_len, Error, Result};
+use crate::error::{Error, Result, check_len};
 use crate::plant::{Payload, PayloadKind, PayloadSchedule, Plant, PlantSettings, SimulatedPlant};
 use crate::scene::Scene;
 

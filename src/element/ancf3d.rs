@@ -88,11 +88,11 @@ pub(crate) mod jet;
 mod kinematics;
 
 use jet::{Dual, Jet, Scalar};
-use kinematics::{line_density, node_frame, node_penalty, rotation_vector, strains, LineStiffness};
+use kinematics::{LineStiffness, line_density, node_frame, node_penalty, rotation_vector, strains};
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use super::{hermite, Element, NodeKinematics, DEFAULT_GAUSS_POINTS};
-use crate::error::{check_positive, Error, Result};
+use super::{DEFAULT_GAUSS_POINTS, Element, NodeKinematics, hermite};
+use crate::error::{Error, Result, check_positive};
 use crate::quadrature::GaussRule;
 
 /// Coordinates per node.

@@ -27,7 +27,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::error::{check_len, check_positive, Error, Result};
+use crate::error::{Error, Result, check_len, check_positive};
 use crate::quadrature::GaussRule;
 
 mod ancf3d;

@@ -5,8 +5,8 @@
 //! sampled at the bending Gauss points ([`PlanarCable::with_rest_curvature`]).
 
 use super::DEFAULT_GAUSS_POINTS;
-use super::{check_cable, gauss_points, hermite, Element, GaussPoint, NodeKinematics};
-use crate::error::{check_finite, Result};
+use super::{Element, GaussPoint, NodeKinematics, check_cable, gauss_points, hermite};
+use crate::error::{Result, check_finite};
 use nalgebra::{DMatrix, DVector};
 
 /// Planar ANCF cable element (2-D, 4 coordinates per node).

@@ -38,7 +38,7 @@
 //! (the tangent turned back onto `−t0`), where the work is not finite.
 
 use super::DEFAULT_GAUSS_POINTS;
-use super::{check_cable, gauss_points, hermite, Element, GaussPoint, NodeKinematics};
+use super::{Element, GaussPoint, NodeKinematics, check_cable, gauss_points, hermite};
 use crate::error::Result;
 use nalgebra::{DMatrix, DVector, Vector3};
 

@@ -12,9 +12,9 @@
 
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
-use super::gn_form::{count_dense, primal_system, GnForm, PenaltyMatrix};
-use super::problem::{jittered_cholesky, weighted_columns, Derivs, GnFactor};
 use super::Estimate;
+use super::gn_form::{GnForm, PenaltyMatrix, count_dense, primal_system};
+use super::problem::{Derivs, GnFactor, jittered_cholesky, weighted_columns};
 
 mod lazy;
 pub(crate) use lazy::{CovarianceInputs, LazyCovariances};
@@ -57,10 +57,10 @@ fn representer_system(
         gram: Some(k),
         alpha: a,
     }) = gn
+        && *a == alpha
+        && k.nrows() == w.len()
     {
-        if *a == alpha && k.nrows() == w.len() {
-            return Some((k.clone(), chol.clone()));
-        }
+        return Some((k.clone(), chol.clone()));
     }
     let m = w.len();
     count_dense(m * m * dv.jt.nrows() + m * m * m / 3);
@@ -87,10 +87,10 @@ fn primal_factor(
         gram: None,
         alpha: a,
     }) = gn
+        && *a == alpha
+        && chol.l_dirty().nrows() == dv.jt.nrows()
     {
-        if *a == alpha && chol.l_dirty().nrows() == dv.jt.nrows() {
-            return Some(chol.clone());
-        }
+        return Some(chol.clone());
     }
     primal_system(dv, w, alpha, h)
 }

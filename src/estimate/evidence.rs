@@ -52,9 +52,9 @@ use serde::{Deserialize, Serialize};
 use crate::error::Result;
 use crate::observe::ObservationOperator;
 
-use super::driver::{Method, Warm, ALPHA_CONTINUATION_START};
-use super::gn_form::{count_dense, primal_system, GnForm};
-use super::problem::{columns, jittered_cholesky, Derivs, Problem};
+use super::driver::{ALPHA_CONTINUATION_START, Method, Warm};
+use super::gn_form::{GnForm, count_dense, primal_system};
+use super::problem::{Derivs, Problem, columns, jittered_cholesky};
 
 /// How `α` is chosen when the settings leave it unset.
 ///
@@ -247,8 +247,8 @@ pub(crate) fn evidence_alpha<Mo: super::EstimationModel, Me: Method<Mo>>(
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 mod tests {
     use super::*;
-    use crate::estimate::gn_form::PenaltyMatrix;
     use crate::estimate::LoadModel;
+    use crate::estimate::gn_form::PenaltyMatrix;
     use nalgebra::DMatrix;
 
     /// A load model and whether its system is solved in the primal form.

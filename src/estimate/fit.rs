@@ -102,11 +102,7 @@ fn normal_quantile(p: f64) -> f64 {
     let z = t
         - (2.515_517 + 0.802_853 * t + 0.010_328 * t * t)
             / (1.0 + 1.432_788 * t + 0.189_269 * t * t + 0.001_308 * t * t * t);
-    if p < 0.5 {
-        -z
-    } else {
-        z
-    }
+    if p < 0.5 { -z } else { z }
 }
 
 /// `ln Γ(a)` for `a > 0` (Lanczos, g = 7, nine coefficients; about 1e-15

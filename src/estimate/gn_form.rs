@@ -25,7 +25,7 @@ use std::sync::Arc;
 
 use nalgebra::{Cholesky, DMatrix, Dyn};
 
-use super::problem::{jittered_cholesky, weighted_columns, Derivs};
+use super::problem::{Derivs, jittered_cholesky, weighted_columns};
 
 thread_local! {
     static DENSE_FLOPS: Cell<u64> = const { Cell::new(0) };

@@ -6,8 +6,8 @@
 use nalgebra::DVector;
 
 use super::{EstimationModel, LoadModel};
-use crate::error::{check_len, Error, Result};
-use crate::site::{block_position_rows, Site, SiteRows, Sites};
+use crate::error::{Error, Result, check_len};
+use crate::site::{Site, SiteRows, Sites, block_position_rows};
 use crate::statics::LinearLoad;
 use crate::structure::Rod;
 

@@ -12,7 +12,7 @@ use crate::loads::{LineLoad, Loads, PointForce};
 use crate::scene::Scene;
 use crate::statics::StaticSolver;
 
-use super::gn_form::{dense_work, GnForm};
+use super::gn_form::{GnForm, dense_work};
 use super::problem::Problem;
 
 /// The two-section robot with `n` elements, its known loads and two noisy

@@ -115,7 +115,7 @@ mod triplets;
 
 pub use driver::ALPHA_CONTINUATION_START;
 pub use evidence::AlphaRule;
-pub use fit::{chi2_quantile, FIT_QUANTILE};
+pub use fit::{FIT_QUANTILE, chi2_quantile};
 pub use model::EstimationModel;
 pub use newton::NewtonEstimator;
 pub use problem::direct_solution;
@@ -128,7 +128,7 @@ use nalgebra::{DVector, SVector};
 use serde::{Deserialize, Serialize};
 
 use crate::element::ArcPoint;
-use crate::error::{check_all_finite, check_positive, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_positive};
 use crate::loads::Loads;
 use crate::statics::StaticSettings;
 
@@ -405,14 +405,14 @@ impl EstimatorSettings {
             for v in [b.min_n_per_m, b.max_n_per_m].into_iter().flatten() {
                 crate::error::check_finite(&p("min_n_per_m/max_n_per_m"), v)?;
             }
-            if let (Some(lo), Some(hi)) = (b.min_n_per_m, b.max_n_per_m) {
-                if lo > hi {
-                    return Err(Error::invalid(
-                        p("max_n_per_m"),
-                        hi,
-                        "must be >= min_n_per_m",
-                    ));
-                }
+            if let (Some(lo), Some(hi)) = (b.min_n_per_m, b.max_n_per_m)
+                && lo > hi
+            {
+                return Err(Error::invalid(
+                    p("max_n_per_m"),
+                    hi,
+                    "must be >= min_n_per_m",
+                ));
             }
         }
         self.statics.validate("estimator.statics")
@@ -659,12 +659,11 @@ impl Estimate {
         }
         // w(s) = S(s) F (8): the cable field F at the point (laid out like
         // the node coordinates: [w, w'] first in each node's numbers)
-        if let Some(p) = ArcPoint::locate(&self.node_s, s) {
-            if p.node_value_into(self.f.as_slice(), self.node_dofs, w.as_mut_slice())
+        if let Some(p) = ArcPoint::locate(&self.node_s, s)
+            && p.node_value_into(self.f.as_slice(), self.node_dofs, w.as_mut_slice())
                 .is_err()
-            {
-                w.iter_mut().for_each(|v| *v = f64::NAN);
-            }
+        {
+            w.iter_mut().for_each(|v| *v = f64::NAN);
         }
         w
     }

@@ -16,17 +16,17 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use crate::assembly::Robot;
 use crate::element::{Element, NodeKinematics};
-use crate::error::{check_len, Error, Result};
+use crate::error::{Error, Result, check_len};
 use crate::linsolve::AutoFactors;
 use crate::loads::Loads;
 use crate::numeric::dot;
-use crate::observe::{MarkerObservation, Observation, ObservationOperator, MAX_MARKER_SCALE};
+use crate::observe::{MAX_MARKER_SCALE, MarkerObservation, Observation, ObservationOperator};
 use crate::sensitivity::Sensitivity;
 use crate::statics::tracker::FactoredTangent;
 use crate::statics::{LinearLoad, StaticSolver, TrackedEquilibrium, Tracker};
 use crate::structure::ModelLoads;
 
-use super::gn_form::{count_dense, primal_system, GnForm, PenaltyMatrix};
+use super::gn_form::{GnForm, PenaltyMatrix, count_dense, primal_system};
 use super::load_model::field_rod;
 use super::{BoundFrame, EstimationModel, EstimatorSettings, LoadModel};
 
@@ -187,14 +187,12 @@ impl<M: EstimationModel> Problem<M> {
     /// a length in `(0, MAX_MARKER_SCALE]`); otherwise, or when a value
     /// fails them, built anew (with its error naming the field), and kept.
     pub(crate) fn operator_of_frame(&mut self, obs: &Observation) -> Result<ObservationOperator> {
-        if let Some((markers, op)) = &self.last_operator {
-            if let Some(y) =
+        if let Some((markers, op)) = &self.last_operator
+            && let Some(y) =
                 same_markers_values(markers, obs, self.robot().length_m(), M::Element::DIM)
-            {
-                if let Ok(op) = op.with_measurements(y) {
-                    return Ok(op);
-                }
-            }
+            && let Ok(op) = op.with_measurements(y)
+        {
+            return Ok(op);
         }
         let op = self.operator(obs)?;
         self.last_operator = Some((obs.markers.clone(), op.clone()));
@@ -717,10 +715,10 @@ pub(crate) fn jittered_cholesky(a: DMatrix<f64>) -> Option<Cholesky<f64, Dyn>> {
         for i in 0..m {
             l[(i, i)] += jitter * dmax;
         }
-        if let Some(c) = l.cholesky() {
-            if c.l_dirty().diagonal().iter().all(|v| v.is_finite()) {
-                return Some(c);
-            }
+        if let Some(c) = l.cholesky()
+            && c.l_dirty().diagonal().iter().all(|v| v.is_finite())
+        {
+            return Some(c);
         }
     }
     None

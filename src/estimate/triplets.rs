@@ -6,8 +6,8 @@ use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::Result;
 
-use super::problem::Problem;
 use super::LoadModel;
+use super::problem::Problem;
 
 /// Sparse entries `(row, column, value)`, sorted by column then row.
 pub(crate) type Triplets = Vec<(usize, usize, f64)>;
@@ -44,20 +44,20 @@ impl<E: Element> Problem<Robot<E>> {
                     }
                     let col = self.robot().restrict(&self.gen_force(&probe)?)?;
                     for (i, v) in col.iter().enumerate() {
-                        if *v != 0.0 {
-                            if let Some(m) = source(node_of_free[i], c) {
-                                g_free.push((i, m * nd + k, *v));
-                            }
+                        if *v != 0.0
+                            && let Some(m) = source(node_of_free[i], c)
+                        {
+                            g_free.push((i, m * nd + k, *v));
                         }
                     }
                     let hcol = self.penalty_grad(&probe)?;
                     for (i, v) in hcol.iter().enumerate() {
-                        if *v != 0.0 {
-                            if let Some(m) = source(i / nd, c) {
-                                let j = m * nd + k;
-                                if i <= j {
-                                    h_upper.push((i, j, *v));
-                                }
+                        if *v != 0.0
+                            && let Some(m) = source(i / nd, c)
+                        {
+                            let j = m * nd + k;
+                            if i <= j {
+                                h_upper.push((i, j, *v));
                             }
                         }
                     }

@@ -47,7 +47,7 @@ use crate::cone::{self, Failure, Tolerances};
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_len};
 
 /// The largest weight factor the program looks for: an object in a cup of
 /// contacts that can carry any weight reports this value.

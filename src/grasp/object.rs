@@ -316,7 +316,7 @@ impl GraspObject {
                 return Ok(vec![Obstacle::Circle {
                     center_m: p,
                     radius_m: *radius_m,
-                }])
+                }]);
             }
             Shape::Ellipse {
                 semi_axes_m: [a, b],
@@ -749,10 +749,11 @@ mod tests {
             vertices_m: vec![[0.0, 0.0], [0.0, 0.01], [0.01, 0.0]],
             corner_radius_m: 0.001,
         };
-        assert!(o
-            .validate("object")
-            .unwrap_err()
-            .field()
-            .is_some_and(|f| f.starts_with("object.shape.vertices_m")));
+        assert!(
+            o.validate("object")
+                .unwrap_err()
+                .field()
+                .is_some_and(|f| f.starts_with("object.shape.vertices_m"))
+        );
     }
 }

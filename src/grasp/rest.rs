@@ -20,7 +20,7 @@
 
 use crate::grasp::friction::FrictionContact;
 use crate::grasp::object::{GraspObject, Pose, Shape};
-use crate::grasp::slip::{least_constraint, Support, MAX_TURN_RAD, MIN_STEP_FRACTION};
+use crate::grasp::slip::{MAX_TURN_RAD, MIN_STEP_FRACTION, Support, least_constraint};
 
 /// A point of the outline within this of the table top supports the object (m).
 const TOUCH_M: f64 = 1e-6;
@@ -168,7 +168,7 @@ pub(crate) fn rest_on_table<E: From<crate::Error>>(
                     at_rest: false,
                     steps: k,
                     failed: Some(e.to_string()),
-                })
+                });
             }
         };
         let a = lc.acceleration;
@@ -193,10 +193,10 @@ pub(crate) fn rest_on_table<E: From<crate::Error>>(
                 failed: None,
             });
         }
-        if let Some(p) = previous {
-            if m * (a[0] * p[0] + a[1] * p[1]) + inertia * a[2] * p[2] < 0.0 {
-                h = (0.5 * h).max(MIN_STEP_FRACTION * step_m);
-            }
+        if let Some(p) = previous
+            && m * (a[0] * p[0] + a[1] * p[1]) + inertia * a[2] * p[2] < 0.0
+        {
+            h = (0.5 * h).max(MIN_STEP_FRACTION * step_m);
         }
         previous = Some(a);
         let s = (h / reach).min(h / step_m * MAX_TURN_RAD / a[2].abs().max(1e-300));

@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::grasp::gripper::GripperSpec;
 use crate::grasp::object::GraspObject;
 use crate::grasp::trial::{
-    check_trial, run_trial, GraspSettings, Placement, Strategy, TrialOutcome,
+    GraspSettings, Placement, Strategy, TrialOutcome, check_trial, run_trial,
 };
 
 /// A grasp scene file (JSON): `{"object": {...}, "placement": {...}}`,

@@ -32,7 +32,7 @@ use clarabel::algebra::CscMatrix;
 use clarabel::solver::{NonnegativeConeT, SecondOrderConeT, SupportedConeT};
 
 use crate::error::{Error, Result};
-use crate::grasp::friction::{hold_check, solve_cone_program, FrictionContact, HoldCheck};
+use crate::grasp::friction::{FrictionContact, HoldCheck, hold_check, solve_cone_program};
 use crate::grasp::object::{GraspObject, Pose};
 
 /// The smallest step, as a fraction of the step length.
@@ -343,10 +343,10 @@ pub(crate) fn settle<E: From<Error>>(
         }
         let a =
             least_constraint_acceleration(&contacts, m, inertia, c, object.mu, gravity_m_per_s2)?;
-        if let Some(p) = previous {
-            if m * (a[0] * p[0] + a[1] * p[1]) + inertia * a[2] * p[2] < 0.0 {
-                h = (0.5 * h).max(MIN_STEP_FRACTION * step_m);
-            }
+        if let Some(p) = previous
+            && m * (a[0] * p[0] + a[1] * p[1]) + inertia * a[2] * p[2] < 0.0
+        {
+            h = (0.5 * h).max(MIN_STEP_FRACTION * step_m);
         }
         previous = Some(a);
         // the largest displacement per unit of `a` among the points of interest

@@ -23,7 +23,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 
 use crate::assembly::Robot;
 use crate::element::PlanarCable;
-use crate::error::{check_len, Error, Result};
+use crate::error::{Error, Result, check_len};
 use crate::loads::Loads;
 
 /// The finger's pose at arc coordinate `s_m`: `[p_x, p_y, θ]` (m, m, rad),

@@ -88,11 +88,11 @@ use crate::element::PlanarCable;
 use crate::error::{Error, Result};
 use crate::estimate::{Estimator, EstimatorSettings};
 use crate::grasp::friction::{FrictionContact, HoldCheck};
-use crate::grasp::gripper::{GripperSpec, Side, FINGER_PRESSURES};
+use crate::grasp::gripper::{FINGER_PRESSURES, GripperSpec, Side};
 use crate::grasp::object::{GraspObject, Pose};
 use crate::grasp::plant::{FingerState, GripperPlant, GripperPlantSettings, PlantStep};
-use crate::grasp::rest::{rest_on_table, TableTop};
-use crate::grasp::slip::{settle, Grip, Touch};
+use crate::grasp::rest::{TableTop, rest_on_table};
+use crate::grasp::slip::{Grip, Touch, settle};
 use crate::grasp::strategy::{bounded_step, contact_jacobian, contact_pose};
 use crate::loads::Loads;
 use crate::outcome::ContactStatus;
@@ -102,10 +102,10 @@ mod finger;
 mod lift;
 mod record;
 mod simulate;
-use finger::{calibrate, FingerController};
+use finger::{FingerController, calibrate};
 use lift::{friction_contacts, lifted_grip};
-use record::{contact_records, Stop};
-use simulate::{simulate, Scene};
+use record::{Stop, contact_records};
+use simulate::{Scene, simulate};
 
 /// Which grasp strategy.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -316,14 +316,14 @@ impl GraspSettings {
                 "must be finite and >= 0",
             ));
         }
-        if let Some(p) = self.open_loop_pressure_pa {
-            if !(p.is_finite() && p >= 0.0) {
-                return Err(Error::invalid(
-                    "settings.open_loop_pressure_pa",
-                    p,
-                    "must be finite and >= 0",
-                ));
-            }
+        if let Some(p) = self.open_loop_pressure_pa
+            && !(p.is_finite() && p >= 0.0)
+        {
+            return Err(Error::invalid(
+                "settings.open_loop_pressure_pa",
+                p,
+                "must be finite and >= 0",
+            ));
         }
         if self.markers_s_m.is_empty() {
             return Err(Error::invalid(

@@ -7,7 +7,7 @@
 //! `L D Lᵀ`); the banded factorizations were removed after measurement (they
 //! were at most 1.25x faster end to end, see the README's Performance).
 
-use crate::error::{check_len, Error, Result};
+use crate::error::{Error, Result, check_len};
 
 /// The most numbers [`BandedMatrix::try_zeros`] stores (2³⁰, 8 GiB).
 pub const MAX_ENTRIES: usize = 1 << 30;

@@ -74,7 +74,7 @@ mod work;
 
 pub use auto::{AutoFactors, AutoSolver, SolverKind};
 pub use banded::BandedMatrix;
-pub use pattern::{SymmetricMatrix, SymmetricPattern, MAX_ELEMENT_DOFS};
+pub use pattern::{MAX_ELEMENT_DOFS, SymmetricMatrix, SymmetricPattern};
 pub use sparse::{CholeskyKind, SparseFactors, SparseSettings, SparseSolver};
 pub use work::LinearWork;
 

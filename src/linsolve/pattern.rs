@@ -11,9 +11,9 @@
 
 use std::sync::Arc;
 
-use super::banded::{BandedMatrix, MAX_ENTRIES};
 use super::LinsolveError;
-use crate::error::{check_index, check_len, Error, Result};
+use super::banded::{BandedMatrix, MAX_ENTRIES};
+use crate::error::{Error, Result, check_index, check_len};
 
 /// The largest number of dofs one element may couple (its dense block has
 /// the square of it in entries).

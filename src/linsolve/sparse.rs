@@ -24,19 +24,19 @@ use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
 use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw,
-    SymmetricOrdering,
+    CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky,
 };
 use faer::sparse::linalg::lu::simplicial::{
-    factorize_simplicial_numeric_lu, factorize_simplicial_numeric_lu_scratch, SimplicialLu,
+    SimplicialLu, factorize_simplicial_numeric_lu, factorize_simplicial_numeric_lu_scratch,
 };
-use faer::sparse::linalg::{amd, LuError};
+use faer::sparse::linalg::{LuError, amd};
 use faer::sparse::{FaerError, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Par, Side};
 
 use super::{
-    check_factor_input, pivot_tolerance, FactorOptions, Inertia, LinsolveError, SymmetricMatrix,
-    SymmetricPattern, TangentSolver,
+    FactorOptions, Inertia, LinsolveError, SymmetricMatrix, SymmetricPattern, TangentSolver,
+    check_factor_input, pivot_tolerance,
 };
 
 mod band;
@@ -46,7 +46,7 @@ mod kept;
 use band::Band;
 use factors::Numeric;
 pub use factors::SparseFactors;
-use kept::{keep_analysis, kept_analysis, Analysis};
+use kept::{Analysis, keep_analysis, kept_analysis};
 
 /// The symmetric factorization [`SparseSolver`] tries first.
 ///
@@ -549,7 +549,7 @@ impl SparseSolver {
                     index: pm.fwd.get(index).copied().unwrap_or(0),
                     pivot: 0.0,
                     scale: 0.0,
-                })
+                });
             }
             Err(LuError::Generic(e)) => return Err(faer_error(e)),
         }
@@ -563,7 +563,7 @@ impl SparseSolver {
                     .row_idx_of_col_raw(j)
                     .iter()
                     .zip(u.val_of_col(j))
-                    .find(|(&i, _)| i == j)
+                    .find(|&(&i, _)| i == j)
                     .map_or(0.0, |(_, v)| *v);
                 let scale = rowmax[row];
                 if !exceeds(pivot.abs(), rel * scale) {
@@ -712,10 +712,10 @@ impl TangentSolver for SparseSolver {
         let llt_first = self.settings.cholesky == CholeskyKind::Llt;
         let mut outcome = self.cholesky(llt_first)?;
         if llt_first {
-            if let CholeskyOutcome::Done { values } = outcome {
-                if let Ok(ratio) = self.positive_definite() {
-                    return Ok(factors(Numeric::Llt(values), all_positive, ratio));
-                }
+            if let CholeskyOutcome::Done { values } = outcome
+                && let Ok(ratio) = self.positive_definite()
+            {
+                return Ok(factors(Numeric::Llt(values), all_positive, ratio));
             }
             // not positive definite: L D Lᵀ for the pivot and the inertia
             outcome = self.cholesky(false)?;

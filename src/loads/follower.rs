@@ -15,7 +15,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_finite, Error, Result};
+use crate::error::{Error, Result, check_finite};
 
 /// A pressure normal to the deformed backbone of a planar rod, over the
 /// undeformed arc interval `[s_start_m, s_end_m]` (the whole rod when both

@@ -16,7 +16,7 @@
 
 use nalgebra::SVector;
 
-use crate::error::{check_all_finite, check_index, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_index};
 
 /// Where stiffness entries go: `add(i, j, v)` adds `v` to entry `(i, j)`.
 ///

@@ -5,7 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_all_finite, check_finite, check_len, check_positive, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_finite, check_len, check_positive};
 
 use super::{FollowerLoad, LineLoad, Loads, NodeMoment, PointForce, PointMoment};
 
@@ -237,14 +237,14 @@ impl MomentNm {
                     format!(
                         "a moment in this scene is an array of {dim} numbers (N·m, world axes)"
                     ),
-                ))
+                ));
             }
             (MomentNm::Vector(v), 1) => {
                 return Err(Error::invalid(
                     name,
                     format!("{v:?}"),
                     "a moment in a planar scene is one number (N·m, counter-clockwise positive)",
-                ))
+                ));
             }
             (MomentNm::Vector(v), _) => check_len(name, dim, v.len())?,
         }

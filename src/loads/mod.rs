@@ -30,7 +30,7 @@ use serde::{Deserialize, Serialize};
 pub use follower::FollowerLoad;
 pub use load::{Load, MomentNm};
 
-use crate::error::{check_all_finite, check_finite, check_positive, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_finite, check_positive};
 
 /// A known distributed load along the backbone (N/m, world axes), as a
 /// function of the undeformed arc coordinate `X` (m).

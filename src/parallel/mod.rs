@@ -33,8 +33,8 @@ pub mod warm;
 
 use serde::{Deserialize, Serialize};
 
-use crate::element::{Ancf3d, Ancf3dStiffness, Element, SpatialCable, DEFAULT_GAUSS_POINTS};
-use crate::error::{check_all_finite, check_at_most, check_len, Error, Result};
+use crate::element::{Ancf3d, Ancf3dStiffness, DEFAULT_GAUSS_POINTS, Element, SpatialCable};
+use crate::error::{Error, Result, check_all_finite, check_at_most, check_len};
 use crate::params::parallel as p;
 use crate::statics::{Equilibrium, StaticSolver};
 use crate::structure::{

@@ -26,7 +26,7 @@ use nalgebra::{DVector, Matrix3, Vector3, Vector6};
 
 use super::ParallelRobot;
 use crate::element::Element;
-use crate::error::{check_all_finite, Error, Result};
+use crate::error::{Error, Result, check_all_finite};
 use crate::estimate::{EstimateStatus, Estimator, EstimatorSettings, LoadModel, NewtonEstimator};
 use crate::observe::{MarkerObservation, Observation};
 use crate::rng::Gaussian;

@@ -29,7 +29,7 @@ use nalgebra::{DMatrix, DVector, SMatrix};
 
 use super::ParallelRobot;
 use crate::element::Element;
-use crate::error::{check_len, Error, Result};
+use crate::error::{Error, Result, check_len};
 use crate::linsolve::{AutoFactors, Factorization};
 use crate::statics::{StaticSettings, Tracker, WarmStrategy};
 use crate::structure::{Structure, StructureLoads};

@@ -36,7 +36,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
 use crate::element::PlanarCable;
-use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_len};
 use crate::linsolve::AutoSolver;
 use crate::loads::Loads;
 use crate::observe::{MarkerObservation, Observation};

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_finite, Error, Result};
+use crate::error::{Error, Result, check_finite};
 use crate::loads::{LineLoad, Loads, PointForce};
 
 /// Where a payload's mass hangs.
@@ -251,17 +251,17 @@ impl PayloadSchedule {
             if p.start_s < 0.0 {
                 return Err(Error::invalid(f("start_s"), p.start_s, "must be >= 0"));
             }
-            if let Some(e) = p.end_s {
-                if !(e.is_finite() && e > p.start_s) {
-                    return Err(Error::invalid(
-                        f("end_s"),
-                        e,
-                        format!(
-                            "must be after start_s = {} s (time cannot go backwards)",
-                            p.start_s
-                        ),
-                    ));
-                }
+            if let Some(e) = p.end_s
+                && !(e.is_finite() && e > p.start_s)
+            {
+                return Err(Error::invalid(
+                    f("end_s"),
+                    e,
+                    format!(
+                        "must be after start_s = {} s (time cannot go backwards)",
+                        p.start_s
+                    ),
+                ));
             }
         }
         Ok(())

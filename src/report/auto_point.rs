@@ -13,10 +13,10 @@ use std::sync::Arc;
 
 use serde_json::json;
 
+use super::ReportOptions;
 use super::pareto::{LabelledPoint, ParetoGrid};
 use super::reference::Reference;
 use super::sweep::{marker_arcs, median, observe, run_guarded};
-use super::ReportOptions;
 use crate::error::Result;
 use crate::estimate::Backend;
 use crate::refine::auto_elements;

@@ -42,7 +42,7 @@ use crate::rng::SplitMix64;
 use crate::scene::Scene;
 use crate::statics::StaticSolver;
 
-use super::{plot, progress, write_json, Machine, ReportOptions};
+use super::{Machine, ReportOptions, plot, progress, write_json};
 
 /// `χ²` with two degrees of freedom at 0.95: `−2 ln 0.05`.
 pub(crate) const CHI2_2_95: f64 = 5.991_464_547_107_979;

@@ -207,10 +207,10 @@ pub(crate) fn annotations() {
 
 fn note_marks(points: impl IntoIterator<Item = BackendCoord>) {
     LOG.with(|l| {
-        if let Some(log) = l.borrow_mut().as_mut() {
-            if let Some(i) = log.current {
-                log.areas[i].1.extend(points);
-            }
+        if let Some(log) = l.borrow_mut().as_mut()
+            && let Some(i) = log.current
+        {
+            log.areas[i].1.extend(points);
         }
     });
 }
@@ -423,10 +423,11 @@ impl<DB: DrawingBackend> DrawingBackend for Recorder<DB> {
         style: &TStyle,
         pos: BackendCoord,
     ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
-        if style.color().alpha > 0.0 && !text.trim().is_empty() {
-            if let Some(b) = text_box(text, style, pos) {
-                note_text(text, b);
-            }
+        if style.color().alpha > 0.0
+            && !text.trim().is_empty()
+            && let Some(b) = text_box(text, style, pos)
+        {
+            note_text(text, b);
         }
         self.0.draw_text(text, style, pos)
     }
@@ -452,7 +453,7 @@ impl<DB: DrawingBackend> DrawingBackend for Recorder<DB> {
 #[cfg(test)]
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 mod tests {
-    use super::{annotations, data_in, recorded, text_box, LayoutIssue, Recorder};
+    use super::{LayoutIssue, Recorder, annotations, data_in, recorded, text_box};
     use plotters::coord::Shift;
     use plotters::prelude::*;
 

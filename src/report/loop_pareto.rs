@@ -23,9 +23,9 @@ use crate::estimate::Backend;
 use crate::plant::{PayloadSchedule, PlantSettings, SimulatedPlant};
 use crate::scene::Scene;
 
+use super::ReportOptions;
 use super::plot::{both, ms};
 use super::tracking::guarded;
-use super::ReportOptions;
 
 const FONT: &str = "sans-serif";
 

@@ -61,7 +61,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 
 pub use pareto::{LabelledPoint, ParetoReport};
-pub use result_plot::{plot_result, PlotSummary};
+pub use result_plot::{PlotSummary, plot_result};
 pub use stability::StabilityReport;
 
 /// Which part of the report runs.

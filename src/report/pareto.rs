@@ -18,8 +18,8 @@ use crate::error::Result;
 use crate::estimate::Backend;
 
 use super::reference::Reference;
-use super::sweep::{median, run_guarded, CaseSpec, Outcome};
-use super::{plot, progress, write_json, Machine, ReportOptions};
+use super::sweep::{CaseSpec, Outcome, median, run_guarded};
+use super::{Machine, ReportOptions, plot, progress, write_json};
 
 /// An extra point for the Pareto chart (e.g. where `elements: "auto"` lands),
 /// drawn as a labelled star; not part of the front computation.

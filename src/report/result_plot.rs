@@ -109,7 +109,7 @@ pub fn plot_record(value: &serde_json::Value, source: &str, out: &Path) -> Resul
                 name: "out".into(),
                 value: out.display().to_string(),
                 reason: "the picture is a .png or an .svg file".into(),
-            })
+            });
         }
     };
     let picture = Picture::read(value, source)?;

@@ -10,12 +10,12 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Serialize;
 
-use super::{write_json, ReportOptions};
+use super::{ReportOptions, write_json};
 use crate::error::Result;
-use crate::parallel::payload::{
-    fig8_configurations, mass_experiment, plant_spec, MassTrial, Measurement, FIG8_FRAMES,
-};
 use crate::parallel::ParallelSpec;
+use crate::parallel::payload::{
+    FIG8_FRAMES, MassTrial, Measurement, fig8_configurations, mass_experiment, plant_spec,
+};
 use crate::scene::parallel::ParallelSolution;
 
 /// What the part measured.

@@ -18,9 +18,9 @@ use serde::{Deserialize, Serialize};
 use crate::error::Result;
 use crate::estimate::Backend;
 
-use super::reference::{family_name, Reference, FAMILY_FACTORS};
-use super::sweep::{run_guarded, CaseSpec, FailureCause, Outcome};
-use super::{plot, progress, write_json, Machine, ReportOptions};
+use super::reference::{FAMILY_FACTORS, Reference, family_name};
+use super::sweep::{CaseSpec, FailureCause, Outcome, run_guarded};
+use super::{Machine, ReportOptions, plot, progress, write_json};
 
 /// A swept parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]

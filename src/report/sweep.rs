@@ -7,7 +7,7 @@
 //! recorded as an outcome with a [`FailureCause`], computed from the typed
 //! status or error (never from a message).
 
-use std::sync::{mpsc, Arc};
+use std::sync::{Arc, mpsc};
 use std::time::{Duration, Instant};
 
 use clarabel::solver::SolverStatus;
@@ -624,13 +624,13 @@ pub fn run_case(spec: &CaseSpec) -> Outcome {
     if let Err(f) = step(&mut est, &first) {
         return fail(f, Stage::FirstFrame);
     }
-    if let Some(previous) = &previous {
-        if let Err(f) = step(&mut est, previous) {
-            return Outcome {
-                alpha_used: est.alpha(),
-                ..fail(f, Stage::PreviousFrame)
-            };
-        }
+    if let Some(previous) = &previous
+        && let Err(f) = step(&mut est, previous)
+    {
+        return Outcome {
+            alpha_used: est.alpha(),
+            ..fail(f, Stage::PreviousFrame)
+        };
     }
     let (e, dt) = match step(&mut est, &measured) {
         Ok(x) => x,
@@ -638,7 +638,7 @@ pub fn run_case(spec: &CaseSpec) -> Outcome {
             return Outcome {
                 alpha_used: est.alpha(),
                 ..fail(f, Stage::MeasuredFrame)
-            }
+            };
         }
     };
     let iterations = e.report.iterations;

@@ -20,15 +20,15 @@ use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::control::{
-    run_track, CircleSpec, ControllerKind, FigureEightSpec, LineSpec, MassTable, TrackFile,
-    TrackRun, TrajectorySpec, WeighingExperiment,
+    CircleSpec, ControllerKind, FigureEightSpec, LineSpec, MassTable, TrackFile, TrackRun,
+    TrajectorySpec, WeighingExperiment, run_track,
 };
 use crate::error::Result;
 use crate::plant::{Payload, PayloadKind, PayloadSchedule};
 use crate::scene::Scene;
 
-use super::plot::{both, ms};
 use super::ReportOptions;
+use super::plot::{both, ms};
 
 const FONT: &str = "sans-serif";
 /// The centre of the example trajectories: the model's end effector at

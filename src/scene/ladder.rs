@@ -1,7 +1,7 @@
 //! The candidate meshes of a scene with `"elements": "auto"` sections: the
 //! ladder [`crate::refine`] climbs (here, since validating a scene needs it).
 
-use super::{Scene, UnknownLoad, DEFAULT_MAX_REFINED_ELEMENTS, NODE_MATCH};
+use super::{DEFAULT_MAX_REFINED_ELEMENTS, NODE_MATCH, Scene, UnknownLoad};
 use crate::error::{Error, Result};
 
 /// The candidate meshes of a scene: fixed sections keep their count, auto

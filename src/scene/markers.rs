@@ -14,7 +14,7 @@
 use serde::Deserialize;
 
 use super::ranges::MAX_MARKERS;
-use crate::error::{check_at_most, Error, Result};
+use crate::error::{Error, Result, check_at_most};
 use crate::estimate::{MarkerObservation, Observation};
 
 /// The most frames of a recorded stream: one warm estimate each (a few

@@ -16,15 +16,15 @@ mod settings;
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::{Base, Chamber, Robot, RobotSpec, Section};
-use crate::element::{Element, NodeKinematics, PlanarCable, SpatialCable, DEFAULT_GAUSS_POINTS};
-use crate::error::{check_at_most, check_index, check_len, check_positive, Error, Result};
+use crate::element::{DEFAULT_GAUSS_POINTS, Element, NodeKinematics, PlanarCable, SpatialCable};
+use crate::error::{Error, Result, check_at_most, check_index, check_len, check_positive};
 use crate::estimate::{EstimatorSettings, LoadModel};
 use crate::loads::{Load, Loads};
 use crate::params;
 
 pub use ladder::Ladder;
 pub use robot::{SceneElement, SceneRobot};
-pub use settings::{RefinementTarget, SolverSettings, UnknownLoad, DEFAULT_MAX_REFINED_ELEMENTS};
+pub use settings::{DEFAULT_MAX_REFINED_ELEMENTS, RefinementTarget, SolverSettings, UnknownLoad};
 
 /// The largest scene file [`Scene::from_file`] reads (64 MiB).
 pub const MAX_SCENE_BYTES: usize = 64 << 20;
@@ -401,7 +401,7 @@ impl Scene {
                         n,
                         "a node index depends on the mesh, which \"elements\": \"auto\" \
                          leaves to the refinement: give the marker's s_m",
-                    ))
+                    ));
                 }
                 (Some(n), None) => {
                     check_index(&format!("markers[{i}].node"), n, robot.n_nodes())?;
@@ -416,7 +416,7 @@ impl Scene {
                         format!("markers[{i}]"),
                         "",
                         "give exactly one of `node` and `s_m`",
-                    ))
+                    ));
                 }
             };
             if seen.iter().any(|t| (t - s).abs() <= 1e-9 * total) {

@@ -19,7 +19,7 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use crate::element::Element;
-use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_len};
 use crate::parallel::payload::PayloadEstimate;
 use crate::parallel::{LegElement, ParallelRobot, ParallelSpec};
 use crate::statics::Equilibrium;

@@ -71,11 +71,7 @@ pub(crate) fn reduce_angle(a: f64) -> f64 {
         return a;
     }
     let r = a.rem_euclid(TAU); // [0, 2π)
-    if r > PI {
-        r - TAU
-    } else {
-        r
-    }
+    if r > PI { r - TAU } else { r }
 }
 
 /// Checks the ranges of this module on `scene`.

@@ -29,10 +29,12 @@ fn nested_load_tags_parse() {
     assert_eq!(loads.node_moments[0].node, 4);
     assert!((loads.point_forces[0].force_n[1] + 0.02 * 9.81).abs() < 1e-15);
     let bad = text.replace("\"width_m\"", "\"sigma\"");
-    assert!(Scene::from_json(&bad)
-        .unwrap_err()
-        .to_string()
-        .contains("sigma"));
+    assert!(
+        Scene::from_json(&bad)
+            .unwrap_err()
+            .to_string()
+            .contains("sigma")
+    );
 }
 
 #[test]

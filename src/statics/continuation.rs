@@ -43,8 +43,8 @@
 //! acts on one node slope, whose stretch is held only by `EA L_e` (soft on
 //! a fine mesh), so near the loaded node the corrector contracts slowly.
 
-use super::newton::{Target, Work};
 use super::StaticSolver;
+use super::newton::{Target, Work};
 use crate::error::Result;
 use crate::linsolve::{AutoFactors, FactorOptions, Factorization, LinsolveError, TangentSolver};
 use crate::numeric::norm2;
@@ -179,12 +179,11 @@ impl StaticSolver {
                 };
                 return Ok(path.end(Some(status)));
             }
-            if path.tangent.is_none() {
-                if let Some(status) =
+            if path.tangent.is_none()
+                && let Some(status) =
                     self.path_tangent(model, dead, loads, u, w, &mut path, &mut dq)?
-                {
-                    return Ok(path.end(Some(status)));
-                }
+            {
+                return Ok(path.end(Some(status)));
             }
             let target = self.predict(model, u, w, &mut path, &mut dq, &mut u_try, &mut q_try)?;
             let off: Vec<f64> = path.r0.iter().map(|v| (1.0 - target) * v).collect();
@@ -546,7 +545,7 @@ fn factor(w: &mut Work<'_>) -> std::result::Result<AutoFactors, StaticStatus> {
             Err(LinsolveError::NonFinite { .. }) => {
                 return Err(StaticStatus::NonFinite {
                     at: NonFiniteAt::Tangent,
-                })
+                });
             }
             Err(_) => return Err(StaticStatus::SingularTangent),
         }

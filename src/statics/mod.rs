@@ -57,7 +57,7 @@ use std::sync::Arc;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_at_most, check_len, check_positive, named, Error, Result};
+use crate::error::{Error, Result, check_at_most, check_len, check_positive, named};
 use crate::linsolve::{AutoSolver, SolverKind, TangentSolver};
 pub use crate::outcome::{
     BranchChoice, NonFiniteAt, StaticCriterion, StaticReport, StaticStatus, StaticWarning,
@@ -404,11 +404,7 @@ const FLOOR_SQRT_N: f64 = 0.05;
 /// `v`, or `f64::MAX` in place of an infinity or NaN: every number of a
 /// report is finite.
 fn finite_or_max(v: f64) -> f64 {
-    if v.is_finite() {
-        v
-    } else {
-        f64::MAX
-    }
+    if v.is_finite() { v } else { f64::MAX }
 }
 
 #[cfg(test)]

@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use nalgebra::DVector;
 
-use super::{finite_or_max, residual_floor, Equilibrium, StaticSolver};
+use super::{Equilibrium, StaticSolver, finite_or_max, residual_floor};
 use crate::error::{Error, Result};
 use crate::linsolve::{
     AutoFactors, AutoSolver, FactorOptions, Factorization, Inertia, LinsolveError, SymmetricMatrix,
@@ -658,7 +658,7 @@ impl StaticSolver {
                 match self.floor_step(model, t, u, w, &mut it, step_inf, xtol)? {
                     FloorStep::Continue => continue,
                     FloorStep::Converged => {
-                        return Ok(StaticStatus::Converged(StaticCriterion::RoundOffFloor))
+                        return Ok(StaticStatus::Converged(StaticCriterion::RoundOffFloor));
                     }
                     FloorStep::Ordinary => {}
                 }

@@ -15,8 +15,8 @@
 //! by the coarse discretization error only, which plain Newton removes in a
 //! few full steps whatever the fine mesh.
 
-use super::newton::{Target, Work};
 use super::StaticSolver;
+use super::newton::{Target, Work};
 use crate::error::{Error, Result};
 use crate::linsolve::AutoSolver;
 use crate::outcome::{StaticStatus, StaticWarning};

@@ -30,8 +30,8 @@
 //! two sides' potentials differed by 1e-3 of their change, and the side
 //! flipped from mesh to mesh (+x at 8 elements, −x at 16).
 
-use super::newton::{Target, Work};
 use super::StaticSolver;
+use super::newton::{Target, Work};
 use crate::error::Result;
 use crate::linsolve::{FactorOptions, Factorization, Inertia, LinsolveError, TangentSolver};
 use crate::outcome::{BranchChoice, StaticStatus};

@@ -51,14 +51,14 @@ use serde::Serialize;
 
 use crate::assembly::Robot;
 use crate::element::Element;
-use crate::error::{check_len, Error, Result};
+use crate::error::{Error, Result, check_len};
 use crate::linsolve::{
     AutoFactors, AutoSolver, FactorOptions, Factorization, SymmetricMatrix, TangentSolver,
 };
 use crate::numeric::{max_abs, norm2};
 use crate::structure::Model;
 
-use super::{residual_floor, Equilibrium, StaticSettings, StaticSolver};
+use super::{Equilibrium, StaticSettings, StaticSolver, residual_floor};
 
 /// A load linear in a parameter vector `F` on a model `M`: its generalized
 /// force over all coordinates is `G F` with a constant `G` (the distributed

@@ -17,9 +17,9 @@ use nalgebra::DVector;
 use super::rigid::Attachment;
 use super::{BlockRule, Structure, StructureLoads, Triplets};
 use crate::element::Element;
-use crate::error::{check_all_finite, check_index, check_len, Error, Result};
-use crate::loads::force_field::StiffnessSink;
+use crate::error::{Error, Result, check_all_finite, check_index, check_len};
 use crate::loads::Loads;
+use crate::loads::force_field::StiffnessSink;
 use crate::structure::dofmap::DofMap;
 use crate::structure::rod::MAX_EDOF;
 

@@ -48,7 +48,7 @@ pub use strategy::{MeshSequencing, SolverHints, Stepping};
 pub use triplets::Triplets;
 
 use crate::element::Element;
-use crate::error::{check_index, Result};
+use crate::error::{Result, check_index};
 use crate::loads::force_field::ForceField;
 use rigid::Attachment;
 use spec::ResolvedJoint;

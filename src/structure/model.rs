@@ -17,7 +17,7 @@ use nalgebra::DVector;
 use super::strategy::{MeshSequencing, SolverHints, Stepping};
 use super::{Structure, StructureLoads, Triplets};
 use crate::element::Element;
-use crate::error::{check_len, Error, Result};
+use crate::error::{Error, Result, check_len};
 use crate::linsolve::{SymmetricMatrix, SymmetricPattern};
 
 /// A model whose equilibrium a static solver finds in the free coordinates

@@ -37,7 +37,7 @@ use nalgebra::Vector2;
 
 pub(crate) use spatial::resolve_spatial;
 pub use spatial::{
-    rotate_3d, rotate_back_3d, rotation_vector_of, SpatialAttachment, SPATIAL_END_COLUMNS,
+    SPATIAL_END_COLUMNS, SpatialAttachment, rotate_3d, rotate_back_3d, rotation_vector_of,
 };
 
 /// `R(θ) v` for the planar rotation by `theta` (rad).

@@ -3,8 +3,8 @@
 
 use super::Structure;
 use crate::element::Element;
-use crate::error::{check_index, Result};
-use crate::site::{block_position_rows, rod_node_arc, rod_rows, Site, SiteRows, Sites};
+use crate::error::{Result, check_index};
+use crate::site::{Site, SiteRows, Sites, block_position_rows, rod_node_arc, rod_rows};
 
 impl<E: Element> Sites for Structure<E> {
     fn dim(&self) -> usize {

@@ -7,11 +7,11 @@
 use nalgebra::{SVector, Vector3};
 use serde::{Deserialize, Serialize};
 
-use super::rigid::{resolve_spatial, rotate, rotate_back, Attachment, PlanarAttachment};
-use super::rod::{Rod, MAX_ELEMENTS};
+use super::rigid::{Attachment, PlanarAttachment, resolve_spatial, rotate, rotate_back};
+use super::rod::{MAX_ELEMENTS, Rod};
 use super::section::Section;
-use crate::element::{Element, DEFAULT_GAUSS_POINTS};
-use crate::error::{check_all_finite, check_at_most, check_index, check_len, Error, Result};
+use crate::element::{DEFAULT_GAUSS_POINTS, Element};
+use crate::error::{Error, Result, check_all_finite, check_at_most, check_index, check_len};
 use crate::loads::Loads;
 
 /// What the base clamp prescribes.
@@ -577,7 +577,9 @@ impl StructureSpec {
                         return Err(Error::invalid(
                             p("body"),
                             body,
-                            format!("rigid body {body} is already fixed to the ground by joints[{first}]"),
+                            format!(
+                                "rigid body {body} is already fixed to the ground by joints[{first}]"
+                            ),
                         ));
                     }
                     ground_joint[*body] = Some(j);
@@ -609,7 +611,9 @@ impl StructureSpec {
                         return Err(Error::invalid(
                             p("end"),
                             format!("{end:?}"),
-                            format!("this end of rod {rod} is clamped: an end is clamped or joined, not both"),
+                            format!(
+                                "this end of rod {rod} is clamped: an end is clamped or joined, not both"
+                            ),
                         ));
                     }
                     end_joint[slot] = Some(j);

@@ -9,7 +9,7 @@ use nalgebra::DVector;
 use super::Assembled;
 #[cfg(doc)]
 use super::Model;
-use crate::error::{check_len, Error, Result};
+use crate::error::{Error, Result, check_len};
 use crate::linsolve::SymmetricMatrix;
 
 /// How a solver moves in the free coordinates `u` of a model with `q = φ(u)`:

@@ -2,7 +2,7 @@
 //! which the structure's tangent is assembled (duplicates add up): a sparse
 //! factorization takes it as it is, a test turns it into a dense matrix.
 
-use crate::error::{check_len, Result};
+use crate::error::{Result, check_len};
 use crate::loads::force_field::StiffnessSink;
 
 /// An `n × n` matrix as a list of entries; repeated `(row, column)` pairs

@@ -29,15 +29,15 @@ use serde::{Deserialize, Serialize};
 
 use crate::contact::Obstacles;
 use crate::control::{IkSettings, IkStatus, InverseKinematics};
-use crate::error::{check_len, check_positive, Error, Result};
+use crate::error::{Error, Result, check_len, check_positive};
 use crate::estimate::{AlphaRule, Estimator, EstimatorSettings};
 use crate::plant::{Plant, PlantSettings, SimulatedPlant};
 use crate::scene::Scene;
 
 use super::response::dq_dp;
 use super::{
-    calibrate, field_gradient, locate_point_force, Calibration, FieldParams, FreeFrame,
-    PointSearchSettings,
+    Calibration, FieldParams, FreeFrame, PointSearchSettings, calibrate, field_gradient,
+    locate_point_force,
 };
 
 /// Settings of an avoidance run; every field has a documented default.
@@ -405,11 +405,10 @@ pub fn run_avoidance(
     let mut ik = InverseKinematics::new(model.clone(), base_loads.clone(), IkSettings::default())?;
     if let IkStatus::Unreachable { distance_m } =
         ik.solve(goal_m.as_slice(), &vec![0.0; model.n_q()])?.status
+        && distance_m > settings.goal_tolerance_m
     {
-        if distance_m > settings.goal_tolerance_m {
-            run.status = AvoidStatus::GoalUnreachable { distance_m };
-            return Ok(run);
-        }
+        run.status = AvoidStatus::GoalUnreachable { distance_m };
+        return Ok(run);
     }
     let dt = 1.0 / settings.control_rate_hz;
     let steps = (settings.duration_s * settings.control_rate_hz).round() as usize;

@@ -9,7 +9,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_len, Error, Result};
+use crate::error::{Error, Result, check_len};
 use crate::scene::Scene;
 use crate::statics::StaticSolver;
 

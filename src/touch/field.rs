@@ -22,7 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
 use crate::element::{ArcPoint, Element, PlanarCable};
-use crate::error::{check_len, check_positive, Error, Result};
+use crate::error::{Error, Result, check_len, check_positive};
 
 /// The paper's parameters of (36)–(44) (SI units), with a documented
 /// default each: `Q0 = 10 cm`, `α_r = 0.02`, `ζ = 200`, `v_d = 5 mm/s`.

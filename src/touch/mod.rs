@@ -18,15 +18,15 @@ mod robot;
 mod scene;
 
 pub use avoid::{
-    calibrate_on_free_plant, check_obstacles, run_avoidance, AvoidRun, AvoidSample, AvoidSettings,
-    AvoidStatus, TouchedPoint, MAX_AVOID_STEPS,
+    AvoidRun, AvoidSample, AvoidSettings, AvoidStatus, MAX_AVOID_STEPS, TouchedPoint,
+    calibrate_on_free_plant, check_obstacles, run_avoidance,
 };
-pub use calibrate::{calibrate, Calibration, FreeFrame};
-pub use field::{field_gradient, repulsive, FieldParams};
-pub use peak::{peak_contact, PeakContact};
-pub use point_search::{locate_point_force, marker_offset, PointContact, PointSearchSettings};
+pub use calibrate::{Calibration, FreeFrame, calibrate};
+pub use field::{FieldParams, field_gradient, repulsive};
+pub use peak::{PeakContact, peak_contact};
+pub use point_search::{PointContact, PointSearchSettings, locate_point_force, marker_offset};
 pub use response::MarkerResponse;
-pub use robot::{five_section_scene, marker_arcs, ROD_RADIUS_M, SECTIONS, SECTION_LENGTH_M};
+pub use robot::{ROD_RADIUS_M, SECTION_LENGTH_M, SECTIONS, five_section_scene, marker_arcs};
 pub use scene::AvoidScene;
 
 /// How touch's estimators choose their regularization `α` by default (the

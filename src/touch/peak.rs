@@ -4,7 +4,7 @@
 
 use crate::assembly::Robot;
 use crate::element::{ArcPoint, PlanarCable};
-use crate::error::{check_len, Result};
+use crate::error::{Result, check_len};
 
 /// A contact located by the peak of a load field.
 ///

@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
 use crate::element::PlanarCable;
-use crate::error::{check_len, check_positive, Error, Result};
+use crate::error::{Error, Result, check_len, check_positive};
 use crate::loads::{Loads, PointForce};
 use crate::statics::StaticSolver;
 

@@ -21,8 +21,8 @@ use crate::error::{Error, Result};
 use crate::plant::{PlantSettings, SimulatedPlant};
 
 use super::{
-    calibrate_on_free_plant, five_section_scene, marker_arcs, run_avoidance, AvoidRun,
-    AvoidSettings, ROD_RADIUS_M,
+    AvoidRun, AvoidSettings, ROD_RADIUS_M, calibrate_on_free_plant, five_section_scene,
+    marker_arcs, run_avoidance,
 };
 
 /// An avoidance scene (see the [module documentation](crate::touch)).

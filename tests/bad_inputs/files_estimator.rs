@@ -116,18 +116,14 @@ pub(super) fn cases() -> Vec<Case> {
         ),
         case(
             "auto without a refinement",
-            move || {
-                json(|v| v["robot"]["sections"][1]["elements"] = json!("auto"))
-            },
+            move || json(|v| v["robot"]["sections"][1]["elements"] = json!("auto")),
             Invalid,
             "refinement",
         ),
         case(
             "refinement without an auto section",
             move || {
-                json(|v| {
-                    v["refinement"] = json!({"quantity": "tip_position", "tolerance_m": 1e-5})
-                })
+                json(|v| v["refinement"] = json!({"quantity": "tip_position", "tolerance_m": 1e-5}))
             },
             Invalid,
             "refinement",
@@ -204,7 +200,9 @@ pub(super) fn cases() -> Vec<Case> {
         case(
             "node moment with auto",
             move || {
-                auto_json(|v| v["loads"] = json!([{"type": "node_moment", "node": 3, "moment_nm": 0.01}]))
+                auto_json(|v| {
+                    v["loads"] = json!([{"type": "node_moment", "node": 3, "moment_nm": 0.01}])
+                })
             },
             Invalid,
             "loads[0].node",
@@ -213,7 +211,8 @@ pub(super) fn cases() -> Vec<Case> {
             "concentrated load model by node with auto",
             move || {
                 auto_json(|v| {
-                    v["solver"]["estimator"] = json!({"load_model": {"kind": "concentrated", "node": 20}})
+                    v["solver"]["estimator"] =
+                        json!({"load_model": {"kind": "concentrated", "node": 20}})
                 })
             },
             Invalid,
@@ -224,7 +223,8 @@ pub(super) fn cases() -> Vec<Case> {
             move || {
                 json(|v| {
                     v["unknown_load"] = json!({"acts_at": "point", "s_m": 0.24});
-                    v["solver"]["estimator"] = json!({"load_model": {"kind": "concentrated", "node": 20}});
+                    v["solver"]["estimator"] =
+                        json!({"load_model": {"kind": "concentrated", "node": 20}});
                 })
             },
             Invalid,
@@ -432,7 +432,10 @@ pub(super) fn cases() -> Vec<Case> {
                 estimate(
                     Backend::Sqp,
                     |_| {},
-                    |o| o.markers[4] = MarkerObservation::at_arc(0.3, nalgebra::Vector2::new(0.3, 0.0)),
+                    |o| {
+                        o.markers[4] =
+                            MarkerObservation::at_arc(0.3, nalgebra::Vector2::new(0.3, 0.0))
+                    },
                 )
             },
             Invalid,

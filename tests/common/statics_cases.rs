@@ -3,7 +3,7 @@
 //! hard loads of the kind users apply, each as a scene with `n` elements.
 #![allow(dead_code, clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use serde_json::{json, Value};
+use serde_json::{Value, json};
 use softrod::scene::Scene;
 
 /// Bending stiffness of the two-section robot (N·m²).

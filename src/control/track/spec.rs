@@ -233,7 +233,7 @@ impl TrajectorySpec {
                     "trajectory.kind",
                     other,
                     "one of circle, figure_eight, line, samples, pressures",
-                ))
+                ));
             }
         })
     }

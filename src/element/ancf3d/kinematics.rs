@@ -24,7 +24,7 @@
 //! the section `E_ij = (d_i·d_j − δ_ij)/2`, `i, j ∈ {2, 3}`, and the
 //! rotation vector of the node's frame from a reference frame.
 
-use super::jet::{axpy, cross, dot, mul3, sub3, Scalar, Vec3};
+use super::jet::{Scalar, Vec3, axpy, cross, dot, mul3, sub3};
 use crate::element::spatial_cable::rotation_factor;
 
 /// The stiffnesses a density is weighted with (weights of the Gauss point

@@ -355,8 +355,10 @@ fn wrong_sizes_give_nan_and_add_nothing() {
         assert!(bad.unwrap_err().to_string().contains(field));
     }
     let s = Ancf3dStiffness::isotropic(1.0, 1.0, 1.0);
-    assert!(Ancf3d::with_stiffness(0.1, s, 0)
-        .unwrap_err()
-        .to_string()
-        .contains("gauss_points"));
+    assert!(
+        Ancf3d::with_stiffness(0.1, s, 0)
+            .unwrap_err()
+            .to_string()
+            .contains("gauss_points")
+    );
 }

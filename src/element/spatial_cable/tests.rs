@@ -415,15 +415,19 @@ fn a_moment_along_the_reference_tangent_does_no_work() {
 #[test]
 fn node_kinematics_of_bad_slices_are_nan_or_empty() {
     let n = [0.0; 5];
-    assert!(SpatialCable::straight_node(&[0.0; 2], &[1.0, 0.0, 0.0])
-        .iter()
-        .all(|v| v.is_nan()));
+    assert!(
+        SpatialCable::straight_node(&[0.0; 2], &[1.0, 0.0, 0.0])
+            .iter()
+            .all(|v| v.is_nan())
+    );
     assert!(SpatialCable::node_tangent(&n).iter().all(|v| v.is_nan()));
     assert!(SpatialCable::clamp_free_directions(&n).is_empty());
     let good = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0];
-    assert!(SpatialCable::node_rotation(&good, &[0.0; 6])
-        .iter()
-        .all(|v| v.is_nan()));
+    assert!(
+        SpatialCable::node_rotation(&good, &[0.0; 6])
+            .iter()
+            .all(|v| v.is_nan())
+    );
     assert!(SpatialCable::moment_work_between(&good, &good, &good, &[1.0]).is_nan());
     let (mut g, mut h) = ([0.0; 6], [0.0; 36]);
     SpatialCable::add_moment_work(&good, &good, &[1.0, 2.0], &mut g, &mut h);

@@ -6,9 +6,9 @@ use std::sync::{Arc, OnceLock};
 
 use nalgebra::DMatrix;
 
+use super::super::LoadModel;
 use super::super::gn_form::GnForm;
 use super::super::problem::{Derivs, GnFactor};
-use super::super::LoadModel;
 use super::{cov_factor, noise_cov, posterior, posterior_alpha_marginal};
 
 /// What the covariances of an estimate are formed from: the derivatives

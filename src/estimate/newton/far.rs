@@ -7,10 +7,10 @@ use crate::error::Result;
 use crate::observe::ObservationOperator;
 use crate::statics::tracker::FactoredTangent;
 
+use super::super::EstimationModel;
 use super::super::driver::{Method, Solved};
 use super::super::problem::{Derivs, Problem};
 use super::super::sqp::SqpEstimator;
-use super::super::EstimationModel;
 use super::reduced::{Iterate, Reduced};
 
 /// The full-space iterations over `(q, F)` a far start runs on a model (the

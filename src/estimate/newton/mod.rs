@@ -64,7 +64,7 @@ use crate::linsolve::AutoFactors;
 use crate::observe::{ObsRow, ObservationOperator};
 use nalgebra::{DMatrix, DVector};
 
-use super::driver::{run_step, Method, Solved, Stream};
+use super::driver::{Method, Solved, Stream, run_step};
 use super::problem::{Derivs, GnFactor, Problem};
 use super::{Backend, Estimate, Estimator, EstimatorSettings, FarStart, Observation};
 

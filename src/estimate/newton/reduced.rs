@@ -13,7 +13,7 @@ use crate::sensitivity::Sensitivity;
 use crate::statics::TrackedEquilibrium;
 
 use super::super::driver::Solved;
-use super::super::problem::{step_cap, Derivs, GnFactor, Problem};
+use super::super::problem::{Derivs, GnFactor, Problem, step_cap};
 use super::super::{
     Backend, EstimateCriterion, EstimateReport, EstimateStatus, EstimationModel, EstimatorSettings,
 };
@@ -126,13 +126,13 @@ impl<M: EstimationModel> Reduced<'_, M> {
             // linearization would only measure how far the start is
             if eager {
                 eager = false;
-                if let Some(used) = far.take() {
-                    if let Some((next, its)) = self.far_start(&it, obj)? {
-                        *used = Some(its);
-                        iterations += its;
-                        it = next;
-                        continue;
-                    }
+                if let Some(used) = far.take()
+                    && let Some((next, its)) = self.far_start(&it, obj)?
+                {
+                    *used = Some(its);
+                    iterations += its;
+                    it = next;
+                    continue;
                 }
             }
             let lin = self.linearize(&it, &at)?;
@@ -160,14 +160,13 @@ impl<M: EstimationModel> Reduced<'_, M> {
             // solve): the full-space iterations take over (see
             // `full_space`), once per solve
             let mut accepted = None;
-            if step.cap < 1.0 {
-                if let Some(used) = far.take() {
-                    if let Some((next, its)) = self.far_start(&it, obj)? {
-                        *used = Some(its);
-                        iterations += its;
-                        accepted = Some((next, None));
-                    }
-                }
+            if step.cap < 1.0
+                && let Some(used) = far.take()
+                && let Some((next, its)) = self.far_start(&it, obj)?
+            {
+                *used = Some(its);
+                iterations += its;
+                accepted = Some((next, None));
             }
             let accepted = match accepted {
                 Some(a) => Some(a),

@@ -16,8 +16,8 @@ use crate::linsolve::{AutoFactors, Factorization, SymmetricMatrix};
 use crate::numeric::{dot, norm2};
 use crate::observe::ObservationOperator;
 
-use super::super::gn_form::{count_dense, GnForm};
-use super::super::problem::{weighted_columns, Derivs, Problem};
+use super::super::gn_form::{GnForm, count_dense};
+use super::super::problem::{Derivs, Problem, weighted_columns};
 use super::super::{BoundFrame, LoadModel};
 use super::{QpError, QpStep, SqpEstimator, Unconstrained};
 
@@ -50,7 +50,7 @@ impl<E: Element> SqpEstimator<E> {
                         robot.arc_point("estimator.load_model.site.s_m", s_m)?
                     }
                     crate::site::Site::Body { body } => {
-                        return Err(crate::site::no_body("estimator.load_model.site", body))
+                        return Err(crate::site::no_body("estimator.load_model.site", body));
                     }
                 },
             };
@@ -283,7 +283,7 @@ impl<E: Element> SqpEstimator<E> {
             Ok(sol) => sol,
             Err(Failure::Status(s)) => return Err(QpError::Clarabel(s)),
             Err(Failure::Rejected(e)) => {
-                return Err(Error::invalid("clarabel problem", e, "internal").into())
+                return Err(Error::invalid("clarabel problem", e, "internal").into());
             }
         };
         let sol = &sol;

@@ -10,12 +10,12 @@ use crate::linsolve::{AutoFactors, Factorization};
 use crate::numeric::{dot, max_abs, norm2};
 use crate::observe::ObservationOperator;
 use crate::statics::residual_floor;
-use crate::statics::tracker::{chord_converged, FactoredTangent};
+use crate::statics::tracker::{FactoredTangent, chord_converged};
 
 use super::super::driver::Solved;
 use super::super::problem::{Derivs, GnFactor};
 use super::super::{Backend, EstimateCriterion, EstimateReport, EstimateStatus};
-use super::{trust, SqpEstimator, WarmQp};
+use super::{SqpEstimator, WarmQp, trust};
 
 /// A point of the iteration: `(q, F)` (not necessarily an equilibrium),
 /// the dead force there, the residual `Q` and the objective's parts. An

@@ -91,8 +91,8 @@ use crate::observe::{ObsRow, ObservationOperator};
 use crate::outcome::NonFiniteAt;
 use crate::statics::tracker::FactoredTangent;
 
-use super::driver::{run_step, Method, Solved, Stream};
-use super::problem::{columns, Derivs, GnFactor, Problem};
+use super::driver::{Method, Solved, Stream, run_step};
+use super::problem::{Derivs, GnFactor, Problem, columns};
 use super::{
     Backend, Estimate, EstimateStatus, Estimator, EstimatorSettings, LoadModel, Observation,
 };

@@ -384,7 +384,7 @@ pub(super) fn free_run(
                     return Err(Failure::Controller {
                         message: format!("payload-free run: {e}"),
                     }
-                    .into())
+                    .into());
                 }
             }
         }

@@ -10,7 +10,7 @@
 //! positive definite goes on to the general path (faer's `L D Lᵀ` for the
 //! inertia and its pivoted LU), which this module does not replace.
 
-use crate::linsolve::{pivot_tolerance, LinsolveError, SymmetricMatrix, SymmetricPattern};
+use crate::linsolve::{LinsolveError, SymmetricMatrix, SymmetricPattern, pivot_tolerance};
 
 /// A pattern's band layout (built once, at analysis).
 #[derive(Debug)]

@@ -13,7 +13,7 @@ use std::sync::Arc;
 
 use super::band::Band;
 use super::{Numeric, SparseFactors, SparseSolver};
-use crate::linsolve::{pivot_tolerance, FactorOptions, Inertia, LinsolveError, SymmetricMatrix};
+use crate::linsolve::{FactorOptions, Inertia, LinsolveError, SymmetricMatrix, pivot_tolerance};
 
 /// The factors `P A = L U` of a band matrix of half-bandwidth `b`: `U` of
 /// upper bandwidth `2b` (the fill of the interchanges), `L` unit lower of

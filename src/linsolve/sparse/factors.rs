@@ -8,14 +8,14 @@ use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::simplicial::{SimplicialLdltRef, SimplicialLltRef};
 use faer::sparse::linalg::cholesky::{LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw};
 use faer::sparse::linalg::lu::simplicial::{
-    solve_in_place_scratch as lu_solve_scratch, SimplicialLu,
+    SimplicialLu, solve_in_place_scratch as lu_solve_scratch,
 };
 use faer::{Conj, MatMut, Par};
 
+use super::Permuted;
 use super::band::BandFactors;
 use super::band_lu::BandLu;
-use super::Permuted;
-use crate::linsolve::{check_rhs, FactorMethod, Factorization, Inertia, LinsolveError};
+use crate::linsolve::{FactorMethod, Factorization, Inertia, LinsolveError, check_rhs};
 
 /// The numeric factors.
 #[derive(Debug, Clone)]

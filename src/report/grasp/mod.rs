@@ -16,12 +16,12 @@ use crate::contact::Obstacle;
 use crate::error::Result;
 use crate::grasp::gripper::GripperSpec;
 use crate::grasp::object::GraspObject;
-use crate::report::{write_json, ReportOptions};
+use crate::report::{ReportOptions, write_json};
 
 pub mod table;
 
 use crate::grasp::trial::{GraspSettings, Strategy, TrialOutcome};
-use table::{run_table, table_objects, TableRow};
+use table::{TableRow, run_table, table_objects};
 
 /// Index of the red apple in [`table_objects`] (the full report's sequence).
 const SEQUENCE_OBJECT: usize = 5;
@@ -362,8 +362,9 @@ mod tests {
         };
         let o = outline(&c, [0.0, -0.1]);
         assert_eq!(o.first(), o.last());
-        assert!(o
-            .iter()
-            .all(|p| ((p.0).hypot(p.1 + 0.1) - 0.01).abs() < 1e-12));
+        assert!(
+            o.iter()
+                .all(|p| ((p.0).hypot(p.1 + 0.1) - 0.01).abs() < 1e-12)
+        );
     }
 }

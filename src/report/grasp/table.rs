@@ -31,7 +31,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::Result;
 use crate::grasp::gripper::GripperSpec;
 use crate::grasp::object::{GraspObject, Shape};
-use crate::grasp::trial::{run_trial, Failure, GraspSettings, Placement, Strategy, TrialOutcome};
+use crate::grasp::trial::{Failure, GraspSettings, Placement, Strategy, TrialOutcome, run_trial};
 use crate::rng::SplitMix64;
 
 /// Largest placement offset (m).

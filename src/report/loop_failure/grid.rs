@@ -48,8 +48,8 @@ use crate::plant::{PayloadSchedule, PlantSettings, SimulatedPlant};
 use crate::scene::Scene;
 
 use crate::control::{
-    build_trajectory, run_track, CircleSpec, ControllerKind, EstimateFlag, IkSettings, IkStatus,
-    InverseKinematics, LoopSettings, StepStatus, TrackFile, TrackRun, TrajectorySpec,
+    CircleSpec, ControllerKind, EstimateFlag, IkSettings, IkStatus, InverseKinematics,
+    LoopSettings, StepStatus, TrackFile, TrackRun, TrajectorySpec, build_trajectory, run_track,
 };
 
 /// One case of the sweep.

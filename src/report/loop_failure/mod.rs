@@ -18,15 +18,15 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
 
+use crate::report::ReportOptions;
 use crate::report::plot::{both, ms};
 use crate::report::tracking::guarded;
-use crate::report::ReportOptions;
 
 mod grid;
 
 pub use grid::{
-    case_file, plant_reach_m, robot_mass_kg, run_case, FailureSettings, LoopCase, LoopCause,
-    LoopOutcome, LoopVerdict,
+    FailureSettings, LoopCase, LoopCause, LoopOutcome, LoopVerdict, case_file, plant_reach_m,
+    robot_mass_kg, run_case,
 };
 
 const FONT: &str = "sans-serif";

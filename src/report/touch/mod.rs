@@ -18,17 +18,17 @@ use crate::contact::{Obstacle, Obstacles};
 use crate::error::Result;
 use crate::plant::{PlantSettings, SimulatedPlant};
 use crate::report::plot::{both, ms};
-use crate::report::{write_json, ReportOptions};
+use crate::report::{ReportOptions, write_json};
 use crate::touch::{
-    calibrate_on_free_plant, five_section_scene, marker_arcs, run_avoidance, AvoidRun,
-    AvoidSettings, AvoidStatus, ROD_RADIUS_M,
+    AvoidRun, AvoidSettings, AvoidStatus, ROD_RADIUS_M, calibrate_on_free_plant,
+    five_section_scene, marker_arcs, run_avoidance,
 };
 
 mod sweep;
 mod table;
 
-pub use sweep::{run_localization, LocalizationCase, LocalizationResult, PROBE_RADIUS_M};
-pub use table::{avoidance_table, AvoidRow, AvoidSummary, FIG9_GOALS, FIG9_PLACEMENTS};
+pub use sweep::{LocalizationCase, LocalizationResult, PROBE_RADIUS_M, run_localization};
+pub use table::{AvoidRow, AvoidSummary, FIG9_GOALS, FIG9_PLACEMENTS, avoidance_table};
 
 /// The avoidance run's disk (centre, radius; m) and goal (m).
 pub(crate) const AVOID_DISK: ([f64; 2], f64) = ([0.08, -0.465], 0.01);

@@ -12,8 +12,8 @@ use crate::estimate::{AlphaRule, Estimator, EstimatorSettings};
 use crate::plant::{MarkerFrame, Plant, PlantSettings, SimulatedPlant};
 
 use crate::touch::{
-    calibrate, five_section_scene, locate_point_force, marker_arcs, marker_offset, peak_contact,
-    FreeFrame, PointSearchSettings, ROD_RADIUS_M,
+    FreeFrame, PointSearchSettings, ROD_RADIUS_M, calibrate, five_section_scene,
+    locate_point_force, marker_arcs, marker_offset, peak_contact,
 };
 
 /// Radius of the disk the robot is pressed against in the sweep (m).

@@ -18,8 +18,8 @@ use crate::error::Result;
 use crate::plant::{PlantSettings, SimulatedPlant};
 
 use crate::touch::{
-    calibrate_on_free_plant, five_section_scene, marker_arcs, run_avoidance, AvoidRun,
-    AvoidSettings, AvoidStatus, ROD_RADIUS_M,
+    AvoidRun, AvoidSettings, AvoidStatus, ROD_RADIUS_M, calibrate_on_free_plant,
+    five_section_scene, marker_arcs, run_avoidance,
 };
 
 /// The obstacle placements of the table: disks (centre, radius; m) that

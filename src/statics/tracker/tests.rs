@@ -121,8 +121,8 @@ fn robot_scenario() -> (Vec<u64>, WarmCounts) {
 /// forces, the factors kept across loads, explicit refactors, the platform
 /// sensitivities: the digests and counts.
 fn parallel_scenario() -> (Vec<u64>, WarmCounts) {
-    use crate::parallel::warm::WarmStatics;
     use crate::parallel::ParallelSpec;
+    use crate::parallel::warm::WarmStatics;
     let spec = ParallelSpec {
         elements_per_section: 1,
         ..ParallelSpec::default()

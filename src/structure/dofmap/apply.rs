@@ -2,7 +2,7 @@
 //! and the second-derivative term of the tangent.
 
 use super::{BlockRule, DofMap, MAX_DOFS, MAX_TERMS};
-use crate::error::{check_index, check_len, Error, Result};
+use crate::error::{Error, Result, check_index, check_len};
 use crate::loads::force_field::StiffnessSink;
 
 impl DofMap {

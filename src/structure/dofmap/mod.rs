@@ -33,8 +33,8 @@
 
 use std::ops::Range;
 
-use super::rigid::{PlanarAttachment, SpatialAttachment, SPATIAL_END_COLUMNS};
-use crate::error::{check_all_finite, check_index, check_len, Error, Result};
+use super::rigid::{PlanarAttachment, SPATIAL_END_COLUMNS, SpatialAttachment};
+use crate::error::{Error, Result, check_all_finite, check_index, check_len};
 
 /// The largest block (a node of the full 3-D ANCF element: 12 coordinates).
 pub const MAX_BLOCK: usize = 12;
@@ -436,11 +436,11 @@ impl DofMap {
             BlockRule::Affine { directions, .. } => {
                 let mut n = 0;
                 for (j, t) in directions.iter().enumerate() {
-                    if let Some(&c) = t.get(k) {
-                        if c != 0.0 {
-                            out[n] = (b.u0 + j, c);
-                            n += 1;
-                        }
+                    if let Some(&c) = t.get(k)
+                        && c != 0.0
+                    {
+                        out[n] = (b.u0 + j, c);
+                        n += 1;
                     }
                 }
                 n

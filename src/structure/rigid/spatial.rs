@@ -28,7 +28,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::element::jet::{cross, Jet, Scalar};
+use crate::element::jet::{Jet, Scalar, cross};
 use crate::error::{Error, Result};
 
 /// Terms of the series of `f₁`, `f₂` (the terms fall like `θ^{2k}/(2k)!`:
@@ -510,7 +510,9 @@ mod tests {
                         worst_h = worst_h.max((fd - an).abs());
                     }
                 }
-                println!("spatial attachment {nd} FD: Jacobian {worst_j:.1e}, second derivative {worst_h:.1e}");
+                println!(
+                    "spatial attachment {nd} FD: Jacobian {worst_j:.1e}, second derivative {worst_h:.1e}"
+                );
                 assert!(worst_h < 1e-8, "{nd}: second derivative {worst_h:e}");
                 assert!(curv.iter().flatten().any(|x| x.abs() > 0.1));
             }

@@ -4,13 +4,13 @@
 //! breakpoints (a [`crate::loads::LineLoad::Tabulated`]), integrated piece
 //! by piece.
 
-use super::{add_shape_force, Rod, MAX_EDOF};
+use super::{MAX_EDOF, Rod, add_shape_force};
 use crate::element::{ArcPoint, Element};
-use crate::error::{check_all_finite, check_len, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_len};
 use crate::loads::point_moment::{
     add_point_moment_work, has_cable_layout, point_moment_work_between,
 };
-use crate::loads::{outside, LineLoad, Loads};
+use crate::loads::{LineLoad, Loads, outside};
 
 impl<E: Element> Rod<E> {
     /// Adds the generalized forces `∫ Sᵀ w dX` of the line load `l` into

@@ -1,11 +1,11 @@
 //! Building a rod: the checks of its sections and the assembly of its
 //! elements, self-weight and load Gram matrix.
 
-use super::{add_shape_force, slot, ChamberRef, Rod, Section, MAX_EDOF, MAX_ELEMENTS};
+use super::{ChamberRef, MAX_EDOF, MAX_ELEMENTS, Rod, Section, add_shape_force, slot};
 use super::{MAX_SECTION_LENGTH_M, MAX_SECTION_LENGTH_RATIO};
 use crate::element::Element;
 use crate::error::{
-    check_all_finite, check_at_most, check_finite, check_len, check_positive, Error, Result,
+    Error, Result, check_all_finite, check_at_most, check_finite, check_len, check_positive,
 };
 use crate::linsolve::BandedMatrix;
 use crate::quadrature::GaussRule;

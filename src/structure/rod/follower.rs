@@ -3,10 +3,10 @@
 //! stiffness, and its work along a straight path.
 
 use super::Rod;
-use crate::element::{hermite, Element};
+use crate::element::{Element, hermite};
 use crate::error::{Error, Result};
-use crate::loads::follower::shape_slope_gram;
 use crate::loads::Loads;
+use crate::loads::follower::shape_slope_gram;
 
 /// Element coordinates of a planar cable (2 nodes × `[x, y, x', y']`).
 const EDOF: usize = 8;

@@ -4,9 +4,9 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::{add_shape_force, slot, Rod};
+use super::{Rod, add_shape_force, slot};
 use crate::element::Element;
-use crate::error::{check_all_finite, check_index, check_len, named, Error, Result};
+use crate::error::{Error, Result, check_all_finite, check_index, check_len, named};
 use crate::loads::Loads;
 
 impl<E: Element> Rod<E> {

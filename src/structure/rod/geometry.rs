@@ -3,9 +3,9 @@
 
 use nalgebra::DVector;
 
-use super::{slot, Rod};
+use super::{Rod, slot};
 use crate::element::{ArcPoint, Element};
-use crate::error::{check_len, Result};
+use crate::error::{Result, check_len};
 use crate::loads::outside;
 
 impl<E: Element> Rod<E> {

@@ -14,7 +14,7 @@
 use nalgebra::DMatrix;
 
 use crate::element::Element;
-use crate::error::{check_len, Result};
+use crate::error::{Result, check_len};
 use crate::linsolve::BandedMatrix;
 use crate::quadrature::GaussRule;
 
