@@ -17,9 +17,13 @@
 //!   (`assemble`) adds element by element through the map: residual
 //!   `R(u) = T(u)ᵀ Q(φ(u))` of the equilibrium (17) and tangent
 //!   `K_u = Tᵀ K T + Σ_i g_i ∂²φ_i/∂u²` as a [`Triplets`] list.
-//! - [`model`]: what an equilibrium solver needs of a model
-//!   ([`Model`], implemented by the structure and the clamped robot);
-//!   the solver is [`crate::statics::StaticSolver`], one for every model.
+//! - [`model`]: what an equilibrium solver needs of a model, by concept:
+//!   its equilibrium ([`Assembled`], ten methods), how a solver steps in
+//!   its free coordinates ([`Stepping`]), shortcuts with defaults
+//!   ([`SolverHints`]), mesh sequencing ([`MeshSequencing`]) and the load
+//!   set's scaling ([`ModelLoads`]); [`Model`] is all of them, implemented
+//!   by the structure and the clamped robot. The solver is
+//!   [`crate::statics::StaticSolver`], one for every model.
 
 mod assemble;
 pub mod dofmap;
