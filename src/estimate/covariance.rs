@@ -13,8 +13,10 @@
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use super::Estimate;
-use super::gn_form::{GnForm, PenaltyMatrix, count_dense, primal_system};
-use super::problem::{Derivs, GnFactor, jittered_cholesky, weighted_columns};
+use super::gn_form::{
+    GnForm, PenaltyMatrix, count_dense, jittered_cholesky, primal_system, weighted_columns,
+};
+use super::problem::{Derivs, GnFactor};
 
 mod lazy;
 pub(crate) use lazy::{CovarianceInputs, LazyCovariances};
@@ -92,7 +94,7 @@ fn primal_factor(
     {
         return Some(chol.clone());
     }
-    primal_system(dv, w, alpha, h)
+    primal_system(&dv.jt, w, alpha, h)
 }
 
 /// The posterior covariances of the resultant force (`DIM × DIM`) and of
@@ -725,7 +727,7 @@ mod tests {
                         z: self.z.clone(),
                         jt: self.jt(load),
                     };
-                    let chol = primal_system(&dv, &self.w, alpha, &h).unwrap();
+                    let chol = primal_system(&dv.jt, &self.w, alpha, &h).unwrap();
                     evidence_curvature_primal(&dv, &self.w, alpha, &chol, &h, u, pen)
                 }
             }

@@ -53,8 +53,9 @@ use crate::error::Result;
 use crate::observe::ObservationOperator;
 
 use super::driver::{ALPHA_CONTINUATION_START, Method, Warm};
+use super::gn_form::jittered_cholesky;
 use super::gn_form::{GnForm, count_dense, primal_system};
-use super::problem::{Derivs, Problem, columns, jittered_cholesky};
+use super::problem::{Derivs, Problem, columns};
 
 /// How `α` is chosen when the settings leave it unset.
 ///
@@ -119,7 +120,7 @@ pub(crate) fn evidence(
         GnForm::Primal(h) => {
             // N = Jᵀ W J + α H, tr(N⁻¹ H)
             let d = dv.jt.nrows();
-            let chol = primal_system(dv, w, alpha, h)?;
+            let chol = primal_system(&dv.jt, w, alpha, h)?;
             let inv = chol.inverse();
             count_dense(d * d * d);
             let tr: f64 = inv.iter().zip(h.h.iter()).map(|(a, b)| a * b).sum();

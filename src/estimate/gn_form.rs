@@ -25,8 +25,6 @@ use std::sync::Arc;
 
 use nalgebra::{Cholesky, DMatrix, Dyn};
 
-use super::problem::{Derivs, jittered_cholesky, weighted_columns};
-
 thread_local! {
     static DENSE_FLOPS: Cell<u64> = const { Cell::new(0) };
 }
@@ -79,19 +77,49 @@ pub(crate) enum GnForm {
     Primal(Arc<PenaltyMatrix>),
 }
 
-/// The factor of `N = Jᵀ W J + α H` from the derivatives `dv` (`Jᵀ` its
-/// columns) and weights `w`: the weighted marker rows accumulated into the
+/// The factor of `N = Jᵀ W J + α H` from the marker Jacobian transposed
+/// `jt` (`Jᵀ`, one column per observed component) and weights `w`: the weighted marker rows accumulated into the
 /// `n_F × n_F` matrix (one product), then a Cholesky factorization with the
 /// jitter of [`jittered_cholesky`]. `None` if it cannot be factored.
 pub(crate) fn primal_system(
-    dv: &Derivs,
+    jt: &DMatrix<f64>,
     w: &[f64],
     alpha: f64,
     h: &PenaltyMatrix,
 ) -> Option<Cholesky<f64, Dyn>> {
-    let (nf, m) = dv.jt.shape();
-    let mut n = weighted_columns(&dv.jt, w) * dv.jt.transpose();
+    let (nf, m) = jt.shape();
+    let mut n = weighted_columns(jt, w) * jt.transpose();
     n.zip_apply(&h.h, |a, b| *a += alpha * b);
     count_dense(m * nf * nf + nf * nf * nf / 3);
     jittered_cholesky(n)
+}
+
+/// `J W`: the columns of `jt` scaled by the weights.
+pub(crate) fn weighted_columns(jt: &DMatrix<f64>, w: &[f64]) -> DMatrix<f64> {
+    let mut jw = jt.clone();
+    for (mut col, wi) in jw.column_iter_mut().zip(w) {
+        col *= *wi;
+    }
+    jw
+}
+
+/// `A = L Lᵀ` of a small dense symmetric matrix (only its lower triangle is
+/// read), with a diagonal jitter of 1e-14 … 1e-10 of the largest diagonal
+/// entry if the plain factorization fails (nearly redundant markers);
+/// `None` if that does not help either.
+pub(crate) fn jittered_cholesky(a: DMatrix<f64>) -> Option<Cholesky<f64, Dyn>> {
+    let m = a.nrows();
+    let dmax = (0..m).fold(0.0f64, |x, i| x.max(a[(i, i)].abs()));
+    for jitter in [0.0, 1e-14, 1e-12, 1e-10] {
+        let mut l = a.clone();
+        for i in 0..m {
+            l[(i, i)] += jitter * dmax;
+        }
+        if let Some(c) = l.cholesky()
+            && c.l_dirty().diagonal().iter().all(|v| v.is_finite())
+        {
+            return Some(c);
+        }
+    }
+    None
 }

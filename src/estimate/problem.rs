@@ -26,7 +26,9 @@ use crate::statics::tracker::FactoredTangent;
 use crate::statics::{LinearLoad, StaticSolver, TrackedEquilibrium, Tracker};
 use crate::structure::ModelLoads;
 
-use super::gn_form::{GnForm, PenaltyMatrix, count_dense, primal_system};
+use super::gn_form::{
+    GnForm, PenaltyMatrix, count_dense, jittered_cholesky, primal_system, weighted_columns,
+};
 use super::load_model::field_rod;
 use super::{BoundFrame, EstimationModel, EstimatorSettings, LoadModel};
 
@@ -554,7 +556,7 @@ impl<M: EstimationModel> Problem<M> {
                 });
                 let chol = match reuse {
                     Some(fac) => fac.chol,
-                    None => primal_system(dv, w, alpha, &h).ok_or_else(not_spd)?,
+                    None => primal_system(&dv.jt, w, alpha, &h).ok_or_else(not_spd)?,
                 };
                 let hf = DVector::from_vec(self.penalty_grad(f)?);
                 let mut step = -weighted_columns(&dv.jt, w) * DVector::from_column_slice(e);
@@ -692,36 +694,6 @@ pub(crate) fn step_cap(dv: &Derivs, step: &[f64], cap: f64) -> f64 {
 /// column).
 pub(crate) fn columns(a: &DMatrix<f64>) -> impl Iterator<Item = &[f64]> {
     a.as_slice().chunks_exact(a.nrows().max(1)).take(a.ncols())
-}
-
-/// `J W`: the columns of `jt` scaled by the weights.
-pub(crate) fn weighted_columns(jt: &DMatrix<f64>, w: &[f64]) -> DMatrix<f64> {
-    let mut jw = jt.clone();
-    for (mut col, wi) in jw.column_iter_mut().zip(w) {
-        col *= *wi;
-    }
-    jw
-}
-
-/// `A = L Lᵀ` of a small dense symmetric matrix (only its lower triangle is
-/// read), with a diagonal jitter of 1e-14 … 1e-10 of the largest diagonal
-/// entry if the plain factorization fails (nearly redundant markers);
-/// `None` if that does not help either.
-pub(crate) fn jittered_cholesky(a: DMatrix<f64>) -> Option<Cholesky<f64, Dyn>> {
-    let m = a.nrows();
-    let dmax = (0..m).fold(0.0f64, |x, i| x.max(a[(i, i)].abs()));
-    for jitter in [0.0, 1e-14, 1e-12, 1e-10] {
-        let mut l = a.clone();
-        for i in 0..m {
-            l[(i, i)] += jitter * dmax;
-        }
-        if let Some(c) = l.cholesky()
-            && c.l_dirty().diagonal().iter().all(|v| v.is_finite())
-        {
-            return Some(c);
-        }
-    }
-    None
 }
 
 /// The cross product: scalar (as a 1-vector) in 2-D, vector in 3-D.

@@ -18,6 +18,7 @@ use super::super::{
     Backend, EstimateCriterion, EstimateReport, EstimateStatus, EstimationModel, EstimatorSettings,
 };
 use super::DerivsCache;
+use super::far::full_space;
 
 /// What a reduced solve works on: the estimator's problem and caches, the
 /// observation and `α`.
@@ -500,5 +501,41 @@ impl<M: EstimationModel> Reduced<'_, M> {
             t *= 0.5;
         }
         Ok(None)
+    }
+}
+
+impl<M: EstimationModel> Reduced<'_, M> {
+    /// The far start from the iterate `it` (objective `obj`): the full-space
+    /// iterations ([`full_space`]) and the equilibrium at their estimate,
+    /// with the iterations they took; `None` if they did not converge below
+    /// `obj` or the equilibrium failed. Their last factored tangent is kept in
+    /// the tracker (the equilibrium there is then a chord step without a
+    /// factorization) and their derivatives cached for the next iteration, at
+    /// the equilibrium's shape when that stayed within `1e-10 L` of theirs
+    /// (the tracker then returns the same factors, from which the derivatives
+    /// are the same numbers).
+    pub(super) fn far_start(&mut self, it: &Iterate, obj: f64) -> Result<Option<(Iterate, usize)>> {
+        let (core, op) = (&mut *self.core, self.op);
+        let Some((fs, qs, its, last)) =
+            full_space(self.inner, core, op, &it.f, &it.q, self.alpha, obj)
+        else {
+            return Ok(None);
+        };
+        let mut cached = None;
+        if let Some((tangent, dv)) = last {
+            core.tracker().keep_factors(&qs, tangent.factors)?;
+            cached = Some(dv);
+        }
+        let Ok(eq) = core.equilibrium(&fs, &qs) else {
+            return Ok(None);
+        };
+        if let Some(dv) = cached {
+            let tol = 1e-10 * core.robot().length_m();
+            if eq.q.iter().zip(&qs).all(|(a, b)| (a - b).abs() <= tol) {
+                *self.cache_rows = op.rows().to_vec();
+                *self.derivs_cache = Some((eq.q.as_slice().to_vec(), dv, None));
+            }
+        }
+        Ok(Some((Iterate::at(fs, eq), its)))
     }
 }

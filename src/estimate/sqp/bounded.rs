@@ -16,8 +16,9 @@ use crate::linsolve::{AutoFactors, Factorization, SymmetricMatrix};
 use crate::numeric::{dot, norm2};
 use crate::observe::ObservationOperator;
 
+use super::super::gn_form::weighted_columns;
 use super::super::gn_form::{GnForm, count_dense};
-use super::super::problem::{Derivs, Problem, weighted_columns};
+use super::super::problem::{Derivs, Problem};
 use super::super::{BoundFrame, LoadModel};
 use super::{QpError, QpStep, SqpEstimator, Unconstrained};
 
