@@ -53,8 +53,7 @@ use crate::error::Result;
 use crate::observe::ObservationOperator;
 
 use super::driver::{ALPHA_CONTINUATION_START, Method, Warm};
-use super::gn_form::jittered_cholesky;
-use super::gn_form::{GnForm, count_dense, primal_system};
+use super::gn_form::{GnForm, count_dense, jittered_cholesky, primal_system};
 use super::problem::{Derivs, Problem, columns};
 
 /// How `α` is chosen when the settings leave it unset.
