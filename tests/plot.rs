@@ -30,16 +30,10 @@ fn run3(args: &[&str]) -> (i32, String, String) {
     )
 }
 
+/// Exit code and standard error.
 fn run(args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_softrod"))
-        .args(args)
-        .current_dir(ROOT)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    let (code, _, stderr) = run3(args);
+    (code, stderr)
 }
 
 fn dir(name: &str) -> PathBuf {

@@ -537,6 +537,24 @@ fn robot_body(dim: usize, r: RobotIn, estimate: bool, title: &mut Vec<String>) -
     })
 }
 
+/// The legend of `chart`'s labelled series at `position`, in the one style
+/// of these pictures; what it draws is an annotation for the layout check
+/// (it may lie over the data, not outside the canvas or over other text).
+fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> std::result::Result<(), String> {
+    layout::annotations();
+    chart
+        .configure_series_labels()
+        .label_font((FONT, 13))
+        .background_style(WHITE.mix(0.85))
+        .border_style(RGBColor(160, 160, 160))
+        .position(position)
+        .draw()
+        .map_err(ms)
+}
+
 /// `[lo, hi]` of `values`, padded by `pad` of the span (a span of zero:
 /// `±1e-3` about the value; nothing: `[-1, 1]`).
 fn padded(values: impl Iterator<Item = f64>, pad: f64) -> (f64, f64) {
@@ -730,16 +748,7 @@ fn draw_view<DB: DrawingBackend>(
             .draw_series(std::iter::once(Circle::new(to, 4, LOAD.filled())))
             .map_err(ms)?;
     }
-    layout::annotations();
-    chart
-        .configure_series_labels()
-        .label_font((FONT, 13))
-        .background_style(WHITE.mix(0.85))
-        .border_style(RGBColor(160, 160, 160))
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(ms)?;
-    Ok(())
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
 }
 
 /// An estimated point force: one bar per component with its ±1σ.
@@ -890,16 +899,7 @@ fn draw_load<DB: DrawingBackend>(
             .label(format!("w{}", AXES[k]))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
     }
-    layout::annotations();
-    chart
-        .configure_series_labels()
-        .label_font((FONT, 13))
-        .background_style(WHITE.mix(0.85))
-        .border_style(RGBColor(160, 160, 160))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(ms)?;
-    Ok(())
+    draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
 }
 
 /// Each marker's residual `|measured − fitted|` (µm) against its arc
@@ -970,16 +970,7 @@ fn draw_residuals<DB: DrawingBackend>(
             .label(format!("stated marker noise σ = {} µm", sig3(sig)))
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.mix(0.6)));
     }
-    layout::annotations();
-    chart
-        .configure_series_labels()
-        .label_font((FONT, 13))
-        .background_style(WHITE.mix(0.85))
-        .border_style(RGBColor(160, 160, 160))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(ms)?;
-    Ok(())
+    draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
 }
 
 /// An avoidance run: its shapes, the goal, the touched points and their
@@ -1094,14 +1085,5 @@ fn draw_avoid<DB: DrawingBackend>(
             ))
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], FITTED.stroke_width(2)));
     }
-    layout::annotations();
-    chart
-        .configure_series_labels()
-        .label_font((FONT, 13))
-        .background_style(WHITE.mix(0.85))
-        .border_style(RGBColor(160, 160, 160))
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(ms)?;
-    Ok(())
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
 }
