@@ -3,7 +3,7 @@
 //! differences, bad input.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use softrod::control::{MassEstimator, MassReference, MassSettings, WeighingExperiment};
+use softrod::control::{MassEstimator, MassForce, MassReference, MassSettings, WeighingExperiment};
 use softrod::scene::Scene;
 
 #[test]
@@ -162,4 +162,97 @@ fn mass_bad_input_names_the_field() {
         )
         .starts_with("pressures_pa")
     );
+}
+
+#[test]
+fn the_weight_is_the_least_squares_weight_with_its_standard_deviation() {
+    // the estimate through the one estimator (a force along gravity at the
+    // load node, `LoadModel::Along`) checked on its answer with the forward
+    // map and its Jacobian (finite-difference tested above): the residual
+    // of the end effector is orthogonal to dx/dθ = J ĝ (the normal
+    // equation of the one-parameter least squares), and σ_m = σ / (|J ĝ| |g|)
+    let scene = Scene::two_section();
+    let robot = scene.robot().unwrap();
+    let g = &scene.gravity_m_per_s2;
+    let gn = (g[0] * g[0] + g[1] * g[1]).sqrt();
+    for (load_s, p) in [
+        (0.24, [60e3, 0.0, 0.0, 30e3]),
+        (0.12, [80e3, 0.0, 60e3, 0.0]),
+    ] {
+        let sigma = 2e-5;
+        let settings = MassSettings {
+            noise_sigma_m: sigma,
+            reference: MassReference::Absolute,
+            ..MassSettings::default()
+        };
+        let mut est =
+            MassEstimator::new(robot.clone(), scene.loads().unwrap(), load_s, g, settings).unwrap();
+        let (_, x0) = est.forward(&p, &[0.0, 0.0]).unwrap();
+        // 6 mm down and 3 mm sideways: no weight explains the sideways part
+        let target = [x0[0] + 3e-3, x0[1] - 6e-3];
+        let e = est.estimate(&p, x0.as_slice(), &target).unwrap();
+        assert!(e.converged && e.mass_kg > 0.0, "{e:?}");
+        // the misfit is 1-2 mm against 0.02 mm of noise: said so
+        assert!(
+            matches!(
+                e.status,
+                softrod::estimate::EstimateStatus::MisfitBeyondNoise { .. }
+            ),
+            "{}",
+            e.status
+        );
+        let (_, x) = est.forward(&p, e.force_n.as_slice()).unwrap();
+        let r = nalgebra::Vector2::new(target[0] - x[0], target[1] - x[1]);
+        assert!(
+            (r.norm() - e.residual_m).abs() < 1e-12,
+            "{} {}",
+            r.norm(),
+            e.residual_m
+        );
+        let j = est.jacobian(&p, e.force_n.as_slice()).unwrap();
+        let c = &j * nalgebra::dvector![g[0] / gn, g[1] / gn];
+        let cos = c.dot(&nalgebra::dvector![r[0], r[1]]) / (c.norm() * r.norm());
+        assert!(
+            cos.abs() < 1e-6,
+            "s {load_s}: cos(residual, dx/dθ) = {cos:e}"
+        );
+        assert!(r.norm() > 1e-4, "{}", r.norm());
+        let std_kg = sigma / (c.norm() * gn);
+        assert!(
+            (e.std_kg - std_kg).abs() <= 1e-6 * std_kg,
+            "std {} vs {std_kg}",
+            e.std_kg
+        );
+        // the force is a weight: along gravity
+        let cross = e.force_n[0] * g[1] - e.force_n[1] * g[0];
+        assert!(cross.abs() <= 1e-12 * gn * e.force_n.iter().map(|v| v.abs()).sum::<f64>());
+    }
+}
+
+#[test]
+fn the_free_force_puts_the_end_effector_on_the_target() {
+    // `MassForce::Free`: two force components from two coordinates, the
+    // exactly determined estimate; its answer checked by the forward map
+    let scene = Scene::two_section();
+    let robot = scene.robot().unwrap();
+    let settings = MassSettings {
+        force: MassForce::Free,
+        reference: MassReference::Absolute,
+        ..MassSettings::default()
+    };
+    let g = &scene.gravity_m_per_s2;
+    let mut est = MassEstimator::new(robot, scene.loads().unwrap(), 0.24, g, settings).unwrap();
+    let p = [60e3, 0.0, 0.0, 30e3];
+    let (_, x0) = est.forward(&p, &[0.0, 0.0]).unwrap();
+    let (_, xl) = est.forward(&p, &[0.05, -0.4]).unwrap();
+    let e = est.estimate(&p, x0.as_slice(), xl.as_slice()).unwrap();
+    assert!(e.status.is_converged(), "{}", e.status);
+    assert!(e.residual_m < 1e-9, "{}", e.residual_m);
+    assert!(
+        (e.force_n[0] - 0.05).abs() < 1e-6 && (e.force_n[1] + 0.4).abs() < 1e-6,
+        "{:?}",
+        e.force_n
+    );
+    let (_, x) = est.forward(&p, e.force_n.as_slice()).unwrap();
+    assert!((x - xl).norm() < 1e-9);
 }

@@ -57,11 +57,19 @@ fn rel_err(exact: &DMatrix<f64>, fd: &DMatrix<f64>) -> f64 {
 #[test]
 fn dq_df_matches_finite_differences_of_resolved_equilibria() {
     let (robot, known) = robot_and_loads();
-    for model in [LoadModel::Distributed, LoadModel::Concentrated { node: 9 }] {
+    let along = LoadModel::Along {
+        site: softrod::site::Site::Rod { rod: 0, s_m: 0.2 },
+        direction: [0.3, -1.0, 0.0],
+    };
+    for model in [
+        LoadModel::Distributed,
+        LoadModel::Concentrated { node: 9 },
+        along,
+    ] {
         let n_f = model.n_params(&robot);
         // a loaded, bent state: a small downward load on every node
         let f0: Vec<f64> = (0..n_f)
-            .map(|j| if j % 4 == 1 || n_f == 2 { -0.2 } else { 0.0 })
+            .map(|j| if j % 4 == 1 || n_f <= 2 { -0.2 } else { 0.0 })
             .collect();
         let mut tracker =
             EquilibriumTracker::new(robot.clone(), known.clone(), StaticSettings::default())
@@ -137,8 +145,17 @@ fn dq_dp_matches_finite_differences_of_resolved_equilibria() {
 /// touching the clamped base node and the tip.
 #[test]
 fn adjoint_gradients_equal_the_forward_sensitivities() {
+    let along = LoadModel::Along {
+        site: softrod::site::Site::Rod { rod: 0, s_m: 0.15 },
+        direction: [0.0, -2.0, 0.0],
+    };
+    for model in [LoadModel::Distributed, along] {
+        adjoint_gradients_equal_the_forward_sensitivities_of(model);
+    }
+}
+
+fn adjoint_gradients_equal_the_forward_sensitivities_of(model: LoadModel) {
     let (robot, known) = robot_and_loads();
-    let model = LoadModel::Distributed;
     let n_f = model.n_params(&robot);
     let mut tracker =
         EquilibriumTracker::new(robot.clone(), known.clone(), StaticSettings::default()).unwrap();

@@ -6,10 +6,15 @@
 //! generalized force is `A_xᵀ F` (34); the equilibrium (35)
 //! `Q_E(q) + Q_A(q, P) + A_xᵀ F = 0` together with "the end effector is at
 //! the measured `x̄`" (32) fixes `(q, F)`: as many unknowns as equations.
-//! The solve is Newton on `F` with `q` eliminated by the equilibrium (each
-//! iterate `q(F)` solved warm by an [`EquilibriumTracker`]) and the Jacobian
-//! `∂x/∂F = S(X_e) ∂q/∂F` from (28) with `G = A_xᵀ`, backtracking on
-//! `|x(F) − x̄|`.
+//! This is the estimate of a force at a site by the one estimator of every
+//! model ([`NewtonEstimator`] with [`LoadModel::AtSite`], or with
+//! [`LoadModel::Along`] for the weight alone, one unknown along gravity),
+//! from one marker at the end effector, with the vanishing penalty
+//! [`PAYLOAD_ALPHA`]: its status (the fit test against
+//! [`MassSettings::noise_sigma_m`]) and its covariance come with it. The
+//! forward map `x(F)` and its Jacobian `∂x/∂F = S(X_e) ∂q/∂F` ((28) with
+//! `G = A_xᵀ`) stay available to check the answer
+//! ([`MassEstimator::forward`], [`MassEstimator::jacobian`]).
 //!
 //! # Relative displacement (the virtual payload idea)
 //! The model is not the robot: its unloaded end effector is not where the
@@ -28,9 +33,14 @@ use serde::{Deserialize, Serialize};
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::{Error, Result, check_all_finite, check_len};
-use crate::estimate::LoadModel;
+use crate::estimate::{
+    Estimate, EstimateStatus, Estimator, EstimatorSettings, LoadModel, NewtonEstimator,
+    PAYLOAD_ALPHA,
+};
 use crate::loads::Loads;
+use crate::observe::{MarkerObservation, Observation};
 use crate::sensitivity::Sensitivity;
+use crate::site::Site;
 use crate::statics::{EquilibriumTracker, StaticSettings};
 
 use super::{IkSettings, InverseKinematics};
@@ -92,12 +102,12 @@ pub enum MassForce {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MassSettings {
-    /// Newton iterations per solve (default 50).
+    /// Outer iterations of the estimator per estimate (default 50).
     pub max_iterations: usize,
-    /// The end effector counts as matched within this distance (m, default 1e-9).
-    pub tolerance_m: f64,
-    /// Largest change of `|F|` in one Newton step (N, default 0.5).
-    pub max_step_n: f64,
+    /// The standard deviation of each coordinate of the measured
+    /// displacement (m, default 1e-5): the mass's standard deviation and
+    /// the fit test of the estimate are stated for it.
+    pub noise_sigma_m: f64,
     /// Which target (default relative).
     pub reference: MassReference,
     /// Which force (default the weight).
@@ -114,8 +124,7 @@ impl Default for MassSettings {
     fn default() -> Self {
         MassSettings {
             max_iterations: 50,
-            tolerance_m: 1e-9,
-            max_step_n: 0.5,
+            noise_sigma_m: 1e-5,
             reference: MassReference::Relative,
             force: MassForce::Gravity,
             scale: 1.0,
@@ -128,14 +137,13 @@ impl MassSettings {
     /// Checks every field.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] naming the field (`mass.tolerance_m`, …).
+    /// [`Error::InvalidParameter`] naming the field (`mass.noise_sigma_m`, …).
     pub fn validate(&self) -> Result<()> {
         if self.max_iterations == 0 {
             return Err(Error::invalid("mass.max_iterations", 0, "must be >= 1"));
         }
         for (name, v) in [
-            ("mass.tolerance_m", self.tolerance_m),
-            ("mass.max_step_n", self.max_step_n),
+            ("mass.noise_sigma_m", self.noise_sigma_m),
             ("mass.scale", self.scale),
         ] {
             if !(v.is_finite() && v > 0.0) {
@@ -143,6 +151,28 @@ impl MassSettings {
             }
         }
         self.statics.validate("mass.statics")
+    }
+
+    /// The estimator's settings of a mass hanging at `site` under gravity
+    /// `gravity_m_per_s2` (`DIM` components): the force at the site
+    /// ([`LoadModel::AtSite`]) or its weight along gravity
+    /// ([`LoadModel::Along`]), the vanishing penalty [`PAYLOAD_ALPHA`], run
+    /// to its optimum (no statistical stop).
+    fn estimator(&self, site: Site, gravity_m_per_s2: &[f64]) -> EstimatorSettings {
+        let mut direction = [0.0; 3];
+        direction[..gravity_m_per_s2.len()].copy_from_slice(gravity_m_per_s2);
+        EstimatorSettings {
+            load_model: match self.force {
+                MassForce::Gravity => LoadModel::Along { site, direction },
+                MassForce::Free => LoadModel::AtSite { site },
+            },
+            alpha: Some(PAYLOAD_ALPHA),
+            noise_sigma_m: self.noise_sigma_m,
+            max_iterations: self.max_iterations,
+            statistical_tolerance: 0.0,
+            statics: self.statics.clone(),
+            ..EstimatorSettings::default()
+        }
     }
 }
 
@@ -165,12 +195,21 @@ pub struct MassEstimate {
     /// (m): for [`MassForce::Gravity`] the part of the displacement a weight
     /// at the node cannot explain.
     pub residual_m: f64,
-    /// Newton iterations.
+    /// Iterations of the estimator.
     pub iterations: usize,
-    /// Whether the iteration ended on a step below the tolerance (a
-    /// stationary point of the distance) rather than on its limit or a
-    /// failed line search.
+    /// Whether the estimator's iteration ended on its stopping test (a
+    /// stationary point of the misfit) rather than on its limit or a
+    /// failed line search: `status` converged, or a misfit beyond the
+    /// noise (for [`MassForce::Gravity`], a displacement a weight at the
+    /// point cannot explain to [`MassSettings::noise_sigma_m`]; its size is
+    /// `residual_m`).
     pub converged: bool,
+    /// The estimator's status, its fit test under
+    /// [`MassSettings::noise_sigma_m`] included.
+    pub status: EstimateStatus,
+    /// The mass's standard deviation (kg) under
+    /// [`MassSettings::noise_sigma_m`], the scale applied.
+    pub std_kg: f64,
 }
 
 impl MassEstimate {
@@ -181,7 +220,8 @@ impl MassEstimate {
     /// let e = softrod::control::MassEstimate {
     ///     mass_kg: 0.05, force_n: vec![0.0, -0.49], target_m: vec![0.2, 0.0],
     ///     model_unloaded_m: vec![0.2, 0.001], pressures_pa: vec![0.0; 4],
-    ///     residual_m: 0.0, iterations: 3, converged: true,
+    ///     residual_m: 0.0, iterations: 3, converged: true, std_kg: 1e-4,
+    ///     status: softrod::estimate::EstimateStatus::Converged(softrod::estimate::EstimateCriterion::WithinNoise),
     /// };
     /// assert_eq!(e.force(), nalgebra::dvector![0.0, -0.49]);
     /// assert_eq!(e.target(), nalgebra::dvector![0.2, 0.0]);
@@ -229,8 +269,17 @@ impl MassEstimate {
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone)]
-pub struct MassEstimator<E: Element> {
+pub struct MassEstimator<E: Element + 'static> {
+    /// The forward map's warm equilibria ([`MassEstimator::forward`]).
     tracker: EquilibriumTracker<E>,
+    /// The estimate of the force at the load point (32)–(35): the one
+    /// estimator of every model, with the load model of
+    /// [`MassSettings::force`].
+    estimator: NewtonEstimator<Robot<E>>,
+    /// The pressures the estimator's known loads carry (Pa).
+    estimator_pressures_pa: Vec<f64>,
+    /// `F = basis θ` of the estimator's load model (`DIM × n_params`).
+    basis: DMatrix<f64>,
     known: Loads,
     load: LoadModel,
     effector_s_m: f64,
@@ -240,7 +289,25 @@ pub struct MassEstimator<E: Element> {
     ik: InverseKinematics<E>,
 }
 
-impl<E: Element> MassEstimator<E> {
+/// The estimator's answer to one target (see [`MassEstimator::force_for`]).
+struct Fit {
+    force_n: Vec<f64>,
+    x_m: Vec<f64>,
+    estimate: Estimate,
+}
+
+impl Fit {
+    /// Whether the iteration ended on its stopping test (converged, or a
+    /// misfit beyond the noise at a stationary point).
+    fn stopped_on_test(&self) -> bool {
+        matches!(
+            self.estimate.report.status,
+            EstimateStatus::Converged(_) | EstimateStatus::MisfitBeyondNoise { .. }
+        )
+    }
+}
+
+impl<E: Element + 'static> MassEstimator<E> {
     /// An estimator for a mass hanging at the node at arc coordinate
     /// `load_s_m` of `robot` (m; a node must lie there) under the known
     /// loads `known` (their pressures are replaced per estimate), gravity
@@ -293,9 +360,22 @@ impl<E: Element> MassEstimator<E> {
             ..IkSettings::default()
         };
         let ik = InverseKinematics::new(robot.clone(), known.clone(), ik_settings)?;
+        let site = Site::Rod {
+            rod: 0,
+            s_m: arc[node],
+        };
+        let estimator_settings = settings.estimator(site, gravity_m_per_s2);
+        let basis = estimator_settings
+            .load_model
+            .force_basis(E::DIM)?
+            .unwrap_or_default();
+        let estimator = NewtonEstimator::new(&robot, &known, &estimator_settings)?;
         let tracker = EquilibriumTracker::new(robot, known.clone(), settings.statics.clone())?;
         Ok(MassEstimator {
             tracker,
+            estimator,
+            estimator_pressures_pa: known.pressures_pa.clone(),
+            basis,
             known,
             load: LoadModel::Concentrated { node },
             effector_s_m,
@@ -416,14 +496,17 @@ impl<E: Element> MassEstimator<E> {
 
     /// The force at the load node putting the model's end effector at (or,
     /// for [`MassForce::Gravity`], closest to) `target_m` under
-    /// `pressures_pa`: `(F, x, iterations)`. Gauss–Newton on the parameters
-    /// `θ` of `F = B θ` (`B = g`: one parameter, the mass; `B = I`: the
-    /// force), backtracking on `|x(F) − x̄|`, until a step moves the end
-    /// effector by less than the tolerance. The closest iterate is returned
-    /// if it stalls (the caller compares `x` with the target).
+    /// `pressures_pa`: `(F, x, iterations, converged)`, `converged` as
+    /// [`MassEstimate::converged`]. The estimate (32)–(35) of the force at
+    /// the node ([`LoadModel::AtSite`], or its weight along gravity,
+    /// [`LoadModel::Along`]) from one marker at the end effector, by the
+    /// estimator of every model ([`NewtonEstimator`], kept warm from one
+    /// call to the next at the same pressures).
     ///
     /// # Errors
-    /// As [`MassEstimator::jacobian`].
+    /// [`Error::DimensionMismatch`] or [`Error::InvalidParameter`]
+    /// (`target_m`) for a target of the wrong size or not finite; as
+    /// [`crate::estimate::Estimator::step`].
     ///
     /// # Example
     /// See [`MassEstimator::forward`].
@@ -432,115 +515,49 @@ impl<E: Element> MassEstimator<E> {
         pressures_pa: &[f64],
         target_m: &[f64],
     ) -> Result<(DVector<f64>, DVector<f64>, usize, bool)> {
-        let (f, x, iterations, converged) = self.force_for_raw(pressures_pa, target_m)?;
+        let fit = self.fit(pressures_pa, target_m)?;
+        let converged = fit.stopped_on_test();
         Ok((
-            DVector::from_vec(f),
-            DVector::from_vec(x),
-            iterations,
+            DVector::from_vec(fit.force_n),
+            DVector::from_vec(fit.x_m),
+            fit.estimate.report.iterations,
             converged,
         ))
     }
 
-    /// [`MassEstimator::force_for`] as plain vectors.
-    fn force_for_raw(
-        &mut self,
-        pressures_pa: &[f64],
-        target_m: &[f64],
-    ) -> Result<(Vec<f64>, Vec<f64>, usize, bool)> {
-        let d = E::DIM;
-        check_len("target_m", d, target_m.len())?;
+    /// The estimate of the force at the load node from the end effector
+    /// at `target_m`.
+    fn fit(&mut self, pressures_pa: &[f64], target_m: &[f64]) -> Result<Fit> {
+        check_len("target_m", E::DIM, target_m.len())?;
         check_all_finite("target_m", target_m)?;
-        let dist = |x: &[f64]| -> f64 {
-            x.iter()
-                .zip(target_m)
-                .map(|(a, b)| (a - b).powi(2))
-                .sum::<f64>()
-                .sqrt()
-        };
-        // F = B θ
-        let b: Vec<Vec<f64>> = match self.settings.force {
-            MassForce::Gravity => self.gravity_m_per_s2.iter().map(|g| vec![*g]).collect(),
-            MassForce::Free => (0..d)
-                .map(|r| (0..d).map(|c| if r == c { 1.0 } else { 0.0 }).collect())
-                .collect(),
-        };
-        let np = b[0].len();
-        let force = |th: &[f64]| -> Vec<f64> {
-            b.iter()
-                .map(|row| row.iter().zip(th).map(|(a, t)| a * t).sum())
-                .collect()
-        };
-        let mut theta = vec![0.0; np];
-        let mut f = force(&theta);
-        let (_, mut x) = self.forward_raw(pressures_pa, &f)?;
-        let mut r = dist(&x);
-        let mut iterations = 0;
-        let mut converged = r <= self.settings.tolerance_m;
-        while iterations < self.settings.max_iterations && !converged {
-            iterations += 1;
-            let jf = self.jacobian(pressures_pa, &f)?;
-            // J_θ = J_F B (DIM × np); normal equations J_θᵀ J_θ dθ = J_θᵀ (x̄ − x)
-            let jt: Vec<Vec<f64>> = (0..d)
-                .map(|row| {
-                    (0..np)
-                        .map(|c| (0..d).map(|k| jf[(row, k)] * b[k][c]).sum())
-                        .collect()
-                })
-                .collect();
-            let res: Vec<f64> = target_m.iter().zip(&x).map(|(a, b)| a - b).collect();
-            let normal: Vec<Vec<f64>> = (0..np)
-                .map(|i| {
-                    (0..np)
-                        .map(|j| (0..d).map(|k| jt[k][i] * jt[k][j]).sum())
-                        .collect()
-                })
-                .collect();
-            let rhs: Vec<f64> = (0..np)
-                .map(|i| (0..d).map(|k| jt[k][i] * res[k]).sum())
-                .collect();
-            let mut step = solve_small(&normal, &rhs)?;
-            // the predicted motion of the end effector
-            let moved = (0..d)
-                .map(|k| (0..np).map(|c| jt[k][c] * step[c]).sum::<f64>().powi(2))
-                .sum::<f64>()
-                .sqrt();
-            if moved <= self.settings.tolerance_m {
-                converged = true;
-                break;
-            }
-            let fstep = force(&step);
-            let norm = fstep.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if norm > self.settings.max_step_n {
-                let sc = self.settings.max_step_n / norm;
-                step.iter_mut().for_each(|v| *v *= sc);
-            }
-            // backtracking on the distance
-            let mut t = 1.0;
-            let mut accepted = false;
-            let warm = self.warm.clone();
-            for _ in 0..20 {
-                let trial: Vec<f64> = theta.iter().zip(&step).map(|(a, s)| a + t * s).collect();
-                let ft = force(&trial);
-                if let Ok((_, xt)) = self.forward_raw(pressures_pa, &ft) {
-                    let rt = dist(&xt);
-                    if rt < r {
-                        theta = trial;
-                        f = ft;
-                        x = xt;
-                        r = rt;
-                        accepted = true;
-                        converged = r <= self.settings.tolerance_m;
-                        break;
-                    }
-                }
-                self.warm.clone_from(&warm);
-                t *= 0.5;
-            }
-            if !accepted {
-                break;
-            }
+        if self.estimator_pressures_pa != pressures_pa {
+            let mut known = self.known.clone();
+            known.pressures_pa = pressures_pa.to_vec();
+            self.estimator.set_known_loads(known)?;
+            // another configuration: a cold start (its far start), not the
+            // last configuration's shape
+            self.estimator.reset();
+            self.estimator_pressures_pa = pressures_pa.to_vec();
         }
-        Ok((f, x, iterations, converged))
+        let observation = Observation {
+            markers: vec![MarkerObservation::at_arc(
+                self.effector_s_m,
+                DVector::from_column_slice(target_m),
+            )],
+        };
+        let estimate = self.estimator.step(&observation)?;
+        let force_n: Vec<f64> = (&self.basis * &estimate.f).data.into();
+        let x_m = self
+            .tracker
+            .robot()
+            .position_at(estimate.q.as_slice(), self.effector_s_m)?
+            .data
+            .into();
+        Ok(Fit {
+            force_n,
+            x_m,
+            estimate,
+        })
     }
 
     /// The mass hanging at the load node from the end effector measured
@@ -584,16 +601,18 @@ impl<E: Element> MassEstimator<E> {
                 .collect(),
             MassReference::Absolute => loaded_m.to_vec(),
         };
-        let (force_n, x, iterations, converged) = self.force_for_raw(pressures_pa, &target_m)?;
+        let fit = self.fit(pressures_pa, &target_m)?;
+        let converged = fit.stopped_on_test();
         let g2: f64 = self.gravity_m_per_s2.iter().map(|g| g * g).sum();
-        let mass_kg = force_n
-            .iter()
-            .zip(&self.gravity_m_per_s2)
-            .map(|(f, g)| f * g)
-            .sum::<f64>()
-            / g2
-            * self.settings.scale;
-        let residual_m = x
+        // m = gᵀ F / |g|² = cᵀ θ with c = basisᵀ g / |g|²
+        let g = DVector::from_column_slice(&self.gravity_m_per_s2);
+        let c = self.basis.tr_mul(&g) / g2 * self.settings.scale;
+        let mass_kg = c.dot(&fit.estimate.f);
+        let std_kg = (c.transpose() * fit.estimate.covariance_f() * &c)[(0, 0)]
+            .max(0.0)
+            .sqrt();
+        let residual_m = fit
+            .x_m
             .iter()
             .zip(&target_m)
             .map(|(a, b)| (a - b).powi(2))
@@ -601,18 +620,20 @@ impl<E: Element> MassEstimator<E> {
             .sqrt();
         Ok(MassEstimate {
             mass_kg,
-            force_n,
+            force_n: fit.force_n,
             target_m,
             model_unloaded_m,
             pressures_pa: pressures_pa.to_vec(),
             converged,
+            status: fit.estimate.report.status,
+            std_kg,
             residual_m,
-            iterations,
+            iterations: fit.estimate.report.iterations,
         })
     }
 }
 
-impl<E: Element> MassEstimator<E> {
+impl<E: Element + 'static> MassEstimator<E> {
     /// The factor on the estimated mass in use.
     pub fn scale(&self) -> f64 {
         self.settings.scale
@@ -659,21 +680,4 @@ impl<E: Element> MassEstimator<E> {
         self.settings.scale = known_kg / e.mass_kg;
         Ok(self.settings.scale)
     }
-}
-
-/// `A x = b` for a small dense `A` (rows), by LU with partial pivoting.
-fn solve_small(a: &[Vec<f64>], b: &[f64]) -> Result<Vec<f64>> {
-    let n = b.len();
-    let m = nalgebra::DMatrix::from_fn(n, n, |r, c| a[r][c]);
-    let scale = m.amax();
-    let x = m
-        .lu()
-        .solve(&nalgebra::DVector::from_column_slice(b))
-        .ok_or(Error::Singular {
-            context: "mass estimation: dx/dF (the end effector does not move with the load)".into(),
-            index: 0,
-            pivot: 0.0,
-            scale,
-        })?;
-    Ok(x.iter().copied().collect())
 }

@@ -66,16 +66,21 @@ impl WeighingExperiment {
     /// 20 g) at the tip; three configurations (straight, an S at
     /// (60, 0, 0, 30) kPa, curled up at (80, 0, 60, 0) kPa); ten frames per
     /// state; the default plant; calibration with 150 g in the first
-    /// configuration (seed 99, not a seed of the weighings).
+    /// configuration (seed 99, not a seed of the weighings). The
+    /// estimator's noise is that of a displacement of two means of ten
+    /// frames of the plant's marker noise, `σ √(2/10)`.
     pub fn paper_like(scene: Scene) -> Self {
         let length: f64 = scene.robot.sections.iter().map(|s| s.length_m).sum();
+        let plant = PlantSettings::default();
+        let frames = 10;
+        let noise_sigma_m = plant.noise_sigma_m * (2.0 / f64::from(frames)).sqrt();
         let configuration = |name: &str, p: [f64; 4]| MassConfiguration {
             name: name.into(),
             pressures_pa: p.to_vec(),
         };
         WeighingExperiment {
             scene,
-            plant: PlantSettings::default(),
+            plant,
             load_s_m: length,
             configurations: vec![
                 configuration("straight (0, 0, 0, 0) kPa", [0.0; 4]),
@@ -83,10 +88,11 @@ impl WeighingExperiment {
                 configuration("curled (80, 0, 60, 0) kPa", [80e3, 0.0, 60e3, 0.0]),
             ],
             masses_kg: (0..=10).map(|k| 0.02 * f64::from(k)).collect(),
-            frames: 10,
+            frames: frames as usize,
             calibration: Some((0, 0.15, 99)),
             settings: MassSettings {
                 reference: super::MassReference::Matched,
+                noise_sigma_m,
                 ..MassSettings::default()
             },
         }
@@ -108,8 +114,12 @@ pub struct MassRow {
     pub unloaded_m: Vec<f64>,
     /// See `unloaded_m`.
     pub loaded_m: Vec<f64>,
-    /// Whether the estimator's iteration converged.
+    /// Whether the estimator's iteration converged
+    /// ([`super::MassEstimate::converged`]).
     pub converged: bool,
+    /// The estimate's standard deviation (kg, scaled) under the
+    /// estimator's noise ([`MassSettings::noise_sigma_m`]).
+    pub std_kg: f64,
 }
 
 impl MassRow {
@@ -120,6 +130,7 @@ impl MassRow {
     /// let r = softrod::control::MassRow {
     ///     configuration: 0, true_kg: 0.1, estimated_kg: 0.1, raw_kg: 0.1,
     ///     unloaded_m: vec![0.24, 0.0], loaded_m: vec![0.239, -0.01], converged: true,
+    ///     std_kg: 1e-3,
     /// };
     /// assert!((r.displacement() - nalgebra::dvector![-0.001, -0.01]).norm() < 1e-15);
     /// assert_eq!(r.loaded() - r.unloaded(), r.displacement());
@@ -275,6 +286,7 @@ impl WeighingExperiment {
                     unloaded_m: u.as_slice().to_vec(),
                     loaded_m: l.as_slice().to_vec(),
                     converged: e.converged,
+                    std_kg: e.std_kg,
                 });
             }
         }

@@ -668,15 +668,17 @@ mod tests {
         fn jt(&self, load: LoadModel) -> DMatrix<f64> {
             match load {
                 LoadModel::Distributed => &self.b * &self.z,
-                LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => self.z.clone(),
+                LoadModel::Concentrated { .. }
+                | LoadModel::AtSite { .. }
+                | LoadModel::Along { .. } => self.z.clone(),
             }
         }
         fn h(&self, load: LoadModel) -> DMatrix<f64> {
             match load {
                 LoadModel::Distributed => self.b.clone(),
-                LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
-                    DMatrix::identity(self.b.nrows(), self.b.nrows())
-                }
+                LoadModel::Concentrated { .. }
+                | LoadModel::AtSite { .. }
+                | LoadModel::Along { .. } => DMatrix::identity(self.b.nrows(), self.b.nrows()),
             }
         }
         /// `F̂(α)` and `−2 log p(y | α)` (up to a constant), densely.

@@ -3,7 +3,7 @@
 //! robot's rod, and a force at a site (32)–(35) with `G = A_xᵀ`, `A_x` the
 //! site's position rows ([`crate::site::SiteRows`]) on any model.
 
-use nalgebra::DVector;
+use nalgebra::{DMatrix, DVector};
 
 use super::{EstimationModel, LoadModel};
 use crate::error::{Error, Result, check_len};
@@ -25,7 +25,7 @@ impl LoadModel {
                 rod: 0,
                 s_m: model.node_arc_m("load_model.node", 0, node)?,
             })),
-            LoadModel::AtSite { site } => Ok(Some(site)),
+            LoadModel::AtSite { site } | LoadModel::Along { site, .. } => Ok(Some(site)),
         }
     }
 
@@ -40,7 +40,9 @@ impl LoadModel {
                 let r = model.node_coordinates_of("load_model.node", 0, node)?;
                 Ok(Some(block_position_rows(r, model.dim())))
             }
-            LoadModel::AtSite { site } => model.site_rows("load_model.site", &site).map(Some),
+            LoadModel::AtSite { site } | LoadModel::Along { site, .. } => {
+                model.site_rows("load_model.site", &site).map(Some)
+            }
         }
     }
 }
@@ -78,11 +80,19 @@ pub(crate) fn check_site_moves<M: EstimationModel>(load: &LoadModel, model: &M) 
     }
 }
 
-/// `A_xᵀ F` over all `n_q` coordinates (34).
-fn site_force(rows: &SiteRows, n_q: usize, f: &[f64]) -> Result<DVector<f64>> {
-    check_len("f", rows.position.len(), f.len())?;
+/// `A_xᵀ F` over all `n_q` coordinates (34), `F = basis θ` the force of
+/// the parameters `θ` ([`LoadModel::force_basis`]).
+fn site_force(
+    rows: &SiteRows,
+    basis: &DMatrix<f64>,
+    n_q: usize,
+    th: &[f64],
+) -> Result<DVector<f64>> {
+    check_len("f", basis.ncols(), th.len())?;
+    check_len("load_model.site", rows.position.len(), basis.nrows())?;
+    let f = basis * DVector::from_column_slice(th);
     let mut g = DVector::zeros(n_q);
-    for (row, fc) in rows.position.iter().zip(f) {
+    for (row, fc) in rows.position.iter().zip(f.iter()) {
         for &(j, w) in row {
             g[j] += w * fc;
         }
@@ -90,13 +100,26 @@ fn site_force(rows: &SiteRows, n_q: usize, f: &[f64]) -> Result<DVector<f64>> {
     Ok(g)
 }
 
-/// `A_x v`.
-fn site_force_transpose(rows: &SiteRows, n_q: usize, v: &[f64]) -> Result<DVector<f64>> {
+/// `basisᵀ A_x v`.
+fn site_force_transpose(
+    rows: &SiteRows,
+    basis: &DMatrix<f64>,
+    n_q: usize,
+    v: &[f64],
+) -> Result<DVector<f64>> {
     check_len("v", n_q, v.len())?;
-    Ok(DVector::from_iterator(
+    let ax = DVector::from_iterator(
         rows.position.len(),
         rows.position.iter().map(|r| crate::site::apply_row(r, v)),
-    ))
+    );
+    check_len("load_model.site", basis.nrows(), ax.len())?;
+    Ok(basis.tr_mul(&ax))
+}
+
+/// The force basis of a concentrated load on `model` (`None` for the
+/// distributed field).
+fn basis_of<M: EstimationModel>(load: &LoadModel, model: &M) -> Result<Option<DMatrix<f64>>> {
+    load.force_basis(model.dim())
 }
 
 /// The distributed field on a model that has none.
@@ -118,28 +141,36 @@ impl<M: EstimationModel> LinearLoad<M> for LoadModel {
     fn n_params(&self, model: &M) -> usize {
         match self {
             LoadModel::Distributed => model.n_q(),
-            _ => model.dim(),
+            LoadModel::Along { .. } => 1,
+            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => model.dim(),
         }
     }
 
     fn force(&self, model: &M, f: &[f64]) -> Result<DVector<f64>> {
-        match self.site_rows(model)? {
-            None => field_rod(model)?.apply_load_gram(f),
-            Some(rows) => site_force(&rows, model.n_q(), f),
+        match (self.site_rows(model)?, basis_of(self, model)?) {
+            (Some(rows), Some(basis)) => site_force(&rows, &basis, model.n_q(), f),
+            _ => field_rod(model)?.apply_load_gram(f),
         }
     }
 
     fn force_transpose(&self, model: &M, v: &[f64]) -> Result<DVector<f64>> {
-        match self.site_rows(model)? {
-            None => field_rod(model)?.apply_load_gram(v),
-            Some(rows) => site_force_transpose(&rows, model.n_q(), v),
+        match (self.site_rows(model)?, basis_of(self, model)?) {
+            (Some(rows), Some(basis)) => site_force_transpose(&rows, &basis, model.n_q(), v),
+            _ => field_rod(model)?.apply_load_gram(v),
         }
     }
 
     fn add_to(&self, model: &M, known: &M::Loads, f: &[f64]) -> M::Loads {
         match self.site(model) {
             Ok(None) => model.with_distributed(known, f),
-            Ok(Some(site)) => model.with_point_force(known, &site, f),
+            Ok(Some(site)) => match basis_of(self, model) {
+                Ok(Some(basis)) if basis.ncols() == f.len() => {
+                    let force = basis * DVector::from_column_slice(f);
+                    model.with_point_force(known, &site, force.as_slice())
+                }
+                // refused by the loads' check (a force of the wrong size)
+                _ => model.with_point_force(known, &site, &vec![f64::NAN; model.dim()]),
+            },
             // refused by the loads' check (a point off the model)
             Err(_) => model.with_point_force(
                 known,

@@ -124,7 +124,7 @@ pub use sqp::SqpEstimator;
 pub use crate::observe::{MarkerObservation, Observation};
 pub use crate::outcome::{EstimateCriterion, EstimateStatus};
 
-use nalgebra::{DVector, SVector};
+use nalgebra::{DMatrix, DVector, SVector};
 use serde::{Deserialize, Serialize};
 
 use crate::element::ArcPoint;
@@ -159,6 +159,19 @@ impl Backend {
     }
 }
 
+/// The regularization weight of the payload estimates
+/// ([`crate::parallel::ParallelRobot::estimate_payload`],
+/// [`crate::control::MassEstimator`]): `α |F|²` against the whitened
+/// misfit, so small that the estimate of a force at a site from one marker
+/// there is the exactly determined (or least-squares) one (`α |F|²` ≈
+/// 1e-14 for a 100 g payload).
+///
+/// # Example
+/// ```
+/// assert!(softrod::estimate::PAYLOAD_ALPHA < 1e-9);
+/// ```
+pub const PAYLOAD_ALPHA: f64 = 1e-12;
+
 /// How the unknown load is parameterized.
 ///
 /// # Example
@@ -187,6 +200,19 @@ pub enum LoadModel {
         /// Where the force acts.
         site: crate::site::Site,
     },
+    /// A force of unknown magnitude along a known direction at a site:
+    /// one parameter, the force's component along the unit direction (N).
+    /// A hanging mass pulls along gravity (`direction` = g), so its weight
+    /// is one unknown fitted to the measured coordinates by least squares,
+    /// and a model error along a stiff direction is not read as a force
+    /// there.
+    Along {
+        /// Where the force acts.
+        site: crate::site::Site,
+        /// The force's direction (world axes; any length > 0, used as the
+        /// unit vector; a planar model's third component must be 0).
+        direction: [f64; 3],
+    },
 }
 
 impl LoadModel {
@@ -201,6 +227,67 @@ impl LoadModel {
     /// ```
     pub fn is_concentrated(&self) -> bool {
         !matches!(self, LoadModel::Distributed)
+    }
+
+    /// The `DIM × n_params` map from a concentrated load's parameters to
+    /// its force at the site (`None` for the distributed field): the
+    /// identity for a force, the unit direction's column for
+    /// [`LoadModel::Along`] (whose direction must be finite and not zero,
+    /// with no component beyond `dim`).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] named `estimator.load_model.direction`.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::estimate::LoadModel;
+    /// use softrod::site::Site;
+    /// let weight = LoadModel::Along { site: Site::Rod { rod: 0, s_m: 0.24 }, direction: [0.0, -9.81, 0.0] };
+    /// let b = weight.force_basis(2)?.unwrap();
+    /// assert_eq!((b.nrows(), b.ncols()), (2, 1));
+    /// assert!((b[(1, 0)] + 1.0).abs() < 1e-15);
+    /// assert_eq!(LoadModel::Concentrated { node: 3 }.force_basis(2)?.unwrap(), nalgebra::DMatrix::identity(2, 2));
+    /// for bad in [[0.0; 3], [0.0, -9.81, 1.0], [f64::NAN, 1.0, 0.0]] {
+    ///     let e = LoadModel::Along { site: Site::Body { body: 0 }, direction: bad }.force_basis(2).unwrap_err();
+    ///     assert_eq!(e.field(), Some("estimator.load_model.direction"));
+    /// }
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn force_basis(&self, dim: usize) -> Result<Option<DMatrix<f64>>> {
+        match *self {
+            LoadModel::Distributed => Ok(None),
+            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
+                Ok(Some(DMatrix::identity(dim, dim)))
+            }
+            LoadModel::Along { direction, .. } => {
+                let bad = |why: &str| {
+                    Error::invalid(
+                        "estimator.load_model.direction",
+                        format!("{direction:?}"),
+                        why.to_string(),
+                    )
+                };
+                if direction.iter().any(|v| !v.is_finite()) {
+                    return Err(bad("must be finite"));
+                }
+                if direction[dim.min(3)..].iter().any(|v| *v != 0.0) {
+                    return Err(bad("a planar model's direction has no third component"));
+                }
+                let norm = direction[..dim.min(3)]
+                    .iter()
+                    .map(|v| v * v)
+                    .sum::<f64>()
+                    .sqrt();
+                if !(norm > 0.0 && norm.is_finite()) {
+                    return Err(bad("must not be zero"));
+                }
+                Ok(Some(DMatrix::from_iterator(
+                    dim,
+                    1,
+                    direction[..dim.min(3)].iter().map(|v| v / norm),
+                )))
+            }
+        }
     }
 }
 

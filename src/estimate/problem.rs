@@ -108,6 +108,7 @@ impl<M: EstimationModel> Problem<M> {
                  (its sensitivities assume a symmetric tangent); solve with them instead",
             ));
         }
+        settings.load_model.force_basis(M::Element::DIM)?;
         let n_f = settings.load_model.n_params(&robot);
         super::load_model::check_site_moves(&settings.load_model, &robot)?;
         for (i, b) in settings.bounds.iter().enumerate() {
@@ -211,7 +212,9 @@ impl<M: EstimationModel> Problem<M> {
     pub(crate) fn penalty_grad(&self, f: &[f64]) -> Result<Vec<f64>> {
         match self.load() {
             LoadModel::Distributed => Ok(field_rod(self.robot())?.apply_load_gram(f)?.data.into()),
-            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => Ok(f.to_vec()),
+            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } | LoadModel::Along { .. } => {
+                Ok(f.to_vec())
+            }
         }
     }
 
@@ -345,7 +348,9 @@ impl<M: EstimationModel> Problem<M> {
                 }
                 h
             }
-            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => DMatrix::identity(nf, nf),
+            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } | LoadModel::Along { .. } => {
+                DMatrix::identity(nf, nf)
+            }
         };
         let h = PenaltyMatrix::new(h).map(std::sync::Arc::new);
         Ok(self.penalty_matrix.get_or_init(|| h).clone())
@@ -385,7 +390,7 @@ impl<M: EstimationModel> Problem<M> {
                 }
                 jt
             }
-            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
+            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } | LoadModel::Along { .. } => {
                 s.load_gradients(&self.load(), &adj)?
             }
         };
@@ -596,17 +601,22 @@ impl<M: EstimationModel> Problem<M> {
         let mut force = vec![0.0; d];
         let mut moment = vec![0.0; M::Element::MOMENT_DIM];
         match self.load() {
-            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
+            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } | LoadModel::Along { .. } => {
+                // F = basis θ: fw is the basis, row-major
+                let basis = self.load().force_basis(d)?.unwrap_or_default();
+                check_len("f", basis.ncols(), f.len())?;
                 let mut fw = vec![0.0; d * nf];
-                force.copy_from_slice(f);
+                for a in 0..d {
+                    for j in 0..nf {
+                        fw[a * nf + j] = basis[(a, j)];
+                    }
+                    force[a] = dot(&fw[a * nf..(a + 1) * nf], f);
+                }
                 let rows = self.load().site_rows(self.robot())?;
                 let at = rows.map(|r| r.position_at(q)).unwrap_or_default();
                 check_len("load_model.site", d, at.len())?;
                 let r: Vec<f64> = (0..d).map(|i| at[i] - r0[i]).collect();
-                moment = cross(&r, f);
-                for a in 0..d {
-                    fw[a * nf + a] = 1.0;
-                }
+                moment = cross(&r, &force);
                 Ok((force, moment, fw))
             }
             LoadModel::Distributed => {

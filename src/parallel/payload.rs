@@ -33,11 +33,7 @@ use crate::rng::Gaussian;
 use crate::site::Site;
 use crate::statics::Equilibrium;
 
-/// The regularization weight of [`ParallelRobot::estimate_payload`]:
-/// `α |F|²` against the whitened misfit, so small that the estimate of the
-/// three force components from the three platform coordinates is the
-/// exactly determined one (`α |F|²` ≈ 1e-14 for a 100 g payload).
-pub const PAYLOAD_ALPHA: f64 = 1e-12;
+pub use crate::estimate::PAYLOAD_ALPHA;
 
 /// An estimated payload: the force at the platform's centre by the
 /// estimator ([`crate::estimate::NewtonEstimator`] with the force at the

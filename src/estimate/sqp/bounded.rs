@@ -46,7 +46,7 @@ impl<E: Element> SqpEstimator<E> {
                     let (e, xi) = if node == 0 { (0, 0.0) } else { (node - 1, 1.0) };
                     ArcPoint::new(e, xi, robot.elements()[e].length())
                 }
-                LoadModel::AtSite { site } => match site {
+                LoadModel::AtSite { site } | LoadModel::Along { site, .. } => match site {
                     crate::site::Site::Rod { s_m, .. } => {
                         robot.arc_point("estimator.load_model.site.s_m", s_m)?
                     }
@@ -87,8 +87,14 @@ impl<E: Element> SqpEstimator<E> {
                     }
                     c
                 }
-                LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } => {
-                    dir.iter().copied().enumerate().collect()
+                LoadModel::Concentrated { .. }
+                | LoadModel::AtSite { .. }
+                | LoadModel::Along { .. } => {
+                    // the force is basis θ: the bound reads basisᵀ dir · θ
+                    let basis = problem.load().force_basis(d)?.unwrap_or_default();
+                    (0..basis.ncols())
+                        .map(|j| (j, (0..d).map(|i| basis[(i, j)] * dir[i]).sum()))
+                        .collect()
                 }
             };
             rows.push((coeffs, b.min_n_per_m, b.max_n_per_m));
