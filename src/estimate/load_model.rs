@@ -116,12 +116,6 @@ fn site_force_transpose(
     Ok(basis.tr_mul(&ax))
 }
 
-/// The force basis of a concentrated load on `model` (`None` for the
-/// distributed field).
-fn basis_of<M: EstimationModel>(load: &LoadModel, model: &M) -> Result<Option<DMatrix<f64>>> {
-    load.force_basis(model.dim())
-}
-
 /// The distributed field on a model that has none.
 fn no_distributed() -> Error {
     Error::invalid(
@@ -147,14 +141,14 @@ impl<M: EstimationModel> LinearLoad<M> for LoadModel {
     }
 
     fn force(&self, model: &M, f: &[f64]) -> Result<DVector<f64>> {
-        match (self.site_rows(model)?, basis_of(self, model)?) {
+        match (self.site_rows(model)?, self.force_basis(model.dim())?) {
             (Some(rows), Some(basis)) => site_force(&rows, &basis, model.n_q(), f),
             _ => field_rod(model)?.apply_load_gram(f),
         }
     }
 
     fn force_transpose(&self, model: &M, v: &[f64]) -> Result<DVector<f64>> {
-        match (self.site_rows(model)?, basis_of(self, model)?) {
+        match (self.site_rows(model)?, self.force_basis(model.dim())?) {
             (Some(rows), Some(basis)) => site_force_transpose(&rows, &basis, model.n_q(), v),
             _ => field_rod(model)?.apply_load_gram(v),
         }
@@ -163,7 +157,7 @@ impl<M: EstimationModel> LinearLoad<M> for LoadModel {
     fn add_to(&self, model: &M, known: &M::Loads, f: &[f64]) -> M::Loads {
         match self.site(model) {
             Ok(None) => model.with_distributed(known, f),
-            Ok(Some(site)) => match basis_of(self, model) {
+            Ok(Some(site)) => match self.force_basis(model.dim()) {
                 Ok(Some(basis)) if basis.ncols() == f.len() => {
                     let force = basis * DVector::from_column_slice(f);
                     model.with_point_force(known, &site, force.as_slice())
