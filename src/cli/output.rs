@@ -308,7 +308,8 @@ impl From<Backend> for BackendName {
 pub struct EstimateReportRecord {
     pub backend: BackendName,
     pub status: EstimateStatus,
-    /// Outer iterations (Gauss–Newton steps or QPs).
+    /// Outer iterations (Gauss–Newton steps or QPs) of the solves at the
+    /// chosen `α` (an `α` search's are in `alpha_search`).
     pub iterations: usize,
     /// Intermediate observations used (1: the observation was taken directly).
     pub sub_steps: usize,
@@ -333,6 +334,11 @@ pub struct EstimateReportRecord {
     /// `softrod::estimate::FarStart`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub far_start: Option<serde_json::Value>,
+    /// The choice of `α` this step made, if it made one: the rule, the
+    /// solves of its search and their iterations, which `iterations` does
+    /// not count (the library's `softrod::estimate::AlphaSearch`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alpha_search: Option<softrod::estimate::AlphaSearch>,
 }
 
 impl From<&EstimateReport> for EstimateReportRecord {
@@ -354,6 +360,7 @@ impl From<&EstimateReport> for EstimateReportRecord {
                 .far_start
                 .as_ref()
                 .and_then(|f| serde_json::to_value(f).ok()),
+            alpha_search: r.alpha_search,
         }
     }
 }

@@ -14,7 +14,7 @@ use crate::observe::{Observation, ObservationOperator};
 
 use super::covariance::{CovarianceInputs, LazyCovariances};
 use super::problem::{Derivs, GnFactor, Problem};
-use super::{AlphaRule, Backend, Estimate, EstimateReport, EstimationModel, FarStart};
+use super::{AlphaRule, AlphaSearch, Backend, Estimate, EstimateReport, EstimationModel, FarStart};
 
 /// Where the searches for `α` (the evidence's, the discrepancy principle's)
 /// begin their continuation in `α` (m/N² with whitened weights).
@@ -49,6 +49,8 @@ pub(crate) struct Stream<M: EstimationModel> {
     pub(crate) problem: Problem<M>,
     pub(crate) alpha: Option<f64>,
     pub(crate) warm: Option<Warm>,
+    /// The `α` search of the current step, if it ran one.
+    pub(crate) alpha_search: Option<AlphaSearch>,
 }
 
 impl<M: EstimationModel> Stream<M> {
@@ -58,6 +60,7 @@ impl<M: EstimationModel> Stream<M> {
             alpha: problem.settings().alpha,
             problem,
             warm: None,
+            alpha_search: None,
         }
     }
 
@@ -283,10 +286,12 @@ fn path_solve<Mo: EstimationModel, Me: Method<Mo>>(
     method: &mut Me,
     op: &ObservationOperator,
     alpha: f64,
-    f0: &mut Vec<f64>,
-    q0: &mut Vec<f64>,
+    (f0, q0): (&mut Vec<f64>, &mut Vec<f64>),
+    search: &mut AlphaSearch,
 ) -> Option<f64> {
+    search.solves += 1;
     let s = method.solve_one(op, f0.clone(), q0.clone(), alpha).ok()?;
+    search.iterations += s.report.iterations;
     if s.report.status.is_converged() {
         *f0 = s.f;
         *q0 = s.q;
@@ -297,20 +302,25 @@ fn path_solve<Mo: EstimationModel, Me: Method<Mo>>(
 /// Chooses `α` for the observation `op` by the settings' rule, each
 /// solve of the search starting from the last converged one (continuation
 /// in `α`, from the stream's start); keeps it in the stream with the warm
-/// start the search leaves.
+/// start the search leaves, and the search's count of solves and
+/// iterations for the step's report.
 fn choose_alpha<Mo: EstimationModel, Me: Method<Mo>>(
     method: &mut Me,
     op: &ObservationOperator,
 ) -> Result<f64> {
     let rule = method.stream().problem.settings().alpha_rule;
+    let mut search = AlphaSearch {
+        rule,
+        ..AlphaSearch::default()
+    };
     let (a, warm) = if rule == AlphaRule::Evidence {
-        super::evidence::evidence_alpha(method, op)?
+        super::evidence::evidence_alpha(method, op, &mut search)?
     } else {
         let (mut f0, mut q0) = method.stream().start()?;
         let a = discrepancy_alpha(op.len(), |a| {
             // a failure (at an extreme α) counts as a perfect fit: the
             // search then moves to larger α
-            Ok(path_solve(method, op, a, &mut f0, &mut q0).unwrap_or(0.0))
+            Ok(path_solve(method, op, a, (&mut f0, &mut q0), &mut search).unwrap_or(0.0))
         })?;
         // the last solve of the search is close: start from it
         let warm = Warm {
@@ -323,6 +333,7 @@ fn choose_alpha<Mo: EstimationModel, Me: Method<Mo>>(
     let stream = method.stream();
     stream.alpha = Some(a);
     stream.warm = Some(warm);
+    stream.alpha_search = Some(search);
     Ok(a)
 }
 
@@ -461,6 +472,7 @@ pub(crate) fn run_step<Mo: EstimationModel, Me: Method<Mo>>(
     let backend = Me::BACKEND;
     let op = method.stream().problem.operator_of_frame(observation)?;
     method.take_far_start();
+    method.stream().alpha_search = None;
     let alpha_given = method.stream().problem.settings().alpha.is_some();
     // (an α not yet chosen is chosen on this frame: no revisit then)
     let chosen_now = method.stream().alpha.is_none();
@@ -473,11 +485,13 @@ pub(crate) fn run_step<Mo: EstimationModel, Me: Method<Mo>>(
         run = revisit_alpha(method, &op, run)?;
     }
     let far_start = method.take_far_start();
+    let alpha_search = method.stream().alpha_search.take();
     let finish_report = |mut report: EstimateReport| {
         report.iterations = run.iterations;
         report.sub_steps = run.sub_steps;
         report.backend = backend;
         report.far_start = far_start;
+        report.alpha_search = alpha_search;
         report.wall_time_s = start.elapsed().as_secs_f64();
         report.linear_work = LinearWork::now().since(work);
         report

@@ -65,6 +65,7 @@ use super::problem::{Derivs, Problem, columns};
 /// assert_eq!(softrod::estimate::AlphaRule::default(), softrod::estimate::AlphaRule::Evidence);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum AlphaRule {
     /// The largest marginal likelihood of the observation (default): the
@@ -75,6 +76,24 @@ pub enum AlphaRule {
     /// Morozov's discrepancy principle: the weighted residual equals the
     /// number of observed components.
     Discrepancy,
+}
+
+impl AlphaRule {
+    /// The rule as the settings spell it (`alpha_rule`).
+    ///
+    /// # Example
+    /// ```
+    /// assert_eq!(softrod::estimate::AlphaRule::Evidence.name(), "evidence");
+    /// assert_eq!(softrod::estimate::AlphaRule::Discrepancy.name(), "discrepancy");
+    /// // the spelling of the settings' JSON
+    /// assert_eq!(serde_json::to_string(&softrod::estimate::AlphaRule::Discrepancy).unwrap(), "\"discrepancy\"");
+    /// ```
+    pub fn name(self) -> &'static str {
+        match self {
+            AlphaRule::Evidence => "evidence",
+            AlphaRule::Discrepancy => "discrepancy",
+        }
+    }
 }
 
 /// The evidence of an estimate and its derivative in `log α`.
@@ -201,6 +220,7 @@ pub(crate) fn evidence_root(mut slope: impl FnMut(f64) -> Result<Option<f64>>) -
 pub(crate) fn evidence_alpha<Mo: super::EstimationModel, Me: Method<Mo>>(
     method: &mut Me,
     op: &ObservationOperator,
+    search: &mut super::AlphaSearch,
 ) -> Result<(f64, Warm)> {
     let (mut f0, mut q0) = method.stream().start()?;
     let mut blind = false;
@@ -209,9 +229,11 @@ pub(crate) fn evidence_alpha<Mo: super::EstimationModel, Me: Method<Mo>>(
             return Ok(None);
         }
         let alpha = 10f64.powf(log_a);
+        search.solves += 1;
         let Ok(s) = method.solve_one(op, f0.clone(), q0.clone(), alpha) else {
             return Ok(None);
         };
+        search.iterations += s.report.iterations;
         if !informative(&s.derivs) {
             blind = true;
             return Ok(None);

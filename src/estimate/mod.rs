@@ -514,10 +514,13 @@ pub struct EstimateReport {
     /// How the estimation ended (of the intermediate observation that
     /// stopped it, if one did).
     pub status: EstimateStatus,
-    /// Outer iterations (Gauss–Newton steps or QPs), summed over the
-    /// intermediate observations (and, for the Newton backend, the
-    /// full-space iterations of a far start its solve took, see
-    /// [`EstimateReport::far_start`]).
+    /// Outer iterations (Gauss–Newton steps or QPs) of the solves at the
+    /// chosen `α`, summed over the intermediate observations (and, for the
+    /// Newton backend, the full-space iterations of a far start its solve
+    /// took, see [`EstimateReport::far_start`]). The solves of an `α`
+    /// search are counted in [`EstimateReport::alpha_search`]: after one,
+    /// the solve at the chosen `α` starts from the search's last and may
+    /// take 0 iterations.
     pub iterations: usize,
     /// Intermediate observations used (1: the observation was taken directly).
     pub sub_steps: usize,
@@ -550,6 +553,12 @@ pub struct EstimateReport {
     /// did not need it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub far_start: Option<FarStart>,
+    /// The choice of `α` this step made, if it made one (see
+    /// [`AlphaSearch`]): its solves and their iterations are not in
+    /// [`EstimateReport::iterations`], which counts the solves at the chosen
+    /// `α` only; `None` when `α` was given or chosen on an earlier step.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha_search: Option<AlphaSearch>,
 }
 
 /// The Newton backend's far start in one step: while a stream has no
@@ -592,6 +601,46 @@ pub struct FarStart {
     pub answer: bool,
 }
 
+/// The search for `α` in one step, when the step chose it: a stream's
+/// first observation with `alpha` unset, or a later frame whose answer at
+/// the earlier `α` failed the fit test (then chosen again). The search
+/// solves the estimation problem at a sequence of `α` (each solve starting
+/// from the last converged one); the solve at the chosen `α` then starts
+/// from the search's last, and may need no iteration of its own.
+///
+/// # Example
+/// ```
+/// use softrod::estimate::{AlphaRule, EstimatorSettings, Observation};
+/// use softrod::loads::PointForce;
+/// use softrod::{scene::Scene, statics::StaticSolver};
+/// let scene = Scene::two_section();
+/// let (robot, mut loads) = (scene.robot()?, scene.loads()?);
+/// let known = loads.clone();
+/// loads.point_forces.push(PointForce { s_m: 0.24, force_n: vec![0.0, -0.3] });
+/// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+/// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[5, 10, 15, 20])?.with_noise(1e-5, 1);
+/// let mut est = EstimatorSettings::default().build_for(&robot, &known)?;
+/// // the first observation chooses α by the default rule
+/// let search = est.step(&obs)?.report.alpha_search.expect("an α search");
+/// assert_eq!(search.rule, AlphaRule::Evidence);
+/// assert!(search.solves >= 2 && search.iterations >= 1);
+/// // the next frame keeps that α: no search
+/// assert!(est.step(&obs)?.report.alpha_search.is_none());
+/// # Ok::<(), softrod::Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+pub struct AlphaSearch {
+    /// The rule that chose `α` (the settings' `alpha_rule`).
+    pub rule: AlphaRule,
+    /// Solves of the estimation problem the search ran (one per `α` tried).
+    pub solves: usize,
+    /// Outer iterations of those solves that returned, in all, counted as
+    /// [`EstimateReport::iterations`] counts a solve's (Gauss–Newton steps
+    /// or QPs; a Newton far start's full-space iterations included).
+    pub iterations: usize,
+}
+
 impl std::fmt::Display for EstimateReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
@@ -607,6 +656,15 @@ impl std::fmt::Display for EstimateReport {
             self.alpha,
             self.wall_time_s * 1e6,
         )?;
+        if let Some(a) = &self.alpha_search {
+            write!(
+                f,
+                "; alpha chosen by the {} rule: {} solve(s), {} iterations",
+                a.rule.name(),
+                a.solves,
+                a.iterations
+            )?;
+        }
         if let Some(fs) = &self.far_start {
             write!(
                 f,

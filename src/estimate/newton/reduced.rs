@@ -292,6 +292,7 @@ impl<M: EstimationModel> Reduced<'_, M> {
             wall_time_s: 0.0,
             linear_work: Default::default(),
             far_start: None,
+            alpha_search: None,
         }
     }
 

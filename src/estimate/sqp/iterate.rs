@@ -368,6 +368,7 @@ impl<E: Element> SqpEstimator<E> {
                 wall_time_s: 0.0,
                 linear_work: Default::default(),
                 far_start: None,
+                alpha_search: None,
             },
         })
     }
