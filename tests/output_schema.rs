@@ -267,6 +267,7 @@ fn every_example_output_validates_against_its_schema() {
     let markers = [
         ("auto_load", "auto_load_markers", "estimate"),
         ("ancf3d_cantilever", "ancf3d_cantilever_markers", "estimate"),
+        ("two_section", "two_section_payload_markers", "estimate"),
         (
             "two_section",
             "two_section_payload_frames",

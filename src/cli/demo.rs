@@ -1,6 +1,30 @@
-// `softrod` without a subcommand: the built-in scene's solve and estimation demo.
+// `softrod` without a subcommand: the solve of `examples/two_section.json`
+// and an estimate from the markers of `examples/two_section_payload_markers.json`
+// (both files embedded), each through the same code as the subcommand
+// whose command line it prints, so that the command reruns what it shows.
+
+use std::path::PathBuf;
 
 use super::*;
+use softrod::estimate::AlphaRule;
+
+/// How the printed commands start: `cargo run` installs nothing.
+const RUN: &str = "cargo run --release --features cli --";
+/// The scene (relative to the crate's root, where the commands run).
+const SCENE_PATH: &str = "examples/two_section.json";
+const SCENE_JSON: &str = include_str!("../../examples/two_section.json");
+/// The markers the estimate is made from: a plant of four times the
+/// scene's elements carrying the payload below (written by
+/// `tests/demo_cli.rs` with `SOFTROD_WRITE_EXAMPLES=1`).
+const MARKERS_PATH: &str = "examples/two_section_payload_markers.json";
+const MARKERS_JSON: &str = include_str!("../../examples/two_section_payload_markers.json");
+/// The payload of the markers file (the estimator is not told about it):
+/// a tip mass (kg) and a uniform line load (N/m); `tests/demo_cli.rs`
+/// writes the file with the same numbers.
+const TIP_MASS_KG: f64 = 0.02;
+const UNIFORM_N_PER_M: [f64; 2] = [0.0, -0.5];
+/// Re-estimates timed warm, each of the file's markers plus fresh noise.
+const WARM_FRAMES: u64 = 50;
 
 fn median_warm_step(
     est: &mut dyn softrod::estimate::Estimator,
@@ -17,107 +41,150 @@ fn median_warm_step(
 }
 
 pub(super) fn default_run() -> Result<()> {
-    solve_summary()?;
+    let scene = Scene::from_json(SCENE_JSON)?;
+    solve_summary(&scene)?;
     outln!();
-    estimation_demo()
-}
-
-/// The main job: an unknown payload on the two-section robot, five noisy
-/// markers, both backends.
-fn estimation_demo() -> Result<()> {
-    let scene = Scene::two_section();
-    let robot = scene.robot()?;
-    let known = scene.loads()?;
-    let tip_mass_kg = 0.02;
-    let uniform = [0.0, -0.5];
-    let mut truth = known.clone();
-    truth.point_forces.push(PointForce {
-        s_m: robot.length(),
-        force_n: vec![0.0, -9.81 * tip_mass_kg],
-    });
-    truth.line_loads.push(LineLoad::Uniform {
-        w_n_per_m: uniform.to_vec(),
-    });
-    let eq = StaticSolver::default().solve(&robot, &truth, None)?;
-    let nodes: Vec<usize> = scene.markers.iter().filter_map(|m| m.node).collect();
-    let sigma = 1e-5;
-    let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &nodes)?.with_noise(sigma, 1);
-    let true_force = [
-        uniform[0] * robot.length(),
-        uniform[1] * robot.length() - 9.81 * tip_mass_kg,
-    ];
-    let tip = |q: &[f64]| (q[q.len() - 4], q[q.len() - 3]);
-    let (tx, ty) = tip(eq.q.as_slice());
+    estimation_demo(&scene)?;
+    outln!();
     outln!(
-        "Estimation (Sec. III): unknown payload = {:.0} g tip mass + uniform {:.2} N/m, not known to the estimator",
-        tip_mass_kg * 1e3,
-        uniform[1]
-    );
-    outln!(
-        "  {} markers at nodes {:?}, seeded noise {:.2} mm; alpha by the discrepancy principle",
-        nodes.len(),
-        nodes,
-        sigma * 1e3
-    );
-    outln!(
-        "  truth:    tip ({:+.5}, {:+.5}) m, resultant ({:+.4}, {:+.4}) N",
-        tx,
-        ty,
-        true_force[0],
-        true_force[1]
-    );
-    for backend in [Backend::Newton, Backend::Sqp] {
-        let settings = softrod::estimate::EstimatorSettings {
-            backend,
-            ..scene.solver.estimator.clone()
-        };
-        let mut est = settings.build_for(&robot, &known)?;
-        let e = est.step(&obs)?.converged()?;
-        let (ex, ey) = tip(e.q.as_slice());
-        let sd: Vec<f64> = (0..2)
-            .map(|a| e.resultant_force_cov()[(a, a)].max(0.0).sqrt())
-            .collect();
-        outln!(
-            "  {:<6}    tip ({:+.5}, {:+.5}) m (error {:.3} mm), resultant ({:+.4} ± {:.4}, {:+.4} ± {:.4}) N, moment {:+.4} N·m; {} iterations, alpha {:.3e}, first step {:.1} ms",
-            backend.name(),
-            ex,
-            ey,
-            (ex - tx).hypot(ey - ty) * 1e3,
-            e.resultant_force_n[0],
-            sd[0],
-            e.resultant_force_n[1],
-            sd[1],
-            e.resultant_moment_nm[0],
-            e.report.iterations,
-            e.report.alpha,
-            e.report.wall_time_s * 1e3
-        );
-        // streaming: 50 new noisy frames of the same scene, warm-started
-        let frames: Vec<Observation> = (0..50)
-            .map(|k| {
-                Ok(Observation::of_nodes(&robot, eq.q.as_slice(), &nodes)?
-                    .with_noise(sigma, 100 + k))
-            })
-            .collect::<softrod::Result<_>>()?;
-        let t = median_warm_step(est.as_mut(), &frames)?;
-        outln!(
-            "            warm step (new noisy frame, median of 50): {:.1} µs",
-            t * 1e6
-        );
-    }
-    outln!(
-        "Run `softrod estimate examples/two_section.json --backend newton --out estimate.json` for a full result."
+        "After `cargo install --path . --features cli`, `softrod` replaces `{RUN}` in these commands."
     );
     Ok(())
 }
 
-fn solve_summary() -> Result<()> {
-    let scene = Scene::two_section();
+/// What an α rule is, in words.
+fn rule_words(rule: AlphaRule) -> &'static str {
+    match rule {
+        AlphaRule::Evidence => "the largest evidence, the marginal likelihood of the markers",
+        AlphaRule::Discrepancy => {
+            "the discrepancy principle, weighted residual = observed components"
+        }
+    }
+}
+
+/// How `α` was set and what the estimate's iterations were, from its report.
+fn alpha_and_iterations(r: &output::EstimateReportRecord, given: bool) -> String {
+    let at_alpha = format!("{} iteration(s) at the chosen alpha", r.iterations);
+    match (&r.alpha_search, given) {
+        (Some(a), _) => format!(
+            "alpha {:.3e} chosen by alpha_rule \"{}\" ({}): a search of {} solves, {} iterations in all, then {at_alpha}",
+            r.alpha,
+            a.rule.name(),
+            rule_words(a.rule),
+            a.solves,
+            a.iterations
+        ),
+        (None, true) => format!(
+            "alpha {:.3e} as given (solver.estimator.alpha), {} iteration(s)",
+            r.alpha, r.iterations
+        ),
+        (None, false) => format!("alpha {:.3e} of an earlier step, {at_alpha}", r.alpha),
+    }
+}
+
+/// The main job: an unknown payload on the two-section robot, estimated
+/// from the committed markers file with the scene's estimator settings
+/// (as `softrod estimate` does), by both backends.
+fn estimation_demo(scene: &Scene) -> Result<()> {
     let robot = scene.robot()?;
-    let out = solve(&scene, None)?;
+    let known = scene.loads()?;
+    let file = MarkersFile::from_json(MARKERS_JSON)?;
+    let Some(observation) = file.first() else {
+        anyhow::bail!("{MARKERS_PATH}: no observation");
+    };
+    let description: serde_json::Value = serde_json::from_str(MARKERS_JSON)?;
+    let settings = scene.estimator_settings()?;
+    let sigma = settings.noise_sigma_m;
+    let length = robot.length();
+    let truth = [
+        UNIFORM_N_PER_M[0] * length,
+        UNIFORM_N_PER_M[1] * length - 9.81 * TIP_MASS_KG,
+    ];
+    outln!(
+        "Estimation (Sec. III): an unknown payload ({:.0} g tip mass + uniform {:+.2} N/m), not known to the estimator",
+        TIP_MASS_KG * 1e3,
+        UNIFORM_N_PER_M[1]
+    );
+    outln!(
+        "  markers: {MARKERS_PATH}: {}",
+        description["description"].as_str().unwrap_or("")
+    );
+    outln!(
+        "  estimator: the scene's solver.estimator settings (as `estimate` uses them), marker noise sigma {:.2} mm",
+        sigma * 1e3
+    );
+    outln!("  truth:  resultant ({:+.4}, {:+.4}) N", truth[0], truth[1]);
+    let tip_marker = observation
+        .markers
+        .iter()
+        .find(|m| m.s_m.is_some_and(|s| (s - length).abs() < 1e-12));
+    for backend in [Backend::Newton, Backend::Sqp] {
+        let path = PathBuf::from(MARKERS_PATH);
+        let mut outs = estimate(scene, Some(backend), Some((&path, file.clone())))?;
+        let Some((_, e)) = outs.pop() else {
+            anyhow::bail!("no estimate");
+        };
+        let r = &e.resultant;
+        let tip = e
+            .nodes
+            .last()
+            .map(|n| n.position_m.clone())
+            .unwrap_or_default();
+        outln!(
+            "  {:<6}  resultant ({:+.4} ± {:.4}, {:+.4} ± {:.4}) N (± 1 sigma), moment {:+.4} N·m about the base; {}",
+            backend.name(),
+            r.force_n[0],
+            r.force_std_n[0],
+            r.force_n[1],
+            r.force_std_n[1],
+            r.moment_nm[0],
+            e.status
+        );
+        if let (Some(m), [x, y]) = (tip_marker, tip.as_slice()) {
+            outln!(
+                "          tip ({:+.5}, {:+.5}) m, {:.3} mm from the tip marker",
+                x,
+                y,
+                (x - m.position_m[0]).hypot(y - m.position_m[1]) * 1e3
+            );
+        }
+        outln!(
+            "          {}; first estimate {:.1} ms",
+            alpha_and_iterations(&e.report, settings.alpha.is_some()),
+            e.report.wall_time_s * 1e3
+        );
+        // the estimator kept warm, timed on the file's markers with fresh
+        // noise added (each frame a new draw)
+        let mut est = softrod::estimate::EstimatorSettings {
+            backend,
+            ..settings.clone()
+        }
+        .build_for(&robot, &known)?;
+        est.step(&observation)?.converged()?;
+        let frames: Vec<Observation> = (0..WARM_FRAMES)
+            .map(|k| observation.clone().with_noise(sigma, 100 + k))
+            .collect();
+        let t = median_warm_step(est.as_mut(), &frames)?;
+        outln!(
+            "          warm step: {:.1} µs (median of {WARM_FRAMES} re-estimates, each of these markers plus a fresh {:.2} mm noise draw)",
+            t * 1e6,
+            sigma * 1e3
+        );
+        outln!(
+            "          rerun: {RUN} estimate {SCENE_PATH} --markers {MARKERS_PATH} --backend {} --out target/estimate_{}.json",
+            backend.name(),
+            backend.name()
+        );
+    }
+    Ok(())
+}
+
+fn solve_summary(scene: &Scene) -> Result<()> {
+    let robot = scene.robot()?;
+    let out = solve(scene, None)?;
     let spec = robot.spec();
     outln!(
-        "softrod {} — built-in scene `{}`",
+        "softrod {} — scene `{}` ({SCENE_PATH})",
         env!("CARGO_PKG_VERSION"),
         scene.name
     );
@@ -154,6 +221,6 @@ fn solve_summary() -> Result<()> {
             );
         }
     }
-    outln!("Run `softrod solve examples/two_section.json --out result.json` for the full result.");
+    outln!("  rerun: {RUN} solve {SCENE_PATH} --out target/result.json");
     Ok(())
 }

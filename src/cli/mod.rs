@@ -33,7 +33,6 @@ use output::{
 use softrod::assembly::{Robot, ValidityWarning};
 use softrod::element::{Element, PlanarCable};
 use softrod::estimate::{Backend, Estimate, MarkerObservation, Observation};
-use softrod::loads::{LineLoad, PointForce};
 use softrod::refine::{Quantity, Refinement};
 use softrod::scene::markers::MarkersFile;
 use softrod::scene::{Scene, SceneRobot};
@@ -94,7 +93,8 @@ enum Command {
     /// world axes; [x, y, z] and [tx, ty, tz] in a "spatial_cable" or "ancf3d" scene; optional
     /// "position_weight"/"tangent_weight" per component), or a recorded stream
     /// {"frames": [{"t_s": 0.0, "markers": [...]}, ...]}: one estimate per frame,
-    /// the estimator kept warm, written as {"frames": [{"t_s", "status", "estimate"}, ...]}.
+    /// the estimator kept warm, written as {"frames": [{"t_s", "status", "estimate"}, ...]};
+    /// either may hold a "description" (free text, not read).
     /// Without it, the observation is synthesized: the scene is solved forward
     /// with its own loads and seeded 0.01 mm noise is added at the scene's markers.
     Estimate {

@@ -1,7 +1,8 @@
 //! The markers file of `softrod estimate`: one observation
 //! `{"markers": [...]}`, or a recorded stream
 //! `{"frames": [{"t_s": 0.0, "markers": [...]}, ...]}` (one estimate per
-//! frame, the estimator kept warm).
+//! frame, the estimator kept warm). Either may say what it holds in a
+//! `"description"` (free text, not read).
 //!
 //! Read through the same parser as the scenes (an error names the field by
 //! its path in the file: `frames[2].markers[0].position_m`) and held to the
@@ -34,6 +35,16 @@ pub struct MarkerFrame {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+struct SingleFile {
+    /// What the observation is (free text, not read).
+    #[serde(default)]
+    #[allow(dead_code)]
+    description: Option<String>,
+    markers: Vec<MarkerObservation>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct StreamFile {
     /// What the recording is (free text, not read).
     #[serde(default)]
@@ -51,6 +62,10 @@ struct StreamFile {
 ///     {"t_s": 0.0, "markers": [{"node": 20, "position_m": [0.24, 0.0]}]},
 ///     {"t_s": 0.1, "markers": [{"node": 20, "position_m": [0.24, -0.01]}]}]}"#)?;
 /// assert_eq!(m.observations().len(), 2);
+/// // one observation, with a description (not read)
+/// let one = MarkersFile::from_json(r#"{"description": "the tip at rest",
+///     "markers": [{"node": 20, "position_m": [0.24, 0.0]}]}"#)?;
+/// assert!(!one.is_stream() && one.observations()[0].1.markers.len() == 1);
 /// let e = MarkersFile::from_json(r#"{"frames": [{"t_s": 0.0, "markers": [{"node": 20, "position": [0.24, 0.0]}]}]}"#)
 ///     .unwrap_err();
 /// assert_eq!(e.field(), Some("frames[0].markers[0].position"), "{e}");
@@ -92,7 +107,10 @@ impl MarkersFile {
             let file: StreamFile = super::json::parse(text).map_err(located)?;
             MarkersFile::Stream(file.frames)
         } else {
-            MarkersFile::Single(super::json::parse(text).map_err(located)?)
+            let file: SingleFile = super::json::parse(text).map_err(located)?;
+            MarkersFile::Single(Observation {
+                markers: file.markers,
+            })
         };
         file.check()?;
         Ok(file)
