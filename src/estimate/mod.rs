@@ -59,9 +59,10 @@
 //!   `q = q(F)` by the static solve, Gauss–Newton steps on `F`.
 //! - [`SqpEstimator`] ("sqp"): (25) as a sequence of QPs in `(du, dF)` with
 //!   the linearized equilibrium as equality constraints, solved by clarabel;
-//!   it also takes bounds on `w` ([`LoadBound`]).
+//!   it also takes bounds on the load ([`LoadBound`]).
 //!
-//! Both solve the same problem and agree at convergence.
+//! Both run on every [`EstimationModel`] (the clamped robot, every
+//! structure), solve the same problem and agree at convergence.
 //!
 //! # Example
 //! ```

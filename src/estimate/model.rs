@@ -10,7 +10,7 @@ use crate::assembly::Robot;
 use crate::element::Element;
 use crate::loads::{Loads, PointForce};
 use crate::site::{Site, Sites};
-use crate::structure::{BodyLoad, Model, Rod, Structure, StructureLoads};
+use crate::structure::{BodyLoad, DofMap, Model, Rod, Structure, StructureLoads};
 
 mod sealed {
     use super::super::newton::far::FullSpaceSolve;
@@ -82,6 +82,11 @@ pub trait EstimationModel:
     /// The largest change of a position coordinate in the step `dq` (m):
     /// the nodes' positions and the bodies' (slopes and angles left out).
     fn max_position_change(&self, dq: &[f64]) -> f64;
+
+    /// The map `q = φ(u)` from the free coordinates to all coordinates
+    /// (whether it is linear decides what the sqp backend may keep
+    /// constant).
+    fn dof_map(&self) -> &DofMap;
 }
 
 impl<E: Element + 'static> EstimationModel for Robot<E> {
@@ -89,6 +94,10 @@ impl<E: Element + 'static> EstimationModel for Robot<E> {
 
     fn field_rod(&self) -> Option<&Rod<E>> {
         Some(self.rod())
+    }
+
+    fn dof_map(&self) -> &DofMap {
+        Robot::dof_map(self)
     }
 
     fn reference_q(&self) -> DVector<f64> {
@@ -137,6 +146,10 @@ impl<E: Element + 'static> EstimationModel for Structure<E> {
 
     fn field_rod(&self) -> Option<&Rod<E>> {
         None
+    }
+
+    fn dof_map(&self) -> &DofMap {
+        Structure::dof_map(self)
     }
 
     fn reference_q(&self) -> DVector<f64> {

@@ -1,8 +1,6 @@
 //! The far start of a cold reduced solve: the sqp backend's full-space
 //! iterations over `(q, F)` (see the [module documentation](super)).
 
-use crate::assembly::Robot;
-use crate::element::Element;
 use crate::error::Result;
 use crate::observe::ObservationOperator;
 use crate::statics::tracker::FactoredTangent;
@@ -44,7 +42,7 @@ impl<M: EstimationModel> Clone for FullSpaceBox<M> {
     }
 }
 
-impl<E: Element + 'static> FullSpaceSolve<Robot<E>> for SqpEstimator<E> {
+impl<M: EstimationModel> FullSpaceSolve<M> for SqpEstimator<M> {
     fn solve_one(
         &mut self,
         op: &ObservationOperator,
@@ -63,15 +61,15 @@ impl<E: Element + 'static> FullSpaceSolve<Robot<E>> for SqpEstimator<E> {
         SqpEstimator::take_final_qp(self, q, op)
     }
 
-    fn boxed_clone(&self) -> Box<dyn FullSpaceSolve<Robot<E>>> {
+    fn boxed_clone(&self) -> Box<dyn FullSpaceSolve<M>> {
         Box::new(self.clone())
     }
 }
 
 /// The sqp backend's full-space iterations over a copy of `problem`.
-pub(crate) fn sqp_full_space<E: Element + 'static>(
-    problem: &Problem<Robot<E>>,
-) -> Option<Box<dyn FullSpaceSolve<Robot<E>>>> {
+pub(crate) fn sqp_full_space<M: EstimationModel>(
+    problem: &Problem<M>,
+) -> Option<Box<dyn FullSpaceSolve<M>>> {
     let sqp = SqpEstimator::over(problem.clone()).ok()?;
     Some(Box::new(sqp))
 }
