@@ -326,10 +326,12 @@ pub struct LoadBound {
     pub frame: BoundFrame,
     /// Direction `d` (`DIM` entries, need not be unit).
     pub direction: Vec<f64>,
-    /// Lower bound of `d · w` (N/m), if any.
+    /// Lower bound of `d · w` (N/m; N for a force at a node or a site), if
+    /// any.
     #[serde(default)]
     pub min_n_per_m: Option<f64>,
-    /// Upper bound of `d · w` (N/m), if any.
+    /// Upper bound of `d · w` (N/m; N for a force at a node or a site), if
+    /// any.
     #[serde(default)]
     pub max_n_per_m: Option<f64>,
 }

@@ -128,6 +128,16 @@ impl<M: EstimationModel> Problem<M> {
             if settings.load_model == LoadModel::Distributed {
                 field_rod(&robot)?.locate(&format!("estimator.bounds[{i}].s_m"), b.s_m)?;
             }
+            if let LoadModel::AtSite { site } | LoadModel::Along { site, .. } = settings.load_model
+                && b.frame == BoundFrame::Local
+                && matches!(site, crate::site::Site::Body { .. })
+            {
+                return Err(Error::invalid(
+                    format!("estimator.bounds[{i}].frame"),
+                    "local",
+                    "a rigid body's site has no tangent: give the direction in world axes",
+                ));
+            }
         }
         let tracker = Tracker::new(robot, known, settings.statics.clone())?;
         Ok(Problem {
