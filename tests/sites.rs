@@ -13,9 +13,8 @@
 //! - On the robot, a force at the node's site is the concentrated load at
 //!   the node, bit for bit, through the estimator.
 //! - The one-rod structure estimates the robot's tip force through the same
-//!   estimator: the same optimum, force to 1e-9 and shape to 1e-10 of the robot's
-//!   (the robot's cold estimate takes the sqp far start, the structure's
-//!   the reduced iteration alone).
+//!   estimator: the same optimum, force to 1e-9 and shape to 1e-10 of the robot's,
+//!   by either backend (both cold estimates may take the sqp far start).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use nalgebra::{DMatrix, Vector2};
@@ -323,7 +322,7 @@ fn the_one_rod_structure_estimates_the_robots_load() {
         },
         alpha: Some(1e-6),
         // to the optimum, not to a tenth of its standard deviation: the
-        // robot's cold estimate takes the far start, the structure's not
+        // two may stop at different iterates
         statistical_tolerance: 0.0,
         ..EstimatorSettings::default()
     };

@@ -12,34 +12,6 @@ use crate::loads::{Loads, PointForce};
 use crate::site::{Site, Sites};
 use crate::structure::{BodyLoad, DofMap, Model, Rod, Structure, StructureLoads};
 
-mod sealed {
-    use super::super::newton::far::FullSpaceSolve;
-    use super::super::problem::Problem;
-    use super::EstimationModel;
-
-    /// The estimators' hooks into a model that users need not implement:
-    /// the full-space iterations of the newton backend's far start.
-    pub trait Hooks: Sized {
-        /// The full-space iterations over a copy of `problem`, if the model
-        /// has them.
-        fn full_space(problem: &Problem<Self>) -> Option<Box<dyn FullSpaceSolve<Self>>>
-        where
-            Self: EstimationModel;
-    }
-
-    impl<E: crate::element::Element + 'static> Hooks for crate::assembly::Robot<E> {
-        fn full_space(problem: &Problem<Self>) -> Option<Box<dyn FullSpaceSolve<Self>>> {
-            super::super::newton::far::sqp_full_space(problem)
-        }
-    }
-
-    impl<E: crate::element::Element + 'static> Hooks for crate::structure::Structure<E> {
-        fn full_space(_: &Problem<Self>) -> Option<Box<dyn FullSpaceSolve<Self>>> {
-            None
-        }
-    }
-}
-
 /// A model the estimators run on.
 ///
 /// # Example
@@ -54,7 +26,6 @@ mod sealed {
 pub trait EstimationModel:
     Model<Loads: Clone + Default + PartialEq + std::fmt::Debug + Send + Sync>
     + Sites
-    + sealed::Hooks
     + 'static
     + Clone
     + std::fmt::Debug
