@@ -28,6 +28,7 @@ use std::time::Duration;
 use criterion::{Criterion, criterion_group, criterion_main};
 use softrod::control::parallel::ParallelController;
 use softrod::control::{ControllerKind, UpdaterGains};
+use softrod::estimate::Backend;
 use softrod::parallel::ParallelSpec;
 use softrod::parallel::payload::fig8_configurations;
 
@@ -53,7 +54,12 @@ fn bench(c: &mut Criterion) {
         b.iter(|| black_box(cable.solve(&cable_loads, None).unwrap()))
     });
     g.bench_function("payload_step/actuated", |b| {
-        b.iter(|| black_box(full.estimate_payload(&p, [x[0], x[1], x[2]], 5e-5).unwrap()))
+        b.iter(|| {
+            black_box(
+                full.estimate_payload(&p, [x[0], x[1], x[2]], 5e-5, Backend::Newton)
+                    .unwrap(),
+            )
+        })
     });
     let mut warm = softrod::parallel::warm::WarmStatics::new(full.clone()).unwrap();
     warm.factor_at(

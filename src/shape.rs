@@ -36,10 +36,10 @@
 use nalgebra::{DVector, Point2, SMatrix, SVector, Vector2};
 
 use crate::assembly::Robot;
-use crate::element::{Element, NodeKinematics, PlanarCable};
+use crate::element::{NodeKinematics, PlanarCable};
 use crate::error::{Error, Result, check_len};
 use crate::estimate::{
-    Backend, Estimate, Estimator, EstimatorSettings, NewtonEstimator, SqpEstimator,
+    Backend, Estimate, EstimationModel, Estimator, EstimatorSettings, NewtonEstimator, SqpEstimator,
 };
 use crate::loads::Loads;
 use crate::statics::Equilibrium;
@@ -443,9 +443,10 @@ impl Estimate {
 
 impl EstimatorSettings {
     /// An estimator of the backend these settings name
-    /// ([`EstimatorSettings::backend`]), for `robot` under the known loads
-    /// `known` (both borrowed, cloned into the estimator): the backend is
-    /// chosen once, in the settings.
+    /// ([`EstimatorSettings::backend`]), for `robot` (the clamped robot or
+    /// any structure: the parallel robot, the gripper's fingers) under the
+    /// known loads `known` (both borrowed, cloned into the estimator): the
+    /// backend is chosen once, in the settings.
     ///
     /// # Errors
     /// As [`NewtonEstimator::new`] and [`SqpEstimator::new`].
@@ -462,11 +463,11 @@ impl EstimatorSettings {
     /// assert_eq!(robot.n_elements(), 20); // still ours
     /// # Ok::<(), softrod::Error>(())
     /// ```
-    pub fn build_for<E: Element + 'static>(
+    pub fn build_for<M: EstimationModel>(
         &self,
-        robot: &Robot<E>,
-        known: &Loads,
-    ) -> Result<Box<dyn Estimator>> {
+        robot: &M,
+        known: &M::Loads,
+    ) -> Result<Box<dyn Estimator<M::Loads>>> {
         Ok(match self.backend {
             Backend::Newton => Box::new(NewtonEstimator::new(robot, known, self)?),
             Backend::Sqp => Box::new(SqpEstimator::new(robot, known, self)?),

@@ -13,14 +13,15 @@
 //! - On the robot, a force at the node's site is the concentrated load at
 //!   the node, bit for bit, through the estimator.
 //! - The one-rod structure estimates the robot's tip force through the same
-//!   estimator: the same optimum, force to 1e-9 and shape to 1e-10 of the robot's
-//!   (the robot's cold estimate takes the sqp far start, the structure's
-//!   the reduced iteration alone).
+//!   estimator: the same optimum, force to 1e-9 and shape to 1e-10 of the robot's,
+//!   by either backend (both cold estimates may take the sqp far start).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use nalgebra::{DMatrix, Vector2};
 use softrod::assembly::{RobotSpec, Section};
-use softrod::estimate::{Estimator, EstimatorSettings, LoadModel, NewtonEstimator};
+use softrod::estimate::{
+    Backend, BoundFrame, Estimator, EstimatorSettings, LoadBound, LoadModel, NewtonEstimator,
+};
 use softrod::loads::{Loads, PointForce};
 use softrod::observe::{MarkerObservation, Observation, ObservationOperator};
 use softrod::scene::Scene;
@@ -259,7 +260,12 @@ fn the_parallel_payload_is_a_force_at_the_platform_site() {
     // the parallel robot's own entry point is this estimate
     let x = robot.platform_pose(loaded.q.as_slice()).unwrap();
     let p = robot
-        .estimate_payload(&[], x.fixed_rows::<3>(0).into_owned(), sigma)
+        .estimate_payload(
+            &[],
+            x.fixed_rows::<3>(0).into_owned(),
+            sigma,
+            Backend::Newton,
+        )
         .unwrap();
     assert!(p.status.is_converged());
     assert!((p.force_n - nalgebra::Vector3::from_column_slice(e.f.as_slice())).amax() < 1e-9);
@@ -316,7 +322,7 @@ fn the_one_rod_structure_estimates_the_robots_load() {
         },
         alpha: Some(1e-6),
         // to the optimum, not to a tenth of its standard deviation: the
-        // robot's cold estimate takes the far start, the structure's not
+        // two may stop at different iterates
         statistical_tolerance: 0.0,
         ..EstimatorSettings::default()
     };
@@ -343,4 +349,169 @@ fn the_one_rod_structure_estimates_the_robots_load() {
     // test's predicted decrease, 1e-15 of the objective's scale, at
     // different iterates)
     assert!(df < 1e-9 && dq < 1e-10, "{df:.1e} {dq:.1e}");
+}
+
+/// The sqp backend on a structure: the one-rod structure's estimate of the
+/// robot's tip force (as above) by sqp is the robot's by sqp, with bounds
+/// too (the tip force's y component bounded above by −0.02 N, active: the
+/// bound's answer differs from the unbounded one).
+#[test]
+fn the_one_rod_structure_estimates_the_robots_load_by_sqp() {
+    let robot = RobotSpec::new(sections()).build_planar().unwrap();
+    let rod = RodSpec::clamped(sections(), Vector2::zeros(), Vector2::new(1.0, 0.0));
+    let mut spec = StructureSpec::new(vec![rod], vec![], vec![]);
+    spec.gravity_m_per_s2 = robot.spec().gravity_m_per_s2.clone();
+    let structure = spec.build_planar().unwrap();
+    let truth = Loads {
+        point_forces: vec![PointForce {
+            s_m: 0.24,
+            force_n: vec![0.01, -0.03],
+        }],
+        ..Loads::default()
+    };
+    let eq = StaticSolver::default().solve(&robot, &truth, None).unwrap();
+    let sites: Vec<Site> = [0.08, 0.16, 0.24]
+        .map(|s_m| Site::Rod { rod: 0, s_m })
+        .to_vec();
+    let obs = Observation::of_sites(&robot, eq.q.as_slice(), &sites)
+        .unwrap()
+        .with_noise(1e-4, 7);
+    let known = StructureLoads {
+        rods: vec![Loads::default()],
+        ..StructureLoads::default()
+    };
+    let tip = Site::Rod { rod: 0, s_m: 0.24 };
+    let bound = LoadBound {
+        s_m: 0.24,
+        frame: BoundFrame::World,
+        direction: vec![0.0, 1.0],
+        min_n_per_m: None,
+        max_n_per_m: Some(-0.031),
+    };
+    let mut forces = Vec::new();
+    for bounds in [vec![], vec![bound]] {
+        let settings = EstimatorSettings {
+            backend: Backend::Sqp,
+            load_model: LoadModel::AtSite { site: tip },
+            alpha: Some(1e-6),
+            noise_sigma_m: 1e-4,
+            statistical_tolerance: 0.0,
+            bounds,
+            ..EstimatorSettings::default()
+        };
+        let a = settings
+            .build_for(&robot, &Loads::default())
+            .unwrap()
+            .step(&obs)
+            .unwrap();
+        let b = settings
+            .build_for(&structure, &known)
+            .unwrap()
+            .step(&obs)
+            .unwrap();
+        assert!(a.report.status.is_converged(), "{}", a.report);
+        assert!(b.report.status.is_converged(), "{}", b.report);
+        let df = (&a.f - &b.f).amax() / a.f.amax();
+        let dq = (&a.q - &b.q).amax() / 0.24;
+        let dc = (a.covariance_f() - b.covariance_f()).amax() / a.covariance_f().amax();
+        println!(
+            "sqp, {} bounds: one-rod structure vs robot: force {df:.1e}, shape {dq:.1e}, covariance {dc:.1e}",
+            settings.bounds.len()
+        );
+        assert!(
+            df < 1e-8 && dq < 1e-9 && dc < 1e-6,
+            "{df:.1e} {dq:.1e} {dc:.1e}"
+        );
+        forces.push(a.f.clone());
+    }
+    // the bound is active: F_y at its limit, the unbounded F_y above it
+    assert!(forces[0][1] > -0.031 + 1e-4, "{}", forces[0]);
+    assert!((forces[1][1] + 0.031).abs() < 1e-9, "{}", forces[1]);
+}
+
+/// The parallel robot's payload by both backends: the same estimate (force
+/// and covariance), and with a bound the sqp backend's constrained least
+/// squares. The platform is pushed up (a force against gravity, which no
+/// payload makes); bounded to `F·ĝ ≥ 0` (a payload pulls along gravity),
+/// the estimate is the least-squares force perpendicular to `g`, checked
+/// against the platform compliance `C` (a dense LU of the tangent, another
+/// code path): `F⊥ = argmin |C F⊥ − d|` over the plane `F·ĝ = 0`.
+#[test]
+fn the_parallel_payload_by_either_backend() {
+    let robot = softrod::parallel::ParallelSpec::default()
+        .build_cable()
+        .unwrap();
+    let s = robot.structure();
+    let known = robot.loads(&[], [0.0; 3], [0.0; 3]).unwrap();
+    let free = robot.solve(&known, None).unwrap();
+    let x0 = robot.platform_pose(free.q.as_slice()).unwrap();
+    // a 10 g payload: both backends give the same estimate
+    let loaded = robot
+        .solve(
+            &robot.loads(&[], [0.0, 0.0, -0.0981], [0.0; 3]).unwrap(),
+            None,
+        )
+        .unwrap();
+    let x = robot.platform_pose(loaded.q.as_slice()).unwrap();
+    let target = x.fixed_rows::<3>(0).into_owned();
+    let n = robot
+        .estimate_payload(&[], target, 5e-5, Backend::Newton)
+        .unwrap();
+    let q = robot
+        .estimate_payload(&[], target, 5e-5, Backend::Sqp)
+        .unwrap();
+    println!("payload: newton {n:?}\n         sqp {q:?}");
+    assert!(n.status.is_converged() && q.status.is_converged());
+    assert!((n.force_n - q.force_n).amax() < 1e-9 * n.force_n.amax());
+    assert!((n.std_n - q.std_n).amax() < 1e-6 * n.std_n.amax());
+    assert!((q.mass_kg - 0.01).abs() < 1e-6, "{}", q.mass_kg);
+    // pushed up and sideways by (0.02, 0, 0.05) N: bounded to F·ĝ ≥ 0
+    let c = robot.platform_compliance(&free, &known).unwrap();
+    let push = nalgebra::Vector3::new(0.02, 0.0, 0.05);
+    let d = c * push;
+    let target = x0.fixed_rows::<3>(0).into_owned() + d;
+    let platform = Site::Body { body: 0 };
+    let settings = EstimatorSettings {
+        backend: Backend::Sqp,
+        load_model: LoadModel::AtSite { site: platform },
+        alpha: Some(1e-12),
+        statistical_tolerance: 0.0,
+        bounds: vec![LoadBound {
+            s_m: 0.0,
+            frame: BoundFrame::World,
+            direction: vec![0.0, 0.0, -1.0],
+            min_n_per_m: Some(0.0),
+            max_n_per_m: None,
+        }],
+        ..EstimatorSettings::default()
+    };
+    let obs = Observation {
+        markers: vec![MarkerObservation::at_site(
+            &platform,
+            target.as_slice().to_vec(),
+        )],
+    };
+    let e = settings.build_for(s, &known).unwrap().step(&obs).unwrap();
+    assert!(e.report.status.is_converged(), "{}", e.report);
+    // the constrained least squares on the compliance: F = (a, b, 0)
+    let c2 = c.fixed_columns::<2>(0).into_owned();
+    let ab = (c2.transpose() * c2).try_inverse().unwrap() * c2.transpose() * d;
+    let want = nalgebra::Vector3::new(ab[0], ab[1], 0.0);
+    let got = nalgebra::Vector3::from_column_slice(e.f.as_slice());
+    println!("bounded payload: {got:?} against {want:?} (unbounded: {push:?})");
+    assert!(
+        got[2].abs() < 1e-9,
+        "F_z = {} must be at its bound 0",
+        got[2]
+    );
+    assert!(
+        (got - want).amax() < 1e-3 * want.amax(),
+        "{got:?} vs {want:?}"
+    );
+    // and the newton backend refuses bounds
+    let newton = EstimatorSettings {
+        backend: Backend::Newton,
+        ..settings
+    };
+    assert!(newton.build_for(s, &known).is_err());
 }

@@ -710,6 +710,7 @@ pub fn run() -> Result<()> {
                     ps,
                     markers.as_ref(),
                     pressures.map(|p| p.0),
+                    backend.map(Backend::from),
                     out.as_ref(),
                 );
             }

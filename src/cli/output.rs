@@ -543,6 +543,8 @@ pub struct ParallelEstimateRecord {
     /// the answer); always given (`null` only in records of format 1
     /// written before the payload went through the estimator).
     pub status: Option<EstimateStatus>,
+    /// The estimator's backend.
+    pub backend: BackendName,
     pub element: LegElementName,
     /// Where the observation came from.
     pub observation: String,

@@ -66,8 +66,12 @@ pub(super) fn estimate(
     mut scene: ParallelScene,
     markers: Option<&PathBuf>,
     pressures: Option<Vec<f64>>,
+    backend: Option<softrod::estimate::Backend>,
     out: Option<&PathBuf>,
 ) -> Result<()> {
+    if let Some(b) = backend {
+        scene.backend = b;
+    }
     if let Some(p) = pressures {
         scene.pressures_pa = p;
         scene.validate()?;
@@ -111,6 +115,7 @@ pub(super) fn estimate(
                 Outcome::from_ok(converged),
             ),
             status: Some(e.status),
+            backend: scene.backend.into(),
             element: scene.element.into(),
             observation: source,
             force_n: e.force_n.into(),

@@ -46,7 +46,7 @@ pub(crate) enum LoopEstimator<E: Element> {
     /// The reduced Gauss–Newton backend.
     Newton(Box<NewtonEstimator<Robot<E>>>),
     /// The SQP backend.
-    Sqp(Box<SqpEstimator<E>>),
+    Sqp(Box<SqpEstimator<Robot<E>>>),
 }
 
 impl<E: Element + 'static> LoopEstimator<E> {

@@ -59,9 +59,10 @@
 //!   `q = q(F)` by the static solve, Gauss–Newton steps on `F`.
 //! - [`SqpEstimator`] ("sqp"): (25) as a sequence of QPs in `(du, dF)` with
 //!   the linearized equilibrium as equality constraints, solved by clarabel;
-//!   it also takes bounds on `w` ([`LoadBound`]).
+//!   it also takes bounds on the load ([`LoadBound`]).
 //!
-//! Both solve the same problem and agree at convergence.
+//! Both run on every [`EstimationModel`] (the clamped robot, every
+//! structure), solve the same problem and agree at convergence.
 //!
 //! # Example
 //! ```
@@ -325,10 +326,12 @@ pub struct LoadBound {
     pub frame: BoundFrame,
     /// Direction `d` (`DIM` entries, need not be unit).
     pub direction: Vec<f64>,
-    /// Lower bound of `d · w` (N/m), if any.
+    /// Lower bound of `d · w` (N/m; N for a force at a node or a site), if
+    /// any.
     #[serde(default)]
     pub min_n_per_m: Option<f64>,
-    /// Upper bound of `d · w` (N/m), if any.
+    /// Upper bound of `d · w` (N/m; N for a force at a node or a site), if
+    /// any.
     #[serde(default)]
     pub max_n_per_m: Option<f64>,
 }

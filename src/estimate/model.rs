@@ -10,35 +10,7 @@ use crate::assembly::Robot;
 use crate::element::Element;
 use crate::loads::{Loads, PointForce};
 use crate::site::{Site, Sites};
-use crate::structure::{BodyLoad, Model, Rod, Structure, StructureLoads};
-
-mod sealed {
-    use super::super::newton::far::FullSpaceSolve;
-    use super::super::problem::Problem;
-    use super::EstimationModel;
-
-    /// The estimators' hooks into a model that users need not implement:
-    /// the full-space iterations of the newton backend's far start.
-    pub trait Hooks: Sized {
-        /// The full-space iterations over a copy of `problem`, if the model
-        /// has them.
-        fn full_space(problem: &Problem<Self>) -> Option<Box<dyn FullSpaceSolve<Self>>>
-        where
-            Self: EstimationModel;
-    }
-
-    impl<E: crate::element::Element + 'static> Hooks for crate::assembly::Robot<E> {
-        fn full_space(problem: &Problem<Self>) -> Option<Box<dyn FullSpaceSolve<Self>>> {
-            super::super::newton::far::sqp_full_space(problem)
-        }
-    }
-
-    impl<E: crate::element::Element + 'static> Hooks for crate::structure::Structure<E> {
-        fn full_space(_: &Problem<Self>) -> Option<Box<dyn FullSpaceSolve<Self>>> {
-            None
-        }
-    }
-}
+use crate::structure::{BodyLoad, DofMap, Model, Rod, Structure, StructureLoads};
 
 /// A model the estimators run on.
 ///
@@ -54,7 +26,6 @@ mod sealed {
 pub trait EstimationModel:
     Model<Loads: Clone + Default + PartialEq + std::fmt::Debug + Send + Sync>
     + Sites
-    + sealed::Hooks
     + 'static
     + Clone
     + std::fmt::Debug
@@ -82,6 +53,11 @@ pub trait EstimationModel:
     /// The largest change of a position coordinate in the step `dq` (m):
     /// the nodes' positions and the bodies' (slopes and angles left out).
     fn max_position_change(&self, dq: &[f64]) -> f64;
+
+    /// The map `q = φ(u)` from the free coordinates to all coordinates
+    /// (whether it is linear decides what the sqp backend may keep
+    /// constant).
+    fn dof_map(&self) -> &DofMap;
 }
 
 impl<E: Element + 'static> EstimationModel for Robot<E> {
@@ -89,6 +65,10 @@ impl<E: Element + 'static> EstimationModel for Robot<E> {
 
     fn field_rod(&self) -> Option<&Rod<E>> {
         Some(self.rod())
+    }
+
+    fn dof_map(&self) -> &DofMap {
+        Robot::dof_map(self)
     }
 
     fn reference_q(&self) -> DVector<f64> {
@@ -137,6 +117,10 @@ impl<E: Element + 'static> EstimationModel for Structure<E> {
 
     fn field_rod(&self) -> Option<&Rod<E>> {
         None
+    }
+
+    fn dof_map(&self) -> &DofMap {
+        Structure::dof_map(self)
     }
 
     fn reference_q(&self) -> DVector<f64> {

@@ -128,6 +128,16 @@ impl<M: EstimationModel> Problem<M> {
             if settings.load_model == LoadModel::Distributed {
                 field_rod(&robot)?.locate(&format!("estimator.bounds[{i}].s_m"), b.s_m)?;
             }
+            if let LoadModel::AtSite { site } | LoadModel::Along { site, .. } = settings.load_model
+                && b.frame == BoundFrame::Local
+                && matches!(site, crate::site::Site::Body { .. })
+            {
+                return Err(Error::invalid(
+                    format!("estimator.bounds[{i}].frame"),
+                    "local",
+                    "a rigid body's site has no tangent: give the direction in world axes",
+                ));
+            }
         }
         let tracker = Tracker::new(robot, known, settings.statics.clone())?;
         Ok(Problem {
@@ -236,6 +246,15 @@ impl<M: EstimationModel> Problem<M> {
     /// The residual `Q` over the free coordinates at `(q, F)`.
     pub(crate) fn residual(&self, q: &[f64], f: &[f64]) -> Result<Vec<f64>> {
         Ok(self.tracker.residual(&self.load(), q, f)?.data.into())
+    }
+
+    /// The residual `Q` over the free coordinates at `q = φ(u)` under the
+    /// dead force `dead` (the known loads' and the unknown load's).
+    pub(crate) fn residual_under(&self, u: &[f64], q: &[f64], dead: &[f64]) -> Result<Vec<f64>> {
+        let mut out = vec![0.0; self.robot().n_free()];
+        self.robot()
+            .residual_into(u, q, dead, self.known(), &mut out)?;
+        Ok(out)
     }
 
     /// The equilibrium `q(F)` from `q0` (warm; the globalized static solve
@@ -368,6 +387,33 @@ impl<M: EstimationModel> Problem<M> {
     ) -> Result<Derivs> {
         let u = self.robot().free_coordinates_of(q)?;
         self.derivs_of(Sensitivity::at(self.robot(), u.as_slice(), lu)?, op)
+    }
+
+    /// [`Problem::derivs`] at the free coordinates `u` of the equilibrium
+    /// (the clamped robot's map is linear: its `u` is not read).
+    pub(crate) fn derivs_at(
+        &self,
+        u: &[f64],
+        lu: &AutoFactors,
+        op: &ObservationOperator,
+    ) -> Result<Derivs> {
+        self.derivs_of(Sensitivity::at(self.robot(), u, lu)?, op)
+    }
+
+    /// `T(u)ᵀ f`: a force `f` over all coordinates as the free coordinates
+    /// at `u` see it.
+    pub(crate) fn restrict(&self, u: &[f64], f: &[f64]) -> Result<DVector<f64>> {
+        let mut out = DVector::zeros(self.robot().n_free());
+        self.robot().restrict_into(u, f, out.as_mut_slice())?;
+        Ok(out)
+    }
+
+    /// `dq = T(u) du`: a step of the free coordinates at `u` over all
+    /// coordinates.
+    pub(crate) fn expand(&self, u: &[f64], du: &[f64]) -> Result<DVector<f64>> {
+        let mut dq = DVector::zeros(self.robot().n_q());
+        self.robot().step_into(u, du, dq.as_mut_slice())?;
+        Ok(dq)
     }
 
     /// [`Problem::derivs`] from the sensitivities `s` of the equilibrium.
@@ -671,18 +717,6 @@ impl<M: EstimationModel> Problem<M> {
             }
         }
         Ok(self.load_map.get_or_init(|| fw))
-    }
-}
-
-impl<E: Element> Problem<Robot<E>> {
-    /// [`Problem::derivs`] on the clamped robot, whose map `q = φ(u)` is
-    /// linear: no point needed.
-    pub(crate) fn derivs_linear(
-        &self,
-        lu: &AutoFactors,
-        op: &ObservationOperator,
-    ) -> Result<Derivs> {
-        self.derivs_of(Sensitivity::new(self.robot(), lu)?, op)
     }
 }
 

@@ -2,19 +2,19 @@
 //! and `H` (the sqp backend's linearized equilibrium and penalty), as
 //! triplets, probed instead of formed column by column.
 
-use crate::assembly::Robot;
-use crate::element::Element;
+use crate::element::NodeKinematics;
 use crate::error::Result;
 
-use super::LoadModel;
 use super::problem::Problem;
+use super::{EstimationModel, LoadModel};
 
 /// Sparse entries `(row, column, value)`, sorted by column then row.
 pub(crate) type Triplets = Vec<(usize, usize, f64)>;
 
-impl<E: Element> Problem<Robot<E>> {
-    /// The constant matrices of the load over the free coordinates, as
-    /// triplets sorted by column then row: `(i, j, (Mᵀ G)_ij)` (nonzero
+impl<M: EstimationModel> Problem<M> {
+    /// The matrices of the load over the free coordinates at `u` (constant
+    /// where the map `q = φ(u)` is linear), as triplets sorted by column
+    /// then row: `(i, j, (Mᵀ G)_ij)` (nonzero
     /// entries) and the upper triangle of `H`, `(i, j, H_ij)` with `i ≤ j`.
     ///
     /// Column `j` is `Mᵀ G e_j`. For the distributed load (`G = H = B`,
@@ -25,12 +25,12 @@ impl<E: Element> Problem<Robot<E>> {
     /// `3 NODE_DOFS` products instead of `n_F` (the entries are the same
     /// numbers: one nonzero per element and row enters each sum). Any other
     /// load or map: column by column.
-    pub(crate) fn load_triplets(&self) -> Result<(Triplets, Triplets)> {
+    pub(crate) fn load_triplets(&self, u: &[f64]) -> Result<(Triplets, Triplets)> {
         let nf = self.n_f();
         let mut g_free = Vec::new();
         let mut h_upper = Vec::new();
         if let Some(node_of_free) = self.free_nodes() {
-            let nd = E::NODE_DOFS;
+            let nd = M::Element::NODE_DOFS;
             let n_nodes = self.robot().n_q() / nd;
             // the probed node (≡ c mod 3) next to node m, if any
             let source = |m: usize, c: usize| -> Option<usize> {
@@ -42,7 +42,7 @@ impl<E: Element> Problem<Robot<E>> {
                     for m in (c..n_nodes).step_by(3) {
                         probe[m * nd + k] = 1.0;
                     }
-                    let col = self.robot().restrict(&self.gen_force(&probe)?)?;
+                    let col = self.restrict(u, &self.gen_force(&probe)?)?;
                     for (i, v) in col.iter().enumerate() {
                         if *v != 0.0
                             && let Some(m) = source(node_of_free[i], c)
@@ -69,18 +69,18 @@ impl<E: Element> Problem<Robot<E>> {
             h_upper.sort_unstable_by(by_column);
             return Ok((g_free, h_upper));
         }
-        self.load_triplets_by_columns()
+        self.load_triplets_by_columns(u)
     }
 
     /// [`Problem::load_triplets`] column by column (`n_F` products).
-    fn load_triplets_by_columns(&self) -> Result<(Triplets, Triplets)> {
+    fn load_triplets_by_columns(&self, u: &[f64]) -> Result<(Triplets, Triplets)> {
         let nf = self.n_f();
         let mut g_free = Vec::new();
         let mut h_upper = Vec::new();
         for j in 0..nf {
             let mut ej = vec![0.0; nf];
             ej[j] = 1.0;
-            let col = self.robot().restrict(&self.gen_force(&ej)?)?;
+            let col = self.restrict(u, &self.gen_force(&ej)?)?;
             for (i, v) in col.iter().enumerate() {
                 if *v != 0.0 {
                     g_free.push((i, j, *v));
@@ -100,9 +100,9 @@ impl<E: Element> Problem<Robot<E>> {
     /// within one node (see [`Problem::load_triplets`]): the node of each
     /// free coordinate; `None` otherwise.
     fn free_nodes(&self) -> Option<Vec<usize>> {
-        let nd = E::NODE_DOFS;
+        let nd = M::Element::NODE_DOFS;
         let robot = self.robot();
-        let map = robot.dof_map();
+        let map = EstimationModel::dof_map(robot);
         if self.load() != LoadModel::Distributed
             || !map.is_linear()
             || !robot.n_q().is_multiple_of(nd)
@@ -128,8 +128,10 @@ impl<E: Element> Problem<Robot<E>> {
 mod tests {
     use super::*;
     use crate::assembly::{Base, Clamp, Robot, RobotSpec, Section};
+    use crate::element::Element;
     use crate::estimate::EstimatorSettings;
     use crate::loads::Loads;
+    use crate::structure::Assembled;
 
     /// `load_triplets` against `load_triplets_by_columns` on `robot`,
     /// for both load models.
@@ -146,8 +148,9 @@ mod tests {
                 load_model == LoadModel::Distributed,
                 "{what} {n} {load_model:?}"
             );
-            let fast = p.load_triplets().unwrap();
-            let slow = p.load_triplets_by_columns().unwrap();
+            let u = robot.reference_free_coordinates();
+            let fast = p.load_triplets(u.as_slice()).unwrap();
+            let slow = p.load_triplets_by_columns(u.as_slice()).unwrap();
             assert!(!fast.0.is_empty() && !fast.1.is_empty());
             assert_eq!(fast, slow, "{what} {n} elements {load_model:?}");
         }

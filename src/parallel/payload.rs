@@ -27,7 +27,7 @@ use nalgebra::{DVector, Matrix3, Vector3, Vector6};
 use super::ParallelRobot;
 use crate::element::Element;
 use crate::error::{Error, Result, check_all_finite};
-use crate::estimate::{EstimateStatus, Estimator, EstimatorSettings, LoadModel, NewtonEstimator};
+use crate::estimate::{Backend, EstimateStatus, EstimatorSettings, LoadModel};
 use crate::observe::{MarkerObservation, Observation};
 use crate::rng::Gaussian;
 use crate::site::Site;
@@ -36,8 +36,8 @@ use crate::statics::Equilibrium;
 pub use crate::estimate::PAYLOAD_ALPHA;
 
 /// An estimated payload: the force at the platform's centre by the
-/// estimator ([`crate::estimate::NewtonEstimator`] with the force at the
-/// platform's site, [`crate::estimate::LoadModel::AtSite`]).
+/// estimator (either backend, with the force at the platform's site,
+/// [`crate::estimate::LoadModel::AtSite`]).
 ///
 /// # Example
 /// ```
@@ -118,8 +118,11 @@ impl<E: Element> ParallelRobot<E> {
     /// at `target_m` under the chamber pressures `pressures_pa` (32)–(35):
     /// the estimate of a force at the platform's site from one marker
     /// there, with the marker noise `noise_sigma_m` (m) for its standard
-    /// deviations, by the one estimator of every model (its warm tracker,
-    /// its fit test, its covariance).
+    /// deviations, by the one estimator of every model and the backend
+    /// `backend` (its warm tracker, its fit test, its covariance; both
+    /// backends reach the same estimate). For bounds on the force, build
+    /// the estimator on [`ParallelRobot::structure`] with
+    /// [`EstimatorSettings::build_for`] and the sqp backend.
     ///
     /// # Errors
     /// As [`ParallelRobot::loads`]; [`Error::InvalidParameter`]
@@ -128,11 +131,13 @@ impl<E: Element> ParallelRobot<E> {
     ///
     /// # Example
     /// ```
+    /// use softrod::estimate::Backend;
     /// let robot = softrod::parallel::ParallelSpec::default().build_full()?;
     /// // the platform where a 10 g payload puts it
     /// let loaded = robot.solve(&robot.loads(&[], [0.0, 0.0, -0.0981], [0.0; 3])?, None)?;
     /// let x = robot.platform_pose(loaded.q.as_slice())?;
-    /// let e = robot.estimate_payload(&[], x.fixed_rows::<3>(0).into_owned(), 5e-5)?;
+    /// let target = x.fixed_rows::<3>(0).into_owned();
+    /// let e = robot.estimate_payload(&[], target, 5e-5, Backend::Newton)?;
     /// assert!(e.status.is_converged());
     /// assert!((e.mass_kg - 0.01).abs() < 1e-6);
     /// // 0.05 mm of marker noise: grams of uncertainty (the compliance is 1.4e-4 m/N)
@@ -144,18 +149,20 @@ impl<E: Element> ParallelRobot<E> {
         pressures_pa: &[f64],
         target_m: impl Into<nalgebra::Vector3<f64>>,
         noise_sigma_m: f64,
+        backend: Backend,
     ) -> Result<PayloadEstimate> {
         let target_m: [f64; 3] = target_m.into().into();
         check_all_finite("target_m", &target_m)?;
         let known = self.loads(pressures_pa, [0.0; 3], [0.0; 3])?;
         let platform = Site::Body { body: 0 };
         let settings = EstimatorSettings {
+            backend,
             load_model: LoadModel::AtSite { site: platform },
             alpha: Some(PAYLOAD_ALPHA),
             noise_sigma_m,
             ..EstimatorSettings::default()
         };
-        let mut estimator = NewtonEstimator::new(&self.structure, &known, &settings)?;
+        let mut estimator = settings.build_for(&self.structure, &known)?;
         let observation = Observation {
             markers: vec![MarkerObservation::at_site(&platform, target_m.to_vec())],
         };
@@ -299,7 +306,12 @@ pub fn mass_experiment<E: Element, P: Element>(
             let before = measure(plant.platform_pose(plant_free.q.as_slice())?);
             let after = measure(plant.platform_pose(loaded.q.as_slice())?);
             let target = [0, 1, 2].map(|i| x_model[i] + after[i] - before[i]);
-            let e = model.estimate_payload(p, target, measurement_sigma(&measurement))?;
+            let e = model.estimate_payload(
+                p,
+                target,
+                measurement_sigma(&measurement),
+                Backend::Newton,
+            )?;
             if !e.status.is_converged() {
                 return Err(Error::EstimateNotConverged {
                     status: e.status,

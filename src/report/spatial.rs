@@ -84,6 +84,7 @@ pub fn run(opts: &ReportOptions) -> Result<(SpatialReport, Vec<PathBuf>)> {
             platform_force_n: vec![0.0, 0.0, -0.2 * 9.81],
             platform_moment_nm: Vec::new(),
             marker_sigma_m: 0.05e-3,
+            backend: Default::default(),
         };
         shapes.push(scene.solve()?);
         pb.inc(1);

@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::element::Element;
 use crate::error::{Error, Result, check_all_finite, check_len};
+use crate::estimate::Backend;
 use crate::parallel::payload::PayloadEstimate;
 use crate::parallel::{LegElement, ParallelRobot, ParallelSpec};
 use crate::statics::Equilibrium;
@@ -69,6 +70,10 @@ pub struct ParallelScene {
     /// difference of two measurements, has `√2` times this).
     #[serde(default = "default_marker_sigma")]
     pub marker_sigma_m: f64,
+    /// The estimator's backend for the payload estimate (default
+    /// `newton`; `softrod estimate --backend` overrides it).
+    #[serde(default)]
+    pub backend: Backend,
 }
 
 /// The default [`ParallelScene::marker_sigma_m`]: 0.05 mm.
@@ -339,7 +344,12 @@ impl ParallelScene {
         let free = robot.solve(&self.loads_of(robot, [0.0; 3])?, None)?;
         let x = robot.platform_pose(free.q.as_slice())?;
         let target = [0, 1, 2].map(|i| x[i] + loaded_m[i] - unloaded_m[i]);
-        robot.estimate_payload(&self.pressures_pa, target, self.noise_sigma_m())
+        robot.estimate_payload(
+            &self.pressures_pa,
+            target,
+            self.noise_sigma_m(),
+            self.backend,
+        )
     }
 }
 

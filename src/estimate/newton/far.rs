@@ -1,80 +1,12 @@
 //! The far start of a cold reduced solve: the sqp backend's full-space
 //! iterations over `(q, F)` (see the [module documentation](super)).
 
-use crate::assembly::Robot;
-use crate::element::Element;
-use crate::error::Result;
 use crate::observe::ObservationOperator;
-use crate::statics::tracker::FactoredTangent;
 
 use super::super::EstimationModel;
-use super::super::driver::{Method, Solved};
+use super::super::driver::Method;
 use super::super::problem::{Derivs, Problem};
 use super::super::sqp::SqpEstimator;
-
-/// The full-space iterations over `(q, F)` a far start runs on a model (the
-/// sqp backend's, on the clamped robot; a model without them has no far
-/// start and its reduced iteration backtracks on its own).
-pub trait FullSpaceSolve<M: EstimationModel>: std::fmt::Debug + Send + Sync {
-    /// One solve from `(f0, q0)` at `alpha` for `op`.
-    fn solve_one(
-        &mut self,
-        op: &ObservationOperator,
-        f0: Vec<f64>,
-        q0: Vec<f64>,
-        alpha: f64,
-    ) -> Result<Solved>;
-    /// The last QP's factored tangent and derivatives, if taken at `q`.
-    fn take_final_qp(
-        &mut self,
-        q: &[f64],
-        op: &ObservationOperator,
-    ) -> Option<(FactoredTangent, Derivs)>;
-    /// A copy (the estimator is `Clone`).
-    fn boxed_clone(&self) -> Box<dyn FullSpaceSolve<M>>;
-}
-
-/// The full-space iterations of a far start, once made.
-#[derive(Debug)]
-pub(crate) struct FullSpaceBox<M: EstimationModel>(pub(crate) Box<dyn FullSpaceSolve<M>>);
-
-impl<M: EstimationModel> Clone for FullSpaceBox<M> {
-    fn clone(&self) -> Self {
-        FullSpaceBox(self.0.boxed_clone())
-    }
-}
-
-impl<E: Element + 'static> FullSpaceSolve<Robot<E>> for SqpEstimator<E> {
-    fn solve_one(
-        &mut self,
-        op: &ObservationOperator,
-        f0: Vec<f64>,
-        q0: Vec<f64>,
-        alpha: f64,
-    ) -> Result<Solved> {
-        Method::solve_one(self, op, f0, q0, alpha)
-    }
-
-    fn take_final_qp(
-        &mut self,
-        q: &[f64],
-        op: &ObservationOperator,
-    ) -> Option<(FactoredTangent, Derivs)> {
-        SqpEstimator::take_final_qp(self, q, op)
-    }
-
-    fn boxed_clone(&self) -> Box<dyn FullSpaceSolve<Robot<E>>> {
-        Box::new(self.clone())
-    }
-}
-
-/// The sqp backend's full-space iterations over a copy of `problem`.
-pub(crate) fn sqp_full_space<E: Element + 'static>(
-    problem: &Problem<Robot<E>>,
-) -> Option<Box<dyn FullSpaceSolve<Robot<E>>>> {
-    let sqp = SqpEstimator::over(problem.clone()).ok()?;
-    Some(Box::new(sqp))
-}
 
 /// The full-space iterations of a far start: from `(f, q)`, an
 /// equilibrium, the estimate at `alpha` for `op` by the sqp backend's
@@ -104,7 +36,7 @@ pub(crate) fn sqp_full_space<E: Element + 'static>(
 /// which restore the equilibrium in the same linear solve as the step,
 /// take 7 iterations of one factorization each.
 pub(super) fn full_space<M: EstimationModel>(
-    inner: &mut Option<FullSpaceBox<M>>,
+    inner: &mut Option<Box<SqpEstimator<M>>>,
     core: &Problem<M>,
     op: &ObservationOperator,
     f: &[f64],
@@ -114,10 +46,10 @@ pub(super) fn full_space<M: EstimationModel>(
 ) -> Option<FullSpace> {
     if inner.is_none() {
         // the same problem (its analysis, its unloaded start)
-        *inner = Some(FullSpaceBox(M::full_space(core)?));
+        *inner = Some(Box::new(SqpEstimator::over(core.clone()).ok()?));
     }
-    let sqp = &mut inner.as_mut()?.0;
-    let s = sqp.solve_one(op, f.to_vec(), q.to_vec(), alpha).ok()?;
+    let sqp = inner.as_mut()?;
+    let s = Method::solve_one(sqp.as_mut(), op, f.to_vec(), q.to_vec(), alpha).ok()?;
     if !(s.report.status.is_converged() && s.report.objective < obj) {
         return None;
     }

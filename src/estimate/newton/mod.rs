@@ -104,7 +104,7 @@ pub struct NewtonEstimator<M: EstimationModel> {
     hf_cache: Option<(Vec<f64>, Vec<f64>)>,
     /// The full-space iterations of a far start (made when first needed;
     /// see [`full_space`]).
-    full_space: Option<far::FullSpaceBox<M>>,
+    full_space: Option<Box<super::sqp::SqpEstimator<M>>>,
     /// The far starts of the solves since the driver last took the log.
     far_log: FarStart,
 }

@@ -32,7 +32,7 @@ pub(super) struct Reduced<'a, M: EstimationModel> {
     /// The last estimate `F` and `H F` there.
     pub(super) hf_cache: &'a mut Option<(Vec<f64>, Vec<f64>)>,
     /// The full-space iterations of a far start.
-    pub(super) inner: &'a mut Option<super::far::FullSpaceBox<M>>,
+    pub(super) inner: &'a mut Option<Box<super::super::sqp::SqpEstimator<M>>>,
     pub(super) op: &'a ObservationOperator,
     pub(super) alpha: f64,
     pub(super) settings: EstimatorSettings,

@@ -9,8 +9,7 @@ use clarabel::solver::{NonnegativeConeT, SupportedConeT, ZeroConeT};
 use crate::cone::{self, Failure, Tolerances};
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
-use crate::assembly::Robot;
-use crate::element::{ArcPoint, Element};
+use crate::element::{ArcPoint, Element, NodeKinematics};
 use crate::error::{Error, Result};
 use crate::linsolve::{AutoFactors, Factorization, SymmetricMatrix};
 use crate::numeric::{dot, norm2};
@@ -18,8 +17,9 @@ use crate::observe::ObservationOperator;
 
 use super::super::gn_form::weighted_columns;
 use super::super::gn_form::{GnForm, count_dense};
+use super::super::load_model::field_rod;
 use super::super::problem::{Derivs, Problem};
-use super::super::{BoundFrame, LoadModel};
+use super::super::{BoundFrame, EstimationModel, LoadModel};
 use super::{QpError, QpStep, SqpEstimator, Unconstrained};
 
 /// One bound row `a · dF ≤ h` (`a` sparse over the load parameters).
@@ -28,55 +28,75 @@ pub(super) struct Ineq {
     pub h: f64,
 }
 
-impl<E: Element> SqpEstimator<E> {
+impl<M: EstimationModel> SqpEstimator<M> {
     /// Rows `(coefficients over F, lo, hi)` of the load bounds at shape `q`.
     #[allow(clippy::type_complexity)]
     fn bound_rows(&self, q: &[f64]) -> Result<Vec<(Vec<(usize, f64)>, Option<f64>, Option<f64>)>> {
-        let d = E::DIM;
-        let nd = E::NODE_DOFS;
+        let d: usize = M::Element::DIM;
+        let nd = M::Element::NODE_DOFS;
         let problem = &self.stream.problem;
-        let robot = problem.robot();
+        let model = problem.robot();
         // slot k of element e: node e + k/2, its value (k even) or slope
         let slot = |e: usize, k: usize, i: usize| (e + k / 2) * nd + (k % 2) * d + i;
+        let local = |t: &mut Vec<f64>| -> Vec<f64> {
+            let n = norm2(t).max(1e-300);
+            t.iter_mut().for_each(|v| *v /= n);
+            t.clone()
+        };
         let mut rows = Vec::new();
         for b in &problem.settings().bounds {
-            let p = match problem.load() {
-                LoadModel::Distributed => robot.arc_point("bound.s_m", b.s_m)?,
-                LoadModel::Concentrated { node } => {
-                    let (e, xi) = if node == 0 { (0, 0.0) } else { (node - 1, 1.0) };
-                    ArcPoint::new(e, xi, robot.elements()[e].length())
-                }
-                LoadModel::AtSite { site } | LoadModel::Along { site, .. } => match site {
-                    crate::site::Site::Rod { s_m, .. } => {
-                        robot.arc_point("estimator.load_model.site.s_m", s_m)?
-                    }
-                    crate::site::Site::Body { body } => {
-                        return Err(crate::site::no_body("estimator.load_model.site", body));
-                    }
-                },
-            };
-            let (e, sh) = (p.element, p.values);
-            // world direction
-            let dir: Vec<f64> = match b.frame {
-                BoundFrame::World => b.direction.clone(),
-                BoundFrame::Local => {
+            // the field's point (distributed and nodal loads) and the unit
+            // tangent there when the bound is in the local frame
+            let (point, tangent) = match problem.load() {
+                LoadModel::Distributed | LoadModel::Concentrated { .. } => {
+                    let rod = field_rod(model)?;
+                    let p = match problem.load() {
+                        LoadModel::Concentrated { node } => {
+                            let (e, xi) = if node == 0 { (0, 0.0) } else { (node - 1, 1.0) };
+                            ArcPoint::new(e, xi, rod.elements()[e].length())
+                        }
+                        _ => rod.arc_point("bound.s_m", b.s_m)?,
+                    };
                     let mut t = vec![0.0; d];
                     p.slope_into(q, &mut t)?;
-                    let n = norm2(&t).max(1e-300);
-                    t.iter_mut().for_each(|v| *v /= n);
-                    if d == 2 {
-                        let nrm = [-t[1], t[0]];
-                        (0..2)
-                            .map(|i| b.direction[0] * t[i] + b.direction[1] * nrm[i])
-                            .collect()
-                    } else {
-                        // 3-D: refused when the problem is built (no section frame)
-                        b.direction.clone()
-                    }
+                    (Some(p), Some(local(&mut t)))
                 }
+                LoadModel::AtSite { site } | LoadModel::Along { site, .. } => {
+                    let field = "estimator.load_model.site";
+                    let t = match b.frame {
+                        BoundFrame::World => None,
+                        BoundFrame::Local => {
+                            let mut t = model.site_rows(field, &site)?.tangent_at(q).ok_or_else(|| {
+                                crate::Error::invalid(
+                                    "estimator.bounds.frame",
+                                    "local",
+                                    "a rigid body's site has no tangent: bound it in the world frame",
+                                )
+                            })?;
+                            Some(local(&mut t))
+                        }
+                    };
+                    (None, t)
+                }
+            };
+            // world direction
+            let dir: Vec<f64> = match (b.frame, tangent) {
+                (BoundFrame::Local, Some(t)) if d == 2 => {
+                    let nrm = [-t[1], t[0]];
+                    (0..2)
+                        .map(|i| b.direction[0] * t[i] + b.direction[1] * nrm[i])
+                        .collect()
+                }
+                // the world frame; 3-D local bounds are refused when the
+                // problem is built (no section frame)
+                _ => b.direction.clone(),
             };
             let coeffs: Vec<(usize, f64)> = match problem.load() {
                 LoadModel::Distributed => {
+                    // (the point is always there for the distributed load)
+                    let (e, sh) = point
+                        .map(|p| (p.element, p.values))
+                        .unwrap_or((0, [0.0; 4]));
                     let mut c = Vec::new();
                     for (k, sk) in sh.iter().enumerate() {
                         for (i, di) in dir.iter().enumerate() {
@@ -140,6 +160,7 @@ impl<E: Element> SqpEstimator<E> {
         k: &SymmetricMatrix,
         lu: &AutoFactors,
         op: &ObservationOperator,
+        u: &[f64],
         q: &[f64],
         f: &[f64],
         e: &[f64],
@@ -150,7 +171,7 @@ impl<E: Element> SqpEstimator<E> {
         let ineq = self.inequalities(q, f)?;
         let problem = &self.stream.problem;
         let Unconstrained { dv, df0, g1, fac } =
-            self.unconstrained(lu, op, f, e, r, alpha, None)?;
+            self.unconstrained(lu, op, u, f, e, r, alpha, None)?;
         let reduced = Reduced::new(problem, self.gram_lu.as_ref(), &dv, op, alpha);
         let solve_from = |start: &[usize]| -> Option<(Vec<f64>, Vec<usize>)> {
             active_set_solve(reduced.as_ref()?, &ineq, f, &df0, start)
@@ -159,7 +180,7 @@ impl<E: Element> SqpEstimator<E> {
         let (df, act, exact) = match warm {
             Some((df, act)) => (df, act, true),
             None => {
-                let (df_ip, act) = self.clarabel_df(k, op, r, alpha, &c, &ineq)?;
+                let (df_ip, act) = self.clarabel_df(k, op, u, r, alpha, &c, &ineq)?;
                 match solve_from(&act) {
                     Some((df, act)) => (df, act, true),
                     None => (df_ip, act, false),
@@ -177,7 +198,7 @@ impl<E: Element> SqpEstimator<E> {
             .fold(0.0f64, f64::max);
         let dec_opt = exact.then(|| (-dot(&g1, &df)).max(0.0));
         let du = self.du_from(lu, r, &df)?;
-        let lambda_max = self.lambda_max(&dv, op, e, &du)?;
+        let lambda_max = self.lambda_max(&dv, op, u, e, &du)?;
         Ok((
             QpStep {
                 du,
@@ -196,11 +217,14 @@ impl<E: Element> SqpEstimator<E> {
     }
 
     /// The full-space QP with bounds by clarabel's interior-point method at
-    /// the tangent `k`: its load step and the bounds active in its solution.
+    /// the tangent `k` at `u`: its load step and the bounds active in its
+    /// solution.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn clarabel_df(
         &self,
         k: &SymmetricMatrix,
         op: &ObservationOperator,
+        u: &[f64],
         r: &[f64],
         alpha: f64,
         c: &[f64],
@@ -220,7 +244,7 @@ impl<E: Element> SqpEstimator<E> {
             for &(j, v) in row.entries() {
                 dense[j] += v;
             }
-            let ma = robot.restrict(&dense)?;
+            let ma = problem.restrict(u, &dense)?;
             let nz: Vec<(usize, f64)> = ma
                 .iter()
                 .copied()
@@ -389,8 +413,8 @@ pub(super) struct Reduced<'a> {
 }
 
 impl<'a> Reduced<'a> {
-    pub(super) fn new<E: Element>(
-        problem: &Problem<Robot<E>>,
+    pub(super) fn new<M: EstimationModel>(
+        problem: &Problem<M>,
         gram_lu: Option<&'a AutoFactors>,
         dv: &'a Derivs,
         op: &ObservationOperator,
@@ -536,12 +560,18 @@ mod tests {
         let op = problem.operator(&obs).unwrap();
         let (_, _, e) = problem.objective(&op, &q, &f, alpha).unwrap();
         let r = problem.residual(&q, &f).unwrap();
-        let c = est.linear_term(&op, &f, &e, alpha).unwrap();
+        let u: Vec<f64> = crate::structure::Stepping::free_coordinates_of(&robot, &q)
+            .unwrap()
+            .data
+            .into();
+        let c = est.linear_term(&op, &u, &f, &e, alpha).unwrap();
         let ineq = est.inequalities(&q, &f).unwrap();
-        let un = est.unconstrained(lu, &op, &f, &e, &r, alpha, None).unwrap();
+        let un = est
+            .unconstrained(lu, &op, &u, &f, &e, &r, alpha, None)
+            .unwrap();
         let mut w0 = r.clone();
         lu.solve_in_place(&mut w0).unwrap();
-        let dq0 = problem.robot().expand_step(&w0).unwrap();
+        let dq0 = problem.expand(&u, &w0).unwrap();
         let e1: Vec<f64> = (0..op.len())
             .map(|i| e[i] + op.rows()[i].apply(dq0.as_slice()))
             .collect();
@@ -553,7 +583,7 @@ mod tests {
             wr + alpha * problem.penalty(&ft).unwrap()
         };
         let red = Reduced::new(problem, est.gram_lu.as_ref(), &un.dv, &op, alpha).unwrap();
-        let (df_ip, act_ip) = est.clarabel_df(k, &op, &r, alpha, &c, &ineq).unwrap();
+        let (df_ip, act_ip) = est.clarabel_df(k, &op, &u, &r, alpha, &c, &ineq).unwrap();
         let (df_a, act_a) = active_set_solve(&red, &ineq, &f, &un.df0, &[]).unwrap();
         let (df_b, act_b) = active_set_solve(&red, &ineq, &f, &un.df0, &act_ip).unwrap();
         assert!(!act_a.is_empty(), "the test needs active bounds");

@@ -4,7 +4,6 @@
 //! function with its second-order correction, and the exact equilibrium
 //! at the final load. [`SqpEstimator::iterate`] strings them together.
 
-use crate::element::Element;
 use crate::error::Result;
 use crate::linsolve::{AutoFactors, Factorization};
 use crate::numeric::{dot, max_abs, norm2};
@@ -14,13 +13,15 @@ use crate::statics::tracker::{FactoredTangent, chord_converged};
 
 use super::super::driver::Solved;
 use super::super::problem::{Derivs, GnFactor};
-use super::super::{Backend, EstimateCriterion, EstimateReport, EstimateStatus};
+use super::super::{Backend, EstimateCriterion, EstimateReport, EstimateStatus, EstimationModel};
 use super::{SqpEstimator, WarmQp, trust};
 
-/// A point of the iteration: `(q, F)` (not necessarily an equilibrium),
-/// the dead force there, the residual `Q` and the objective's parts. An
-/// accepted line-search trial hands its own on to the next iteration.
+/// A point of the iteration: `(q, F)` (not necessarily an equilibrium)
+/// with the free coordinates `u` of `q = φ(u)`, the dead force there, the
+/// residual `Q` and the objective's parts. An accepted line-search trial
+/// hands its own on to the next iteration.
 struct Point {
+    u: Vec<f64>,
     q: Vec<f64>,
     f: Vec<f64>,
     dead: Vec<f64>,
@@ -65,7 +66,7 @@ struct Solve<'a> {
     n_ob: f64,
 }
 
-impl<E: Element> SqpEstimator<E> {
+impl<M: EstimationModel> SqpEstimator<M> {
     /// The SQP solve from `(f0, q0)` at `alpha` for `op`: QPs until the
     /// convergence tests hold at a feasible point, the budget runs out, a
     /// QP or the line search fails; then the exact equilibrium at the
@@ -82,7 +83,7 @@ impl<E: Element> SqpEstimator<E> {
         let sv = Solve {
             op,
             alpha,
-            len: robot.length(),
+            len: robot.length_m(),
             n_free: robot.n_free(),
             n_ob: op.len() as f64,
         };
@@ -99,19 +100,19 @@ impl<E: Element> SqpEstimator<E> {
         let mut radius = settings.max_observation_jump_m;
         let status = loop {
             let obj = p.wr + p.pen;
-            let load = norm2(self.stream.problem.robot().restrict(&p.dead)?.as_slice()).max(1e-12);
+            let load = norm2(self.stream.problem.restrict(&p.u, &p.dead)?.as_slice()).max(1e-12);
             let rn = norm2(&p.r);
             if iterations >= settings.max_iterations {
                 break EstimateStatus::IterationLimit { iterations };
             }
-            let (qp, tangent) = match self.qp(op, &p.q, &p.f, &p.e, &p.r, alpha) {
+            let (qp, tangent) = match self.qp(op, &p.u, &p.q, &p.f, &p.e, &p.r, alpha) {
                 Ok(s) => s,
                 Err(err) => break err.status()?,
             };
             at_q = qp.derivs;
             let lu = &last.insert(tangent).factors;
             iterations += 1;
-            let step = self.trust_cut(op, qp.du, qp.df, &qp.c, radius)?;
+            let step = self.trust_cut(op, &p.u, qp.du, qp.df, &qp.c, radius)?;
             let scale = obj.max(sv.n_ob);
             // feasible: |Q| relative to the applied loads, or at the round-off
             // floor ε |K|max |q|∞ √n (which grows with the element count)
@@ -167,13 +168,16 @@ impl<E: Element> SqpEstimator<E> {
         self.answer(&sv, p, at_q, last, status, iterations)
     }
 
-    /// The point `(q, F)`: its dead force, residual and objective.
+    /// The point `(q, F)`: its free coordinates, dead force, residual and
+    /// objective.
     fn point(&self, sv: &Solve<'_>, q: Vec<f64>, f: Vec<f64>) -> Result<Point> {
         let problem = &self.stream.problem;
+        let u = problem.robot().free_coordinates_of(&q)?.data.into();
         let dead = problem.dead_with(&f)?;
         let r = problem.residual(&q, &f)?;
         let (wr, pen, e) = problem.objective(sv.op, &q, &f, sv.alpha)?;
         Ok(Point {
+            u,
             q,
             f,
             dead,
@@ -185,11 +189,12 @@ impl<E: Element> SqpEstimator<E> {
     }
 
     /// The trust region on the QP step's predicted marker motion: the step
-    /// `(du, dF)` scaled to move no marker by more than `radius`, with the
-    /// model decrease `−cᵀ d` of the step before the cut.
+    /// `(du, dF)` at `u` scaled to move no marker by more than `radius`,
+    /// with the model decrease `−cᵀ d` of the step before the cut.
     fn trust_cut(
         &self,
         op: &ObservationOperator,
+        u: &[f64],
         mut du: Vec<f64>,
         mut df: Vec<f64>,
         c: &[f64],
@@ -199,7 +204,7 @@ impl<E: Element> SqpEstimator<E> {
         dm.extend_from_slice(&df);
         // model decrease of the objective
         let dec = (-dot(c, &dm)).max(0.0);
-        let mut dq = self.stream.problem.robot().expand_step(&du)?;
+        let mut dq = self.stream.problem.expand(u, &du)?;
         let moved = op
             .rows()
             .iter()
@@ -239,12 +244,15 @@ impl<E: Element> SqpEstimator<E> {
     ) -> Result<Option<f64>> {
         let obj = p.wr + p.pen;
         let mut t = 1.0;
+        let robot = self.stream.problem.robot();
+        let du = &step.dm[..robot.n_free()];
+        let (mut ut, mut qt) = (p.u.clone(), p.q.clone());
         for _ in 0..30 {
-            let qt: Vec<f64> = p.q.iter().zip(&step.dq).map(|(a, b)| a + t * b).collect();
+            robot.advance_into(&p.u, &p.q, du, step.dq.as_slice(), t, &mut ut, &mut qt)?;
             let ft: Vec<f64> = p.f.iter().zip(&step.df).map(|(a, b)| a + t * b).collect();
             let problem = &self.stream.problem;
             let dead_t = problem.dead_with(&ft)?;
-            let (qt, rt) = self.corrected(qt, &dead_t, lu, m.load)?;
+            let (ut, qt, rt) = self.corrected(ut.clone(), qt.clone(), &dead_t, lu, m.load)?;
             let (wr_t, pen_t, e_t) = problem.objective(sv.op, &qt, &ft, sv.alpha)?;
             let phi_t = wr_t + pen_t + m.mu * rt.iter().map(|v| v.abs()).sum::<f64>();
             let small = m.dec <= 1e-8 * m.scale && m.rn <= 1e-6 * m.load;
@@ -254,6 +262,7 @@ impl<E: Element> SqpEstimator<E> {
             let descends = wr_t + pen_t <= obj + 1e-4 * t * m.lin.min(0.0);
             if m.phi_t_accepts(phi_t, t) || small || (feasible_t && descends) {
                 *p = Point {
+                    u: ut,
                     q: qt,
                     f: ft,
                     dead: dead_t,
@@ -269,23 +278,23 @@ impl<E: Element> SqpEstimator<E> {
         Ok(None)
     }
 
-    /// The second-order correction of a trial shape `qt` under the dead
-    /// force `dead_t`: up to four chord steps `u += K⁻¹ Q(q_t, F_t)` with
-    /// the factorization `lu` while the residual shrinks (to `1e-10` of the
-    /// applied load `load`). The corrected shape and its residual.
+    /// The second-order correction of a trial shape `qt = φ(ut)` under the
+    /// dead force `dead_t`: up to four chord steps `u += K⁻¹ Q(q_t, F_t)`
+    /// with the factorization `lu` while the residual shrinks (to `1e-10`
+    /// of the applied load `load`). The corrected point and its residual.
+    #[allow(clippy::type_complexity)]
     fn corrected(
         &self,
+        mut ut: Vec<f64>,
         mut qt: Vec<f64>,
         dead_t: &[f64],
         lu: &AutoFactors,
         load: f64,
-    ) -> Result<(Vec<f64>, Vec<f64>)> {
+    ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
         let problem = &self.stream.problem;
-        let mut rt: Vec<f64> = problem
-            .robot()
-            .residual(&qt, dead_t, problem.known())?
-            .data
-            .into();
+        let robot = problem.robot();
+        let (mut uc, mut qc) = (ut.clone(), qt.clone());
+        let mut rt = problem.residual_under(&ut, &qt, dead_t)?;
         let mut rn_t = norm2(rt.as_slice());
         for _ in 0..4 {
             let mut du_c = rt.clone();
@@ -293,25 +302,22 @@ impl<E: Element> SqpEstimator<E> {
             if !du_c.iter().all(|v| v.is_finite()) {
                 break;
             }
-            let corr = problem.robot().expand_step(du_c.as_slice())?;
-            let qc: Vec<f64> = qt.iter().zip(&corr).map(|(a, b)| a + b).collect();
-            let rc: Vec<f64> = problem
-                .robot()
-                .residual(&qc, dead_t, problem.known())?
-                .data
-                .into();
+            let corr = problem.expand(&ut, du_c.as_slice())?;
+            robot.advance_into(&ut, &qt, &du_c, corr.as_slice(), 1.0, &mut uc, &mut qc)?;
+            let rc = problem.residual_under(&uc, &qc, dead_t)?;
             let rn_c = norm2(rc.as_slice());
             if rn_c.is_nan() || rn_c >= rn_t {
                 break;
             }
-            qt = qc;
+            std::mem::swap(&mut ut, &mut uc);
+            std::mem::swap(&mut qt, &mut qc);
             rt = rc;
             rn_t = rn_c;
             if rn_t <= 1e-10 * load {
                 break;
             }
         }
-        Ok((qt, rt))
+        Ok((ut, qt, rt))
     }
 
     /// The answer at the last point: its exact equilibrium at the final
@@ -397,7 +403,9 @@ impl<E: Element> SqpEstimator<E> {
         let len = sv.len;
         let lu = &tangent.factors;
         let problem = &self.stream.problem;
-        let mut qc = p.q.clone();
+        let robot = problem.robot();
+        let (mut uc, mut qc) = (p.u.clone(), p.q.clone());
+        let (mut u1, mut q1) = (uc.clone(), qc.clone());
         let mut rc = p.r.clone();
         let mut moved = 0.0;
         let mut prev = f64::INFINITY;
@@ -410,13 +418,11 @@ impl<E: Element> SqpEstimator<E> {
             if !step.is_finite() || moved > 1e-6 * len {
                 break;
             }
-            let dq = problem.robot().expand_step(&w)?;
-            qc.iter_mut().zip(&dq).for_each(|(a, b)| *a += b);
-            rc = problem
-                .robot()
-                .residual(&qc, &p.dead, problem.known())?
-                .data
-                .into();
+            let dq = problem.expand(&uc, &w)?;
+            robot.advance_into(&uc, &qc, &w, dq.as_slice(), 1.0, &mut u1, &mut q1)?;
+            std::mem::swap(&mut uc, &mut u1);
+            std::mem::swap(&mut qc, &mut q1);
+            rc = problem.residual_under(&uc, &qc, &p.dead)?;
             // below 1e-10 L, or predicted so by the contraction so far
             if chord_converged(step, prev, moved, len) {
                 done = true;

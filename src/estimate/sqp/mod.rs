@@ -1,9 +1,12 @@
 //! The constrained estimator (25) by sequential quadratic programming.
 //!
-//! Unknowns: the free coordinates `u` (so `q = q(u)`, linear: the base
-//! stretch and nodes 1…N) and the load parameters `F`. The objective is
-//! quadratic in `(u, F)`, only the equilibrium `Q(F, q, P) = 0` (17) is
-//! nonlinear. Each iteration takes a full-space step `(du, dF)` from the QP
+//! Unknowns: the free coordinates `u` of any model (`q = φ(u)`: on the
+//! clamped robot linear, the base stretch and nodes 1…N; on a structure
+//! with rigid joints, such as the parallel robot, nonlinear in the bodies'
+//! rotations) and the load parameters `F`. `M = ∂φ/∂u` below is taken at
+//! the QP's point, and `Mᵀ G` is kept constant only where `φ` is linear.
+//! On the clamped robot the objective is quadratic in `(u, F)` and only
+//! the equilibrium `Q(F, q, P) = 0` (17) is nonlinear. Each iteration takes a full-space step `(du, dF)` from the QP
 //!
 //! ```text
 //! min_{du, dF}  ½ dᵀ P d + cᵀ d
@@ -77,24 +80,24 @@ mod trust;
 
 use clarabel::solver::SolverStatus;
 
-use crate::assembly::Robot;
-use crate::element::Element;
+use crate::element::NodeKinematics;
 use crate::error::{Error, Result};
 use crate::linsolve::SolverKind;
 use crate::linsolve::{
     AutoFactors, AutoSolver, FactorOptions, Factorization, SymmetricMatrix, SymmetricPattern,
     TangentSolver,
 };
-use crate::loads::Loads;
 use crate::numeric::{dot, max_abs};
 use crate::observe::{ObsRow, ObservationOperator};
 use crate::outcome::NonFiniteAt;
 use crate::statics::tracker::FactoredTangent;
 
 use super::driver::{Method, Solved, Stream, run_step};
+use super::load_model::field_rod;
 use super::problem::{Derivs, GnFactor, Problem, columns};
 use super::{
-    Backend, Estimate, EstimateStatus, Estimator, EstimatorSettings, LoadModel, Observation,
+    Backend, Estimate, EstimateStatus, EstimationModel, Estimator, EstimatorSettings, LoadModel,
+    Observation,
 };
 
 /// Why an SQP subproblem was not solved: clarabel's status, or an error of
@@ -149,10 +152,15 @@ impl QpError {
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone)]
-pub struct SqpEstimator<E: Element> {
-    stream: Stream<Robot<E>>,
-    /// Triplets `(free row, F column, value)` of `Mᵀ G` (constant).
+pub struct SqpEstimator<M: EstimationModel> {
+    stream: Stream<M>,
+    /// Triplets `(free row, F column, value)` of `Mᵀ G` at the last QP's
+    /// point (constant where the map `q = φ(u)` is linear).
     g_free: Vec<(usize, usize, f64)>,
+    /// Whether `g_free` is constant (a linear map `q = φ(u)`: the clamped
+    /// robot, a structure without rigid joints); else it is formed again
+    /// at each QP's point.
+    g_fixed: bool,
     /// Upper-triangle triplets of `H` (constant).
     h_upper: Vec<(usize, usize, f64)>,
     /// The factored load Gram matrix `B` (distributed load with bounds).
@@ -177,26 +185,26 @@ struct WarmQp {
     dv: Derivs,
 }
 
-impl<E: Element> SqpEstimator<E> {
+impl<M: EstimationModel> SqpEstimator<M> {
     /// The estimation problem (tests set its Gauss–Newton form).
     #[cfg(test)]
-    pub(crate) fn problem_mut(&mut self) -> &mut super::problem::Problem<Robot<E>> {
+    pub(crate) fn problem_mut(&mut self) -> &mut super::problem::Problem<M> {
         &mut self.stream.problem
     }
 
-    /// An estimator for `robot` under the known loads `known` (both
-    /// borrowed; the estimator keeps copies). `settings.backend` must be
+    /// An estimator for `robot` (the clamped robot or any structure) under
+    /// the known loads `known` (both borrowed; the estimator keeps copies). `settings.backend` must be
     /// [`super::Backend::Sqp`]: the backend is chosen once, by the settings
     /// ([`EstimatorSettings::build_for`] builds the one they name).
     ///
     /// # Errors
     /// [`crate::Error::InvalidParameter`] for invalid settings or bounds, or
     /// another backend (`estimator.backend`); the errors of
-    /// [`Robot::validate_loads`].
+    /// [`crate::structure::Assembled::validate_loads`].
     ///
     /// # Example
     /// See [`SqpEstimator`].
-    pub fn new(robot: &Robot<E>, known: &Loads, settings: &EstimatorSettings) -> Result<Self> {
+    pub fn new(robot: &M, known: &M::Loads, settings: &EstimatorSettings) -> Result<Self> {
         if settings.backend != super::Backend::Sqp {
             return Err(crate::Error::invalid(
                 "estimator.backend",
@@ -214,8 +222,10 @@ impl<E: Element> SqpEstimator<E> {
     /// The estimator over `problem` (its settings naming the sqp backend):
     /// the constant triplets of `Mᵀ G` and `H` and, for bounds on a
     /// distributed load, the factored load Gram matrix.
-    pub(crate) fn over(problem: Problem<Robot<E>>) -> Result<Self> {
-        let (g_free, h_upper) = problem.load_triplets()?;
+    pub(crate) fn over(problem: Problem<M>) -> Result<Self> {
+        let u = problem.robot().reference_free_coordinates();
+        let (g_free, h_upper) = problem.load_triplets(u.as_slice())?;
+        let g_fixed = EstimationModel::dof_map(problem.robot()).is_linear();
         let gram_lu = match problem.load() {
             LoadModel::Distributed if !problem.settings().bounds.is_empty() => Some(gram_factors(
                 problem.robot(),
@@ -226,6 +236,7 @@ impl<E: Element> SqpEstimator<E> {
         Ok(SqpEstimator {
             stream: Stream::new(problem),
             g_free,
+            g_fixed,
             h_upper,
             gram_lu,
             active_set: None,
@@ -233,8 +244,8 @@ impl<E: Element> SqpEstimator<E> {
         })
     }
 
-    /// The robot.
-    pub fn robot(&self) -> &Robot<E> {
+    /// The model.
+    pub fn robot(&self) -> &M {
         self.stream.problem.robot()
     }
 
@@ -257,10 +268,12 @@ impl<E: Element> SqpEstimator<E> {
     /// with bounds `bounded_qp` (whose clarabel matrix reads `K` itself).
     /// Returns the step and the factored tangent it was computed with (for
     /// the second-order correction); the tracker keeps the factors for its
-    /// chord steps.
+    /// chord steps. `u`: the free coordinates of `q`.
+    #[allow(clippy::too_many_arguments)]
     fn qp(
         &mut self,
         op: &ObservationOperator,
+        u: &[f64],
         q: &[f64],
         f: &[f64],
         e: &[f64],
@@ -282,11 +295,14 @@ impl<E: Element> SqpEstimator<E> {
             },
         };
         let (k, lu) = (&tangent.matrix, &tangent.factors);
-        let c = self.linear_term(op, f, e, alpha)?;
+        if !self.g_fixed {
+            self.g_free = self.stream.problem.load_triplets(u)?.0;
+        }
+        let c = self.linear_term(op, u, f, e, alpha)?;
         let step = if self.stream.problem.settings().bounds.is_empty() {
-            self.equality_qp(k, lu, op, f, e, r, alpha, c, cached)?
+            self.equality_qp(k, lu, op, u, f, e, r, alpha, c, cached)?
         } else {
-            let (step, act) = self.bounded_qp(k, lu, op, q, f, e, r, alpha, c)?;
+            let (step, act) = self.bounded_qp(k, lu, op, u, q, f, e, r, alpha, c)?;
             self.active_set = Some(act);
             step
         };
@@ -297,10 +313,11 @@ impl<E: Element> SqpEstimator<E> {
         Ok((step, tangent))
     }
 
-    /// The QP objective's linear term `c = 2 [Mᵀ AᵀW e; α H F]`.
+    /// The QP objective's linear term `c = 2 [Mᵀ AᵀW e; α H F]` at `u`.
     fn linear_term(
         &self,
         op: &ObservationOperator,
+        u: &[f64],
         f: &[f64],
         e: &[f64],
         alpha: f64,
@@ -312,7 +329,7 @@ impl<E: Element> SqpEstimator<E> {
                 wa[j] += 2.0 * w * ei * v;
             }
         }
-        let mut c: Vec<f64> = problem.robot().restrict(&wa)?.data.into();
+        let mut c: Vec<f64> = problem.restrict(u, &wa)?.data.into();
         c.extend(problem.penalty_grad(f)?.iter().map(|v| 2.0 * alpha * v));
         Ok(c)
     }
@@ -330,6 +347,7 @@ impl<E: Element> SqpEstimator<E> {
         k: &SymmetricMatrix,
         lu: &AutoFactors,
         op: &ObservationOperator,
+        u: &[f64],
         f: &[f64],
         e: &[f64],
         r: &[f64],
@@ -342,10 +360,10 @@ impl<E: Element> SqpEstimator<E> {
             df0: df,
             g1,
             fac,
-        } = self.unconstrained(lu, op, f, e, r, alpha, cached)?;
+        } = self.unconstrained(lu, op, u, f, e, r, alpha, cached)?;
         let dec_opt = (-dot(&g1, &df)).max(0.0);
         let du = self.du_from(lu, r, &df)?;
-        let lambda_max = self.lambda_max(&dv, op, e, &du)?;
+        let lambda_max = self.lambda_max(&dv, op, u, e, &du)?;
         Ok(QpStep {
             du,
             df,
@@ -363,12 +381,14 @@ impl<E: Element> SqpEstimator<E> {
     /// The QP's solution without bounds, by block elimination: the
     /// restored residual `e' = e + A M K⁻¹ Q`, the derivatives at `q`, the
     /// Gauss–Newton load step there and the reduced gradient at `e'`.
-    /// `cached`: the derivatives at `q`, if known.
+    /// `u`: the free coordinates of `q`; `cached`: the derivatives at `q`,
+    /// if known.
     #[allow(clippy::too_many_arguments)]
     fn unconstrained(
         &self,
         lu: &AutoFactors,
         op: &ObservationOperator,
+        u: &[f64],
         f: &[f64],
         e: &[f64],
         r: &[f64],
@@ -378,7 +398,7 @@ impl<E: Element> SqpEstimator<E> {
         let problem = &self.stream.problem;
         let mut w0 = r.to_vec();
         lu.solve_in_place(&mut w0)?;
-        let dq0 = problem.robot().expand_step(&w0)?;
+        let dq0 = problem.expand(u, &w0)?;
         let e1: Vec<f64> = e
             .iter()
             .zip(op.rows())
@@ -386,7 +406,7 @@ impl<E: Element> SqpEstimator<E> {
             .collect();
         let dv = match cached {
             Some(dv) => dv,
-            None => problem.derivs_linear(lu, op)?,
+            None => problem.derivs_at(u, lu, op)?,
         };
         let (df0, fac) = problem.gn_solve(&dv, op, &e1, f, alpha)?;
         let g1 = problem.gradient(&dv, op, &e1, f, alpha)?;
@@ -410,12 +430,13 @@ impl<E: Element> SqpEstimator<E> {
         &self,
         dv: &Derivs,
         op: &ObservationOperator,
+        u: &[f64],
         e: &[f64],
         du: &[f64],
     ) -> Result<f64> {
-        let robot = self.stream.problem.robot();
-        let dq = robot.expand_step(du)?;
-        let mut lam = vec![0.0; robot.n_q()];
+        let problem = &self.stream.problem;
+        let dq = problem.expand(u, du)?;
+        let mut lam = vec![0.0; problem.robot().n_q()];
         for (((zi, row), w), ei) in columns(&dv.z).zip(op.rows()).zip(op.weights()).zip(e) {
             let s = 2.0 * w * (ei + row.apply(dq.as_slice()));
             lam.iter_mut().zip(zi).for_each(|(a, b)| *a += s * b);
@@ -424,10 +445,10 @@ impl<E: Element> SqpEstimator<E> {
     }
 }
 
-impl<E: Element> Method<Robot<E>> for SqpEstimator<E> {
+impl<M: EstimationModel> Method<M> for SqpEstimator<M> {
     const BACKEND: Backend = Backend::Sqp;
 
-    fn stream(&mut self) -> &mut Stream<Robot<E>> {
+    fn stream(&mut self) -> &mut Stream<M> {
         &mut self.stream
     }
 
@@ -442,13 +463,15 @@ impl<E: Element> Method<Robot<E>> for SqpEstimator<E> {
     }
 }
 
-/// The factors of the load Gram matrix `B = ∫ Sᵀ S dX` (22) over all
-/// `n_q` coordinates: element `e` couples the coordinates of its two nodes.
-fn gram_factors<E: Element>(robot: &Robot<E>, kind: SolverKind) -> Result<AutoFactors> {
-    let nd = E::NODE_DOFS;
-    let elements = (0..robot.n_elements()).map(|e| (e * nd..(e + 2) * nd).collect::<Vec<_>>());
-    let pattern = std::sync::Arc::new(SymmetricPattern::from_elements(robot.n_q(), elements)?);
-    let gram = robot.load_gram();
+/// The factors of the load Gram matrix `B = ∫ Sᵀ S dX` (22) over the
+/// field rod's coordinates (the first of `q`): element `e` couples the
+/// coordinates of its two nodes.
+fn gram_factors<M: EstimationModel>(model: &M, kind: SolverKind) -> Result<AutoFactors> {
+    let rod = field_rod(model)?;
+    let nd = M::Element::NODE_DOFS;
+    let elements = (0..rod.elements().len()).map(|e| (e * nd..(e + 2) * nd).collect::<Vec<_>>());
+    let pattern = std::sync::Arc::new(SymmetricPattern::from_elements(rod.n_q(), elements)?);
+    let gram = rod.load_gram();
     let mut b = SymmetricMatrix::zeros(pattern.clone());
     let slots: Vec<(usize, usize)> = b.iter_upper().map(|(i, j, _)| (i, j)).collect();
     for (i, j) in slots {
@@ -502,7 +525,7 @@ struct Unconstrained {
     fac: GnFactor,
 }
 
-impl<E: Element + 'static> Estimator for SqpEstimator<E> {
+impl<M: EstimationModel> Estimator<M::Loads> for SqpEstimator<M> {
     fn step(&mut self, observation: &Observation) -> Result<Estimate> {
         run_step(self, observation)
     }
@@ -520,7 +543,7 @@ impl<E: Element + 'static> Estimator for SqpEstimator<E> {
         self.warm_qp = None;
     }
 
-    fn set_known_loads(&mut self, known: Loads) -> Result<()> {
+    fn set_known_loads(&mut self, known: M::Loads) -> Result<()> {
         self.stream.problem.set_known(known)?;
         self.warm_qp = None;
         Ok(())
