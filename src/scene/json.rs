@@ -81,15 +81,19 @@ pub(crate) fn parse<T: DeserializeOwned>(text: &str) -> std::result::Result<T, P
 }
 
 /// One attempt: the tracked path (without the `?` of unidentified
-/// segments) and the message.
+/// segments) and the message. Text after the value (anything but
+/// whitespace) is an error of the whole file, as in `serde_json::from_str`:
+/// a scene followed by more text is not the scene.
 fn try_parse<T: DeserializeOwned>(text: &str) -> std::result::Result<T, (String, String)> {
     let de = &mut serde_json::Deserializer::from_str(text);
-    serde_path_to_error::deserialize(de).map_err(|e| {
+    let value = serde_path_to_error::deserialize(&mut *de).map_err(|e| {
         let path = e.path().to_string();
         let path = path.trim_end_matches(".?").trim_end_matches('?');
         let path = if path == "." { "" } else { path }.to_string();
         (path, e.into_inner().to_string())
-    })
+    })?;
+    de.end().map_err(|e| (String::new(), e.to_string()))?;
+    Ok(value)
 }
 
 /// A step of a path: a key or an index.
