@@ -435,7 +435,6 @@ fn estimate_out<E: Element>(
 ) -> EstimateBody {
     let nodes = node_outs(robot, e.q.as_slice());
     let d = e.resultant_force_n.len();
-    let m = e.marker_residuals.len();
     let cov = e.resultant_force_cov();
     EstimateBody {
         status: e.report.status,
@@ -475,9 +474,7 @@ fn estimate_out<E: Element>(
         },
         marker_residuals_m: e.marker_residuals.as_slice().to_vec(),
         markers: marker_fits(robot, e.q.as_slice(), obs),
-        marker_std_m: (0..m)
-            .map(|i| e.marker_cov()[(i, i)].max(0.0).sqrt())
-            .collect(),
+        marker_std_m: e.marker_std().as_slice().to_vec(),
         max_load_parameter_std: e.std_f().iter().copied().fold(0.0, f64::max),
         noise_sigma_m: e.noise_sigma_m,
         determined_directions: e.determined_directions(),

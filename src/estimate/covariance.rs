@@ -21,6 +21,39 @@ use super::problem::{Derivs, GnFactor};
 mod lazy;
 pub(crate) use lazy::{CovarianceInputs, LazyCovariances};
 
+/// What of the marker-space covariance `Cov(A q)` a formula forms: nothing,
+/// its diagonal (`n_ob` numbers, work linear in the markers in the primal
+/// form) or all of it (`n_ob²` numbers, row-major).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum MarkerPart {
+    /// Not formed (empty).
+    None,
+    /// The variances only.
+    Diagonal,
+    /// The whole matrix.
+    Full,
+}
+
+impl MarkerPart {
+    /// The numbers the part has for `m` observed components.
+    fn len(self, m: usize) -> usize {
+        match self {
+            MarkerPart::None => 0,
+            MarkerPart::Diagonal => m,
+            MarkerPart::Full => m * m,
+        }
+    }
+
+    /// The part of the symmetric `m × m` matrix `a`.
+    fn of(self, a: &DMatrix<f64>) -> Vec<f64> {
+        match self {
+            MarkerPart::None => Vec::new(),
+            MarkerPart::Diagonal => a.diagonal().as_slice().to_vec(),
+            MarkerPart::Full => row_major(a),
+        }
+    }
+}
+
 /// The covariance factor `L = σ (JᵀWJ + αH)⁻¹ JᵀW` (`n_F × n_ob`), from
 /// the Gauss–Newton system's factor at the same derivatives when it was
 /// formed at `alpha` (else anew): `σ Z S⁻¹` in the representer form
@@ -116,8 +149,9 @@ fn primal_factor(
 /// the form of the system, `nd` coordinates per node (the first `DIM` of them the
 /// position), `w` the weights; `gn`: the factor of the Gauss–Newton system
 /// at the same derivatives, if at hand (used when formed at this `α`).
-/// `markers`: whether to form `Cov(A q)` (`O(n_ob² n_F)` work and
-/// `n_ob²` numbers; empty otherwise).
+/// `markers`: what of `Cov(A q)` to form (all of it: `O(n_ob² n_F)` work
+/// and `n_ob²` numbers; its diagonal in the primal form `|L⁻¹ j_i|²`,
+/// `N = L Lᵀ`: `O(n_ob n_F²)` work and `n_ob` numbers).
 #[allow(clippy::too_many_arguments)]
 fn posterior(
     form: &GnForm,
@@ -127,7 +161,7 @@ fn posterior(
     w: &[f64],
     alpha: f64,
     gn: Option<&GnFactor>,
-    markers: bool,
+    markers: MarkerPart,
 ) -> Option<(Vec<f64>, Vec<f64>)> {
     let m = w.len();
     let nf = dv.jt.nrows();
@@ -147,27 +181,33 @@ fn posterior(
             let s_inv_czt = chol.solve(&cz.transpose());
             let r = (ce - &cz * s_inv_czt) / alpha;
             let r = (&r + r.transpose()) * 0.5;
-            if !markers {
+            if markers == MarkerPart::None {
                 return Some((row_major(&r), Vec::new()));
             }
-            // Zᵀ B Z S⁻¹ W⁻¹
+            // Zᵀ B Z S⁻¹ W⁻¹ (the representer form serves up to n_F
+            // observed components: m² is bounded by n_F²)
             let mut winv = DMatrix::zeros(m, m);
             for i in 0..m {
                 winv[(i, i)] = 1.0 / w[i];
             }
             let mk = &k * chol.solve(&winv);
             let mk = (&mk + mk.transpose()) * 0.5;
-            Some((row_major(&r), row_major(&mk)))
+            Some((row_major(&r), markers.of(&mk)))
         }
         GnForm::Primal(h) => {
             let chol = primal_factor(dv, w, alpha, h, gn)?;
             let ninv = chol.inverse();
             let r = &c * &ninv * c.transpose();
-            if !markers {
-                return Some((row_major(&r), Vec::new()));
-            }
-            let mk = dv.jt.transpose() * &ninv * &dv.jt;
-            Some((row_major(&r), row_major(&mk)))
+            let mk = match markers {
+                MarkerPart::None => Vec::new(),
+                MarkerPart::Full => row_major(&(dv.jt.transpose() * &ninv * &dv.jt)),
+                // jᵢᵀ N⁻¹ jᵢ = |L⁻¹ jᵢ|², column by column
+                MarkerPart::Diagonal => {
+                    let x = chol.l().solve_lower_triangular(&dv.jt)?;
+                    x.column_iter().map(|col| col.norm_squared()).collect()
+                }
+            };
+            Some((row_major(&r), mk))
         }
     }
 }
@@ -309,7 +349,7 @@ pub(crate) fn alpha_spread(
 /// `ln α̂ ± √3 σ`, weights 2/3, 1/6, 1/6) and the spread of the estimate
 /// itself added, `σ² g gᵀ` with `g = d(C F̂)/d ln α` (or `d(J F̂)/d ln α`).
 /// That is the mean squared error about the reported estimate `F̂(α̂)`.
-/// `markers` as in [`posterior`].
+/// `markers` as in [`posterior`] (the parts are averaged entry by entry).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn posterior_alpha_marginal(
     form: &GnForm,
@@ -321,53 +361,79 @@ pub(crate) fn posterior_alpha_marginal(
     f: &[f64],
     pen: f64,
     gn: Option<&GnFactor>,
-    markers: bool,
+    markers: MarkerPart,
 ) -> Option<(Vec<f64>, Vec<f64>)> {
     let sp = alpha_spread(form, fw, dv, w, alpha, f, pen, gn)?;
     let h = 3f64.sqrt() * sp.sigma_ln;
-    let mut r: Option<DMatrix<f64>> = None;
-    let mut mk: Option<DMatrix<f64>> = None;
+    let d = sp.force.len();
+    let m = sp.marker.len();
+    let mut r = vec![0.0; d * d];
+    let mut mk = vec![0.0; markers.len(m)];
     for (a, wt) in [
         (alpha, 2.0 / 3.0),
         (alpha * h.exp(), 1.0 / 6.0),
         (alpha * (-h).exp(), 1.0 / 6.0),
     ] {
         let (ri, mi) = posterior(form, nd, fw, dv, w, a, gn, markers)?;
-        let d = sp.force.len();
-        let m = if markers { sp.marker.len() } else { 0 };
-        let ri = DMatrix::from_row_slice(d, d, &ri) * wt;
-        let mi = DMatrix::from_row_slice(m, m, &mi) * wt;
-        r = Some(r.map_or(ri.clone(), |x| x + ri));
-        mk = Some(mk.map_or(mi.clone(), |x| x + mi));
+        if ri.len() != r.len() || mi.len() != mk.len() {
+            return None;
+        }
+        r.iter_mut().zip(&ri).for_each(|(x, y)| *x += wt * y);
+        mk.iter_mut().zip(&mi).for_each(|(x, y)| *x += wt * y);
     }
     let s2 = sp.sigma_ln * sp.sigma_ln;
-    let r = r? + &sp.force * sp.force.transpose() * s2;
-    let mut mk = mk?;
-    if markers {
-        mk += &sp.marker * sp.marker.transpose() * s2;
+    for i in 0..d {
+        for j in 0..d {
+            r[i * d + j] += sp.force[i] * sp.force[j] * s2;
+        }
     }
-    Some((row_major(&r), row_major(&mk)))
+    match markers {
+        MarkerPart::None => {}
+        MarkerPart::Diagonal => {
+            for i in 0..m {
+                mk[i] += sp.marker[i] * sp.marker[i] * s2;
+            }
+        }
+        MarkerPart::Full => {
+            for i in 0..m {
+                for j in 0..m {
+                    mk[i * m + j] += sp.marker[i] * sp.marker[j] * s2;
+                }
+            }
+        }
+    }
+    Some((r, mk))
 }
 
 /// `Cov(resultant force)` (`DIM × DIM`) and `Cov(A q)` (`n_ob × n_ob`) of
 /// the noise alone, from the covariance factor `L` (`n_F × n_ob`), the map
 /// `C: F → ∫ w dX` (row-major `DIM × n_F`) and the marker Jacobian:
-/// `(C L)(C L)ᵀ` and `(J L)(J L)ᵀ` (empty without `markers`).
+/// `(C L)(C L)ᵀ` (row-major) and the `markers` part of `(J L)(J L)ᵀ` (its
+/// diagonal: the rows of `J L` squared, one row at a time).
 fn noise_cov(
     l: &DMatrix<f64>,
     fw: &[f64],
     dv: &Derivs,
-    markers: bool,
-) -> (DMatrix<f64>, DMatrix<f64>) {
+    markers: MarkerPart,
+) -> (Vec<f64>, Vec<f64>) {
     let nf = dv.jt.nrows();
     let d = fw.len().checked_div(nf).unwrap_or(0);
     let cl = DMatrix::from_row_slice(d, nf, fw) * l;
-    if !markers {
-        return (&cl * cl.transpose(), DMatrix::zeros(0, 0));
-    }
-    // J L = Jtᵀ L
-    let jl = dv.jt.tr_mul(l);
-    (&cl * cl.transpose(), &jl * jl.transpose())
+    let r = row_major(&(&cl * cl.transpose()));
+    let mk = match markers {
+        MarkerPart::None => Vec::new(),
+        // J L = Jtᵀ L
+        MarkerPart::Full => {
+            let jl = dv.jt.tr_mul(l);
+            row_major(&(&jl * jl.transpose()))
+        }
+        MarkerPart::Diagonal => dv
+            .jt
+            .column_iter()
+            .map(|j| (l.transpose() * j).norm_squared())
+            .collect(),
+    };
+    (r, mk)
 }
 
 /// The entries of `a` row by row.
@@ -466,6 +532,37 @@ impl Estimate {
         &self.cov.posterior().1
     }
 
+    /// Posterior standard deviations of the estimated marker-space shape
+    /// `A q` (`n_ob`; m, tangents dimensionless), in observation order: the
+    /// square roots of the diagonal of [`Estimate::marker_cov`], formed
+    /// without it (`n_ob` numbers; in the primal form, the one of many
+    /// markers, work linear in `n_ob`).
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::estimate::{EstimatorSettings, Observation};
+    /// use softrod::{scene::Scene, statics::StaticSolver};
+    /// let scene = Scene::two_section();
+    /// let (robot, loads) = (scene.robot()?, scene.loads()?);
+    /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+    /// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[10, 20])?.with_noise(1e-5, 1);
+    /// let settings = EstimatorSettings { alpha: Some(1.0), ..Default::default() };
+    /// let e = settings.build_for(&robot, &loads)?.step(&obs)?;
+    /// let s = e.marker_std();
+    /// assert_eq!(s.len(), 4);
+    /// assert!((s[3] - e.marker_cov()[(3, 3)].sqrt()).abs() < 1e-12 * s[3]);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn marker_std(&self) -> DVector<f64> {
+        DVector::from_iterator(
+            self.cov.marker_variances().len(),
+            self.cov
+                .marker_variances()
+                .iter()
+                .map(|v| v.max(0.0).sqrt()),
+        )
+    }
+
     /// Covariance factor `L` (`n_F × n_ob`) of the noise alone (no bias):
     /// `Cov(F̂) = L Lᵀ` ([`Estimate::covariance_f`]) for the linearized
     /// estimator `F̂ ≈ (JᵀWJ + αH)⁻¹ JᵀW y`, `L = σ (JᵀWJ + αH)⁻¹ JᵀW`;
@@ -543,7 +640,8 @@ mod tests {
             .try_inverse()
             .unwrap();
         for form in [GnForm::Representer, primal(b.clone())] {
-            let (rc, mc) = posterior(&form, nd, &fw, &dv, &w, alpha, None, true).unwrap();
+            let (rc, mc) =
+                posterior(&form, nd, &fw, &dv, &w, alpha, None, MarkerPart::Full).unwrap();
             assert!(close(&rc, &(&c * &post * c.transpose())), "{form:?}");
             assert!(close(&mc, &(jt.transpose() * &post * &jt)), "{form:?}");
         }
@@ -555,12 +653,79 @@ mod tests {
         };
         let fw = vec![1.0, 0.0, 0.0, 1.0];
         let eye = primal(DMatrix::identity(d, d));
-        let (rc, mc) = posterior(&eye, nd, &fw, &dv, &w, alpha, None, true).unwrap();
+        let (rc, mc) = posterior(&eye, nd, &fw, &dv, &w, alpha, None, MarkerPart::Full).unwrap();
         let post = (&jt * &wm * jt.transpose() + DMatrix::identity(d, d) * alpha)
             .try_inverse()
             .unwrap();
         assert!(close(&rc, &post));
         assert!(close(&mc, &(jt.transpose() * &post * &jt)));
+    }
+
+    /// The diagonal part of `Cov(A q)` (formed without the matrix) is the
+    /// full matrix's diagonal, in both forms, averaged over `α`, and in the
+    /// noise-only fallback; the resultant's part is the same numbers.
+    /// Bound 1e-12 relative (a missing weight or a transposed factor is
+    /// off by O(1)).
+    #[test]
+    fn the_marker_diagonal_is_the_full_covariances_diagonal() {
+        let (nd, nodes, m) = (4, 5, 7);
+        let nf = nd * nodes;
+        let r = DMatrix::from_vec(nf, nf, lcg(21, nf * nf));
+        let b = &r * r.transpose() + DMatrix::identity(nf, nf);
+        let z = DMatrix::from_vec(nf, m, lcg(22, nf * m));
+        let w: Vec<f64> = lcg(23, m).iter().map(|v| 2.0 + v).collect();
+        let fw = lcg(24, 2 * nf);
+        let f = lcg(25, nf);
+        let alpha = 0.7;
+        let dv = Derivs {
+            jt: &b * &z,
+            z: z.clone(),
+        };
+        let diag_of = |full: &[f64]| (0..m).map(|i| full[i * m + i]).collect::<Vec<_>>();
+        let close = |a: &[f64], b: &[f64]| {
+            let scale = b.iter().fold(0.0f64, |x, v| x.max(v.abs()));
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-12 * scale)
+        };
+        for form in [GnForm::Representer, primal(b.clone())] {
+            let (r_full, full) =
+                posterior(&form, nd, &fw, &dv, &w, alpha, None, MarkerPart::Full).unwrap();
+            let (r_diag, diag) =
+                posterior(&form, nd, &fw, &dv, &w, alpha, None, MarkerPart::Diagonal).unwrap();
+            assert!(close(&diag, &diag_of(&full)), "{form:?}");
+            assert!(close(&r_diag, &r_full), "{form:?}");
+            let (_, full) = posterior_alpha_marginal(
+                &form,
+                nd,
+                &fw,
+                &dv,
+                &w,
+                alpha,
+                &f,
+                0.3,
+                None,
+                MarkerPart::Full,
+            )
+            .unwrap();
+            let (_, diag) = posterior_alpha_marginal(
+                &form,
+                nd,
+                &fw,
+                &dv,
+                &w,
+                alpha,
+                &f,
+                0.3,
+                None,
+                MarkerPart::Diagonal,
+            )
+            .unwrap();
+            assert!(close(&diag, &diag_of(&full)), "α-averaged {form:?}");
+        }
+        let l = DMatrix::from_vec(nf, m, lcg(26, nf * m));
+        let (r_full, full) = noise_cov(&l, &fw, &dv, MarkerPart::Full);
+        let (r_diag, diag) = noise_cov(&l, &fw, &dv, MarkerPart::Diagonal);
+        assert!(close(&diag, &diag_of(&full)) && close(&r_diag, &r_full));
+        assert!(noise_cov(&l, &fw, &dv, MarkerPart::None).1.is_empty());
     }
 
     /// The posterior covariances from the Gauss–Newton system's factor at
@@ -603,23 +768,64 @@ mod tests {
         };
         let load = &GnForm::Representer;
         let gn = fac(&k, alpha);
-        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None, true).unwrap();
-        let reused = posterior(load, nd, &fw, &dv, &w, alpha, Some(&gn), true).unwrap();
+        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None, MarkerPart::Full).unwrap();
+        let reused = posterior(load, nd, &fw, &dv, &w, alpha, Some(&gn), MarkerPart::Full).unwrap();
         assert!(close(&reused.0, &fresh.0) && close(&reused.1, &fresh.1));
-        let fresh =
-            posterior_alpha_marginal(load, nd, &fw, &dv, &w, alpha, &f, 0.3, None, true).unwrap();
-        let reused =
-            posterior_alpha_marginal(load, nd, &fw, &dv, &w, alpha, &f, 0.3, Some(&gn), true)
-                .unwrap();
+        let fresh = posterior_alpha_marginal(
+            load,
+            nd,
+            &fw,
+            &dv,
+            &w,
+            alpha,
+            &f,
+            0.3,
+            None,
+            MarkerPart::Full,
+        )
+        .unwrap();
+        let reused = posterior_alpha_marginal(
+            load,
+            nd,
+            &fw,
+            &dv,
+            &w,
+            alpha,
+            &f,
+            0.3,
+            Some(&gn),
+            MarkerPart::Full,
+        )
+        .unwrap();
         assert!(close(&reused.0, &fresh.0) && close(&reused.1, &fresh.1));
         // a factor at another α is not used: a wrong gram there would show
         let wrong = fac(&(&k * 2.0), 2.0 * alpha);
-        let other = posterior(load, nd, &fw, &dv, &w, alpha, Some(&wrong), true).unwrap();
-        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None, true).unwrap();
+        let other = posterior(
+            load,
+            nd,
+            &fw,
+            &dv,
+            &w,
+            alpha,
+            Some(&wrong),
+            MarkerPart::Full,
+        )
+        .unwrap();
+        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None, MarkerPart::Full).unwrap();
         assert!(close(&other.0, &fresh.0) && close(&other.1, &fresh.1));
         // and a wrong factor at this α would: the test can fail
         let wrong = fac(&(&k * 2.0), alpha);
-        let bad = posterior(load, nd, &fw, &dv, &w, alpha, Some(&wrong), true).unwrap();
+        let bad = posterior(
+            load,
+            nd,
+            &fw,
+            &dv,
+            &w,
+            alpha,
+            Some(&wrong),
+            MarkerPart::Full,
+        )
+        .unwrap();
         assert!(!close(&bad.1, &fresh.1));
         // concentrated: N = Jᵀ W J + α I
         let jt = DMatrix::from_vec(2, m, lcg(16, 2 * m));
@@ -638,8 +844,8 @@ mod tests {
         };
         let load = &primal(DMatrix::identity(2, 2));
         let fw = vec![1.0, 0.0, 0.0, 1.0];
-        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None, true).unwrap();
-        let reused = posterior(load, nd, &fw, &dv, &w, alpha, Some(&gn), true).unwrap();
+        let fresh = posterior(load, nd, &fw, &dv, &w, alpha, None, MarkerPart::Full).unwrap();
+        let reused = posterior(load, nd, &fw, &dv, &w, alpha, Some(&gn), MarkerPart::Full).unwrap();
         assert!(close(&reused.0, &fresh.0) && close(&reused.1, &fresh.1));
     }
 

@@ -9,7 +9,7 @@ use nalgebra::DMatrix;
 use super::super::LoadModel;
 use super::super::gn_form::GnForm;
 use super::super::problem::{Derivs, GnFactor};
-use super::{cov_factor, noise_cov, posterior, posterior_alpha_marginal};
+use super::{MarkerPart, cov_factor, noise_cov, posterior, posterior_alpha_marginal};
 
 /// What the covariances of an estimate are formed from: the derivatives
 /// and the Gauss–Newton factor of its last linearization, with what the
@@ -78,13 +78,13 @@ impl CovarianceInputs {
     /// `Cov(resultant force)` (`DIM × DIM`) and `Cov(A q)` (`n_ob ×
     /// n_ob`): the posterior's ([`posterior`], averaged over `α` when it is
     /// the evidence's), or, when its matrix cannot be factored, the spread
-    /// the noise alone causes, from the covariance factor `l()`. Without
-    /// `markers`, `Cov(A q)` is not formed (empty).
+    /// the noise alone causes, from the covariance factor `l()`. Of
+    /// `Cov(A q)` the `markers` part (row-major when full).
     fn posterior(
         &self,
-        markers: bool,
+        markers: MarkerPart,
         l: impl FnOnce() -> DMatrix<f64>,
-    ) -> (DMatrix<f64>, DMatrix<f64>) {
+    ) -> (DMatrix<f64>, Vec<f64>) {
         let (load, nd, fw, dv, w, alpha) = (
             &self.form,
             self.nd,
@@ -95,13 +95,7 @@ impl CovarianceInputs {
         );
         let gn = self.gn.as_ref();
         let d = fw.len().checked_div(dv.jt.nrows()).unwrap_or(0);
-        let m = if markers { w.len() } else { 0 };
-        let typed = |(r, mk): (Vec<f64>, Vec<f64>)| {
-            (
-                DMatrix::from_row_slice(d, d, &r),
-                DMatrix::from_row_slice(m, m, &mk),
-            )
-        };
+        let typed = |(r, mk): (Vec<f64>, Vec<f64>)| (DMatrix::from_row_slice(d, d, &r), mk);
         if let Some((f, pen)) = &self.evidence {
             let c = posterior_alpha_marginal(load, nd, fw, dv, w, alpha, f, *pen, gn, markers);
             if let Some(c) = c {
@@ -111,7 +105,7 @@ impl CovarianceInputs {
         if let Some(c) = posterior(load, nd, fw, dv, w, alpha, gn, markers) {
             return typed(c);
         }
-        noise_cov(&l(), fw, dv, markers)
+        typed(noise_cov(&l(), fw, dv, markers))
     }
 }
 
@@ -126,6 +120,9 @@ pub(crate) struct LazyCovariances {
     /// The resultant's posterior covariance when asked for alone (without
     /// `Cov(A q)`, whose work grows as `n_ob²`).
     resultant: OnceLock<DMatrix<f64>>,
+    /// The variances of `A q` when asked for alone (the diagonal of
+    /// `Cov(A q)` without the rest).
+    marker_variances: OnceLock<Vec<f64>>,
     gamma: OnceLock<f64>,
 }
 
@@ -137,6 +134,7 @@ impl LazyCovariances {
             factor: OnceLock::new(),
             posterior: OnceLock::new(),
             resultant: OnceLock::new(),
+            marker_variances: OnceLock::new(),
             gamma: OnceLock::new(),
         }
     }
@@ -164,8 +162,18 @@ impl LazyCovariances {
 
     /// The posterior covariances of the resultant force and of `A q`.
     pub(super) fn posterior(&self) -> &(DMatrix<f64>, DMatrix<f64>) {
-        self.posterior
-            .get_or_init(|| self.inputs.posterior(true, || self.factor().clone()))
+        self.posterior.get_or_init(|| {
+            let m = self.inputs.weights.len();
+            let (r, mk) = self
+                .inputs
+                .posterior(MarkerPart::Full, || self.factor().clone());
+            let mk = if mk.len() == m * m {
+                DMatrix::from_row_slice(m, m, &mk)
+            } else {
+                DMatrix::from_element(m, m, f64::NAN)
+            };
+            (r, mk)
+        })
     }
 
     /// The posterior covariance of the resultant force: from
@@ -175,8 +183,29 @@ impl LazyCovariances {
         if let Some(p) = self.posterior.get() {
             return &p.0;
         }
-        self.resultant
-            .get_or_init(|| self.inputs.posterior(false, || self.factor().clone()).0)
+        self.resultant.get_or_init(|| {
+            self.inputs
+                .posterior(MarkerPart::None, || self.factor().clone())
+                .0
+        })
+    }
+
+    /// The posterior variances of `A q` (the diagonal of `Cov(A q)`): from
+    /// [`LazyCovariances::posterior`] if formed, else alone (the same
+    /// numbers, without the `n_ob²` matrix).
+    pub(super) fn marker_variances(&self) -> Vec<f64> {
+        if let Some(p) = self.posterior.get() {
+            return p.1.diagonal().as_slice().to_vec();
+        }
+        self.marker_variances
+            .get_or_init(|| {
+                let m = self.inputs.weights.len();
+                let (_, v) = self
+                    .inputs
+                    .posterior(MarkerPart::Diagonal, || self.factor().clone());
+                if v.len() == m { v } else { vec![f64::NAN; m] }
+            })
+            .clone()
     }
 }
 
