@@ -233,4 +233,13 @@ fn runs_beyond_their_step_budget_are_refused_naming_the_field() {
     let e = Scene::from_json(&v.to_string()).unwrap_err();
     assert!(e.field().is_some_and(|f| f.starts_with("markers")), "{e}");
     assert!(matches!(e, softrod::Error::TooLarge { .. }), "{e}");
+    // the estimator's iterations: 1e18 was accepted (each a static solve)
+    let mut v = base.clone();
+    v["solver"]["estimator"] = serde_json::json!({"max_iterations": 1_000_000_000_000_000_000u64});
+    let e = Scene::from_json(&v.to_string()).unwrap_err();
+    assert_eq!(e.field(), Some("solver.estimator.max_iterations"), "{e}");
+    let mut v = base.clone();
+    v["solver"]["estimator"] =
+        serde_json::json!({"max_iterations": softrod::estimate::MAX_ESTIMATOR_ITERATIONS});
+    assert!(Scene::from_json(&v.to_string()).is_ok());
 }

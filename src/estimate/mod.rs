@@ -386,7 +386,9 @@ pub struct EstimatorSettings {
     /// Standard deviation of each observed tangent component (dimensionless,
     /// default 1e-3).
     pub tangent_sigma: f64,
-    /// Outer iterations per observation (default 100).
+    /// Outer iterations per observation (default 100; at most
+    /// [`MAX_ESTIMATOR_ITERATIONS`]: each is a linearization, a static
+    /// solve or a QP).
     pub max_iterations: usize,
     /// Convergence, tight: the predicted decrease of the objective below
     /// `tolerance × max(objective, n_ob)` (default 1e-15; a round-off floor
@@ -485,6 +487,11 @@ impl EstimatorSettings {
                 "must be >= 1",
             ));
         }
+        crate::error::check_at_most(
+            "estimator.max_iterations",
+            self.max_iterations,
+            MAX_ESTIMATOR_ITERATIONS,
+        )?;
         for (i, b) in self.bounds.iter().enumerate() {
             let p = |f: &str| format!("estimator.bounds[{i}].{f}");
             crate::error::check_finite(&p("s_m"), b.s_m)?;
@@ -508,6 +515,11 @@ impl EstimatorSettings {
         self.statics.validate("estimator.statics")
     }
 }
+
+/// The largest [`EstimatorSettings::max_iterations`] accepted: it bounds
+/// the work of one estimate (an iteration of the newton backend is a
+/// static solve, of the sqp backend a QP).
+pub const MAX_ESTIMATOR_ITERATIONS: usize = 10_000;
 
 /// What an estimation did.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
