@@ -57,9 +57,15 @@ impl<M: EstimationModel> SqpEstimator<M> {
                         }
                         _ => rod.arc_point("bound.s_m", b.s_m)?,
                     };
-                    let mut t = vec![0.0; d];
-                    p.slope_into(q, &mut t)?;
-                    (Some(p), Some(local(&mut t)))
+                    let t = match b.frame {
+                        BoundFrame::World => None,
+                        BoundFrame::Local => {
+                            let mut t = vec![0.0; d];
+                            p.slope_into(q, &mut t)?;
+                            Some(local(&mut t))
+                        }
+                    };
+                    (Some(p), t)
                 }
                 LoadModel::AtSite { site } | LoadModel::Along { site, .. } => {
                     let field = "estimator.load_model.site";
