@@ -14,7 +14,8 @@
 //!   the node, bit for bit, through the estimator.
 //! - The one-rod structure estimates the robot's tip force through the same
 //!   estimator: the same optimum, force to 1e-9 and shape to 1e-10 of the robot's,
-//!   by either backend (both cold estimates may take the sqp far start).
+//!   by either backend (the robot's cold newton estimate takes the sqp far
+//!   start, the structure's the reduced iteration alone).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use nalgebra::{DMatrix, Vector2};
@@ -322,7 +323,7 @@ fn the_one_rod_structure_estimates_the_robots_load() {
         },
         alpha: Some(1e-6),
         // to the optimum, not to a tenth of its standard deviation: the
-        // two may stop at different iterates
+        // robot's cold estimate takes the far start, the structure's not
         statistical_tolerance: 0.0,
         ..EstimatorSettings::default()
     };

@@ -17,7 +17,8 @@ use super::super::sqp::SqpEstimator;
 /// QP's factored tangent and derivatives when taken there (the reduced
 /// iteration resumes from them without a factorization or adjoint solves),
 /// if it converged below the objective `obj` at `(f, q)`; `None` otherwise
-/// (the reduced iteration then backtracks on its own).
+/// (the reduced iteration then backtracks on its own), and always on a
+/// model without it ([`EstimationModel::FAR_START`]).
 ///
 /// It is taken as soon as the trust region cuts a step of a cold solve,
 /// without trying the reduced step's equilibrium first: that trial (chord
@@ -44,6 +45,9 @@ pub(super) fn full_space<M: EstimationModel>(
     alpha: f64,
     obj: f64,
 ) -> Option<FullSpace> {
+    if !M::FAR_START {
+        return None;
+    }
     if inner.is_none() {
         // the same problem (its analysis, its unloaded start)
         *inner = Some(Box::new(SqpEstimator::over(core.clone()).ok()?));
