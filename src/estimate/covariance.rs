@@ -390,8 +390,8 @@ pub(crate) fn posterior_alpha_marginal(
     match markers {
         MarkerPart::None => {}
         MarkerPart::Diagonal => {
-            for i in 0..m {
-                mk[i] += sp.marker[i] * sp.marker[i] * s2;
+            for (v, g) in mk.iter_mut().zip(sp.marker.iter()) {
+                *v += g * g * s2;
             }
         }
         MarkerPart::Full => {
