@@ -599,6 +599,30 @@ mod tests {
             .collect()
     }
 
+    /// A random layout of 5 nodes × `nd` coordinates seen by `m` observed
+    /// components, from the seeds `seed … seed + 4`: `B` symmetric positive
+    /// definite, `Z`, weights in `[1, 3]`, a map `C` (row-major `2 × n_F`)
+    /// and a load `F`.
+    struct Layout {
+        b: DMatrix<f64>,
+        z: DMatrix<f64>,
+        w: Vec<f64>,
+        fw: Vec<f64>,
+        f: Vec<f64>,
+    }
+
+    fn layout(nd: usize, m: usize, seed: u64) -> Layout {
+        let nf = nd * 5;
+        let r = DMatrix::from_vec(nf, nf, lcg(seed, nf * nf));
+        Layout {
+            b: &r * r.transpose() + DMatrix::identity(nf, nf),
+            z: DMatrix::from_vec(nf, m, lcg(seed + 1, nf * m)),
+            w: lcg(seed + 2, m).iter().map(|v| 2.0 + v).collect(),
+            fw: lcg(seed + 3, 2 * nf),
+            f: lcg(seed + 4, nf),
+        }
+    }
+
     /// The representer forms of the posterior covariances equal the dense
     /// `(JᵀWJ + αH)⁻¹` mapped by `C` and `J`: a planar layout of 5 nodes ×
     /// 4 coordinates, `B` symmetric positive definite, `C = E_dᵀ B`, for
@@ -668,14 +692,9 @@ mod tests {
     /// off by O(1)).
     #[test]
     fn the_marker_diagonal_is_the_full_covariances_diagonal() {
-        let (nd, nodes, m) = (4, 5, 7);
-        let nf = nd * nodes;
-        let r = DMatrix::from_vec(nf, nf, lcg(21, nf * nf));
-        let b = &r * r.transpose() + DMatrix::identity(nf, nf);
-        let z = DMatrix::from_vec(nf, m, lcg(22, nf * m));
-        let w: Vec<f64> = lcg(23, m).iter().map(|v| 2.0 + v).collect();
-        let fw = lcg(24, 2 * nf);
-        let f = lcg(25, nf);
+        let (nd, m) = (4, 7);
+        let Layout { b, z, w, fw, f } = layout(nd, m, 21);
+        let nf = b.nrows();
         let alpha = 0.7;
         let dv = Derivs {
             jt: &b * &z,
@@ -735,14 +754,9 @@ mod tests {
     /// is off by O(1)).
     #[test]
     fn posterior_from_the_factor_at_hand_equals_the_one_formed_anew() {
-        let (nd, nodes, m) = (4, 5, 3);
-        let nf = nd * nodes;
-        let r = DMatrix::from_vec(nf, nf, lcg(11, nf * nf));
-        let b = &r * r.transpose() + DMatrix::identity(nf, nf);
-        let z = DMatrix::from_vec(nf, m, lcg(12, nf * m));
-        let w: Vec<f64> = lcg(13, m).iter().map(|v| 2.0 + v).collect();
-        let fw = lcg(14, 2 * nf);
-        let f = lcg(15, nf);
+        let (nd, m) = (4, 3);
+        let Layout { b, z, w, fw, f } = layout(nd, m, 11);
+        let nf = b.nrows();
         let alpha = 0.7;
         let close = |a: &[f64], b: &[f64]| {
             let scale = b.iter().fold(0.0f64, |x, v| x.max(v.abs()));
