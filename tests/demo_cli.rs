@@ -12,8 +12,6 @@
 #![cfg(feature = "cli")]
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use std::process::Command;
-
 use serde_json::Value;
 use softrod::plant::{Payload, PayloadKind, PayloadSchedule, Plant, PlantSettings, SimulatedPlant};
 use softrod::scene::Scene;
@@ -32,18 +30,9 @@ const SIGMA_M: f64 = 1e-5;
 /// The demo's command prefix.
 const RUN: &str = "cargo run --release --features cli --";
 
-fn softrod(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_softrod"))
-        .args(args)
-        .current_dir(ROOT)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+#[path = "common/cli.rs"]
+mod cli;
+use cli::softrod;
 
 /// The plant: the scene at four times its elements, no parameter errors,
 /// no regulator lag, the payload from the start, noise σ (seed 1),

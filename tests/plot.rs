@@ -7,7 +7,6 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use serde_json::Value;
 use softrod::report::result_plot::plot_result;
@@ -16,19 +15,9 @@ use softrod::scene::markers::MarkersFile;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
-/// Exit code, standard output and standard error.
-fn run3(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_softrod"))
-        .args(args)
-        .current_dir(ROOT)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+#[path = "common/cli.rs"]
+mod cli;
+use cli::softrod as run3;
 
 /// Exit code and standard error.
 fn run(args: &[&str]) -> (i32, String) {
