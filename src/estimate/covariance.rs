@@ -554,13 +554,8 @@ impl Estimate {
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn marker_std(&self) -> DVector<f64> {
-        DVector::from_iterator(
-            self.cov.marker_variances().len(),
-            self.cov
-                .marker_variances()
-                .iter()
-                .map(|v| v.max(0.0).sqrt()),
-        )
+        let v = self.cov.marker_variances();
+        DVector::from_iterator(v.len(), v.iter().map(|x| x.max(0.0).sqrt()))
     }
 
     /// Covariance factor `L` (`n_F × n_ob`) of the noise alone (no bias):
