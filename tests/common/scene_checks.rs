@@ -48,9 +48,10 @@ pub const MAX_ITERATIONS: usize = 200;
 /// are clamped to it.
 pub const MAX_ESTIMATE_ITERATIONS: usize = 10;
 /// Largest iteration budget of the estimator's own static solves
-/// (`solver.estimator.static`): each line-search trial of the newton
-/// backend may run a whole one (up to 23 per iteration), so the default
-/// 2000 lets one estimate of 16 elements take minutes (see
+/// (`solver.estimator.static`): each solve of an estimate (tens in an α
+/// search) may run a few whole ones (its start, a far start, one in the
+/// newton backend's line searches; before the fix of fuzz finding 1 that
+/// was up to 23 per iteration: minutes on one input, see
 /// `tests/fuzz/regressions/scene_estimate/`).
 pub const MAX_ESTIMATE_STATIC_ITERATIONS: usize = 30;
 /// Most markers per observation estimated.

@@ -20,7 +20,10 @@
 //! - Globalization: Armijo backtracking on `J`, each trial a warm static solve
 //!   from the linearized prediction `q + t M K⁻¹ Mᵀ G dF` (chord steps with
 //!   the last factorization of `K`, then one fresh factorization at the
-//!   solution, which the next iteration's adjoint solves use).
+//!   solution, which the next iteration's adjoint solves use). A trial
+//!   below `t = 0.01` whose warm solve fails may run the globalized static
+//!   solve, once per solve (`reduced::LINE_SEARCH_FALLBACKS`); a trial that
+//!   needs another ends the solve as `line_search_failed`.
 //! - Far starts of a cold estimate: when the trust region binds (the
 //!   step's predicted node motion is cut to `max_observation_jump_m`),
 //!   the reduced method would need many short steps, each a static solve of
@@ -304,6 +307,7 @@ impl<M: EstimationModel> NewtonEstimator<M> {
             op,
             alpha,
             settings,
+            fallbacks_left: reduced::LINE_SEARCH_FALLBACKS,
         }
         .run(f0, q0, far)
     }

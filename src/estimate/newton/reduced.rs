@@ -36,6 +36,9 @@ pub(super) struct Reduced<'a, M: EstimationModel> {
     pub(super) op: &'a ObservationOperator,
     pub(super) alpha: f64,
     pub(super) settings: EstimatorSettings,
+    /// The globalized static solves the line searches of this solve may
+    /// still run (starts at [`LINE_SEARCH_FALLBACKS`]).
+    pub(super) fallbacks_left: usize,
 }
 
 /// An iterate: an equilibrium `(q, F)` with the tangent's factors at `q`
@@ -97,6 +100,39 @@ struct CappedStep {
 /// An accepted step: the new iterate and, when the line search formed it,
 /// the objective there (which the next iteration starts from).
 type Accepted = (Iterate, Option<ObjectiveAt>);
+
+/// The globalized static solves (the tracker's fallback after its warm
+/// iterations, each within `statics.max_total_iterations` Newton
+/// iterations) that the line searches of one solve may run: one. A trial
+/// that needs another ends the solve ([`Search::BudgetSpent`],
+/// [`EstimateStatus::LineSearchFailed`]), so the line searches' globalized
+/// work per solve is at most one static solve's budget.
+///
+/// Measured on the fuzz finding
+/// `tests/fuzz/regressions/scene_estimate/newton_line_search_minutes` (16
+/// elements, markers no equilibrium fits, default budgets): with a fallback
+/// at every trial below `t = 0.01` (before) the estimate ran 137 s to
+/// `iteration_limit` with 8.66 million factorizations, 8.63 million of them
+/// in 3,966 globalized solves of its line searches (14 to 10,338
+/// factorizations each); 299 of them converged, at steps `t` of 7e-9 to
+/// 8e-3, and the estimate still ended with the objective at 2.1e7 for 8
+/// observed components. With one per solve: 0.68 s, 39,192 factorizations,
+/// `line_search_failed` (`tests/fuzz_findings.rs`). On the example scenes
+/// (`examples/*` with their markers files, the payload stream) no line
+/// search went below `t = 0.25`: none of their trials needs a fallback, and
+/// their estimates are the same to the bit.
+pub(super) const LINE_SEARCH_FALLBACKS: usize = 1;
+
+/// How a line search ended.
+enum Search {
+    /// A trial was accepted (boxed: the other variants are empty).
+    Accepted(Box<Accepted>),
+    /// No trial of the 30 halvings was accepted.
+    NoStep,
+    /// A trial's warm static solve failed and the solve's line searches had
+    /// run their [`LINE_SEARCH_FALLBACKS`] globalized solves.
+    BudgetSpent,
+}
 
 impl<M: EstimationModel> Reduced<'_, M> {
     /// The solve from `(f0, q0)`: the iterations until a convergence test
@@ -169,24 +205,23 @@ impl<M: EstimationModel> Reduced<'_, M> {
                 iterations += its;
                 accepted = Some((next, None));
             }
-            let accepted = match accepted {
-                Some(a) => Some(a),
+            let search = match accepted {
+                Some(a) => Search::Accepted(Box::new(a)),
                 None => self.line_search(&it, obj, &lin, &step, scale)?,
             };
-            match accepted {
-                Some((next, objective)) => {
-                    at_trial = objective;
-                    it = next;
+            let status = match search {
+                Search::Accepted(accepted) => {
+                    (it, at_trial) = *accepted;
+                    continue;
                 }
-                None => {
-                    let status = if lin.dec <= 1e-6 * scale {
-                        EstimateStatus::Converged(EstimateCriterion::NegligibleDecrease)
-                    } else {
-                        EstimateStatus::LineSearchFailed
-                    };
-                    return Ok(self.stopped_at(it, at, lin, status, iterations));
+                Search::NoStep if lin.dec <= 1e-6 * scale => {
+                    EstimateStatus::Converged(EstimateCriterion::NegligibleDecrease)
                 }
-            }
+                // no step, or the work the line searches may do spent:
+                // never a convergence
+                Search::NoStep | Search::BudgetSpent => EstimateStatus::LineSearchFailed,
+            };
+            return Ok(self.stopped_at(it, at, lin, status, iterations));
         }
     }
 
@@ -454,8 +489,9 @@ impl<M: EstimationModel> Reduced<'_, M> {
 
     /// Armijo backtracking on the objective `obj` along the capped step;
     /// tiny predicted decreases take the full step (the objective's
-    /// round-off would hide the decrease). `None` if no trial of 30 halvings
-    /// is accepted.
+    /// round-off would hide the decrease). [`Search::NoStep`] if no trial
+    /// of 30 halvings is accepted; [`Search::BudgetSpent`] at a trial that
+    /// needs a globalized static solve beyond [`LINE_SEARCH_FALLBACKS`].
     fn line_search(
         &mut self,
         it: &Iterate,
@@ -463,7 +499,7 @@ impl<M: EstimationModel> Reduced<'_, M> {
         lin: &Linearization,
         step: &CappedStep,
         scale: f64,
-    ) -> Result<Option<Accepted>> {
+    ) -> Result<Search> {
         let (op, alpha) = (self.op, self.alpha);
         let core = &mut *self.core;
         let dec = lin.dec;
@@ -483,25 +519,35 @@ impl<M: EstimationModel> Reduced<'_, M> {
             // solve (10–100× the cost of a first estimate).
             let qp: Vec<f64> = it.q.iter().zip(&step.dq).map(|(a, b)| a + t * b).collect();
             // a trial without the globalized fallback unless the step is
-            // already short: cheap
-            let trial = if t < 0.01 {
-                core.equilibrium(&ft, &qp).ok()
+            // already short (and the solve's line searches have one left):
+            // cheap
+            let trial = if t < 0.01 && self.fallbacks_left > 0 {
+                let before = core.tracker().counts().fallbacks;
+                let eq = core.equilibrium(&ft, &qp).ok();
+                if core.tracker().counts().fallbacks > before {
+                    self.fallbacks_left -= 1;
+                }
+                eq
             } else {
                 let load = core.load();
-                core.tracker().try_solve(&load, &ft, &qp).ok().flatten()
+                let eq = core.tracker().try_solve(&load, &ft, &qp).ok().flatten();
+                if eq.is_none() && t < 0.01 {
+                    return Ok(Search::BudgetSpent);
+                }
+                eq
             };
             if let Some(eq) = trial {
                 let (wr, pen, e, hf) = core.objective_hf(op, eq.q.as_slice(), &ft, alpha)?;
                 if wr + pen <= obj + 1e-4 * t * step.slope || dec <= 1e-8 * scale {
-                    return Ok(Some((
+                    return Ok(Search::Accepted(Box::new((
                         Iterate::at(ft, eq),
                         Some(ObjectiveAt { wr, pen, e, hf }),
-                    )));
+                    ))));
                 }
             }
             t *= 0.5;
         }
-        Ok(None)
+        Ok(Search::NoStep)
     }
 }
 
