@@ -76,7 +76,7 @@ use crate::element::Element;
 use crate::error::{Error, Result, check_len};
 use crate::linsolve::{AutoFactors, Factorization};
 use crate::statics::LinearLoad;
-use crate::structure::Model;
+use crate::structure::{Actuated, Model};
 
 /// The sensitivities of one equilibrium of `robot`, from the factors `F` of
 /// its tangent `K` there (as [`crate::statics::EquilibriumTracker`] returns
@@ -130,32 +130,6 @@ impl<'a, E: Element, F: Factorization> Sensitivity<'a, Robot<E>, F> {
             u: &[],
             factors,
         })
-    }
-
-    /// (43) `∂q/∂P = −(∂Q/∂q)⁻¹ ∂Q/∂P` (`n_q × n_pressures`, m/Pa) at the
-    /// equilibrium `q` of these factors.
-    ///
-    /// # Errors
-    /// [`Error::DimensionMismatch`] if `q` is not `n_q` long.
-    pub fn dq_dp(&self, q: &[f64]) -> Result<DMatrix<f64>> {
-        let np = self.robot.n_pressures();
-        // n_free × n_p, its columns one after the other
-        let b = self.robot.pressure_jacobian(q)?.data.into();
-        self.expand_columns(b, np)
-    }
-
-    /// The gradients `∇_P y_i = (∂Q/∂P)ᵀ u_i` of the outputs of `adjoints`
-    /// with respect to the pressures at the equilibrium `q`, column `i` each
-    /// (`n_pressures × m`, per Pa).
-    ///
-    /// # Errors
-    /// [`Error::DimensionMismatch`] if `q` is not `n_q` long or `adjoints`
-    /// do not fit the robot.
-    pub fn pressure_gradients(&self, q: &[f64], adjoints: &Adjoints) -> Result<DMatrix<f64>> {
-        let nfree = self.robot.n_free();
-        check_len("adjoints", nfree, adjoints.free.nrows())?;
-        let jac = self.robot.pressure_jacobian(q)?;
-        Ok(jac.tr_mul(&adjoints.free))
     }
 }
 
@@ -337,5 +311,33 @@ impl<'a, M: Model, F: Factorization> Sensitivity<'a, M, F> {
             self.robot.step_into(self.u, u, col)?;
         }
         Ok(out)
+    }
+}
+
+impl<'a, M: Actuated, F: Factorization> Sensitivity<'a, M, F> {
+    /// (43) `∂q/∂P = −(∂Q/∂q)⁻¹ ∂Q/∂P` (`n_q × n_pressures`, m/Pa) at the
+    /// equilibrium `q` of these factors.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `q` is not `n_q` long.
+    pub fn dq_dp(&self, q: &[f64]) -> Result<DMatrix<f64>> {
+        let jac = self.robot.pressure_jacobian_free(self.u, q)?;
+        let np = jac.ncols();
+        // n_free × n_p, its columns one after the other
+        self.expand_columns(jac.data.into(), np)
+    }
+
+    /// The gradients `∇_P y_i = (∂Q/∂P)ᵀ u_i` of the outputs of `adjoints`
+    /// with respect to the pressures at the equilibrium `q`, column `i` each
+    /// (`n_pressures × m`, per Pa).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] if `q` is not `n_q` long or `adjoints`
+    /// do not fit the robot.
+    pub fn pressure_gradients(&self, q: &[f64], adjoints: &Adjoints) -> Result<DMatrix<f64>> {
+        let nfree = self.robot.n_free();
+        check_len("adjoints", nfree, adjoints.free.nrows())?;
+        let jac = self.robot.pressure_jacobian_free(self.u, q)?;
+        Ok(jac.tr_mul(&adjoints.free))
     }
 }

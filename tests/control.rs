@@ -11,7 +11,10 @@ use softrod::control::{
 use softrod::plant::{MarkerFrame, PayloadSchedule, Plant, PlantSettings, SimulatedPlant};
 use softrod::scene::Scene;
 
-fn setup() -> (Scene, InverseKinematics<softrod::element::PlanarCable>) {
+fn setup() -> (
+    Scene,
+    InverseKinematics<softrod::assembly::Robot<softrod::element::PlanarCable>>,
+) {
     let scene = Scene::two_section();
     let ik = InverseKinematics::new(
         scene.robot().unwrap(),

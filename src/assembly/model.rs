@@ -3,14 +3,14 @@
 
 use std::sync::Arc;
 
-use nalgebra::DVector;
+use nalgebra::{DMatrix, DVector};
 
 use super::Robot;
 use crate::element::Element;
 use crate::error::{Result, check_len};
 use crate::linsolve::{SymmetricMatrix, SymmetricPattern};
 use crate::loads::Loads;
-use crate::structure::{Assembled, MeshSequencing, ModelLoads, SolverHints, Stepping};
+use crate::structure::{Actuated, Assembled, MeshSequencing, ModelLoads, SolverHints, Stepping};
 
 impl<E: Element> Assembled for Robot<E> {
     type Loads = Loads;
@@ -146,6 +146,28 @@ impl<E: Element> Stepping for Robot<E> {
 
     fn length_m(&self) -> f64 {
         self.length()
+    }
+}
+
+/// The chambers in section order; `∂R/∂P` by [`Robot::pressure_jacobian`]
+/// (the clamp's map is linear: no `u`).
+impl<E: Element> Actuated for Robot<E> {
+    fn pressure_bounds(&self) -> Vec<(f64, f64)> {
+        Robot::pressure_bounds(self)
+    }
+
+    fn pressures_of(&self, loads: &Loads) -> Vec<f64> {
+        loads.pressures_pa.clone()
+    }
+
+    fn with_pressures(&self, known: &Loads, p: &[f64]) -> Loads {
+        let mut loads = known.clone();
+        loads.pressures_pa = p.to_vec();
+        loads
+    }
+
+    fn pressure_jacobian_free(&self, _u: &[f64], q: &[f64]) -> Result<DMatrix<f64>> {
+        self.pressure_jacobian(q)
     }
 }
 

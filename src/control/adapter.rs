@@ -11,31 +11,19 @@ use crate::estimate::{Backend, Estimator, EstimatorSettings, NewtonEstimator, Sq
 use crate::linsolve::{AutoSolver, FactorOptions, SolverKind, SymmetricMatrix, TangentSolver};
 use crate::loads::Loads;
 use crate::sensitivity::Sensitivity;
+use crate::structure::Actuated;
 
 /// (43) `∂q/∂P = −(∂Q/∂q)⁻¹ ∂Q/∂P` (`n_q × n_pressures`, m/Pa) at the
-/// equilibrium `q` of `robot` under `loads` (whose pressures and load field
+/// equilibrium `q` of `model` under `loads` (whose pressures and load field
 /// enter the tangent).
-pub(crate) fn dq_dp<E: Element>(
-    robot: &Robot<E>,
-    loads: &Loads,
-    q: &[f64],
-) -> Result<DMatrix<f64>> {
-    let mut solver = AutoSolver::with_kind(robot.tangent_pattern(), SolverKind::Auto)?;
-    dq_dp_with(robot, loads, q, &mut solver)
-}
-
-/// As [`dq_dp`] with a linear solver already analyzed on the robot's
-/// tangent pattern (the inverse kinematics' own: no analysis per call).
-pub(crate) fn dq_dp_with<E: Element>(
-    robot: &Robot<E>,
-    loads: &Loads,
-    q: &[f64],
-    solver: &mut AutoSolver,
-) -> Result<DMatrix<f64>> {
-    let mut k = SymmetricMatrix::zeros(robot.tangent_pattern().clone());
-    robot.tangent_into(q, loads, &mut k)?;
+pub(crate) fn dq_dp<M: Actuated>(model: &M, loads: &M::Loads, q: &[f64]) -> Result<DMatrix<f64>> {
+    let mut solver = AutoSolver::with_kind(&model.tangent_pattern()?, SolverKind::Auto)?;
+    let u = model.free_coordinates_of(q)?;
+    let dead = model.dead_force(loads)?;
+    let mut k = SymmetricMatrix::zeros(model.tangent_pattern()?);
+    model.tangent_into(u.as_slice(), q, dead.as_slice(), loads, &mut k)?;
     let factors = solver.factor(&k, FactorOptions::default())?;
-    Sensitivity::new(robot, &factors)?.dq_dp(q)
+    Sensitivity::at(model, u.as_slice(), &factors)?.dq_dp(q)
 }
 
 /// The loop's estimator: a concrete backend (not a `Box<dyn Estimator>`)

@@ -400,7 +400,7 @@ pub struct ClosedLoop<E: Element> {
     known: Loads,
     marker_s_m: Vec<f64>,
     settings: LoopSettings,
-    ik: InverseKinematics<E>,
+    ik: InverseKinematics<Robot<E>>,
     updater: ParameterUpdater,
     last_good: Option<Vec<f64>>,
     commanded_pa: Vec<f64>,

@@ -40,9 +40,20 @@
 //! `Σ (P_i / range_i)²` (for equal ranges: least `Σ P²`): with the
 //! antagonistic pairs of the paper's robot that is one active chamber per
 //! section and bending direction, the other at zero — the least air and
-//! the least wall load for the same pose. Weighted by `μ = 10⁻²` against the
-//! position error in `ℓ = 0.1 mm`, it moves the reached position by about
-//! `μ ℓ² |p̂| / |Ĵ|`, i.e. 1e-9 m on this robot.
+//! the least wall load for the same pose. Weighted by `μ = 10⁻²`
+//! ([`IkSettings::pressure_weight`]) against the position error in
+//! `ℓ = 0.1 mm`, it moves the reached position by about `μ ℓ² |p̂| / |Ĵ|`,
+//! i.e. 1e-9 m on this robot. Where the null space is large (the parallel
+//! robot: 18 pressures, 3 coordinates), [`IkSettings::null_space_damping`]
+//! `λ` adds `λ |d|²` to every step, which then moves `μ/(μ + λ)` of the way
+//! towards the least pressures in the null space.
+//!
+//! # Models
+//! The same loop serves every [`Actuated`] model: the end effector is a
+//! [`Site`] (its position rows `A_x`, so `J = A_x ∂q/∂P`), the load field
+//! `F̂` the parameters of a [`LoadModel`] (the distributed `F` of (8) on the
+//! clamped robot, a force at the platform of the parallel robot), and the
+//! equilibria and their factors come from the one warm [`Tracker`].
 //!
 //! # Unreachable targets
 //! A target outside the workspace (or beyond the bounds) ends at the closest
@@ -62,11 +73,16 @@ use nalgebra::{DMatrix, DVector};
 use crate::assembly::Robot;
 use crate::element::Element;
 use crate::error::{Error, Result, check_all_finite, check_len};
+use crate::estimate::{EstimationModel, LoadModel};
 use crate::linsolve::AutoFactors;
 use crate::loads::Loads;
 use crate::sensitivity::Sensitivity;
-use crate::statics::{StaticSettings, StaticSolver, TrackedEquilibrium, Tracker, WarmStrategy};
-use crate::structure::Stepping;
+use crate::site::{Site, SiteRows};
+use crate::statics::{
+    LinearLoad, StaticSettings, StaticSolver, TrackedEquilibrium, Tracker, WarmCounts, WarmPath,
+    WarmStrategy,
+};
+use crate::structure::Actuated;
 
 use super::ik_settings::{IkSettings, IkStatus, PressureBound};
 use super::{adapter, boxqp};
@@ -101,9 +117,12 @@ pub struct IkSolution {
     pub bounds: Vec<PressureBound>,
 }
 
-/// Feedforward inverse kinematics of one robot (see the [module
-/// documentation](crate::control)). It keeps the last solution as the warm start of
-/// the next.
+/// Feedforward inverse kinematics of one model (see the [module
+/// documentation](crate::control)): the clamped robot with its end effector
+/// at the tip under a distributed load field ([`InverseKinematics::new`]),
+/// or any actuated model with an end-effector site and a load model
+/// ([`InverseKinematics::for_model`]: the parallel robot's platform under a
+/// force on it). It keeps the last solution as the warm start of the next.
 ///
 /// # Example
 /// ```
@@ -121,18 +140,22 @@ pub struct IkSolution {
 /// # Ok::<(), softrod::Error>(())
 /// ```
 #[derive(Debug, Clone)]
-pub struct InverseKinematics<E: Element> {
-    /// The robot and the warm corrector of its equilibria (the one warm
+pub struct InverseKinematics<M: Actuated + EstimationModel> {
+    /// The model and the warm corrector of its equilibria (the one warm
     /// tracker, [`WarmStrategy::Newton`]), whose linear solver, analyzed
     /// once, also serves the static solves and the Jacobians.
-    tracker: Tracker<Robot<E>>,
-    known: Loads,
+    tracker: Tracker<M>,
+    known: M::Loads,
+    /// What the load field `F̂` of a solve is: its parameters and how they
+    /// enter the loads.
+    load: LoadModel,
+    /// The end effector's rows (its position is `A_x q`).
+    effector: SiteRows,
     settings: IkSettings,
     solver: StaticSolver,
     /// The solver of the line search's trials (its total budget
     /// [`IkSettings::trial_max_total_iterations`]).
     trial_solver: StaticSolver,
-    effector_s_m: f64,
     /// Scaled pressure bounds and the scale (range) of each chamber.
     lo: Vec<f64>,
     hi: Vec<f64>,
@@ -151,14 +174,10 @@ pub struct InverseKinematics<E: Element> {
 struct Held {
     /// Pressures (Pa).
     p: Vec<f64>,
-    /// The equilibrium shape at `p` under `f_hat`.
-    q: Vec<f64>,
-    /// The load field `q` is the equilibrium of.
+    /// The load field the equilibrium holds for.
     f_hat: Vec<f64>,
-    /// End-effector position at `q` (m).
-    x: Vec<f64>,
-    /// The factors of the tangent at `q` when the corrector made it.
-    factors: Option<AutoFactors>,
+    /// The equilibrium at `p` under `f_hat`.
+    eq: Eq,
 }
 
 /// Where a Newton run starts.
@@ -170,9 +189,19 @@ enum Start {
     Cold(Vec<f64>),
 }
 
-/// An equilibrium of the Newton loop: shape, end effector, and the factors
-/// of its tangent when the corrector made it (`None`: the static solver).
-type Eq = (Vec<f64>, Vec<f64>, Option<AutoFactors>);
+/// An equilibrium of the Newton loop.
+#[derive(Debug, Clone)]
+struct Eq {
+    /// The shape (all coordinates).
+    q: Vec<f64>,
+    /// Its free coordinates.
+    u: Vec<f64>,
+    /// The end effector's position (m).
+    x: Vec<f64>,
+    /// The factors of its tangent when the corrector made it (`None`: the
+    /// static solver).
+    factors: Option<AutoFactors>,
+}
 
 /// A solve that does not reach its target skips the cold restarts when the
 /// last solve ended unreachable at a target at most this far (m): 1 mm, what
@@ -203,25 +232,79 @@ const FAILED_TRIALS: usize = 8;
 /// tracking bench's loop).
 const CORRECTOR_STEPS: usize = 6;
 
-/// Weight of the pressures' norm against the position error (see the
-/// module documentation).
-const MU: f64 = 1e-2;
 /// Length scale of the position error (m).
 const ELL_M: f64 = 1e-4;
 
-impl<E: Element> InverseKinematics<E> {
+impl<E: Element + 'static> InverseKinematics<Robot<E>> {
     /// The inverse kinematics of `robot` under the known loads `known`
     /// (self-weight from the robot; the pressures in `known` are the first
-    /// guess), the end effector at the tip.
+    /// guess), the end effector at the tip, the load field `F̂` the
+    /// distributed `F` of (8) (`n_q` entries).
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] for invalid settings, a robot without
     /// chambers, or a chamber whose bounds are equal; the errors of
     /// [`Robot::validate_loads`].
     pub fn new(robot: Robot<E>, known: Loads, settings: IkSettings) -> Result<Self> {
+        let tip = Site::Rod {
+            rod: 0,
+            s_m: robot.length(),
+        };
+        Self::for_model(robot, known, settings, tip, LoadModel::Distributed)
+    }
+
+    /// The robot.
+    pub fn robot(&self) -> &Robot<E> {
+        self.tracker.robot()
+    }
+}
+
+impl<M: Actuated + EstimationModel> InverseKinematics<M> {
+    /// The inverse kinematics of `model` under the known loads `known`
+    /// (the pressures in `known` are the first guess), the end effector at
+    /// `effector`, the load field `F̂` of a solve the parameters of `load`
+    /// ([`LinearLoad::n_params`] of them).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for invalid settings, a model without
+    /// chambers, or a chamber whose bounds are equal; the errors of
+    /// [`crate::structure::Assembled::validate_loads`] and of the effector's and the load's
+    /// sites (named `effector` and `load_model`).
+    ///
+    /// # Example
+    /// The parallel robot's platform moved 2 mm sideways under a 5 g
+    /// payload:
+    /// ```
+    /// use softrod::{control::{InverseKinematics, IkSettings}, estimate::LoadModel, site::Site};
+    /// let mut spec = softrod::parallel::ParallelSpec::default();
+    /// spec.elements_per_section = 2;
+    /// let robot = spec.build_cable()?;
+    /// let s = robot.structure().clone();
+    /// let platform = Site::Body { body: 0 };
+    /// let known = robot.loads(&vec![0.0; 18], [0.0; 3], [0.0; 3])?;
+    /// let mut ik = InverseKinematics::for_model(
+    ///     s, known, IkSettings::default(), platform, LoadModel::AtSite { site: platform },
+    /// )?;
+    /// let weight = [0.0, 0.0, -0.005 * 9.81];
+    /// let (_, x0) = ik.forward(&vec![0.0; 18], &weight, None)?;
+    /// let target = [x0[0] + 2e-3, x0[1], x0[2]];
+    /// let sol = ik.solve(&target, &weight)?;
+    /// assert!(sol.status.is_reached(), "{:?}", sol.status);
+    /// assert!((sol.effector_m[0] - target[0]).abs() < 1e-6);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn for_model(
+        model: M,
+        known: M::Loads,
+        settings: IkSettings,
+        effector: Site,
+        load: LoadModel,
+    ) -> Result<Self> {
         settings.validate()?;
-        robot.validate_loads(&known)?;
-        let bounds = robot.pressure_bounds();
+        model.validate_loads(&known)?;
+        let effector = model.site_rows("effector", &effector)?;
+        load.site_rows(&model)?;
+        let bounds = model.pressure_bounds();
         if bounds.is_empty() {
             return Err(Error::invalid(
                 "robot.sections[].chambers",
@@ -252,16 +335,16 @@ impl<E: Element> InverseKinematics<E> {
             max_total_iterations: total,
             ..settings.statics.clone()
         })?;
-        let effector_s_m = robot.length();
-        let tracker = Tracker::new(robot, known.clone(), settings.statics.clone())?.with_strategy(
+        let tracker = Tracker::new(model, known.clone(), settings.statics.clone())?.with_strategy(
             WarmStrategy::Newton {
                 max_steps: CORRECTOR_STEPS,
             },
         )?;
         Ok(InverseKinematics {
-            effector_s_m,
             tracker,
             known,
+            load,
+            effector,
             settings,
             solver,
             trial_solver,
@@ -274,9 +357,61 @@ impl<E: Element> InverseKinematics<E> {
         })
     }
 
-    /// The robot.
-    pub fn robot(&self) -> &Robot<E> {
-        self.tracker.robot()
+    /// The same inverse kinematics with `strategy` as the warm corrector of
+    /// its equilibria (default [`WarmStrategy::Newton`] of at most 6 steps,
+    /// whose factors at the answer give the next Jacobian by solves only).
+    /// With a chord strategy ([`WarmStrategy::ChordRefactor`]: the parallel
+    /// robot's, whose 24-coordinate element makes a tangent costly) the
+    /// Jacobian at an iterate is one factorization of its tangent, kept for
+    /// the chord steps of the next trials.
+    ///
+    /// # Errors
+    /// As [`WarmStrategy::validate`].
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{control::{InverseKinematics, IkSettings}, scene::Scene, statics::WarmStrategy};
+    /// let scene = Scene::two_section();
+    /// let robot = scene.robot()?;
+    /// let n = robot.n_q();
+    /// let chord = WarmStrategy::ChordRefactor {
+    ///     max_factorizations: 3, max_residuals: 36, step_tolerance_m: 1e-11, confirm: true,
+    /// };
+    /// let mut ik = InverseKinematics::new(robot, scene.loads()?, IkSettings::default())?
+    ///     .with_corrector(chord)?;
+    /// let sol = ik.solve(&[0.20, 0.08], &vec![0.0; n])?;
+    /// assert!(sol.status.is_reached());
+    /// assert!(ik.counts().solves > 0);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn with_corrector(mut self, strategy: WarmStrategy) -> Result<Self> {
+        self.tracker = self.tracker.with_strategy(strategy)?;
+        Ok(self)
+    }
+
+    /// The warm tracker of the equilibria, for a caller that solves the
+    /// same model between the solves (a controller's estimator): its kept
+    /// factors then serve both.
+    pub(crate) fn tracker_mut(&mut self) -> &mut Tracker<M> {
+        &mut self.tracker
+    }
+
+    /// The model.
+    pub fn model(&self) -> &M {
+        self.tracker.model()
+    }
+
+    /// What the warm corrector's equilibria cost so far (the globalized
+    /// static solves of cold starts and of trials the corrector gave up on
+    /// are not counted here: [`IkSolution::iterations`] and the solve's
+    /// static budget bound them).
+    pub fn counts(&self) -> WarmCounts {
+        self.tracker.counts()
+    }
+
+    /// The number of parameters of a load field `F̂`.
+    pub fn n_load_params(&self) -> usize {
+        self.load.n_params(self.model())
     }
 
     /// Forgets the warm start.
@@ -285,17 +420,22 @@ impl<E: Element> InverseKinematics<E> {
         self.unreached_target = None;
     }
 
-    /// The known loads with pressures `p` and the load field `f_hat`.
-    fn loads(&self, p: &[f64], f_hat: &[f64]) -> Loads {
-        let mut loads = self.known.clone();
-        loads.pressures_pa = p.to_vec();
-        loads.distributed_f = f_hat.to_vec();
-        loads
+    /// The known loads with pressures `p` and the load field `f_hat` added.
+    fn loads(&self, p: &[f64], f_hat: &[f64]) -> M::Loads {
+        let model = self.model();
+        self.load
+            .add_to(model, &model.with_pressures(&self.known, p), f_hat)
+    }
+
+    /// The end effector's position (m) at `q`.
+    fn effector_at(&self, q: &[f64]) -> Vec<f64> {
+        self.effector.position_at(q)
     }
 
     /// The equilibrium at pressures `p` (Pa) and load field `f_hat` (the
-    /// distributed `F` of (8), `n_q` entries), from `q0` or cold; its shape
-    /// `q` and end-effector position (m, `DIM` components).
+    /// parameters of the load model: the distributed `F` of (8), `n_q`
+    /// entries, on the robot), from `q0` or cold; its shape `q` and
+    /// end-effector position (m, `DIM` components).
     ///
     /// # Errors
     /// The errors of [`StaticSolver::solve_with`] (bad loads, no equilibrium).
@@ -308,25 +448,23 @@ impl<E: Element> InverseKinematics<E> {
         f_hat: &[f64],
         q0: Option<&[f64]>,
     ) -> Result<(DVector<f64>, DVector<f64>)> {
-        let (q, x) = self.forward_raw(p, f_hat, q0)?;
-        Ok((DVector::from_vec(q), DVector::from_vec(x)))
+        let eq = self.forward_raw(p, f_hat, q0)?;
+        Ok((DVector::from_vec(eq.q), DVector::from_vec(eq.x)))
     }
 
     /// [`InverseKinematics::forward`] as plain vectors (the Newton loop's).
-    fn forward_raw(
-        &mut self,
-        p: &[f64],
-        f_hat: &[f64],
-        q0: Option<&[f64]>,
-    ) -> Result<(Vec<f64>, Vec<f64>)> {
+    fn forward_raw(&mut self, p: &[f64], f_hat: &[f64], q0: Option<&[f64]>) -> Result<Eq> {
         let loads = self.loads(p, f_hat);
         let eq = self.tracker.static_solve(&self.solver, &loads, q0);
         self.spent += spent(&eq);
         let eq = eq?;
-        let x = self
-            .robot()
-            .position_at(eq.q.as_slice(), self.effector_s_m)?;
-        Ok((eq.q.data.into(), x.data.into()))
+        let x = self.effector_at(eq.q.as_slice());
+        Ok(Eq {
+            q: eq.q.data.into(),
+            u: eq.u.data.into(),
+            x,
+            factors: None,
+        })
     }
 
     /// The equilibrium at pressures `p` and load field `f_hat` near a
@@ -347,10 +485,16 @@ impl<E: Element> InverseKinematics<E> {
         // the Newton steps taken (at least 1: the static solver's count)
         self.spent += (self.tracker.counts().steps - before).max(1);
         if let Some(c) = corrected {
-            let x = self
-                .robot()
-                .position_at(c.q.as_slice(), self.effector_s_m)?;
-            return Ok((c.q.data.into(), x.data.into(), Some(c.factors)));
+            let x = self.effector_at(c.q.as_slice());
+            // Newton's factors are those at the answer; a chord's are kept
+            // from elsewhere
+            let at_answer = c.path == WarmPath::Newton;
+            return Ok(Eq {
+                q: c.q.data.into(),
+                u: c.u.data.into(),
+                x,
+                factors: at_answer.then_some(c.factors),
+            });
         }
         let solver = if trial {
             &self.trial_solver
@@ -360,20 +504,25 @@ impl<E: Element> InverseKinematics<E> {
         let eq = self.tracker.static_solve(solver, &loads, Some(fallback));
         self.spent += spent(&eq);
         let eq = eq?;
-        let x = self
-            .robot()
-            .position_at(eq.q.as_slice(), self.effector_s_m)?;
-        Ok((eq.q.data.into(), x.data.into(), None))
+        let x = self.effector_at(eq.q.as_slice());
+        Ok(Eq {
+            q: eq.q.data.into(),
+            u: eq.u.data.into(),
+            x,
+            factors: None,
+        })
     }
 
-    /// The corrector: the tracker's [`WarmStrategy::Newton`] from `start`
-    /// under `loads` to the static solver's residual tolerance, with the
-    /// positive definite factors of the tangent at its answer; `None`
-    /// where it gives up (a hard solve, or an error: the static solver
-    /// from the caller's start then reports it).
-    fn correct(&mut self, loads: &Loads, start: &[f64]) -> Option<TrackedEquilibrium> {
-        let u0 = self.robot().free_coordinates_of(start).ok()?;
-        self.tracker.set_known(loads.clone()).ok()?;
+    /// The corrector: the tracker's strategy ([`WarmStrategy::Newton`] by
+    /// default) from `start` under `loads` to the static solver's residual
+    /// tolerance (Newton's with the positive definite factors of the
+    /// tangent at its answer); `None` where it gives up (a hard solve, or
+    /// an error: the static solver from the caller's start then reports
+    /// it). The tracker's kept factors stay (a chord strategy steps with
+    /// them; Newton's does not read them).
+    fn correct(&mut self, loads: &M::Loads, start: &[f64]) -> Option<TrackedEquilibrium> {
+        let u0 = self.model().free_coordinates_of(start).ok()?;
+        self.tracker.set_loads(loads.clone()).ok()?;
         self.tracker.try_solve_free(u0.as_slice()).ok().flatten()
     }
 
@@ -384,24 +533,26 @@ impl<E: Element> InverseKinematics<E> {
     fn first_equilibrium(&mut self, f_hat: &[f64], start: Start) -> Result<(Vec<f64>, Eq)> {
         match start {
             Start::Cold(p) => {
-                let (q, x) = self.forward_raw(&p, f_hat, None)?;
-                Ok((p, (q, x, None)))
+                let eq = self.forward_raw(&p, f_hat, None)?;
+                Ok((p, eq))
             }
             Start::Warm(h) if h.f_hat == f_hat => {
                 let h = *h;
-                Ok((h.p, (h.q, h.x, h.factors)))
+                Ok((h.p, h.eq))
             }
             Start::Warm(h) => {
-                let predicted = match &h.factors {
+                let held = &h.eq;
+                let predicted = match &held.factors {
                     Some(f) => {
                         let df: Vec<f64> = f_hat.iter().zip(&h.f_hat).map(|(a, b)| a - b).collect();
-                        let g = self.robot().apply_load_gram(&df)?;
-                        let dq = Sensitivity::new(self.robot(), f)?.response(g.as_slice())?;
-                        h.q.iter().zip(dq.iter()).map(|(a, b)| a + b).collect()
+                        let model = self.model();
+                        let g = self.load.force(model, &df)?;
+                        let dq = Sensitivity::at(model, &held.u, f)?.response(g.as_slice())?;
+                        held.q.iter().zip(dq.iter()).map(|(a, b)| a + b).collect()
                     }
-                    None => h.q.clone(),
+                    None => held.q.clone(),
                 };
-                let eq = self.equilibrium(&h.p, f_hat, &predicted, &h.q, false)?;
+                let eq = self.equilibrium(&h.p, f_hat, &predicted, &held.q, false)?;
                 Ok((h.p, eq))
             }
         }
@@ -413,7 +564,7 @@ impl<E: Element> InverseKinematics<E> {
     /// # Errors
     /// [`Error::Singular`] if the tangent cannot be factored; dimension errors.
     pub fn dq_dp(&self, q: &[f64], p: &[f64], f_hat: &[f64]) -> Result<DMatrix<f64>> {
-        adapter::dq_dp(self.robot(), &self.loads(p, f_hat), q)
+        adapter::dq_dp(self.model(), &self.loads(p, f_hat), q)
     }
 
     /// The end effector's Jacobian `∂x/∂P = S(X_e) ∂q/∂P` (43) at the
@@ -424,44 +575,48 @@ impl<E: Element> InverseKinematics<E> {
     /// [`Error::Singular`] if the tangent cannot be factored; dimension errors.
     pub fn jacobian(&self, q: &[f64], p: &[f64], f_hat: &[f64]) -> Result<DMatrix<f64>> {
         let dqdp = self.dq_dp(q, p, f_hat)?;
-        self.effector_columns(&dqdp)
+        Ok(self.effector_columns(&dqdp))
     }
 
-    /// The Newton loop's `(∂x/∂P, ∂q/∂P)` at the equilibrium `q`: with the
+    /// The Newton loop's `(∂x/∂P, ∂q/∂P)` at the equilibrium `eq`: with the
     /// factors of its tangent when the corrector made it (solves only),
-    /// else factoring with the inverse kinematics' own linear solver,
-    /// analyzed once at construction.
+    /// else factoring its tangent with the tracker's linear solver
+    /// (analyzed once at construction) and keeping the factors there for
+    /// the next chord steps.
     fn jacobian_warm(
         &mut self,
-        q: &[f64],
+        eq: &Eq,
         p: &[f64],
         f_hat: &[f64],
-        factors: Option<&AutoFactors>,
     ) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
-        let dqdp = match factors {
-            Some(f) => Sensitivity::new(self.robot(), f)?.dq_dp(q)?,
+        let dqdp = match &eq.factors {
+            Some(f) => Sensitivity::at(self.model(), &eq.u, f)?.dq_dp(&eq.q)?,
             None => {
-                let loads = self.loads(p, f_hat);
-                let (robot, linear) = self.tracker.model_and_linear();
-                adapter::dq_dp_with(robot, &loads, q, linear)?
+                self.tracker.set_loads(self.loads(p, f_hat))?;
+                let tangent = self.tracker.factor_tangent(&eq.q)?;
+                let dqdp = Sensitivity::at(self.model(), &eq.u, &tangent.factors)?.dq_dp(&eq.q)?;
+                self.tracker.keep_factors(&eq.q, tangent.factors)?;
+                dqdp
             }
         };
-        Ok((self.effector_columns(&dqdp)?, dqdp))
+        Ok((self.effector_columns(&dqdp), dqdp))
     }
 
-    /// `S(X_e) ∂q/∂P`: the end effector's rows of the columns of `dqdp`.
-    fn effector_columns(&self, dqdp: &DMatrix<f64>) -> Result<DMatrix<f64>> {
-        let point = self.robot().arc_point("effector", self.effector_s_m)?;
-        let d = E::DIM;
+    /// `A_x ∂q/∂P`: the end effector's rows of the columns of `dqdp`.
+    fn effector_columns(&self, dqdp: &DMatrix<f64>) -> DMatrix<f64> {
+        let d = self.effector.position.len();
         let mut jac = DMatrix::zeros(d, dqdp.ncols());
-        let mut out = vec![0.0; d];
         for (c, col) in dqdp.column_iter().enumerate() {
-            point.value_into(col.as_slice(), &mut out)?;
-            for (r, v) in out.iter().enumerate() {
-                jac[(r, c)] = *v;
+            for (r, v) in self
+                .effector
+                .position_at(col.as_slice())
+                .into_iter()
+                .enumerate()
+            {
+                jac[(r, c)] = v;
             }
         }
-        Ok(jac)
+        jac
     }
 
     /// `f_IK(x_d, F̂)`: the pressures putting the end effector at `x_d`
@@ -475,21 +630,23 @@ impl<E: Element> InverseKinematics<E> {
     /// errors when no equilibrium is found. An unreachable target is not an
     /// error: see [`IkStatus::Unreachable`].
     pub fn solve(&mut self, x_d: &[f64], f_hat: &[f64]) -> Result<IkSolution> {
-        let d = E::DIM;
-        check_len("x_d", d, x_d.len())?;
+        check_len("x_d", self.effector.position.len(), x_d.len())?;
         check_all_finite("x_d", x_d)?;
-        check_len("f_hat", self.robot().n_q(), f_hat.len())?;
+        check_len("f_hat", self.n_load_params(), f_hat.len())?;
         check_all_finite("f_hat", f_hat)?;
         let np = self.range.len();
-        let bounds = self.robot().pressure_bounds();
+        let bounds = self.model().pressure_bounds();
         self.spent = 0;
         let start = match self.warm.take() {
             Some(h) => Start::Warm(Box::new(h)),
-            None => Start::Cold(if self.known.pressures_pa.len() == np {
+            None => Start::Cold({
                 // the known pressures are checked against the bounds
-                self.known.pressures_pa.clone()
-            } else {
-                bounds.iter().map(|(lo, _)| *lo).collect()
+                let known = self.model().pressures_of(&self.known);
+                if known.len() == np {
+                    known
+                } else {
+                    bounds.iter().map(|(lo, _)| *lo).collect()
+                }
             }),
         };
         // the warm start; a static solve that fails from it is not the end:
@@ -503,12 +660,12 @@ impl<E: Element> InverseKinematics<E> {
                 <= RESTART_RADIUS_M
         });
         let (mut best, first_err) = match self.solve_from(x_d, f_hat, start) {
-            Ok((s, factors)) if s.status.is_reached() => {
-                self.hold(&s, f_hat, factors);
+            Ok((s, eq)) if s.status.is_reached() => {
+                self.hold(&s, f_hat, eq);
                 return Ok(s);
             }
-            Ok((s, factors)) if near_unreached => {
-                self.hold(&s, f_hat, factors);
+            Ok((s, eq)) if near_unreached => {
+                self.hold(&s, f_hat, eq);
                 self.unreached_target = Some(x_d.to_vec());
                 return Ok(s);
             }
@@ -550,7 +707,7 @@ impl<E: Element> InverseKinematics<E> {
                 }
             }
         }
-        let Some((mut best, factors)) = best else {
+        let Some((mut best, eq)) = best else {
             return Err(first_err.unwrap_or_else(|| {
                 Error::invalid(
                     "x_d",
@@ -560,7 +717,7 @@ impl<E: Element> InverseKinematics<E> {
             }));
         };
         best.iterations = iterations;
-        self.hold(&best, f_hat, factors);
+        self.hold(&best, f_hat, eq);
         if !best.status.is_reached() {
             self.unreached_target = Some(x_d.to_vec());
         }
@@ -580,147 +737,67 @@ impl<E: Element> InverseKinematics<E> {
         f_hat: &[f64],
         p0_pa: &[f64],
     ) -> Result<IkSolution> {
-        let mut loads = self.known.clone();
-        loads.pressures_pa = p0_pa.to_vec();
-        self.robot().validate_loads(&loads)?;
-        check_len("f_hat", self.robot().n_q(), f_hat.len())?;
+        check_len("pressures_pa", self.range.len(), p0_pa.len())?;
+        let model = self.model();
+        model.validate_loads(&model.with_pressures(&self.known, p0_pa))?;
+        check_len("f_hat", self.n_load_params(), f_hat.len())?;
         check_all_finite("f_hat", f_hat)?;
-        let (q, x) = self.forward_raw(p0_pa, f_hat, None)?;
+        let eq = self.forward_raw(p0_pa, f_hat, None)?;
         self.warm = Some(Held {
             p: p0_pa.to_vec(),
-            q,
             f_hat: f_hat.to_vec(),
-            x,
-            factors: None,
+            eq,
         });
         self.unreached_target = None;
         self.solve(x_d, f_hat)
     }
 
-    /// Keeps the solution `s` under the load field `f_hat` (and the factors
-    /// of its tangent) as the next solve's warm start.
-    fn hold(&mut self, s: &IkSolution, f_hat: &[f64], factors: Option<AutoFactors>) {
+    /// Keeps the solution `s` under the load field `f_hat` (its
+    /// equilibrium `eq`, with the factors of its tangent) as the next
+    /// solve's warm start.
+    fn hold(&mut self, s: &IkSolution, f_hat: &[f64], eq: Eq) {
         self.warm = Some(Held {
             p: s.pressures_pa.as_slice().to_vec(),
-            q: s.q.as_slice().to_vec(),
             f_hat: f_hat.to_vec(),
-            x: s.effector_m.as_slice().to_vec(),
-            factors,
+            eq,
         });
     }
 
     /// Newton from `start` (the held equilibrium, or cold at pressures);
-    /// the solution and the factors of the tangent at its shape when the
-    /// corrector made it.
-    #[allow(non_snake_case)]
-    fn solve_from(
-        &mut self,
-        x_d: &[f64],
-        f_hat: &[f64],
-        start: Start,
-    ) -> Result<(IkSolution, Option<AutoFactors>)> {
-        let d = E::DIM;
-        let np = self.range.len();
-        let (mut P, (mut q, mut x, mut factors)) = self.first_equilibrium(f_hat, start)?;
-        let merit = |x: &[f64], p: &[f64], range: &[f64]| -> f64 {
-            let r2: f64 = x.iter().zip(x_d).map(|(a, b)| (b - a).powi(2)).sum();
-            let p2: f64 = p.iter().zip(range).map(|(p, r)| (p / r).powi(2)).sum();
-            0.5 * r2 / (ELL_M * ELL_M) + 0.5 * MU * p2
+    /// the solution and its equilibrium (with the factors of the tangent at
+    /// its shape when the corrector made it).
+    fn solve_from(&mut self, x_d: &[f64], f_hat: &[f64], start: Start) -> Result<(IkSolution, Eq)> {
+        let (p, eq) = self.first_equilibrium(f_hat, start)?;
+        let phi = self.merit(x_d, &eq.x, &p);
+        let mut it = NewtonIterate {
+            p,
+            eq,
+            phi,
+            damping: 0.0,
         };
-        let mut phi = merit(&x, &P, &self.range);
-        let bounds_pa = self.robot().pressure_bounds();
         let mut iterations = 0;
         let mut stalled = false;
-        let mut damping = 0.0f64;
         let mut failed_trials = 0usize;
         while iterations < self.settings.max_iterations
             && self.spent < self.settings.max_static_iterations
+            && !(self.settings.stop_when_reached
+                && distance(&it.eq.x, x_d) <= self.settings.tolerance_m)
         {
             iterations += 1;
-            let (J, dqdp) = self.jacobian_warm(&q, &P, f_hat, factors.as_ref())?;
-            // scaled Jacobian Ĵ = J diag(range), residual r = x_d − x
-            let Jh = DMatrix::from_fn(d, np, |r, c| J[(r, c)] * self.range[c]);
-            let r: Vec<f64> = x_d.iter().zip(&x).map(|(a, b)| a - b).collect();
-            let ph: Vec<f64> = P.iter().zip(&self.range).map(|(p, r)| p / r).collect();
-            let w = 1.0 / (ELL_M * ELL_M);
-            let mut H = Jh.transpose() * &Jh * w + DMatrix::identity(np, np) * MU;
-            // Levenberg–Marquardt damping: the Gauss–Newton model leaves out
-            // the curvature of x(P), which dominates far from the target
-            let hmax = H.diagonal().amax();
-            H += DMatrix::identity(np, np) * (damping * hmax);
-            let g: Vec<f64> = (0..np)
-                .map(|c| -w * (0..d).map(|k| Jh[(k, c)] * r[k]).sum::<f64>() + MU * ph[c])
-                .collect();
-            let step = self.settings.max_step;
-            let lo: Vec<f64> = (0..np).map(|c| (self.lo[c] - ph[c]).max(-step)).collect();
-            let hi: Vec<f64> = (0..np).map(|c| (self.hi[c] - ph[c]).min(step)).collect();
-            let sol = boxqp::solve(&H, &g, &lo, &hi)?;
-            let dec: f64 = -g.iter().zip(&sol.x).map(|(a, b)| a * b).sum::<f64>();
-            let small = sol.x.iter().fold(0.0f64, |m, v| m.max(v.abs())) <= 1e-7;
-            if small || dec <= 1e-10 * phi.max(1e-2) {
+            let Some(step) = self.newton_step(&it, x_d, f_hat)? else {
                 stalled = true;
                 break;
-            }
-            // backtracking on the merit (pressures at a bound stay on it for
-            // a full step; shorter steps keep them inside)
-            let mut t = 1.0;
-            let mut accepted = false;
-            for _ in 0..12 {
-                let trial: Vec<f64> = (0..np)
-                    .map(|c| {
-                        let (lo_pa, hi_pa) = bounds_pa[c];
-                        match (t == 1.0, sol.sides[c]) {
-                            (true, boxqp::Side::Lower) => lo_pa,
-                            (true, boxqp::Side::Upper) => hi_pa,
-                            // inside by the QP's feasibility; the clamp only
-                            // takes off round-off of the scaling
-                            _ => ((ph[c] + t * sol.x[c]) * self.range[c]).clamp(lo_pa, hi_pa),
-                        }
-                    })
-                    .collect();
-                // the trial's equilibrium predicted to first order,
-                // q + ∂q/∂P ΔP, corrected (the static solver from q if not)
-                let dp = DVector::from_iterator(np, trial.iter().zip(&P).map(|(a, b)| a - b));
-                let predicted: Vec<f64> = q
-                    .iter()
-                    .zip((&dqdp * dp).iter())
-                    .map(|(a, b)| a + b)
-                    .collect();
-                let ft = self.equilibrium(&trial, f_hat, &predicted, &q, true);
-                if ft.is_err() {
-                    failed_trials += 1;
-                }
-                if let Ok((qt, xt, ft_factors)) = ft {
-                    let phit = merit(&xt, &trial, &self.range);
-                    if phit <= phi - 1e-4 * t * dec {
-                        let ratio = (phi - phit) / dec.max(f64::MIN_POSITIVE);
-                        damping = if t < 1.0 || ratio < 0.25 {
-                            (4.0 * damping).max(1e-4)
-                        } else if ratio > 0.75 {
-                            if damping < 1e-10 { 0.0 } else { damping / 4.0 }
-                        } else {
-                            damping
-                        };
-                        P = trial;
-                        q = qt;
-                        x = xt;
-                        factors = ft_factors;
-                        phi = phit;
-                        accepted = true;
-                        break;
-                    }
-                }
-                t *= 0.5;
-            }
+            };
+            let accepted = self.backtrack(&mut it, &step, x_d, f_hat, &mut failed_trials);
             if failed_trials >= FAILED_TRIALS {
                 // the iterate sits at a fold of the equilibria: the closest
                 // pose on this branch
                 stalled = true;
                 break;
             }
-            if !accepted && damping < 1.0 {
+            if !accepted && it.damping < 1.0 {
                 // a shorter, more gradient-like step before giving up
-                damping = (16.0 * damping).max(1e-3);
+                it.damping = (16.0 * it.damping).max(1e-3);
                 continue;
             }
             if !accepted {
@@ -728,12 +805,142 @@ impl<E: Element> InverseKinematics<E> {
                 break;
             }
         }
-        let error_m = x
+        Ok(self.solution(it, x_d, stalled, iterations))
+    }
+
+    /// The step of one Newton iteration at `it`: the bounded least-squares
+    /// problem of the [module documentation](self) in the scaled pressures,
+    /// solved exactly; `None` where it is too small to move (a stationary
+    /// point of the merit in the bounds).
+    #[allow(non_snake_case)]
+    fn newton_step(
+        &mut self,
+        it: &NewtonIterate,
+        x_d: &[f64],
+        f_hat: &[f64],
+    ) -> Result<Option<NewtonStep>> {
+        let d = self.effector.position.len();
+        let np = self.range.len();
+        let (J, dqdp) = self.jacobian_warm(&it.eq, &it.p, f_hat)?;
+        // scaled Jacobian Ĵ = J diag(range), residual r = x_d − x
+        let Jh = DMatrix::from_fn(d, np, |r, c| J[(r, c)] * self.range[c]);
+        let r: Vec<f64> = x_d.iter().zip(&it.eq.x).map(|(a, b)| a - b).collect();
+        let ph: Vec<f64> = it.p.iter().zip(&self.range).map(|(p, r)| p / r).collect();
+        let w = 1.0 / (ELL_M * ELL_M);
+        let (mu, lambda) = (
+            self.settings.pressure_weight,
+            self.settings.null_space_damping,
+        );
+        let mut H = Jh.transpose() * &Jh * w + DMatrix::identity(np, np) * (mu + lambda);
+        // Levenberg–Marquardt damping: the Gauss–Newton model leaves out
+        // the curvature of x(P), which dominates far from the target
+        let hmax = H.diagonal().amax();
+        H += DMatrix::identity(np, np) * (it.damping * hmax);
+        let g: Vec<f64> = (0..np)
+            .map(|c| -w * (0..d).map(|k| Jh[(k, c)] * r[k]).sum::<f64>() + mu * ph[c])
+            .collect();
+        let step = self.settings.max_step;
+        let lo: Vec<f64> = (0..np).map(|c| (self.lo[c] - ph[c]).max(-step)).collect();
+        let hi: Vec<f64> = (0..np).map(|c| (self.hi[c] - ph[c]).min(step)).collect();
+        let sol = boxqp::solve(&H, &g, &lo, &hi)?;
+        let dec: f64 = -g.iter().zip(&sol.x).map(|(a, b)| a * b).sum::<f64>();
+        let small = sol.x.iter().fold(0.0f64, |m, v| m.max(v.abs())) <= 1e-7;
+        if small || dec <= 1e-10 * it.phi.max(1e-2) {
+            return Ok(None);
+        }
+        Ok(Some(NewtonStep { sol, ph, dec, dqdp }))
+    }
+
+    /// Backtracking on the merit along `step` from `it` (pressures at a
+    /// bound stay on it for a full step; shorter steps keep them inside);
+    /// `it` moves to the accepted trial and its damping is adapted. Whether
+    /// a trial was accepted; `failed_trials` counts the trials without an
+    /// equilibrium.
+    fn backtrack(
+        &mut self,
+        it: &mut NewtonIterate,
+        step: &NewtonStep,
+        x_d: &[f64],
+        f_hat: &[f64],
+        failed_trials: &mut usize,
+    ) -> bool {
+        let np = self.range.len();
+        let bounds_pa = self.model().pressure_bounds();
+        let mut t = 1.0;
+        for _ in 0..12 {
+            let trial: Vec<f64> = (0..np)
+                .map(|c| {
+                    let (lo_pa, hi_pa) = bounds_pa[c];
+                    match (t == 1.0, step.sol.sides[c]) {
+                        (true, boxqp::Side::Lower) => lo_pa,
+                        (true, boxqp::Side::Upper) => hi_pa,
+                        // inside by the QP's feasibility; the clamp only
+                        // takes off round-off of the scaling
+                        _ => ((step.ph[c] + t * step.sol.x[c]) * self.range[c]).clamp(lo_pa, hi_pa),
+                    }
+                })
+                .collect();
+            // the trial's equilibrium predicted to first order,
+            // q + ∂q/∂P ΔP, corrected (the static solver from q if not)
+            let dp = DVector::from_iterator(np, trial.iter().zip(&it.p).map(|(a, b)| a - b));
+            let predicted: Vec<f64> = it
+                .eq
+                .q
+                .iter()
+                .zip((&step.dqdp * dp).iter())
+                .map(|(a, b)| a + b)
+                .collect();
+            let q = it.eq.q.clone();
+            match self.equilibrium(&trial, f_hat, &predicted, &q, true) {
+                Err(_) => *failed_trials += 1,
+                Ok(eq) => {
+                    let phit = self.merit(x_d, &eq.x, &trial);
+                    if phit <= it.phi - 1e-4 * t * step.dec {
+                        let ratio = (it.phi - phit) / step.dec.max(f64::MIN_POSITIVE);
+                        let damping = it.damping;
+                        it.damping = if t < 1.0 || ratio < 0.25 {
+                            (4.0 * damping).max(1e-4)
+                        } else if ratio > 0.75 {
+                            if damping < 1e-10 { 0.0 } else { damping / 4.0 }
+                        } else {
+                            damping
+                        };
+                        it.p = trial;
+                        it.eq = eq;
+                        it.phi = phit;
+                        return true;
+                    }
+                }
+            }
+            t *= 0.5;
+        }
+        false
+    }
+
+    /// The merit of the Newton loop at the end-effector position `x` and the
+    /// pressures `p`: `½ |x_d − x|² / ℓ² + ½ μ |P̂|²`.
+    fn merit(&self, x_d: &[f64], x: &[f64], p: &[f64]) -> f64 {
+        let r2: f64 = x.iter().zip(x_d).map(|(a, b)| (b - a).powi(2)).sum();
+        let p2: f64 = p
             .iter()
-            .zip(x_d)
-            .map(|(a, b)| (a - b).powi(2))
-            .sum::<f64>()
-            .sqrt();
+            .zip(&self.range)
+            .map(|(p, r)| (p / r).powi(2))
+            .sum();
+        0.5 * r2 / (ELL_M * ELL_M) + 0.5 * self.settings.pressure_weight * p2
+    }
+
+    /// The solution at the last iterate: its status from the distance to
+    /// `x_d` (reached within the tolerance, else unreachable when the
+    /// iteration stalled, else the iteration limit) and where each pressure
+    /// sits relative to its bounds.
+    fn solution(
+        &self,
+        it: NewtonIterate,
+        x_d: &[f64],
+        stalled: bool,
+        iterations: usize,
+    ) -> (IkSolution, Eq) {
+        let error_m = distance(&it.eq.x, x_d);
         let status = if error_m <= self.settings.tolerance_m {
             IkStatus::Reached { error_m }
         } else if stalled {
@@ -743,29 +950,59 @@ impl<E: Element> InverseKinematics<E> {
         } else {
             IkStatus::IterationLimit { error_m }
         };
-        let bounds = P
-            .iter()
-            .zip(&bounds_pa)
-            .map(|(p, (lo, hi))| {
-                if p == lo {
-                    PressureBound::Min
-                } else if p == hi {
-                    PressureBound::Max
-                } else {
-                    PressureBound::Inside
-                }
-            })
-            .collect();
-        Ok((
+        let bounds =
+            it.p.iter()
+                .zip(&self.model().pressure_bounds())
+                .map(|(p, (lo, hi))| {
+                    if p == lo {
+                        PressureBound::Min
+                    } else if p == hi {
+                        PressureBound::Max
+                    } else {
+                        PressureBound::Inside
+                    }
+                })
+                .collect();
+        (
             IkSolution {
-                pressures_pa: DVector::from_vec(P),
-                q: DVector::from_vec(q),
-                effector_m: DVector::from_vec(x),
+                pressures_pa: DVector::from_vec(it.p),
+                q: DVector::from_vec(it.eq.q.clone()),
+                effector_m: DVector::from_vec(it.eq.x.clone()),
                 status,
                 iterations,
                 bounds,
             },
-            factors,
-        ))
+            it.eq,
+        )
     }
+}
+
+/// `|x − x_d|` (m).
+fn distance(x: &[f64], x_d: &[f64]) -> f64 {
+    x.iter()
+        .zip(x_d)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// The Newton loop's iterate: pressures, their equilibrium, merit and the
+/// Levenberg–Marquardt damping.
+#[derive(Debug)]
+struct NewtonIterate {
+    p: Vec<f64>,
+    eq: Eq,
+    phi: f64,
+    damping: f64,
+}
+
+/// One Newton step: the box QP's solution in the scaled pressures, the
+/// scaled pressures it starts from, the predicted decrease of the merit and
+/// the sensitivities `∂q/∂P` at the iterate.
+#[derive(Debug)]
+struct NewtonStep {
+    sol: boxqp::BoxQpSolution,
+    ph: Vec<f64>,
+    dec: f64,
+    dqdp: DMatrix<f64>,
 }

@@ -41,6 +41,26 @@ pub struct IkSettings {
     /// found so far and [`IkStatus::IterationLimit`], so one control step
     /// has a bounded cost whatever the load.
     pub max_static_iterations: usize,
+    /// Weight `μ` of the scaled pressures' norm `½ μ |P̂|²` against the
+    /// position error `½ |x_d − x|² / ℓ²`, ℓ = 0.1 mm (default 1e-2): the
+    /// redundancy rule, least `Σ P̂²` (dimensionless, ≥ 0, at most 1e6).
+    pub pressure_weight: f64,
+    /// A damping `λ` of every step (dimensionless, added to the diagonal of
+    /// the step's Hessian in scaled pressures, default 0, ≥ 0, at most
+    /// 1e6): a step then moves only `μ/(μ + λ)` of the way to the least
+    /// pressures in the null space of the Jacobian (the parallel robot's 18
+    /// pressures for 3 coordinates: there a full null-space move changes
+    /// the pressures by tens of kPa, whose nonlinearity the next iterations
+    /// must undo), fully in its range.
+    pub null_space_damping: f64,
+    /// End a solve as soon as the end effector is within `tolerance_m`
+    /// (default `false`: the iterations go on until no step lowers the
+    /// merit, which settles the pressures on the least `Σ P̂²` of the
+    /// redundancy rule). With a [`IkSettings::null_space_damping`] the
+    /// null-space moves are slow by design, so a controller that only needs
+    /// the position stops here (the parallel robot's: 1–3 iterations per
+    /// control instant instead of the iteration limit).
+    pub stop_when_reached: bool,
 }
 
 impl Default for IkSettings {
@@ -52,6 +72,9 @@ impl Default for IkSettings {
             statics: StaticSettings::default(),
             trial_max_total_iterations: 150,
             max_static_iterations: 20_000,
+            pressure_weight: 1e-2,
+            null_space_damping: 0.0,
+            stop_when_reached: false,
         }
     }
 }
@@ -85,6 +108,14 @@ impl IkSettings {
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(Error::invalid(name, v, "must be finite and > 0"));
+            }
+        }
+        for (name, v) in [
+            ("ik.pressure_weight", self.pressure_weight),
+            ("ik.null_space_damping", self.null_space_damping),
+        ] {
+            if !(v.is_finite() && (0.0..=1e6).contains(&v)) {
+                return Err(Error::invalid(name, v, "must lie in [0, 1e6]"));
             }
         }
         self.statics.validate("ik.statics")

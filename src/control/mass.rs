@@ -286,7 +286,7 @@ pub struct MassEstimator<E: Element + 'static> {
     gravity_m_per_s2: Vec<f64>,
     settings: MassSettings,
     warm: Option<Vec<f64>>,
-    ik: InverseKinematics<E>,
+    ik: InverseKinematics<Robot<E>>,
 }
 
 /// The estimator's answer to one target (see [`MassEstimator::force_for`]).

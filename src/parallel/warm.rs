@@ -78,6 +78,41 @@ pub struct WarmStatics<E: Element> {
     tracker: Tracker<Structure<E>>,
 }
 
+/// The warm strategy of the parallel robot's loop (see
+/// [`WarmStatics::new`]): chord steps with kept factors, at most 3
+/// factorizations and `3 ×` [`MAX_CHORD_STEPS`] residuals per solve, a step
+/// tolerance of `1e-11` times the leg length over 0.1 m; with `confirm`
+/// the residual at the answer is evaluated for its status.
+pub(crate) fn chord_strategy(spec: &crate::parallel::ParallelSpec, confirm: bool) -> WarmStrategy {
+    WarmStrategy::ChordRefactor {
+        max_factorizations: 3,
+        max_residuals: MAX_CHORD_STEPS * 3,
+        step_tolerance_m: 1e-11 * spec.leg_length_m.max(1e-3) / 0.1,
+        confirm,
+    }
+}
+
+/// `W = K⁻¹ A_xᵀ` (three columns of `n_free`, column-major) and the
+/// platform's compliance `C = A_x W` (m/N) of `robot` with the factors of
+/// a tangent `K`.
+///
+/// # Errors
+/// The factors' solve errors (factors that do not fit the robot).
+pub(crate) fn compliance_columns<E: Element>(
+    robot: &ParallelRobot<E>,
+    factors: &AutoFactors,
+) -> Result<(Vec<f64>, SMatrix<f64, 3, 3>)> {
+    let n = robot.structure().n_free();
+    let x0 = robot.platform_free_start()?;
+    let mut w = vec![0.0; 3 * n];
+    for j in 0..3 {
+        w[j * n + x0 + j] = 1.0;
+    }
+    factors.solve_columns_in_place(&mut w, 3)?;
+    let c = SMatrix::<f64, 3, 3>::from_fn(|i, j| w[j * n + x0 + i]);
+    Ok((w, c))
+}
+
 impl<E: Element> WarmStatics<E> {
     /// The warm solver of `robot` (its tangent pattern analyzed once): the
     /// tracker's [`WarmStrategy::ChordRefactor`] with at most 3
@@ -90,13 +125,7 @@ impl<E: Element> WarmStatics<E> {
     /// # Errors
     /// As [`Tracker::new`] for a pattern too large to factor.
     pub fn new(robot: ParallelRobot<E>) -> Result<Self> {
-        let step_tolerance_m = 1e-11 * robot.spec().leg_length_m.max(1e-3) / 0.1;
-        let strategy = WarmStrategy::ChordRefactor {
-            max_factorizations: 3,
-            max_residuals: MAX_CHORD_STEPS * 3,
-            step_tolerance_m,
-            confirm: false,
-        };
+        let strategy = chord_strategy(robot.spec(), false);
         let tracker = Tracker::new(
             robot.structure().clone(),
             StructureLoads::default(),
@@ -158,16 +187,7 @@ impl<E: Element> WarmStatics<E> {
     /// `W = K⁻¹ A_xᵀ` (three columns of `n_free`, column-major) and the
     /// compliance `C = A_x W` with the kept factors.
     fn compliance_columns(&self) -> Result<(Vec<f64>, SMatrix<f64, 3, 3>)> {
-        let f = self.factors()?;
-        let n = self.robot.structure().n_free();
-        let x0 = self.robot.platform_free_start()?;
-        let mut w = vec![0.0; 3 * n];
-        for j in 0..3 {
-            w[j * n + x0 + j] = 1.0;
-        }
-        f.solve_columns_in_place(&mut w, 3)?;
-        let c = SMatrix::<f64, 3, 3>::from_fn(|i, j| w[j * n + x0 + i]);
-        Ok((w, c))
+        compliance_columns(&self.robot, self.factors()?)
     }
 
     /// The platform's compliance `C = A_x K⁻¹ A_xᵀ` (m/N) with the kept

@@ -270,6 +270,29 @@ pub struct WarmCounts {
     pub steps: usize,
 }
 
+/// The counts of two trackers together (a controller's estimator and
+/// inverse kinematics).
+///
+/// # Example
+/// ```
+/// use softrod::statics::WarmCounts;
+/// let a = WarmCounts { solves: 2, steps: 3, ..WarmCounts::default() };
+/// assert_eq!((a + a).solves, 4);
+/// ```
+impl std::ops::Add for WarmCounts {
+    type Output = WarmCounts;
+
+    fn add(self, o: WarmCounts) -> WarmCounts {
+        WarmCounts {
+            solves: self.solves + o.solves,
+            residuals: self.residuals + o.residuals,
+            factorizations: self.factorizations + o.factorizations,
+            fallbacks: self.fallbacks + o.fallbacks,
+            steps: self.steps + o.steps,
+        }
+    }
+}
+
 /// A solved equilibrium of the tracker: the shape, the factored tangent,
 /// its residual and how it was found.
 ///
@@ -740,12 +763,6 @@ impl<M: Model> Tracker<M> {
         q0: Option<&[f64]>,
     ) -> Result<Equilibrium> {
         solver.solve_with(&self.model, loads, q0, &mut self.linear)
-    }
-
-    /// The model and the tracker's analyzed linear solver, for a caller
-    /// that factors other matrices of the model (a Jacobian's tangent).
-    pub(crate) fn model_and_linear(&mut self) -> (&M, &mut AutoSolver) {
-        (&self.model, &mut self.linear)
     }
 
     /// The equilibrium at `F` from `q0` (all coordinates, taken as they

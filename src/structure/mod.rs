@@ -25,6 +25,7 @@
 //!   by the structure and the clamped robot. The solver is
 //!   [`crate::statics::StaticSolver`], one for every model.
 
+pub mod actuation;
 mod assemble;
 pub mod dofmap;
 pub mod model;
@@ -39,6 +40,7 @@ mod triplets;
 use std::ops::Range;
 use std::sync::Arc;
 
+pub use actuation::Actuated;
 pub use assemble::JointReaction;
 pub use dofmap::{BlockRule, DofMap};
 pub use model::{Assembled, Model, ModelLoads};
