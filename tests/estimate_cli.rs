@@ -9,8 +9,6 @@
 #![cfg(feature = "cli")]
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use std::process::Command;
-
 use serde_json::Value;
 use softrod::estimate::MarkerObservation;
 use softrod::loads::PointForce;
@@ -27,17 +25,9 @@ const PAYLOAD_N: [f64; 2] = [0.0, -0.02 * 9.81];
 /// Frame times (s); the payload acts from the second.
 const TIMES_S: [f64; 4] = [0.0, 0.1, 0.2, 0.3];
 
-fn run(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_softrod"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+#[path = "common/cli.rs"]
+mod cli;
+use cli::softrod as run;
 
 /// The stream the example holds: `examples/two_section.json`'s robot at
 /// four times its elements under its loads (at rest), then with the
