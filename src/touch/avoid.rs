@@ -27,10 +27,13 @@
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
+use crate::assembly::Robot;
 use crate::contact::Obstacles;
 use crate::control::{IkSettings, IkStatus, InverseKinematics};
+use crate::element::PlanarCable;
 use crate::error::{Error, Result, check_len, check_positive};
 use crate::estimate::{AlphaRule, Estimator, EstimatorSettings};
+use crate::loads::Loads;
 use crate::plant::{Plant, PlantSettings, SimulatedPlant};
 use crate::scene::Scene;
 
@@ -426,12 +429,16 @@ pub fn run_avoidance(
         passes: 1,
         normal_only: true,
     };
-    let sigma2 = settings.noise_sigma_m * settings.noise_sigma_m;
-    let mut pending: Vec<TouchedPoint> = Vec::new();
-    let mut points: Vec<Vector2<f64>> = Vec::new();
+    let mut touch = Touch {
+        search,
+        sigma2: settings.noise_sigma_m * settings.noise_sigma_m,
+        detection_chi2: settings.detection_chi2,
+        min_force_n: settings.min_force_n,
+        pending: Vec::new(),
+        points: Vec::new(),
+    };
     let mut next_shape = 0.0;
     let tip_s = model.length();
-    let nq = model.n_q();
     for k in 1..=steps {
         plant.command(&p)?;
         let frame = plant.advance(dt)?;
@@ -455,49 +462,139 @@ pub fn run_avoidance(
         let e = est.step(&frame.observation(marker_s_m)?)?;
         let (q_hat, f_hat) = (e.q.clone(), e.f.clone());
         // 3. touch
-        let mut chi2_now = 0.0;
-        if settings.touch_feedback {
+        let chi2_now = if settings.touch_feedback {
             let markers = super::planar_points("markers", &frame.positions_m)?;
-            let c = locate_point_force(&model, &known, marker_s_m, &markers, &[], &search)?;
-            let chi2 = (c.misfit_free_m2 - c.misfit_m2) / sigma2;
-            let f = c.force_n[0].hypot(c.force_n[1]);
-            chi2_now = chi2;
-            if chi2 > settings.detection_chi2 && f > settings.min_force_n {
-                let r = model.position_at(q_hat.as_slice(), c.s_m)?;
-                let rho = super::ROD_RADIUS_M;
-                let point = [r[0] - rho * c.force_n[0] / f, r[1] - rho * c.force_n[1] / f];
-                let cand = TouchedPoint {
-                    time_s: t,
-                    s_m: c.s_m,
-                    point_m: point,
-                    force_n: c.force_n,
-                };
-                let near = |a: Vector2<f64>, b: Vector2<f64>| (a - b).norm() < 0.02;
-                pending.retain(|x| near(x.point(), cand.point()));
-                pending.push(cand.clone());
-                if pending.len() >= 3 {
-                    match points.iter().position(|x| near(*x, cand.point())) {
-                        Some(i) => points[i] = cand.point(),
-                        None => points.push(cand.point()),
-                    }
-                    run.touched.push(cand);
-                    pending.clear();
-                }
-            } else {
-                pending.clear();
-            }
-        }
+            touch.step(
+                &model,
+                &known,
+                marker_s_m,
+                &markers,
+                q_hat.as_slice(),
+                t,
+                &mut run.touched,
+            )?
+        } else {
+            0.0
+        };
         // 4. the field's gradient in the pressures, frozen at the bounds, β (44)
         let mut loads = base_loads.clone();
         loads.pressures_pa.clone_from(&p);
         loads.distributed_f = f_hat.as_slice().to_vec();
-        let (_, g_q) = field_gradient(&model, q_hat.as_slice(), &settings.field, goal_m, &points)?;
-        let jac = dq_dp(&model, &loads, q_hat.as_slice())?;
+        let step = FieldStep {
+            model: &model,
+            loads: &loads,
+            q_hat: q_hat.as_slice(),
+            bounds: &bounds,
+            goal_m,
+            points: &touch.points,
+        };
+        step.descend(&settings.field, dt, &mut p)?;
+        let tip = plant.true_tip_m()?;
+        let tip_hat = model.position_at(q_hat.as_slice(), tip_s)?;
+        run.samples.push(AvoidSample {
+            time_s: t,
+            tip_true_m: [tip[0], tip[1]],
+            tip_estimated_m: [tip_hat[0], tip_hat[1]],
+            contact_force_n: force_now,
+            known_points: touch.points.len(),
+            touch_chi2: chi2_now,
+            pressures_pa: p.clone(),
+        });
+    }
+    finish(&mut run, goal_m, settings.goal_tolerance_m);
+    Ok(run)
+}
+
+/// What the touch feedback keeps between instants: the point search's
+/// settings, the detection thresholds, the candidates of the current
+/// contact (a point is learnt once three consecutive instants agree on it
+/// within 2 cm) and the obstacle points learnt.
+struct Touch {
+    search: PointSearchSettings,
+    /// σ² of the markers (m²).
+    sigma2: f64,
+    detection_chi2: f64,
+    min_force_n: f64,
+    pending: Vec<TouchedPoint>,
+    points: Vec<Vector2<f64>>,
+}
+
+impl Touch {
+    /// One instant: the point force that best explains the markers (its
+    /// χ² against no force), and where it is strong enough, a candidate
+    /// contact point on the rod's surface (`q_hat` the estimated shape);
+    /// a point confirmed by three candidates is learnt (pushed to
+    /// `touched`). Returns the χ².
+    #[allow(clippy::too_many_arguments)]
+    fn step(
+        &mut self,
+        model: &Robot<PlanarCable>,
+        known: &Loads,
+        marker_s_m: &[f64],
+        markers: &[Vector2<f64>],
+        q_hat: &[f64],
+        t: f64,
+        touched: &mut Vec<TouchedPoint>,
+    ) -> Result<f64> {
+        let c = locate_point_force(model, known, marker_s_m, markers, &[], &self.search)?;
+        let chi2 = (c.misfit_free_m2 - c.misfit_m2) / self.sigma2;
+        let f = c.force_n[0].hypot(c.force_n[1]);
+        if !(chi2 > self.detection_chi2 && f > self.min_force_n) {
+            self.pending.clear();
+            return Ok(chi2);
+        }
+        let r = model.position_at(q_hat, c.s_m)?;
+        let rho = super::ROD_RADIUS_M;
+        let point = [r[0] - rho * c.force_n[0] / f, r[1] - rho * c.force_n[1] / f];
+        let cand = TouchedPoint {
+            time_s: t,
+            s_m: c.s_m,
+            point_m: point,
+            force_n: c.force_n,
+        };
+        let near = |a: Vector2<f64>, b: Vector2<f64>| (a - b).norm() < 0.02;
+        self.pending.retain(|x| near(x.point(), cand.point()));
+        self.pending.push(cand.clone());
+        if self.pending.len() >= 3 {
+            match self.points.iter().position(|x| near(*x, cand.point())) {
+                Some(i) => self.points[i] = cand.point(),
+                None => self.points.push(cand.point()),
+            }
+            touched.push(cand);
+            self.pending.clear();
+        }
+        Ok(chi2)
+    }
+}
+
+/// One descent step of the pressures on the potential field (44) at the
+/// estimated shape.
+struct FieldStep<'a> {
+    model: &'a Robot<PlanarCable>,
+    /// The loads of the estimate: the commanded pressures and the
+    /// estimated field `F̂`.
+    loads: &'a Loads,
+    q_hat: &'a [f64],
+    bounds: &'a [(f64, f64)],
+    goal_m: Vector2<f64>,
+    points: &'a [Vector2<f64>],
+}
+
+impl FieldStep<'_> {
+    /// The field's gradient in the pressures through (43), frozen where a
+    /// pressure sits at a bound and points out, scaled by `β` so that the
+    /// end effector moves at the field's `v_d`, applied over `dt_s` to `p`
+    /// (clamped to the bounds).
+    fn descend(&self, field: &FieldParams, dt_s: f64, p: &mut [f64]) -> Result<()> {
+        let model = self.model;
+        let nq = model.n_q();
+        let (_, g_q) = field_gradient(model, self.q_hat, field, self.goal_m, self.points)?;
+        let jac = dq_dp(model, self.loads, self.q_hat)?;
         let np = p.len();
         let mut g_p: Vec<f64> = (0..np)
             .map(|j| (0..nq).map(|i| g_q[i] * jac[(i, j)]).sum())
             .collect();
-        for (j, (lo, hi)) in bounds.iter().enumerate() {
+        for (j, (lo, hi)) in self.bounds.iter().enumerate() {
             let tol = 1e-9 * (hi - lo);
             if (p[j] <= lo + tol && g_p[j] > 0.0) || (p[j] >= hi - tol && g_p[j] < 0.0) {
                 g_p[j] = 0.0;
@@ -509,23 +606,19 @@ pub fn run_avoidance(
             .collect();
         let speed = v[0].hypot(v[1]);
         if speed > 0.0 && speed.is_finite() {
-            let beta = settings.field.v_d_m_per_s / speed;
-            for (j, (lo, hi)) in bounds.iter().enumerate() {
-                p[j] = (p[j] - beta * g_p[j] * dt).clamp(*lo, *hi);
+            let beta = field.v_d_m_per_s / speed;
+            for (j, (lo, hi)) in self.bounds.iter().enumerate() {
+                p[j] = (p[j] - beta * g_p[j] * dt_s).clamp(*lo, *hi);
             }
         }
-        let tip = plant.true_tip_m()?;
-        let tip_hat = model.position_at(q_hat.as_slice(), tip_s)?;
-        run.samples.push(AvoidSample {
-            time_s: t,
-            tip_true_m: [tip[0], tip[1]],
-            tip_estimated_m: [tip_hat[0], tip_hat[1]],
-            contact_force_n: force_now,
-            known_points: points.len(),
-            touch_chi2: chi2_now,
-            pressures_pa: p.clone(),
-        });
+        Ok(())
     }
+}
+
+/// The run's end: the final error and force, and its status (reached at
+/// the first instant from which the tip stays within `tolerance_m` of the
+/// goal, else not reached with the last distance).
+fn finish(run: &mut AvoidRun, goal_m: Vector2<f64>, tolerance_m: f64) {
     let err = |s: &AvoidSample| (s.tip_true() - goal_m).norm();
     let last = run.samples.last().map_or(f64::NAN, err);
     run.final_error_m = last;
@@ -533,7 +626,7 @@ pub fn run_avoidance(
     run.status = match run
         .samples
         .iter()
-        .rposition(|s| err(s).is_nan() || err(s) > settings.goal_tolerance_m)
+        .rposition(|s| err(s).is_nan() || err(s) > tolerance_m)
     {
         None => AvoidStatus::Reached { time_s: 0.0 },
         Some(i) if i + 1 < run.samples.len() => AvoidStatus::Reached {
@@ -541,7 +634,6 @@ pub fn run_avoidance(
         },
         Some(_) => AvoidStatus::NotReached { distance_m: last },
     };
-    Ok(run)
 }
 
 /// The plant's chamber pressures now (the command it holds).
