@@ -30,7 +30,10 @@
 //! the static solver, from the unpredicted start, takes over wherever the
 //! corrector gives up. The closing iteration at a reached target (the
 //! check that no null-space step lowers `Σ P̂²`) therefore costs solves,
-//! not another factorization.
+//! not another factorization. With a chord corrector
+//! ([`InverseKinematics::with_corrector`], the parallel robot's) the
+//! trials are chord steps with the kept factors, and each iteration's
+//! Jacobian is one factorization at the iterate, kept for the next trials.
 //!
 //! # Redundancy rule: minimum Σ P̂²
 //! The two-section robot has four chambers and two task coordinates: the

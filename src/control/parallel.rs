@@ -30,10 +30,10 @@
 //!   of 1–3), in the range of `J` it is Gauss–Newton's;
 //! - feedforward only: `F̂ = 0` (the model's own weights only).
 //!
-//! Every equilibrium is warm (the estimator's a chord solve of
-//! [`crate::parallel::warm`], the inverse kinematics' a Newton corrector
-//! from the first-order prediction), which is what makes a control step
-//! cost milliseconds instead of a cold solve's 0.1 s.
+//! Every equilibrium, the estimator's and the inverse kinematics', is a warm
+//! chord solve with the kept factors of one tracker (the chord strategy of
+//! [`crate::parallel::warm`]), which is what makes a control step cost
+//! milliseconds instead of a cold solve's 0.1 s.
 //!
 //! The plant is another [`ParallelRobot`]: finer mesh and the stiffness and
 //! gain errors of [`crate::parallel::payload::plant_spec`], the mass hung from the
@@ -186,9 +186,10 @@ impl<E: Element + 'static> ParallelController<E> {
             stop_when_reached: true,
             ..IkSettings::default()
         };
+        let loads = model.loads(p0_pa, [0.0; 3], [0.0; 3])?;
         let mut ik = InverseKinematics::for_model(
             model.structure().clone(),
-            model.loads(p0_pa, [0.0; 3], [0.0; 3])?,
+            loads.clone(),
             settings,
             PLATFORM,
             LoadModel::AtSite { site: PLATFORM },
@@ -199,7 +200,6 @@ impl<E: Element + 'static> ParallelController<E> {
         // by that step; the residual would cost 3 % more instructions per
         // tracking run (callgrind, 91 instants)
         .with_corrector(crate::parallel::warm::chord_strategy(model.spec(), false))?;
-        let loads = model.loads(p0_pa, [0.0; 3], [0.0; 3])?;
         let eq = model.solve(&loads, None)?;
         let tracker = ik.tracker_mut();
         tracker.set_loads(loads)?;
