@@ -12,8 +12,8 @@
 //! from `elements_per_section = 1` doubled) 2.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
-use softrod::control::ControllerKind;
 use softrod::control::parallel::{TrackSettings, run_track};
+use softrod::control::{ControllerKind, EstimateFlag};
 use softrod::parallel::ParallelSpec;
 
 #[test]
@@ -50,6 +50,64 @@ fn updater_tracks_the_platform_within_0_2_mm_where_feedforward_misses() {
     // the updater's load carries the payload's weight (and the model errors')
     let last = up.samples.last().unwrap();
     assert!(last.control.f_hat_n[2] < -0.5);
+    // every estimate of the run converged (none kept the last good one)
+    let kept = up
+        .samples
+        .iter()
+        .filter(|s| s.control.estimate != EstimateFlag::Converged)
+        .count();
+    assert_eq!(kept, 0, "estimates that kept the last good force");
+}
+
+/// The controller's estimator (the one estimator of every model, its
+/// equilibria chord solves sharing the inverse kinematics' factors) finds
+/// the force that put the model's platform where it is measured: a force
+/// of the platform's own size applied to the model, its platform read
+/// without noise, recovered to 1e-4 of its size (the estimator stops at a
+/// step of a tenth of the tolerance, 1e-7 m, against a compliance of about
+/// 1.4e-4 m/N) in a few control instants; the feedforward controller
+/// estimates nothing.
+#[test]
+fn the_controllers_estimate_recovers_a_known_platform_force() {
+    use softrod::control::UpdaterGains;
+    use softrod::control::parallel::{ParallelController, centre_pressures};
+    let spec = ParallelSpec {
+        elements_per_section: 1,
+        ..ParallelSpec::default()
+    };
+    let model = spec.build_full().unwrap();
+    let p = centre_pressures(&spec);
+    let force = [0.05, -0.03, -0.4];
+    let loaded = model
+        .solve(&model.loads(p.as_slice(), force, [0.0; 3]).unwrap(), None)
+        .unwrap();
+    let x = model.platform_pose(loaded.q.as_slice()).unwrap();
+    let at = [x[0], x[1], x[2]];
+    let gains = UpdaterGains::default();
+    let mut ctl = ParallelController::new(
+        model.clone(),
+        ControllerKind::FfUpdater,
+        gains,
+        0.1,
+        p.as_slice(),
+        1e-6,
+    )
+    .unwrap();
+    // the controller's command moves; the estimate is at the last one, so
+    // the target is the point itself: the command stays at p
+    let first = ctl.step(at, at).unwrap();
+    assert_eq!(first.estimate, EstimateFlag::Converged);
+    let scale = force.iter().map(|v| v * v).sum::<f64>().sqrt();
+    // the estimate at the first instant is at the start pressures p
+    let err = (0..3)
+        .map(|i| (first.f_bar_n[i] - force[i]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(err <= 1e-4 * scale, "{:?} against {force:?}", first.f_bar_n);
+    let mut ff =
+        ParallelController::new(model, ControllerKind::Ff, gains, 0.1, p.as_slice(), 1e-6).unwrap();
+    let s = ff.step(at, at).unwrap();
+    assert_eq!((s.estimate, s.f_bar_n), (EstimateFlag::NotRun, [0.0; 3]));
 }
 
 #[test]

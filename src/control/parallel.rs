@@ -6,16 +6,21 @@
 //! platform marker → estimator F̄ (32)–(35) → updater (31) F̂ → f_IK(x_d, F̂) → 18 pressures → plant
 //! ```
 //!
-//! The pieces of [`crate::control`] are used as they are: the updater
-//! [`ParameterUpdater`] and the one inverse kinematics
-//! ([`InverseKinematics::for_model`] on the robot's structure, the end
-//! effector at the platform's centre, `F̂` a force there); the estimator is
-//! still this robot's own ([`ParallelController`]):
+//! The pieces of [`crate::control`] and [`crate::estimate`] are used as
+//! they are: the updater [`ParameterUpdater`], the one estimator
+//! ([`NewtonEstimator`] on the robot's structure) and the one inverse
+//! kinematics ([`InverseKinematics::for_model`] on it, the end effector at
+//! the platform's centre, `F̂` a force there):
 //!
 //! - the load is the force `F ∈ R³` at the platform's centre (the payload
-//!   model (32)–(35)): `F̄` is the force that puts the model's platform at
-//!   the measured position under the commanded pressures, by Newton's
-//!   method with the platform's compliance `C`;
+//!   model (32)–(35), [`LoadModel::AtSite`]): `F̄` is the force that puts
+//!   the model's platform at the measured position under the commanded
+//!   pressures (the estimate of one marker at the platform's site, `α` =
+//!   [`PAYLOAD_ALPHA`]: three coordinates for three unknowns, an exact fit;
+//!   the estimator's marker σ is the controller's tolerance, which sets
+//!   only where its iteration stops: at a step of a tenth of it); an
+//!   estimate that does not converge keeps the last good `F̄`
+//!   ([`EstimateFlag::KeptLast`]);
 //! - `f_IK(x_d, F̂)`: the pressures (within their bounds) putting the
 //!   model's platform at `x_d` under `F̂`, by the inverse kinematics'
 //!   Gauss–Newton on the pressures scaled by their range with the Jacobian
@@ -31,9 +36,10 @@
 //! - feedforward only: `F̂ = 0` (the model's own weights only).
 //!
 //! Every equilibrium, the estimator's and the inverse kinematics', is a warm
-//! chord solve with the kept factors of one tracker (the chord strategy of
-//! [`crate::parallel::warm`]), which is what makes a control step cost
-//! milliseconds instead of a cold solve's 0.1 s.
+//! chord solve with the kept factors of its tracker (the chord strategy of
+//! [`crate::parallel::warm`], [`NewtonEstimator::with_corrector`]), which
+//! is what makes a control step cost milliseconds instead of a cold
+//! solve's 0.1 s.
 //!
 //! The plant is another [`ParallelRobot`]: finer mesh and the stiffness and
 //! gain errors of [`crate::parallel::payload::plant_spec`], the mass hung from the
@@ -53,12 +59,16 @@ use nalgebra::Vector3;
 use serde::Serialize;
 
 use super::{
-    ControllerKind, IkSettings, InverseKinematics, ParameterUpdater, Trajectory, UpdaterGains,
+    ControllerKind, EstimateFlag, IkSettings, InverseKinematics, ParameterUpdater, Trajectory,
+    UpdaterGains,
 };
 use crate::element::{Ancf3d, Element};
-use crate::error::{Error, Result, check_all_finite, check_len};
-use crate::estimate::LoadModel;
-use crate::parallel::warm::{WarmCounts, WarmStatics, compliance_columns};
+use crate::error::{Result, check_all_finite, check_len};
+use crate::estimate::{
+    Estimator, EstimatorSettings, LoadModel, NewtonEstimator, Observation, PAYLOAD_ALPHA,
+};
+use crate::observe::MarkerObservation;
+use crate::parallel::warm::{WarmCounts, WarmStatics, chord_strategy};
 use crate::parallel::{ParallelRobot, ParallelSpec};
 use crate::rng::Gaussian;
 use crate::site::Site;
@@ -76,7 +86,7 @@ const LAMBDA: f64 = 1e-2;
 const IK_ITERATIONS: usize = 20;
 /// The platform's centre: the end effector and where `F̂` acts.
 const PLATFORM: Site = Site::Body { body: 0 };
-/// Newton iterations of the estimator per control instant, at most.
+/// Gauss–Newton iterations of the estimator per control instant, at most.
 const ESTIMATOR_ITERATIONS: usize = 8;
 
 mod settings;
@@ -88,18 +98,18 @@ pub use settings::{MAX_PARALLEL_TRACK_STEPS, TrackSettings};
 #[derive(Debug, Clone)]
 pub struct ParallelController<E: Element + 'static> {
     robot: ParallelRobot<E>,
-    /// The inverse kinematics on the robot's structure; its warm tracker
-    /// (a chord strategy) also solves the estimator's equilibria, whose
-    /// kept factors then serve both.
+    /// The inverse kinematics on the robot's structure (its warm tracker a
+    /// chord strategy).
     ik: InverseKinematics<Structure<E>>,
+    /// The estimator of the force at the platform's centre (its warm
+    /// tracker a chord strategy), its known pressures the last command.
+    estimator: NewtonEstimator<Structure<E>>,
     kind: ControllerKind,
     updater: ParameterUpdater,
-    tolerance_m: f64,
     /// The last command.
     p: Vec<f64>,
-    /// The estimator's last force and equilibrium.
+    /// The estimator's last good force.
     f_bar: [f64; 3],
-    u_est: Vec<f64>,
 }
 
 /// What a controller step did (written to JSON; the forces typed by
@@ -108,11 +118,12 @@ pub struct ParallelController<E: Element + 'static> {
 /// # Example
 /// ```
 /// use nalgebra::Vector3;
-/// use softrod::control::parallel::ControlStep;
+/// use softrod::control::{EstimateFlag, parallel::ControlStep};
 /// let s = ControlStep {
 ///     f_bar_n: [0.0, 0.0, -0.5],
 ///     f_hat_n: [0.0, 0.0, -0.4],
 ///     pressures_pa: vec![1e4; 9],
+///     estimate: EstimateFlag::Converged,
 ///     ik_error_m: 1e-7,
 ///     ik_iterations: 2,
 /// };
@@ -127,6 +138,8 @@ pub struct ControlStep {
     pub f_hat_n: [f64; 3],
     /// The command (Pa).
     pub pressures_pa: Vec<f64>,
+    /// What the estimator gave.
+    pub estimate: EstimateFlag,
     /// Distance of the model's platform from the target at the command (m).
     pub ik_error_m: f64,
     /// Inverse-kinematics iterations.
@@ -138,8 +151,8 @@ impl ControlStep {
     ///
     /// # Example
     /// ```
-    /// use softrod::control::parallel::ControlStep;
-    /// let s = ControlStep { f_bar_n: [0.1, 0.0, -0.5], f_hat_n: [0.0; 3], pressures_pa: vec![], ik_error_m: 0.0, ik_iterations: 0 };
+    /// use softrod::control::{EstimateFlag, parallel::ControlStep};
+    /// let s = ControlStep { f_bar_n: [0.1, 0.0, -0.5], f_hat_n: [0.0; 3], pressures_pa: vec![], estimate: EstimateFlag::NotRun, ik_error_m: 0.0, ik_iterations: 0 };
     /// assert_eq!(s.f_bar().z, -0.5);
     /// ```
     pub fn f_bar(&self) -> Vector3<f64> {
@@ -150,8 +163,8 @@ impl ControlStep {
     ///
     /// # Example
     /// ```
-    /// use softrod::control::parallel::ControlStep;
-    /// let s = ControlStep { f_bar_n: [0.0; 3], f_hat_n: [0.1, 0.0, -0.4], pressures_pa: vec![], ik_error_m: 0.0, ik_iterations: 0 };
+    /// use softrod::control::{EstimateFlag, parallel::ControlStep};
+    /// let s = ControlStep { f_bar_n: [0.0; 3], f_hat_n: [0.1, 0.0, -0.4], pressures_pa: vec![], estimate: EstimateFlag::NotRun, ik_error_m: 0.0, ik_iterations: 0 };
     /// assert_eq!(s.f_hat().x, 0.1);
     /// ```
     pub fn f_hat(&self) -> Vector3<f64> {
@@ -166,7 +179,7 @@ impl<E: Element + 'static> ParallelController<E> {
     /// # Errors
     /// As [`ParameterUpdater::new`], [`ParallelRobot::solve`] and
     /// [`InverseKinematics::for_model`] (a chamber whose bounds are
-    /// equal); [`Error::DimensionMismatch`] (`pressures_pa`) for a wrong
+    /// equal); [`Error::DimensionMismatch`](crate::Error::DimensionMismatch) (`pressures_pa`) for a wrong
     /// count.
     pub fn new(
         model: ParallelRobot<E>,
@@ -199,72 +212,64 @@ impl<E: Element + 'static> ParallelController<E> {
         // below 1.2e-11 m, bound the answer's distance from the equilibrium
         // by that step; the residual would cost 3 % more instructions per
         // tracking run (callgrind, 91 instants)
-        .with_corrector(crate::parallel::warm::chord_strategy(model.spec(), false))?;
+        .with_corrector(chord_strategy(model.spec(), false))?;
         let eq = model.solve(&loads, None)?;
         let tracker = ik.tracker_mut();
-        tracker.set_loads(loads)?;
+        tracker.set_loads(loads.clone())?;
         tracker.factor_at_free(eq.u.as_slice())?;
+        let estimator = NewtonEstimator::new(
+            model.structure(),
+            &loads,
+            &EstimatorSettings {
+                load_model: LoadModel::AtSite { site: PLATFORM },
+                alpha: Some(PAYLOAD_ALPHA),
+                noise_sigma_m: tolerance_m,
+                max_iterations: ESTIMATOR_ITERATIONS,
+                ..EstimatorSettings::default()
+            },
+        )?
+        .with_corrector(chord_strategy(model.spec(), true))?;
         Ok(ParallelController {
             robot: model,
             ik,
+            estimator,
             kind,
             updater: ParameterUpdater::new(3, gains, dt_s)?,
-            tolerance_m,
             p: p0_pa.to_vec(),
             f_bar: [0.0; 3],
-            u_est: eq.u.data.into(),
         })
     }
 
-    /// The model's platform position (m) at free coordinates `u`.
-    fn platform(&self, u: &[f64]) -> Result<[f64; 3]> {
-        let x0 = self.robot.platform_free_start()?;
-        check_len("u", self.robot.structure().n_free(), u.len())?;
-        Ok([u[x0], u[x0 + 1], u[x0 + 2]])
-    }
-
-    /// The model's equilibrium at pressures `p` and platform force `f`
-    /// from `u0` (the tracker's chord steps with its kept factors).
-    fn forward(&mut self, p: &[f64], f: [f64; 3], u0: &[f64]) -> Result<(Vec<f64>, [f64; 3])> {
-        let loads = self.robot.loads(p, f, [0.0; 3])?;
-        let tracker = self.ik.tracker_mut();
-        tracker.set_loads(loads)?;
-        let u: Vec<f64> = tracker.solve_free(u0)?.u.data.into();
-        let x = self.platform(&u)?;
-        Ok((u, x))
-    }
-
     /// The estimator: the force at the platform's centre that puts the
-    /// model's platform at `measured` under the last command.
-    fn estimate(&mut self, measured: [f64; 3]) -> Result<[f64; 3]> {
-        let mut f = self.f_bar;
-        let u0 = self.u_est.clone();
-        let p = self.p.clone();
-        let (mut u, mut x) = self.forward(&p, f, &u0)?;
-        for _ in 0..ESTIMATOR_ITERATIONS {
-            let r = nalgebra::Vector3::from_fn(|i, _| measured[i] - x[i]);
-            if r.norm() <= 0.1 * self.tolerance_m {
-                break;
+    /// model's platform at `measured` under the last command; the last good
+    /// one kept when the estimate does not converge.
+    fn estimate(&mut self, measured: [f64; 3]) -> Result<([f64; 3], EstimateFlag)> {
+        let known = self.robot.loads(&self.p, [0.0; 3], [0.0; 3])?;
+        self.estimator.set_known_loads(known)?;
+        // the inverse kinematics factored last near this command: its
+        // factors start the estimator's chord steps, and the estimator's
+        // last ones the next inverse kinematics' (one tracker's factors, as
+        // if the two shared it)
+        self.estimator
+            .tracker_mut()
+            .keep_from(self.ik.tracker_mut());
+        let observation = Observation {
+            markers: vec![MarkerObservation::at_site(&PLATFORM, measured.to_vec())],
+        };
+        let flag = match self.estimator.step(&observation) {
+            Ok(e) if e.report.status.is_converged() && e.f.iter().all(|v| v.is_finite()) => {
+                self.f_bar = [e.f[0], e.f[1], e.f[2]];
+                EstimateFlag::Converged
             }
-            let factors = self.ik.tracker_mut().kept_factors().ok_or_else(|| {
-                Error::invalid(
-                    "warm",
-                    "unfactored",
-                    "no tangent factored before the estimate",
-                )
-            })?;
-            let (_, c) = compliance_columns(&self.robot, factors)?;
-            let df = c.lu().solve(&r).ok_or_else(|| {
-                Error::invalid("measured_m", format!("{measured:?}"), "singular compliance")
-            })?;
-            for i in 0..3 {
-                f[i] += df[i];
-            }
-            (u, x) = self.forward(&p, f, &u)?;
-        }
-        self.u_est = u;
-        self.f_bar = f;
-        Ok(f)
+            Ok(e) => EstimateFlag::KeptLast {
+                status: Some(e.report.status),
+            },
+            Err(_) => EstimateFlag::KeptLast { status: None },
+        };
+        self.ik
+            .tracker_mut()
+            .keep_from(self.estimator.tracker_mut());
+        Ok((self.f_bar, flag))
     }
 
     /// `f_IK(x_d, F̂)` warm from the last command, which it replaces;
@@ -276,9 +281,9 @@ impl<E: Element + 'static> ParallelController<E> {
     }
 
     /// What the controller's warm equilibria cost so far (the estimator's
-    /// and the inverse kinematics', on one tracker).
+    /// and the inverse kinematics').
     pub fn counts(&self) -> WarmCounts {
-        self.ik.counts()
+        self.ik.counts() + self.estimator.counts()
     }
 
     /// One control instant: the measured platform (m) in, the command for
@@ -286,7 +291,7 @@ impl<E: Element + 'static> ParallelController<E> {
     /// out. The points are [`Vector3`]s (arrays convert).
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] for non-finite input; the errors of the
+    /// [`Error::InvalidParameter`](crate::Error::InvalidParameter) for non-finite input; the errors of the
     /// static solves.
     pub fn step(
         &mut self,
@@ -297,12 +302,12 @@ impl<E: Element + 'static> ParallelController<E> {
         let x_next_m: [f64; 3] = x_next_m.into().into();
         check_all_finite("measured_m", &measured_m)?;
         check_all_finite("x_d", &x_next_m)?;
-        let (f_bar, f_hat) = match self.kind {
-            ControllerKind::Ff => ([0.0; 3], [0.0; 3]),
+        let (f_bar, estimate, f_hat) = match self.kind {
+            ControllerKind::Ff => ([0.0; 3], EstimateFlag::NotRun, [0.0; 3]),
             ControllerKind::FfUpdater => {
-                let f_bar = self.estimate(measured_m)?;
+                let (f_bar, flag) = self.estimate(measured_m)?;
                 let h = self.updater.step(&f_bar)?;
-                (f_bar, [h[0], h[1], h[2]])
+                (f_bar, flag, [h[0], h[1], h[2]])
             }
         };
         let (ik_error_m, ik_iterations) = self.inverse_kinematics(x_next_m, f_hat)?;
@@ -310,6 +315,7 @@ impl<E: Element + 'static> ParallelController<E> {
             f_bar_n: f_bar,
             f_hat_n: f_hat,
             pressures_pa: self.p.clone(),
+            estimate,
             ik_error_m,
             ik_iterations,
         })
@@ -343,8 +349,8 @@ impl TrackSample {
     /// # Example
     /// ```
     /// use nalgebra::Vector3;
-    /// use softrod::control::parallel::{ControlStep, TrackSample};
-    /// let control = ControlStep { f_bar_n: [0.0; 3], f_hat_n: [0.0; 3], pressures_pa: vec![], ik_error_m: 0.0, ik_iterations: 0 };
+    /// use softrod::control::{EstimateFlag, parallel::{ControlStep, TrackSample}};
+    /// let control = ControlStep { f_bar_n: [0.0; 3], f_hat_n: [0.0; 3], pressures_pa: vec![], estimate: EstimateFlag::NotRun, ik_error_m: 0.0, ik_iterations: 0 };
     /// let s = TrackSample {
     ///     time_s: 0.1,
     ///     desired_m: [0.0, 0.01, 0.3],
@@ -365,8 +371,8 @@ impl TrackSample {
     /// # Example
     /// ```
     /// use nalgebra::Vector3;
-    /// use softrod::control::parallel::{ControlStep, TrackSample};
-    /// let control = ControlStep { f_bar_n: [0.0; 3], f_hat_n: [0.0; 3], pressures_pa: vec![], ik_error_m: 0.0, ik_iterations: 0 };
+    /// use softrod::control::{EstimateFlag, parallel::{ControlStep, TrackSample}};
+    /// let control = ControlStep { f_bar_n: [0.0; 3], f_hat_n: [0.0; 3], pressures_pa: vec![], estimate: EstimateFlag::NotRun, ik_error_m: 0.0, ik_iterations: 0 };
     /// let s = TrackSample {
     ///     time_s: 0.1,
     ///     desired_m: [0.0, 0.01, 0.3],
@@ -387,8 +393,8 @@ impl TrackSample {
     /// # Example
     /// ```
     /// use nalgebra::Vector3;
-    /// use softrod::control::parallel::{ControlStep, TrackSample};
-    /// let control = ControlStep { f_bar_n: [0.0; 3], f_hat_n: [0.0; 3], pressures_pa: vec![], ik_error_m: 0.0, ik_iterations: 0 };
+    /// use softrod::control::{EstimateFlag, parallel::{ControlStep, TrackSample}};
+    /// let control = ControlStep { f_bar_n: [0.0; 3], f_hat_n: [0.0; 3], pressures_pa: vec![], estimate: EstimateFlag::NotRun, ik_error_m: 0.0, ik_iterations: 0 };
     /// let s = TrackSample {
     ///     time_s: 0.1,
     ///     desired_m: [0.0, 0.01, 0.3],
@@ -489,7 +495,7 @@ pub fn centre_pressures(spec: &ParallelSpec) -> nalgebra::DVector<f64> {
 ///
 /// # Errors
 /// As [`TrackSettings::validate`] and [`ParallelSpec::validate`];
-/// [`Error::DimensionMismatch`] (`pressures_pa`) for a wrong count; the
+/// [`Error::DimensionMismatch`](crate::Error::DimensionMismatch) (`pressures_pa`) for a wrong count; the
 /// static solves' errors.
 ///
 /// # Example

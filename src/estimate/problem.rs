@@ -162,6 +162,11 @@ impl<M: EstimationModel> Problem<M> {
         &mut self.tracker
     }
 
+    /// The equilibrium tracker, to read.
+    pub(crate) fn tracker_ref(&self) -> &Tracker<M> {
+        &self.tracker
+    }
+
     /// The known loads.
     pub(crate) fn known(&self) -> &M::Loads {
         self.tracker.known()
@@ -318,10 +323,22 @@ impl<M: EstimationModel> Problem<M> {
         }
     }
 
-    /// Replaces the known loads ([`EquilibriumTracker::set_known`]) and
-    /// forgets the shape of the old ones.
+    /// Replaces the known loads ([`EquilibriumTracker::set_known`]; with a
+    /// chord strategy [`EquilibriumTracker::set_loads`], which keeps the
+    /// factors) and forgets the shape of the old ones.
     pub(crate) fn set_known(&mut self, known: M::Loads) -> Result<()> {
-        self.tracker.set_known(known)?;
+        // a chord strategy's kept factors are a chord's, whose steps check
+        // their own contraction and refactor where it fails: they stay
+        // across the change (a controller's next command); otherwise they
+        // are the tangent at a solution under the old loads and go
+        if matches!(
+            self.tracker.strategy(),
+            crate::statics::WarmStrategy::ChordRefactor { .. }
+        ) {
+            self.tracker.set_loads(known)?;
+        } else {
+            self.tracker.set_known(known)?;
+        }
         self.unloaded = None;
         Ok(())
     }

@@ -533,9 +533,15 @@ impl<M: Model> Tracker<M> {
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn with_strategy(mut self, strategy: WarmStrategy) -> Result<Self> {
+        self.set_strategy(strategy)?;
+        Ok(self)
+    }
+
+    /// Replaces the warm strategy in place ([`Tracker::with_strategy`]).
+    pub(crate) fn set_strategy(&mut self, strategy: WarmStrategy) -> Result<()> {
         strategy.validate()?;
         self.strategy = strategy;
-        Ok(self)
+        Ok(())
     }
 
     /// The model.
@@ -575,6 +581,17 @@ impl<M: Model> Tracker<M> {
     /// factorization, see [`TrackedEquilibrium::factors`]).
     pub fn kept_factors(&self) -> Option<&AutoFactors> {
         self.kept.as_ref().map(|k| &k.factors)
+    }
+
+    /// Takes `other`'s kept factors (with their point and largest entry),
+    /// if it has any: for two trackers of one model whose solves are near
+    /// each other (a controller's estimator and inverse kinematics, at the
+    /// same command), the factorization one made serves the other's chord
+    /// steps, which check their own contraction.
+    pub(crate) fn keep_from(&mut self, other: &Tracker<M>) {
+        if let Some(k) = &other.kept {
+            self.kept = Some(k.clone());
+        }
     }
 
     /// The dead force of the known loads plus `G F` (`n_q`, N).

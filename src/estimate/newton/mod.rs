@@ -65,6 +65,7 @@ use super::EstimationModel;
 use crate::error::Result;
 use crate::linsolve::AutoFactors;
 use crate::observe::{ObsRow, ObservationOperator};
+use crate::statics::{WarmCounts, WarmStrategy};
 use nalgebra::{DMatrix, DVector};
 
 use super::driver::{Method, Solved, Stream, run_step};
@@ -174,6 +175,55 @@ impl<M: EstimationModel> NewtonEstimator<M> {
     /// The robot.
     pub fn robot(&self) -> &M {
         self.stream.problem.robot()
+    }
+
+    /// The estimator with another warm strategy for the equilibria `q(F)`
+    /// of its iterates (default [`WarmStrategy::ChordThenNewton`], which
+    /// factors the tangent at every solution: each iteration's marker
+    /// Jacobian (28) is then exact). With [`WarmStrategy::ChordRefactor`]
+    /// the tangent is refactored only where the chord steps stop
+    /// contracting: the Jacobian comes from the last factorization, an
+    /// approximate Gauss–Newton whose iterates may be more, each far
+    /// cheaper where a tangent costs much more than its chord steps (the
+    /// full 3-D element of the parallel robot's legs, whose control loop
+    /// uses it); the covariances are then those of that tangent too.
+    ///
+    /// # Errors
+    /// As [`WarmStrategy::validate`].
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::estimate::{Estimator, EstimatorSettings, NewtonEstimator, Observation};
+    /// use softrod::{scene::Scene, statics::{StaticSolver, WarmStrategy}};
+    /// let scene = Scene::two_section();
+    /// let (robot, loads) = (scene.robot()?, scene.loads()?);
+    /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+    /// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[8, 16, 20])?.with_noise(1e-5, 1);
+    /// let chord = WarmStrategy::ChordRefactor {
+    ///     max_factorizations: 3, max_residuals: 36, step_tolerance_m: 1e-11, confirm: true,
+    /// };
+    /// let mut est = NewtonEstimator::new(&robot, &loads, &EstimatorSettings::default())?
+    ///     .with_corrector(chord)?;
+    /// assert!(est.step(&obs)?.report.status.is_converged());
+    /// assert!(est.counts().solves > 0);
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn with_corrector(mut self, strategy: WarmStrategy) -> Result<Self> {
+        self.stream.problem.tracker().set_strategy(strategy)?;
+        Ok(self)
+    }
+
+    /// The warm tracker of the equilibria `q(F)`, for a caller that solves
+    /// the same model near them (a controller's inverse kinematics: the
+    /// two share their kept factors).
+    pub(crate) fn tracker_mut(&mut self) -> &mut crate::statics::Tracker<M> {
+        self.stream.problem.tracker()
+    }
+
+    /// What the equilibria `q(F)` of the estimates so far cost (the warm
+    /// tracker's counts).
+    pub fn counts(&self) -> WarmCounts {
+        self.stream.problem.tracker_ref().counts()
     }
 
     /// Objective `J(F)` and reduced gradient (29) at `F` for `observation`
