@@ -26,11 +26,11 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use softrod::control::parallel::ParallelController;
-use softrod::control::{ControllerKind, UpdaterGains};
+use softrod::control::parallel::{TrackSettings, controller};
 use softrod::estimate::Backend;
 use softrod::parallel::ParallelSpec;
 use softrod::parallel::payload::fig8_configurations;
+use softrod::plant::MarkerFrame;
 
 fn bench(c: &mut Criterion) {
     let spec = ParallelSpec::default();
@@ -86,22 +86,18 @@ fn bench(c: &mut Criterion) {
         )
         .unwrap();
     let x = model.platform_pose(eq.q.as_slice()).unwrap();
-    let mut ctl = ParallelController::new(
-        model,
-        ControllerKind::FfUpdater,
-        UpdaterGains::default(),
-        0.1,
-        &p,
-        1e-6,
-    )
-    .unwrap();
-    let target = [x[0], x[1], x[2]];
+    let mut ctl = controller(model, &TrackSettings::default(), &p).unwrap();
+    let target = vec![x[0], x[1], x[2]];
+    let frame = MarkerFrame {
+        time_s: 0.0,
+        positions_m: vec![target.clone()],
+    };
     for _ in 0..30 {
-        ctl.step(target, target).unwrap();
+        ctl.control_step(&frame, &target, &target).unwrap();
     }
     let next = [x[0] + 1e-4, x[1], x[2]];
     g.bench_function("track_step/ff_updater", |b| {
-        b.iter(|| black_box(ctl.clone().step(target, next).unwrap()))
+        b.iter(|| black_box(ctl.clone().control_step(&frame, &target, &next).unwrap()))
     });
     g.finish();
 }

@@ -52,8 +52,7 @@ fn main() -> Result<(), softrod::Error> {
         let ik_max = run
             .samples
             .iter()
-            .fold(0.0f64, |m, s| m.max(s.control.ik_error_m));
-        let ik_it: usize = run.samples.iter().map(|s| s.control.ik_iterations).sum();
+            .fold(0.0f64, |m, s| m.max(s.ik.error_m()));
         println!(
             "   max step {:.1} ms; model {:?}; plant {:?}",
             s.max_step_time_s * 1e3,
@@ -63,21 +62,20 @@ fn main() -> Result<(), softrod::Error> {
         for smp in run
             .samples
             .iter()
-            .filter(|x| x.step_time_s > 0.2 || x.control.ik_error_m > 1e-6)
+            .filter(|x| x.step_time_s > 0.2 || x.ik.error_m() > 1e-6)
         {
             println!(
-                "   t {:.1}: step {:.0} ms, IK error {:.2e} m in {} it",
+                "   t {:.1}: step {:.0} ms, IK error {:.2e} m",
                 smp.time_s,
                 smp.step_time_s * 1e3,
-                smp.control.ik_error_m,
-                smp.control.ik_iterations
+                smp.ik.error_m()
             );
         }
-        println!("   IK: largest remaining distance {ik_max:.3e} m, {ik_it} iterations in all");
+        println!("   IK: largest remaining distance {ik_max:.3e} m");
         if let Some(last) = run.samples.last() {
             println!(
                 "   last F̂ {:?} N, F̄ {:?} N",
-                last.control.f_hat_n, last.control.f_bar_n
+                last.estimated_load_n, last.estimator_load_n
             );
         }
     }

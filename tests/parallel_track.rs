@@ -42,19 +42,20 @@ fn updater_tracks_the_platform_within_0_2_mm_where_feedforward_misses() {
         b.samples,
         b.score_from_s
     );
-    assert_eq!(b.samples, 41);
+    // one per control instant after the first command: 4 s at 10 Hz
+    assert_eq!(b.samples, 40);
     assert!(a.mean_error_m > 0.5e-3, "feedforward alone should miss");
     assert!(b.mean_error_m <= 0.2e-3, "the updater's target");
     assert!(b.max_error_m <= 0.4e-3);
     assert_eq!(b.ik_not_reached, 0);
     // the updater's load carries the payload's weight (and the model errors')
     let last = up.samples.last().unwrap();
-    assert!(last.control.f_hat_n[2] < -0.5);
+    assert!(last.estimated_load_n[2] < -0.5);
     // every estimate of the run converged (none kept the last good one)
     let kept = up
         .samples
         .iter()
-        .filter(|s| s.control.estimate != EstimateFlag::Converged)
+        .filter(|s| s.estimate != EstimateFlag::Converged)
         .count();
     assert_eq!(kept, 0, "estimates that kept the last good force");
 }
@@ -65,12 +66,11 @@ fn updater_tracks_the_platform_within_0_2_mm_where_feedforward_misses() {
 /// of the platform's own size applied to the model, its platform read
 /// without noise, recovered to 1e-4 of its size (the estimator stops at a
 /// step of a tenth of the tolerance, 1e-7 m, against a compliance of about
-/// 1.4e-4 m/N) in a few control instants; the feedforward controller
-/// estimates nothing.
+/// 1.4e-4 m/N); the feedforward controller estimates nothing.
 #[test]
 fn the_controllers_estimate_recovers_a_known_platform_force() {
-    use softrod::control::UpdaterGains;
-    use softrod::control::parallel::{ParallelController, centre_pressures};
+    use softrod::control::parallel::{centre_pressures, controller};
+    use softrod::plant::MarkerFrame;
     let spec = ParallelSpec {
         elements_per_section: 1,
         ..ParallelSpec::default()
@@ -82,32 +82,34 @@ fn the_controllers_estimate_recovers_a_known_platform_force() {
         .solve(&model.loads(p.as_slice(), force, [0.0; 3]).unwrap(), None)
         .unwrap();
     let x = model.platform_pose(loaded.q.as_slice()).unwrap();
-    let at = [x[0], x[1], x[2]];
-    let gains = UpdaterGains::default();
-    let mut ctl = ParallelController::new(
+    let at = vec![x[0], x[1], x[2]];
+    let frame = MarkerFrame {
+        time_s: 0.1,
+        positions_m: vec![at.clone()],
+    };
+    let settings = |controller| TrackSettings {
+        controller,
+        ..TrackSettings::default()
+    };
+    let mut lp = controller(
         model.clone(),
-        ControllerKind::FfUpdater,
-        gains,
-        0.1,
+        &settings(ControllerKind::FfUpdater),
         p.as_slice(),
-        1e-6,
     )
     .unwrap();
-    // the controller's command moves; the estimate is at the last one, so
-    // the target is the point itself: the command stays at p
-    let first = ctl.step(at, at).unwrap();
+    // the estimate is at the start pressures p (the command before it)
+    let first = lp.control_step(&frame, &at, &at).unwrap();
     assert_eq!(first.estimate, EstimateFlag::Converged);
     let scale = force.iter().map(|v| v * v).sum::<f64>().sqrt();
-    // the estimate at the first instant is at the start pressures p
     let err = (0..3)
-        .map(|i| (first.f_bar_n[i] - force[i]).powi(2))
+        .map(|i| (first.f_bar[i] - force[i]).powi(2))
         .sum::<f64>()
         .sqrt();
-    assert!(err <= 1e-4 * scale, "{:?} against {force:?}", first.f_bar_n);
-    let mut ff =
-        ParallelController::new(model, ControllerKind::Ff, gains, 0.1, p.as_slice(), 1e-6).unwrap();
-    let s = ff.step(at, at).unwrap();
-    assert_eq!((s.estimate, s.f_bar_n), (EstimateFlag::NotRun, [0.0; 3]));
+    println!("estimated {:?} N against {force:?} N", first.f_bar);
+    assert!(err <= 1e-4 * scale, "{:?} against {force:?}", first.f_bar);
+    let mut ff = controller(model, &settings(ControllerKind::Ff), p.as_slice()).unwrap();
+    let s = ff.control_step(&frame, &at, &at).unwrap();
+    assert_eq!((s.estimate, s.f_bar), (EstimateFlag::NotRun, vec![0.0; 3]));
 }
 
 #[test]

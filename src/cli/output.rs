@@ -610,7 +610,8 @@ impl ControllerName {
 
 /// The top level of the library's tracking run (`softrod::control::TrackRun`
 /// or `softrod::control::parallel::TrackRun`), for the schema: the summary
-/// and the samples are that type's (see its documentation).
+/// is that type's, the samples `softrod::control::TrackSample` for both
+/// (see their documentation).
 #[derive(JsonSchema)]
 #[schemars(deny_unknown_fields)]
 #[allow(dead_code)]

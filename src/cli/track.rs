@@ -65,7 +65,7 @@ pub(super) fn run(
     controller: Option<ControllerArg>,
     out: Option<PathBuf>,
 ) -> Result<()> {
-    // a parallel-robot scene has its own loop (softrod::control::parallel)
+    // a parallel-robot scene: its settings and plant (softrod::control::parallel)
     if let Some(ps) = super::parallel::read(&scene)? {
         let kind = controller.map(|c| match c {
             ControllerArg::Ff => ControllerKind::Ff,

@@ -4,13 +4,13 @@
 
 use nalgebra::DMatrix;
 
-use crate::assembly::Robot;
-use crate::element::Element;
 use crate::error::Result;
-use crate::estimate::{Backend, Estimator, EstimatorSettings, NewtonEstimator, SqpEstimator};
+use crate::estimate::{
+    Backend, EstimationModel, Estimator, EstimatorSettings, NewtonEstimator, SqpEstimator,
+};
 use crate::linsolve::{AutoSolver, FactorOptions, SolverKind, SymmetricMatrix, TangentSolver};
-use crate::loads::Loads;
 use crate::sensitivity::Sensitivity;
+use crate::statics::{Tracker, WarmCounts, WarmStrategy};
 use crate::structure::Actuated;
 
 /// (43) `∂q/∂P = −(∂Q/∂q)⁻¹ ∂Q/∂P` (`n_q × n_pressures`, m/Pa) at the
@@ -30,40 +30,61 @@ pub(crate) fn dq_dp<M: Actuated>(model: &M, loads: &M::Loads, q: &[f64]) -> Resu
 /// so that a loop, warm start included, can be cloned: a benchmark restores
 /// the same state for every measured step, a sweep branches one settled loop.
 #[derive(Debug, Clone)]
-pub(crate) enum LoopEstimator<E: Element> {
+pub(crate) enum LoopEstimator<M: EstimationModel> {
     /// The reduced Gauss–Newton backend.
-    Newton(Box<NewtonEstimator<Robot<E>>>),
+    Newton(Box<NewtonEstimator<M>>),
     /// The SQP backend.
-    Sqp(Box<SqpEstimator<Robot<E>>>),
+    Sqp(Box<SqpEstimator<M>>),
 }
 
-impl<E: Element + 'static> LoopEstimator<E> {
+impl<M: EstimationModel> LoopEstimator<M> {
     /// The estimator as the trait object.
-    pub(crate) fn as_dyn(&mut self) -> &mut dyn Estimator {
+    pub(crate) fn as_dyn(&mut self) -> &mut dyn Estimator<M::Loads> {
         match self {
             LoopEstimator::Newton(e) => e.as_mut(),
             LoopEstimator::Sqp(e) => e.as_mut(),
         }
     }
+
+    /// What its equilibria cost so far.
+    pub(crate) fn counts(&self) -> WarmCounts {
+        match self {
+            LoopEstimator::Newton(e) => e.counts(),
+            LoopEstimator::Sqp(e) => e.counts(),
+        }
+    }
+
+    /// The warm tracker of its equilibria.
+    pub(crate) fn tracker_mut(&mut self) -> &mut Tracker<M> {
+        match self {
+            LoopEstimator::Newton(e) => e.tracker_mut(),
+            LoopEstimator::Sqp(e) => e.tracker_mut(),
+        }
+    }
 }
 
-/// The estimator of `settings.backend` for `robot` under the known loads
-/// `known` at the chamber pressures `pressures_pa`.
+/// The estimator of `settings.backend` for `model` under the known loads
+/// `known` at the chamber pressures `pressures_pa`, its equilibria by the
+/// warm strategy `corrector` (`None`: the estimator's own).
 ///
 /// The loop builds it once and replaces its known pressures each step with
 /// [`Estimator::set_known_loads`], keeping the warm start `(F, q)` and `α`.
-pub(crate) fn estimator_at<E: Element + 'static>(
-    robot: &Robot<E>,
-    known: &Loads,
+pub(crate) fn estimator_at<M: Actuated + EstimationModel>(
+    model: &M,
+    known: &M::Loads,
     pressures_pa: &[f64],
     settings: &EstimatorSettings,
-) -> Result<LoopEstimator<E>> {
-    let mut loads = known.clone();
-    loads.pressures_pa = pressures_pa.to_vec();
-    Ok(match settings.backend {
+    corrector: Option<WarmStrategy>,
+) -> Result<LoopEstimator<M>> {
+    let loads = model.with_pressures(known, pressures_pa);
+    let mut e = match settings.backend {
         Backend::Newton => {
-            LoopEstimator::Newton(Box::new(NewtonEstimator::new(robot, &loads, settings)?))
+            LoopEstimator::Newton(Box::new(NewtonEstimator::new(model, &loads, settings)?))
         }
-        Backend::Sqp => LoopEstimator::Sqp(Box::new(SqpEstimator::new(robot, &loads, settings)?)),
-    })
+        Backend::Sqp => LoopEstimator::Sqp(Box::new(SqpEstimator::new(model, &loads, settings)?)),
+    };
+    if let Some(strategy) = corrector {
+        e.tracker_mut().set_strategy(strategy)?;
+    }
+    Ok(e)
 }

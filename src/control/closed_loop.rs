@@ -20,11 +20,14 @@ use nalgebra::{DVector, Dim, RawStorage, Vector};
 use serde::{Deserialize, Serialize};
 
 use crate::assembly::Robot;
-use crate::element::Element;
+use crate::element::{Element, NodeKinematics};
 use crate::error::{Error, Result, check_len};
-use crate::estimate::{EstimateStatus, EstimatorSettings};
+use crate::estimate::{EstimateStatus, EstimationModel, EstimatorSettings, LoadModel};
 use crate::loads::Loads;
 use crate::plant::Plant;
+use crate::site::Site;
+use crate::statics::WarmStrategy;
+use crate::structure::Actuated;
 
 use super::{IkSettings, IkStatus, InverseKinematics, ParameterUpdater, Trajectory, adapter};
 use super::{UpdaterGains, VirtualPayload};
@@ -395,22 +398,27 @@ impl TimeSeries {
 /// kinematics, last good estimate, last command): two clones fed the same
 /// frames give the same commands.
 #[derive(Debug, Clone)]
-pub struct ClosedLoop<E: Element> {
-    model: Robot<E>,
-    known: Loads,
-    marker_s_m: Vec<f64>,
+pub struct ClosedLoop<M: Actuated + EstimationModel> {
+    model: M,
+    known: M::Loads,
+    /// Where the frames' markers are, in their order.
+    markers: Vec<Site>,
     settings: LoopSettings,
-    ik: InverseKinematics<Robot<E>>,
+    ik: InverseKinematics<M>,
     updater: ParameterUpdater,
     last_good: Option<Vec<f64>>,
     commanded_pa: Vec<f64>,
     virtual_payload: Option<VirtualPayload>,
     /// The estimator, built on the first frame and kept warm after (its
     /// known pressures replaced each step).
-    estimator: Option<adapter::LoopEstimator<E>>,
+    estimator: Option<adapter::LoopEstimator<M>>,
+    /// The warm strategy of the estimator's equilibria, when not its own
+    /// ([`ClosedLoop::with_corrector`]): the estimator's and the inverse
+    /// kinematics' trackers then hand their kept factors to each other.
+    corrector: Option<WarmStrategy>,
 }
 
-impl<E: Element + 'static> ClosedLoop<E> {
+impl<E: Element + 'static> ClosedLoop<Robot<E>> {
     /// A controller for the model `model` under the known loads `known`
     /// (its pressures are the command before the first step), observing
     /// markers at the arc coordinates `marker_s_m` (m; the last one should
@@ -432,18 +440,83 @@ impl<E: Element + 'static> ClosedLoop<E> {
         for (i, &s) in marker_s_m.iter().enumerate() {
             model.locate(&format!("markers[{i}].s_m"), s)?;
         }
-        let ik = InverseKinematics::new(model.clone(), known.clone(), settings.ik.clone())?;
-        let updater =
-            ParameterUpdater::new(model.n_q(), settings.gains, 1.0 / settings.control_rate_hz)?;
-        let commanded_pa = if known.pressures_pa.is_empty() {
-            vec![0.0; model.n_pressures()]
-        } else {
-            known.pressures_pa.clone()
+        let tip = Site::Rod {
+            rod: 0,
+            s_m: model.length(),
         };
+        let markers: Vec<Site> = marker_s_m
+            .iter()
+            .map(|&s_m| Site::Rod { rod: 0, s_m })
+            .collect();
+        ClosedLoop::for_model(model, known, &markers, tip, settings)
+    }
+}
+
+impl<M: Actuated + EstimationModel> ClosedLoop<M> {
+    /// A controller for any model (a structure of rods and bodies: the
+    /// parallel robot with the platform's centre for its end effector)
+    /// under the known loads `known` (its pressures are the command before
+    /// the first step), observing markers at the sites `markers` (a frame's
+    /// positions in their order), moving the site `effector` along the
+    /// trajectory; the estimator's load model
+    /// ([`EstimatorSettings::load_model`]) is the load the inverse
+    /// kinematics feeds forward.
+    ///
+    /// # Errors
+    /// As [`LoopSettings::validate`] and [`InverseKinematics::for_model`];
+    /// [`Error::InvalidParameter`] (field `markers`) for no markers or a
+    /// site the model does not have (`markers[i]`).
+    ///
+    /// # Example
+    /// The parallel robot's platform, observed by one marker at its centre:
+    /// ```
+    /// use softrod::control::{ClosedLoop, LoopSettings};
+    /// use softrod::{estimate::LoadModel, site::Site};
+    /// let mut spec = softrod::parallel::ParallelSpec::default();
+    /// spec.elements_per_section = 1;
+    /// let robot = spec.build_cable()?;
+    /// let platform = Site::Body { body: 0 };
+    /// let known = robot.loads(&vec![0.0; 18], [0.0; 3], [0.0; 3])?;
+    /// let mut settings = LoopSettings::default();
+    /// settings.estimator.load_model = LoadModel::AtSite { site: platform };
+    /// let lp = ClosedLoop::for_model(robot.structure().clone(), known, &[platform], platform, settings)?;
+    /// assert_eq!(lp.f_hat().len(), 3); // a force at the platform's centre
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn for_model(
+        model: M,
+        known: M::Loads,
+        markers: &[Site],
+        effector: Site,
+        settings: LoopSettings,
+    ) -> Result<Self> {
+        settings.validate()?;
+        if markers.is_empty() {
+            return Err(Error::invalid("markers", "[]", "the loop needs markers"));
+        }
+        for (i, site) in markers.iter().enumerate() {
+            model.site_rows(&format!("markers[{i}]"), site)?;
+        }
+        let ik = InverseKinematics::for_model(
+            model.clone(),
+            known.clone(),
+            settings.ik.clone(),
+            effector,
+            settings.estimator.load_model,
+        )?;
+        let updater = ParameterUpdater::new(
+            ik.n_load_params(),
+            settings.gains,
+            1.0 / settings.control_rate_hz,
+        )?;
+        let mut commanded_pa = model.pressures_of(&known);
+        if commanded_pa.is_empty() {
+            commanded_pa = vec![0.0; model.pressure_bounds().len()];
+        }
         Ok(ClosedLoop {
             model,
             known,
-            marker_s_m: marker_s_m.to_vec(),
+            markers: markers.to_vec(),
             settings,
             ik,
             updater,
@@ -451,7 +524,24 @@ impl<E: Element + 'static> ClosedLoop<E> {
             commanded_pa,
             virtual_payload: None,
             estimator: None,
+            corrector: None,
         })
+    }
+
+    /// The loop with another warm strategy for every equilibrium of its
+    /// model, the inverse kinematics' and the estimator's (by default each
+    /// its own: [`InverseKinematics::with_corrector`],
+    /// [`crate::estimate::NewtonEstimator::with_corrector`]); the two
+    /// trackers then hand their kept factors to each other, so one
+    /// factorization serves both (a model whose tangent costs far more
+    /// than its chord steps: the parallel robot's full 3-D legs).
+    ///
+    /// # Errors
+    /// As [`WarmStrategy::validate`].
+    pub fn with_corrector(mut self, strategy: WarmStrategy) -> Result<Self> {
+        self.ik = self.ik.with_corrector(strategy)?;
+        self.corrector = Some(strategy);
+        Ok(self)
     }
 
     /// Subtracts `vp` (keyed by the desired end-effector position) from every
@@ -496,13 +586,23 @@ impl<E: Element + 'static> ClosedLoop<E> {
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn resultant(&self, f: &[f64]) -> DVector<f64> {
-        let d = E::DIM;
-        let Ok(g) = self.model.apply_load_gram(f) else {
-            return DVector::from_element(d, f64::NAN);
-        };
-        // the generalized force's position rows sum to ∫ w dX
-        let nd = E::NODE_DOFS;
-        DVector::from_iterator(d, (0..d).map(|k| g.iter().skip(k).step_by(nd).sum()))
+        let d = M::Element::DIM;
+        let nan = || DVector::from_element(d, f64::NAN);
+        match self.settings.estimator.load_model {
+            LoadModel::Distributed => {
+                let Some(Ok(g)) = self.model.field_rod().map(|r| r.apply_load_gram(f)) else {
+                    return nan();
+                };
+                // the generalized force's position rows sum to ∫ w dX
+                let nd = M::Element::NODE_DOFS;
+                DVector::from_iterator(d, (0..d).map(|k| g.iter().skip(k).step_by(nd).sum()))
+            }
+            // a force at a site: its basis times the parameters
+            site => match site.force_basis(d) {
+                Ok(Some(b)) if b.ncols() == f.len() => b * DVector::from_column_slice(f),
+                _ => nan(),
+            },
+        }
     }
 
     /// The estimator's `F̄` from the markers of `frame`; `(F̄, flag)` with
@@ -512,28 +612,34 @@ impl<E: Element + 'static> ClosedLoop<E> {
             let f = s
                 .last_good
                 .clone()
-                .unwrap_or_else(|| vec![0.0; s.model.n_q()]);
+                .unwrap_or_else(|| vec![0.0; s.ik.n_load_params()]);
             (f, EstimateFlag::KeptLast { status })
         };
-        let obs = match frame.observation(&self.marker_s_m) {
+        let obs = match frame.observation_at(&self.markers) {
             Ok(o) => o,
             Err(_) => return keep(self, None),
         };
         // built once, then warm: only the commanded pressures change
         let ready = match self.estimator.as_mut() {
-            Some(e) => {
-                let mut known = self.known.clone();
-                known.pressures_pa.clone_from(&self.commanded_pa);
-                e.as_dyn().set_known_loads(known)
-            }
+            Some(e) => e
+                .as_dyn()
+                .set_known_loads(self.model.with_pressures(&self.known, &self.commanded_pa)),
             None => adapter::estimator_at(
                 &self.model,
                 &self.known,
                 &self.commanded_pa,
                 &self.settings.estimator,
+                self.corrector,
             )
             .map(|e| self.estimator = Some(e)),
         };
+        // with one corrector for both, the inverse kinematics factored last
+        // near this command: its factors start the estimator's chord steps
+        if self.corrector.is_some()
+            && let Some(e) = self.estimator.as_mut()
+        {
+            e.tracker_mut().keep_from(self.ik.tracker_mut());
+        }
         let est = ready.and_then(|()| match self.estimator.as_mut() {
             Some(e) => {
                 let e = e.as_dyn();
@@ -545,6 +651,12 @@ impl<E: Element + 'static> ClosedLoop<E> {
             }
             None => Err(Error::invalid("estimator", "none", "not built")),
         });
+        // and the estimator's last factors the next inverse kinematics'
+        if self.corrector.is_some()
+            && let Some(e) = self.estimator.as_mut()
+        {
+            self.ik.tracker_mut().keep_from(e.tracker_mut());
+        }
         match est {
             Ok(e) if e.report.status.is_converged() && e.f.iter().all(|v| v.is_finite()) => {
                 self.last_good = Some(e.f.as_slice().to_vec());
@@ -572,12 +684,12 @@ impl<E: Element + 'static> ClosedLoop<E> {
         x_now: &[f64],
         x_next: &[f64],
     ) -> Result<LoopSample> {
-        check_len("x_d", E::DIM, x_now.len())?;
-        check_len("x_d", E::DIM, x_next.len())?;
+        check_len("x_d", M::Element::DIM, x_now.len())?;
+        check_len("x_d", M::Element::DIM, x_next.len())?;
         crate::error::check_all_finite("x_d", x_now)?;
         crate::error::check_all_finite("x_d", x_next)?;
         let start = Instant::now();
-        let zeros = vec![0.0; self.model.n_q()];
+        let zeros = vec![0.0; self.ik.n_load_params()];
         let (f_bar, flag, f_hat) = match self.settings.controller {
             ControllerKind::Ff => (zeros.clone(), EstimateFlag::NotRun, zeros),
             ControllerKind::FfUpdater => {
@@ -619,6 +731,20 @@ impl<E: Element + 'static> ClosedLoop<E> {
         })
     }
 
+    /// What the loop's static solves cost so far: the inverse
+    /// kinematics' and the estimator's.
+    ///
+    /// # Example
+    /// See [`crate::control::parallel::run_track`].
+    pub fn counts(&self) -> crate::statics::WarmCounts {
+        let est = self
+            .estimator
+            .as_ref()
+            .map(adapter::LoopEstimator::counts)
+            .unwrap_or_default();
+        self.ik.counts() + est
+    }
+
     /// The pressures last commanded (Pa).
     pub fn commanded_pa(&self) -> &[f64] {
         &self.commanded_pa
@@ -650,10 +776,10 @@ impl<E: Element + 'static> ClosedLoop<E> {
     ) -> Result<TimeSeries> {
         let mut inspect = |p: &P| inspect(p).map(|v| v.iter().copied().collect::<Vec<f64>>());
         trajectory.validate()?;
-        check_len("trajectory.points_m[0]", E::DIM, trajectory.dim())?;
+        check_len("trajectory.points_m[0]", M::Element::DIM, trajectory.dim())?;
         check_len(
             "plant pressures",
-            self.model.n_pressures(),
+            self.model.pressure_bounds().len(),
             plant.n_pressures(),
         )?;
         let dt = self.dt_s();
@@ -670,7 +796,7 @@ impl<E: Element + 'static> ClosedLoop<E> {
                 ),
             ));
         }
-        let zeros = vec![0.0; self.model.n_q()];
+        let zeros = vec![0.0; self.ik.n_load_params()];
         // the first command: the start point, nothing estimated yet
         let first = self.ik.solve(trajectory.at(t0).as_slice(), &zeros)?;
         self.commanded_pa = first.pressures_pa.data.into();
@@ -682,7 +808,7 @@ impl<E: Element + 'static> ClosedLoop<E> {
             let frame = match plant.advance(dt) {
                 Ok(f) => f,
                 Err(e) => {
-                    let zeros_d = vec![0.0; E::DIM];
+                    let zeros_d = vec![0.0; M::Element::DIM];
                     let last = series.samples.last();
                     series.samples.push(LoopSample {
                         time_s: t,
@@ -717,7 +843,7 @@ impl<E: Element + 'static> ClosedLoop<E> {
                     .sqrt();
                 // A NaN distance aborts the run too.
                 if e.is_nan() || e > limit {
-                    let zeros_d = vec![0.0; E::DIM];
+                    let zeros_d = vec![0.0; M::Element::DIM];
                     let last = series.samples.last();
                     series.samples.push(LoopSample {
                         time_s: t,

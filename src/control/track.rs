@@ -36,7 +36,8 @@ use crate::plant::{PayloadSchedule, PlantSettings, SimulatedPlant};
 use crate::scene::Scene;
 
 use super::{
-    ClosedLoop, ControllerKind, EstimateFlag, IkStatus, LoopSettings, StepStatus, Trajectory,
+    ClosedLoop, ControllerKind, EstimateFlag, IkStatus, LoopSettings, StepStatus, TimeSeries,
+    Trajectory,
 };
 use super::{IkSettings, InverseKinematics};
 
@@ -593,37 +594,7 @@ pub fn run_track(
     let mut steps: Vec<f64> = series.samples.iter().map(|s| s.step_time_s).collect();
     steps.sort_by(f64::total_cmp);
     let bounds = scene.robot()?.pressure_bounds();
-    let samples: Vec<TrackSample> = series
-        .samples
-        .iter()
-        .map(|s| {
-            let actual = s
-                .true_tip_m
-                .clone()
-                .unwrap_or_else(|| s.measured_tip_m.clone());
-            let error_m = actual
-                .iter()
-                .zip(&s.desired_m)
-                .map(|(a, b)| (a - b).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            TrackSample {
-                time_s: s.time_s,
-                desired_m: s.desired_m.clone(),
-                actual_m: actual,
-                measured_m: s.measured_tip_m.clone(),
-                error_m,
-                payload_kg: payloads.mass_at(s.time_s, length),
-                estimated_load_n: s.f_hat_resultant_n.clone(),
-                estimator_load_n: s.f_bar_resultant_n.clone(),
-                pressures_pa: s.pressures_pa.clone(),
-                step_time_s: s.step_time_s,
-                ik: s.ik,
-                estimate: s.estimate,
-                status: s.status.clone(),
-            }
-        })
-        .collect();
+    let samples = track_samples(&series, |t| payloads.mass_at(t, length));
     let summary = TrackSummary {
         controller: settings.controller,
         control_rate_hz: settings.control_rate_hz,
@@ -659,4 +630,45 @@ pub fn run_track(
         plant: plant_settings,
     };
     Ok(TrackRun { summary, samples })
+}
+
+/// The rows of a run's time series as tracking samples: the true end
+/// effector (the measured one where the plant gave none) and its distance
+/// from the target, the hung mass `payload_kg(t)` on the plant, the loads'
+/// resultants.
+pub(crate) fn track_samples(
+    series: &TimeSeries,
+    payload_kg: impl Fn(f64) -> f64,
+) -> Vec<TrackSample> {
+    series
+        .samples
+        .iter()
+        .map(|s| {
+            let actual = s
+                .true_tip_m
+                .clone()
+                .unwrap_or_else(|| s.measured_tip_m.clone());
+            let error_m = actual
+                .iter()
+                .zip(&s.desired_m)
+                .map(|(a, b)| (a - b).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            TrackSample {
+                time_s: s.time_s,
+                desired_m: s.desired_m.clone(),
+                actual_m: actual,
+                measured_m: s.measured_tip_m.clone(),
+                error_m,
+                payload_kg: payload_kg(s.time_s),
+                estimated_load_n: s.f_hat_resultant_n.clone(),
+                estimator_load_n: s.f_bar_resultant_n.clone(),
+                pressures_pa: s.pressures_pa.clone(),
+                step_time_s: s.step_time_s,
+                ik: s.ik,
+                estimate: s.estimate,
+                status: s.status.clone(),
+            }
+        })
+        .collect()
 }

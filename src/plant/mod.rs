@@ -26,9 +26,11 @@
 //! or a generic `P: Plant`.
 
 mod obstacles;
+mod parallel;
 mod payload;
 
 pub use obstacles::PlantContact;
+pub use parallel::ParallelPlant;
 pub use payload::{Payload, PayloadKind, PayloadSchedule};
 
 use nalgebra::{DVector, Vector2};
@@ -41,6 +43,7 @@ use crate::linsolve::AutoSolver;
 use crate::loads::Loads;
 use crate::observe::{MarkerObservation, Observation};
 use crate::scene::Scene;
+use crate::site::Site;
 use crate::statics::StaticSolver;
 
 /// Marker positions at one instant.
@@ -78,12 +81,34 @@ impl MarkerFrame {
     /// [`Error::DimensionMismatch`] if `s_m` does not have one entry per marker.
     pub fn observation(&self, s_m: &[f64]) -> Result<Observation> {
         check_len("marker arc coordinates", self.positions_m.len(), s_m.len())?;
+        let sites: Vec<Site> = s_m.iter().map(|&s_m| Site::Rod { rod: 0, s_m }).collect();
+        self.observation_at(&sites)
+    }
+
+    /// The frame as an observation of markers at the sites `sites` (one
+    /// per position, in order: the rods' arc coordinates or a body's
+    /// reference point, [`MarkerObservation::at_site`]).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] when the counts differ.
+    ///
+    /// # Example
+    /// ```
+    /// use softrod::{plant::MarkerFrame, site::Site};
+    /// let f = MarkerFrame { time_s: 0.0, positions_m: vec![vec![0.0, 0.0, 0.3]] };
+    /// let obs = f.observation_at(&[Site::Body { body: 0 }])?;
+    /// assert_eq!(obs.markers[0].body, Some(0));
+    /// assert!(f.observation_at(&[]).is_err());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn observation_at(&self, sites: &[Site]) -> Result<Observation> {
+        check_len("marker sites", self.positions_m.len(), sites.len())?;
         Ok(Observation {
             markers: self
                 .positions_m
                 .iter()
-                .zip(s_m)
-                .map(|(p, &s)| MarkerObservation::at_arc_slice(s, p.clone()))
+                .zip(sites)
+                .map(|(p, site)| MarkerObservation::at_site(site, p.clone()))
                 .collect(),
         })
     }
@@ -383,27 +408,30 @@ impl SimulatedPlant {
     }
 }
 
+/// Checks a command against the chambers' `bounds` (Pa): one finite
+/// pressure per chamber within its bounds.
+fn check_command(bounds: &[(f64, f64)], pressures_pa: &[f64]) -> Result<()> {
+    check_len("pressures_pa", bounds.len(), pressures_pa.len())?;
+    check_all_finite("pressures_pa", pressures_pa)?;
+    for (i, (p, &(lo, hi))) in pressures_pa.iter().zip(bounds).enumerate() {
+        if *p < lo || *p > hi {
+            return Err(Error::invalid(
+                format!("pressures_pa[{i}]"),
+                p,
+                format!("must lie within the chamber's bounds [{lo}, {hi}] Pa"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 impl Plant for SimulatedPlant {
     fn n_pressures(&self) -> usize {
         self.robot.n_pressures()
     }
 
     fn command(&mut self, pressures_pa: &[f64]) -> Result<()> {
-        check_len("pressures_pa", self.robot.n_pressures(), pressures_pa.len())?;
-        check_all_finite("pressures_pa", pressures_pa)?;
-        for (i, (p, (lo, hi))) in pressures_pa
-            .iter()
-            .zip(self.robot.pressure_bounds())
-            .enumerate()
-        {
-            if *p < lo || *p > hi {
-                return Err(Error::invalid(
-                    format!("pressures_pa[{i}]"),
-                    p,
-                    format!("must lie within the chamber's bounds [{lo}, {hi}] Pa"),
-                ));
-            }
-        }
+        check_command(&self.robot.pressure_bounds(), pressures_pa)?;
         self.commanded_pa.copy_from_slice(pressures_pa);
         Ok(())
     }

@@ -186,6 +186,18 @@ struct WarmQp {
 }
 
 impl<M: EstimationModel> SqpEstimator<M> {
+    /// The warm tracker of the equilibria (a controller's inverse
+    /// kinematics shares its kept factors, see
+    /// [`super::NewtonEstimator`]'s).
+    pub(crate) fn tracker_mut(&mut self) -> &mut crate::statics::Tracker<M> {
+        self.stream.problem.tracker()
+    }
+
+    /// What the equilibria of the estimates so far cost.
+    pub(crate) fn counts(&self) -> crate::statics::WarmCounts {
+        self.stream.problem.tracker_ref().counts()
+    }
+
     /// The estimation problem (tests set its Gauss–Newton form).
     #[cfg(test)]
     pub(crate) fn problem_mut(&mut self) -> &mut super::problem::Problem<M> {
