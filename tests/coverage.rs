@@ -57,6 +57,7 @@ fn loads_are_covered_at_about_the_nominal_rate() {
                 row.backend,
                 row.coverage
             ),
+            f => panic!("{f:?}: not in this sweep"),
         }
     }
     readme_table_is_this_study(&r.markdown());

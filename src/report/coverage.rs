@@ -10,10 +10,17 @@
 //! its own static solve, marker positions read off it at arc coordinates
 //! that are not nodes of the coarse mesh.
 //!
-//! - Load families: `smooth` (a table of 41 entries of a random sum of the
-//!   first four cosine modes over the robot, both components, amplitude
-//!   0.2–2 N/m log-uniform) and `point` (one force of 0.02–0.3 N in a
-//!   random direction at a random arc coordinate in `[0.3 L, L]`).
+//! - Load families ([`Family`]): `smooth` (a table of 41 entries of a
+//!   random sum of the first four cosine modes over the robot, both
+//!   components, amplitude 0.2–2 N/m log-uniform), `point` (one force of
+//!   0.02–0.3 N log-uniform in a random direction at a random arc
+//!   coordinate in `[0.3 L, L]`), `two_point` (two such forces, drawn
+//!   independently), `sine` (`A sin(2π k X / L + φ)` in a random
+//!   direction, `A` 0.2–2 N/m log-uniform, `k` 0.5–4 waves, `φ` uniform;
+//!   a table of 81 entries), `payload` (a uniform load of 0.2–2 N/m
+//!   log-uniform in a random direction plus a tip mass of 2–30 g
+//!   log-uniform under gravity), and a `mixture` of any set of them,
+//!   summed.
 //! - Markers: the tip and 2–10 more at uniformly drawn arc coordinates in
 //!   `[0.1 L, L]` (3–11 in all), seeded Gaussian noise of σ = 5–100 µm
 //!   (log-uniform), the estimator told that σ.
@@ -55,14 +62,98 @@ pub enum Family {
     Smooth,
     /// One concentrated force at an arc coordinate.
     Point,
+    /// Two concentrated forces at independent arc coordinates.
+    TwoPoint,
+    /// A sine wave along the arc in one random direction (random
+    /// wavenumber, phase and amplitude).
+    Sine,
+    /// A payload: a uniform distributed load in a random direction plus a
+    /// tip mass (a force along gravity at the tip).
+    Payload,
+    /// Every kind of the set at once, each drawn as its own family draws
+    /// it, summed: the guard family a test draws at random per run.
+    Mixture(KindSet),
+}
+
+/// A set of the single families (`Smooth` … `Payload`), as the bits
+/// `1 << index` of [`Family::SINGLE`]: the kinds a [`Family::Mixture`]
+/// sums.
+///
+/// # Example
+/// ```
+/// use softrod::report::coverage::{Family, KindSet};
+/// let k = KindSet::from_bits(0b10110);
+/// assert_eq!(k.kinds(), vec![Family::Point, Family::TwoPoint, Family::Payload]);
+/// assert_eq!(Family::Mixture(k).label(), "mixture(point+two_point+payload)");
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub struct KindSet(u8);
+
+impl KindSet {
+    /// The set of bits `bits` (bits beyond the single families dropped).
+    pub fn from_bits(bits: u8) -> Self {
+        KindSet(bits & ((1 << Family::SINGLE.len()) - 1))
+    }
+
+    /// The kinds in the set, in [`Family::SINGLE`]'s order.
+    pub fn kinds(self) -> Vec<Family> {
+        Family::SINGLE
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| self.0 & (1 << i) != 0)
+            .map(|(_, f)| *f)
+            .collect()
+    }
 }
 
 impl Family {
-    /// The family's name.
+    /// The single families, in the order of their index (the first two
+    /// are the original study's, their seeded trials unchanged).
+    pub const SINGLE: [Family; 5] = [
+        Family::Smooth,
+        Family::Point,
+        Family::TwoPoint,
+        Family::Sine,
+        Family::Payload,
+    ];
+
+    /// The family's name (a mixture's: `mixture`; see [`Family::label`]).
     pub fn name(self) -> &'static str {
         match self {
             Family::Smooth => "smooth",
             Family::Point => "point",
+            Family::TwoPoint => "two_point",
+            Family::Sine => "sine",
+            Family::Payload => "payload",
+            Family::Mixture(_) => "mixture",
+        }
+    }
+
+    /// The name with a mixture's kinds: `mixture(point+sine)`.
+    pub fn label(self) -> String {
+        match self {
+            Family::Mixture(k) => format!(
+                "mixture({})",
+                k.kinds()
+                    .iter()
+                    .map(|f| f.name())
+                    .collect::<Vec<_>>()
+                    .join("+")
+            ),
+            f => f.name().to_string(),
+        }
+    }
+
+    /// The number the family's trials mix into their seeds (the single
+    /// families' index; a mixture's `0x100` plus its set).
+    fn stream(self) -> u64 {
+        match self {
+            Family::Smooth => 0,
+            Family::Point => 1,
+            Family::TwoPoint => 2,
+            Family::Sine => 3,
+            Family::Payload => 4,
+            Family::Mixture(k) => 0x100 | k.0 as u64,
         }
     }
 }
@@ -74,10 +165,10 @@ pub struct TrialSpec {
     pub family: Family,
     /// The seed everything below is drawn from.
     pub seed: u64,
-    /// The unknown load (in the real robot's loads).
-    pub line_load: Option<LineLoad>,
-    /// The unknown concentrated force, if the family is `point`.
-    pub point_force: Option<PointForce>,
+    /// The unknown distributed load, if the family has one.
+    pub line_loads: Vec<LineLoad>,
+    /// The unknown concentrated forces, if the family has them.
+    pub point_forces: Vec<PointForce>,
     /// Marker arc coordinates (m), increasing, the tip last.
     pub marker_s_m: Vec<f64>,
     /// Marker noise σ (m), per component.
@@ -212,16 +303,68 @@ fn robot(scene: &Scene, elements: usize) -> Result<Robot<PlanarCable>> {
     s.robot()
 }
 
-/// What trial `seed` of `family` draws, on a robot of length `length_m`.
+/// What trial `seed` of `family` draws, on a robot of length `length_m`:
+/// the markers and the noise first, then the load (a mixture draws its
+/// kinds in [`Family::SINGLE`]'s order from the same stream).
 pub(crate) fn trial_spec(family: Family, seed: u64, length_m: f64) -> TrialSpec {
-    let mut rng = SplitMix64::new(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ family as u64);
+    let mut rng = SplitMix64::new(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ family.stream());
     let l = length_m;
     let n = 3 + (rng.uniform() * 9.0) as usize; // 3..=11
     let mut marker_s_m: Vec<f64> = (1..n).map(|_| rng.range(0.1 * l, l)).collect();
     marker_s_m.sort_by(f64::total_cmp);
     marker_s_m.push(l);
     let noise_sigma_m = rng.log_range(5e-6, 1e-4);
-    let (line_load, point_force) = match family {
+    let (mut line_loads, mut point_forces) = (Vec::new(), Vec::new());
+    let kinds = match family {
+        Family::Mixture(k) => k.kinds(),
+        f => vec![f],
+    };
+    for kind in kinds {
+        draw_load(kind, &mut rng, l, &mut line_loads, &mut point_forces);
+    }
+    TrialSpec {
+        family,
+        seed,
+        line_loads,
+        point_forces,
+        marker_s_m,
+        noise_sigma_m,
+    }
+}
+
+/// Tip masses of the `payload` family (kg, log-uniform); with the
+/// scene's gravity a tip force of 0.02–0.29 N.
+const TIP_MASS_KG: (f64, f64) = (0.002, 0.03);
+
+/// Intervals of the `sine` family's table (81 entries: 20 per wave at
+/// the largest wavenumber; `smooth` keeps the original study's 41).
+const SINE_TABLE: usize = 80;
+
+/// One kind's load drawn from `rng` (a single family; a mixture is not a
+/// kind), pushed to `line_loads` / `point_forces`.
+fn draw_load(
+    kind: Family,
+    rng: &mut SplitMix64,
+    l: f64,
+    line_loads: &mut Vec<LineLoad>,
+    point_forces: &mut Vec<PointForce>,
+) {
+    use std::f64::consts::PI;
+    let table = |m: usize, w: &dyn Fn(f64) -> [f64; 2]| {
+        let s_m: Vec<f64> = (0..=m).map(|i| l * i as f64 / m as f64).collect();
+        let w_n_per_m = s_m.iter().map(|&s| w(s).to_vec()).collect();
+        LineLoad::Tabulated { s_m, w_n_per_m }
+    };
+    let point = |rng: &mut SplitMix64, lo: f64| {
+        let mag = rng.log_range(0.02, 0.3);
+        let ang = rng.range(0.0, 2.0 * PI);
+        let s = rng.range(lo * l, l);
+        PointForce {
+            s_m: s,
+            force_n: vec![mag * ang.cos(), mag * ang.sin()],
+        }
+    };
+    match kind {
         Family::Smooth => {
             let amp = rng.log_range(0.2, 2.0);
             let c: Vec<[f64; 2]> = (0..4)
@@ -230,63 +373,63 @@ pub(crate) fn trial_spec(family: Family, seed: u64, length_m: f64) -> TrialSpec 
                     [rng.range(-s, s), rng.range(-s, s)]
                 })
                 .collect();
-            let m = 40;
-            let s_m: Vec<f64> = (0..=m).map(|i| l * i as f64 / m as f64).collect();
-            let w_n_per_m = s_m
-                .iter()
-                .map(|s| {
-                    (0..2)
-                        .map(|a| {
-                            c.iter()
-                                .enumerate()
-                                .map(|(k, ck)| {
-                                    ck[a] * (k as f64 * std::f64::consts::PI * s / l).cos()
-                                })
-                                .sum()
-                        })
-                        .collect()
+            line_loads.push(table(40, &|s| {
+                [0, 1].map(|a| {
+                    c.iter()
+                        .enumerate()
+                        .map(|(k, ck)| ck[a] * (k as f64 * PI * s / l).cos())
+                        .sum()
                 })
-                .collect();
-            (Some(LineLoad::Tabulated { s_m, w_n_per_m }), None)
+            }));
         }
-        Family::Point => {
-            let mag = rng.log_range(0.02, 0.3);
-            let ang = rng.range(0.0, 2.0 * std::f64::consts::PI);
-            let s = rng.range(0.3 * l, l);
-            (
-                None,
-                Some(PointForce {
-                    s_m: s,
-                    force_n: vec![mag * ang.cos(), mag * ang.sin()],
-                }),
-            )
+        Family::Point => point_forces.push(point(rng, 0.3)),
+        Family::TwoPoint => {
+            point_forces.push(point(rng, 0.3));
+            point_forces.push(point(rng, 0.3));
         }
-    };
-    TrialSpec {
-        family,
-        seed,
-        line_load,
-        point_force,
-        marker_s_m,
-        noise_sigma_m,
+        Family::Sine => {
+            let amp = rng.log_range(0.2, 2.0);
+            let ang = rng.range(0.0, 2.0 * PI);
+            let waves = rng.range(0.5, 4.0);
+            let phase = rng.range(0.0, 2.0 * PI);
+            line_loads.push(table(SINE_TABLE, &|s| {
+                let w = amp * (2.0 * PI * waves * s / l + phase).sin();
+                [w * ang.cos(), w * ang.sin()]
+            }));
+        }
+        Family::Payload => {
+            let amp = rng.log_range(0.2, 2.0);
+            let ang = rng.range(0.0, 2.0 * PI);
+            // uniform: a table of two entries, base to tip
+            line_loads.push(table(1, &|_| [amp * ang.cos(), amp * ang.sin()]));
+            let m = rng.log_range(TIP_MASS_KG.0, TIP_MASS_KG.1);
+            point_forces.push(PointForce {
+                s_m: l,
+                force_n: (crate::params::GRAVITY_M_PER_S2 * m).as_slice().to_vec(),
+            });
+        }
+        Family::Mixture(_) => {}
     }
 }
 
-/// The true resultant of the spec's unknown load (N): the table integrated
-/// exactly (linear between entries), or the force.
+/// The true resultant of the spec's unknown load (N): the tables integrated
+/// exactly (linear between entries), plus the forces.
 ///
 /// # Example
 /// ```
 /// use softrod::loads::PointForce;
 /// use softrod::report::coverage::{true_resultant, Family, TrialSpec};
-/// let spec = TrialSpec { family: Family::Point, seed: 1, line_load: None,
-///     point_force: Some(PointForce { s_m: 0.2, force_n: vec![0.01, -0.02] }),
+/// let spec = TrialSpec { family: Family::Point, seed: 1, line_loads: vec![],
+///     point_forces: vec![PointForce { s_m: 0.2, force_n: vec![0.01, -0.02] }],
 ///     marker_s_m: vec![0.12, 0.24], noise_sigma_m: 1e-5 };
 /// assert_eq!(true_resultant(&spec), nalgebra::Vector2::new(0.01, -0.02));
 /// ```
 pub fn true_resultant(spec: &TrialSpec) -> Vector2<f64> {
     let mut r = [0.0; 2];
-    if let Some(LineLoad::Tabulated { s_m, w_n_per_m }) = &spec.line_load {
+    for ll in &spec.line_loads {
+        let LineLoad::Tabulated { s_m, w_n_per_m } = ll else {
+            continue; // the families draw tables only
+        };
         for k in 1..s_m.len() {
             let h = s_m[k] - s_m[k - 1];
             for (a, ra) in r.iter_mut().enumerate() {
@@ -294,7 +437,7 @@ pub fn true_resultant(spec: &TrialSpec) -> Vector2<f64> {
             }
         }
     }
-    if let Some(p) = &spec.point_force {
+    for p in &spec.point_forces {
         r[0] += p.force_n[0];
         r[1] += p.force_n[1];
     }
@@ -306,8 +449,8 @@ pub fn true_resultant(spec: &TrialSpec) -> Vector2<f64> {
 /// coordinates, with seeded noise.
 pub fn measure(fine: &Robot<PlanarCable>, known: &Loads, spec: &TrialSpec) -> Result<Observation> {
     let mut loads = known.clone();
-    loads.line_loads.extend(spec.line_load.clone());
-    loads.point_forces.extend(spec.point_force.clone());
+    loads.line_loads.extend(spec.line_loads.iter().cloned());
+    loads.point_forces.extend(spec.point_forces.iter().cloned());
     let eq = StaticSolver::default().solve(fine, &loads, None)?;
     let markers = spec
         .marker_s_m
@@ -536,12 +679,22 @@ impl CoverageReport {
     }
 }
 
+/// A family's colour (the `sqp` backend's paler).
 fn colour(f: Family, b: Backend) -> RGBColor {
-    match (f, b) {
-        (Family::Smooth, Backend::Newton) => RGBColor(31, 119, 180),
-        (Family::Smooth, Backend::Sqp) => RGBColor(23, 190, 207),
-        (Family::Point, Backend::Newton) => RGBColor(214, 39, 40),
-        (Family::Point, Backend::Sqp) => RGBColor(255, 127, 14),
+    let RGBColor(r, g, bl) = match f {
+        Family::Smooth => RGBColor(31, 119, 180),
+        Family::Point => RGBColor(214, 39, 40),
+        Family::TwoPoint => RGBColor(44, 160, 44),
+        Family::Sine => RGBColor(148, 103, 189),
+        Family::Payload => RGBColor(140, 86, 75),
+        Family::Mixture(_) => RGBColor(100, 100, 100),
+    };
+    match b {
+        Backend::Sqp => {
+            let pale = |c: u8| ((c as u16 + 2 * 255) / 3) as u8;
+            RGBColor(pale(r), pale(g), pale(bl))
+        }
+        _ => RGBColor(r, g, bl),
     }
 }
 
