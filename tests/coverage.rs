@@ -1,87 +1,90 @@
 //! The reported uncertainty means what it says: the true resultant force
 //! of a load the estimator is not told about lies in the reported 95 %
-//! region at about the nominal rate. The truth comes from a "real robot"
+//! region at about the nominal rate, or the estimate says that its σ is a
+//! prior's width (weakly informed). The truth comes from a "real robot"
 //! that is not the estimator's model (a mesh twice as fine, markers between
 //! the coarse nodes): see `softrod::report::coverage`. The full study (200
-//! trials per family, both backends) is `softrod report --only coverage`.
+//! trials per family, both backends) is `softrod report --only coverage`;
+//! the test runs the same trials, and a guard family drawn per day.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use softrod::Error;
 use softrod::estimate::MarkerObservation;
 use softrod::estimate::{AlphaRule, Backend, EstimateStatus, EstimatorSettings, Observation};
-use softrod::report::coverage::{Family, sweep};
+use softrod::report::coverage::{Family, KindSet, sweep};
 use softrod::scene::Scene;
 
-/// The full study of `softrod report --only coverage` (3.6 s in release on
-/// a loaded 2-core machine): 200 seeded trials per load family (3–11
-/// markers, 5–100 µm noise), both backends, `α` by the evidence. Smooth
-/// loads: the truth lies in the reported 95 % ellipse in 90–99 % of the
-/// trials (measured 93.0 %; the committed figure of an earlier main 92.5 %;
-/// the posterior at the evidence's `α` without `α`'s own uncertainty
-/// covered 89 %, the bias-blind covariance with the discrepancy principle
-/// 20.5 %), the median squared distance near χ²₂'s median 1.39. Point loads
-/// (not in the distributed model's span): the same 90–99 % (measured 94.5 %;
-/// before 90 %). The backends agree to 1 %.
+/// The full study of `softrod report --only coverage` (1.6 s in release on
+/// the loaded 2-core machine, 2 000 trials): 200 seeded trials per load
+/// family (3–11 markers, 5–100 µm noise), both backends, `α` by the
+/// evidence. Every family: the truth lies in the reported 95 % ellipse or
+/// the estimate says it is weakly informed in at least 90 % of the trials
+/// (measured 95.0–99.5 %; a miss not flagged is the failure a user cannot
+/// see). Smooth, point, two-point and sine loads: at most 99 % in the
+/// ellipse (measured 93.0, 94.5, 96.5, 77.0 %); smooth and point loads also
+/// 90–99 % without the flags, as before (93.0, 94.5 %), the smooth ones'
+/// median squared distance near χ²₂'s median 1.39. The payload (a uniform
+/// load plus a tip mass) is covered 99.5 %, its σ too wide (median d²
+/// 0.40): the σ of a concentrated force in the distributed model is
+/// conservative (a tip force alone: 100 %, median d² 0.19; the uniform load
+/// alone: 93 %, 0.97), held here to a median d² of at least 0.2 (about 2.6
+/// times too wide a σ at most). The backends agree to 1 %.
 #[test]
-fn loads_are_covered_at_about_the_nominal_rate() {
+fn every_family_is_covered_or_flagged() {
     let r = sweep(
         200,
         1,
         &[Backend::Newton, Backend::Sqp],
-        &[Family::Smooth, Family::Point],
+        &Family::SINGLE,
         AlphaRule::Evidence,
         true,
     )
     .unwrap();
-    eprint!("{}", r.markdown());
-    assert_eq!(r.rows.len(), 4);
+    eprint!("{}\n{}", r.markdown(), r.misses_markdown());
+    assert_eq!(r.rows.len(), 2 * Family::SINGLE.len());
     for row in &r.rows {
         assert_eq!(row.converged, 200, "{row:?}");
+        covered_or_flagged(row);
         match row.family {
-            Family::Smooth => {
+            Family::Smooth | Family::Point => {
                 assert!(
                     (0.90..=0.99).contains(&row.coverage),
-                    "{:?}: coverage {}",
+                    "{:?} {:?}: coverage {}",
+                    row.family,
                     row.backend,
                     row.coverage
                 );
-                assert!(
-                    (0.7..=2.8).contains(&row.median_d2),
-                    "median d² {}",
-                    row.median_d2
-                );
+                if row.family == Family::Smooth {
+                    assert!(
+                        (0.7..=2.8).contains(&row.median_d2),
+                        "median d² {}",
+                        row.median_d2
+                    );
+                }
             }
-            Family::Point => assert!(
-                (0.90..=0.99).contains(&row.coverage),
-                "{:?}: coverage {}",
-                row.backend,
-                row.coverage
-            ),
+            Family::Payload => assert!(row.coverage >= 0.90 && row.median_d2 >= 0.2, "{row:?}"),
+            _ => assert!(row.coverage <= 0.99, "{row:?}"),
         }
     }
-    readme_table_is_this_study(&r.markdown());
-    // The one gross miss of the study (smooth trial 175: 5 markers that the
-    // true 0.065 N load moves by 0.16–1.06 σ; estimate ≈ 0 ± 3.8e-5 N,
-    // d² ≈ 3e6) is said to be weakly informed (γ ≈ 5e-4), and no other
-    // trial is (the next smallest γ is 0.86).
-    let flagged: Vec<(Family, u64)> = r
+    readme_tables_are_this_study(&r);
+    // The study's worst trial (smooth trial 175: 5 markers that the true
+    // 0.065 N load moves by 0.16–1.06 σ; estimate ≈ 0 ± 3.8e-5 N, d² ≈
+    // 3e6) is weakly informed for its few determined directions (γ ≈
+    // 5e-4); every gross miss is flagged.
+    let few: Vec<(Family, u64)> = r
         .outcomes
         .iter()
-        .filter(|o| o.weakly_informed)
+        .filter(|o| o.determined_directions < softrod::estimate::WEAKLY_INFORMED_DIRECTIONS)
         .map(|o| (o.family, o.seed))
         .collect();
-    assert_eq!(
-        flagged,
-        vec![(Family::Smooth, 175), (Family::Smooth, 175)],
-        "weakly informed trials"
-    );
+    assert!(few.contains(&(Family::Smooth, 175)), "{few:?}");
     for o in &r.outcomes {
         assert!(
-            o.d2 <= 1e4 || o.weakly_informed,
+            o.d2 <= 1e2 || o.weakly_informed,
             "a gross miss not flagged: {o:?}"
         );
     }
-    for fam in [Family::Smooth, Family::Point] {
+    for fam in Family::SINGLE {
         let c: Vec<f64> = r
             .rows
             .iter()
@@ -92,34 +95,118 @@ fn loads_are_covered_at_about_the_nominal_rate() {
     }
 }
 
-/// The README's coverage table is the one this study gives: the counts and
-/// coverages exactly, the medians to their last printed digit. After a
-/// change that moves them, rerun `softrod report --only coverage --out
-/// validation/figures` and copy its table into the README.
-fn readme_table_is_this_study(markdown: &str) {
+/// A row's trials are covered or flagged weakly informed in at least 90 %
+/// of the trials: at most one trial in ten a miss the estimate does not
+/// warn of.
+fn covered_or_flagged(row: &softrod::report::coverage::CoverageRow) {
+    assert!(
+        row.covered_or_flagged >= 0.90,
+        "{} {:?}: covered or flagged {} (coverage {}, {} flagged)",
+        row.family.label(),
+        row.backend,
+        row.covered_or_flagged,
+        row.coverage,
+        row.flagged
+    );
+}
+
+/// The guard: a family the tests were not tuned on, drawn per day (a
+/// mixture of two or more of the single families, each trial summing one
+/// load of each kind, and its seeds), 300 trials per backend: covered or
+/// flagged in at least 90 % of the trials, its σ at most about 2.6 times too
+/// wide (median d² ≥ 0.2), no miss beyond d² = 100 unflagged (measured on
+/// the single families at two seed ranges: at most 23). The family and seeds are printed; set
+/// `SOFTROD_COVERAGE_GUARD_DAY` to the printed day to replay a failure.
+/// Measured on the 26 mixtures at two seed ranges (200 trials, newton):
+/// covered or flagged 91.5–100 %, in the ellipse 87–100 %, median d²
+/// 0.25–1.31 (the mixtures with a concentrated force over-cover, as the
+/// payload does).
+#[test]
+fn a_family_drawn_at_random_per_run_is_covered_or_flagged() {
+    let day = std::env::var("SOFTROD_COVERAGE_GUARD_DAY")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+        .unwrap_or_else(|| {
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_secs() / 86_400)
+        });
+    // a set of two or more kinds and a seed range, from the day
+    let mixed = |k: u64| {
+        day.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            .rotate_left(k as u32 * 17)
+    };
+    let sets: Vec<u8> = (3u8..32).filter(|b| b.count_ones() >= 2).collect();
+    let kinds = KindSet::from_bits(sets[(mixed(1) % sets.len() as u64) as usize]);
+    let family = Family::Mixture(kinds);
+    let seed = 1_000_000 + mixed(2) % 1_000_000_000;
+    eprintln!(
+        "coverage guard: {} at seeds {seed}.. (SOFTROD_COVERAGE_GUARD_DAY={day} replays)",
+        family.label()
+    );
+    let r = sweep(
+        300,
+        seed,
+        &[Backend::Newton, Backend::Sqp],
+        &[family],
+        AlphaRule::Evidence,
+        true,
+    )
+    .unwrap();
+    eprint!("{}", r.markdown());
+    assert_eq!(r.rows.len(), 2);
+    for row in &r.rows {
+        assert_eq!(row.converged, 300, "{row:?}");
+        covered_or_flagged(row);
+        assert!(row.median_d2 >= 0.2, "{row:?}");
+    }
+    for o in &r.outcomes {
+        assert!(
+            o.d2 <= 1e2 || o.weakly_informed,
+            "a gross miss not flagged: {o:?}"
+        );
+    }
+}
+
+/// The README's coverage tables are the ones this study gives: the counts
+/// and coverages exactly, the medians to their last printed digit; the
+/// table of where the misses are exactly. After a change that moves them,
+/// rerun `softrod report --only coverage --out validation/figures` and copy
+/// its tables into the README.
+fn readme_tables_are_this_study(r: &softrod::report::coverage::CoverageReport) {
     let readme = include_str!("../README.md");
     let cells = |line: &str| -> Vec<String> {
         line.trim_matches('|')
-            .split('|')
-            .map(|c| c.trim().to_string())
+            .split(" | ")
+            .map(|c| c.trim().trim_matches('|').trim().to_string())
             .collect()
     };
+    let markdown = r.markdown();
     for row in markdown.lines().skip(2) {
         let want = cells(row);
         let key = format!("| {} | {} |", want[0], want[1]);
         let line = readme
             .lines()
-            .find(|l| l.starts_with(&key))
+            .find(|l| l.starts_with(&key) && cells(l).len() == want.len())
             .unwrap_or_else(|| panic!("README: no coverage row `{key}`"));
         let got = cells(line);
-        assert_eq!(got[..7], want[..7], "README row `{line}`, study `{row}`");
-        for k in [7, 8] {
-            let num = |c: &str| c.trim_end_matches(" %").parse::<f64>().unwrap();
-            assert!(
-                (num(&got[k]) - num(&want[k])).abs() <= 0.011,
-                "README row `{line}`, study `{row}`"
-            );
+        for k in 0..want.len() {
+            if k == 7 || k == 8 {
+                let num = |c: &str| c.trim_end_matches(" %").parse::<f64>().unwrap();
+                assert!(
+                    (num(&got[k]) - num(&want[k])).abs() <= 0.011,
+                    "README row `{line}`, study `{row}`"
+                );
+            } else {
+                assert_eq!(got[k], want[k], "README row `{line}`, study `{row}`");
+            }
         }
+    }
+    for row in r.misses_markdown().lines().skip(2) {
+        assert!(
+            readme.lines().any(|l| l == row),
+            "README: no row `{row}` of where the misses are"
+        );
     }
 }
 

@@ -478,7 +478,9 @@ fn estimate_out<E: Element>(
         max_load_parameter_std: e.std_f().iter().copied().fold(0.0, f64::max),
         noise_sigma_m: e.noise_sigma_m,
         determined_directions: e.determined_directions(),
+        resultant_prior_fraction: e.resultant_prior_fraction(),
         weakly_informed: e.weakly_informed(),
+        weakly_informed_reason: e.weak_information(),
         report: (&e.report).into(),
         q: e.q.as_slice().to_vec(),
         warnings: robot.validity(e.q.as_slice()).unwrap_or_default(),
@@ -588,12 +590,10 @@ fn write_estimate(
     }
     warn_all(&body.warnings);
     let status = body.status;
-    if body.weakly_informed && status.is_converged() {
-        eprintln!(
-            "softrod: warning: the markers determine {:.3} load directions (fewer than {}): they barely see the load; the estimate stays near zero and `force_std_n` is the width of a prior fitted to markers that show no load, not knowledge of the load",
-            body.determined_directions,
-            softrod::estimate::WEAKLY_INFORMED_DIRECTIONS
-        );
+    if let Some(why) = &body.weakly_informed_reason
+        && status.is_converged()
+    {
+        eprintln!("softrod: warning: {why}");
     }
     let record = EstimateRecord {
         header: Header::new(

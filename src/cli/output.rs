@@ -406,10 +406,18 @@ pub struct EstimateBody {
     /// Load directions the markers determine (the evidence's effective
     /// number of parameters).
     pub determined_directions: f64,
-    /// Fewer than 0.5 load directions determined: the markers barely see
-    /// the load, `force_std_n` is a prior's width, not knowledge (also on
-    /// stderr).
+    /// The largest fraction of the resultant's prior variance the markers
+    /// leave in any direction (0: they fix it; 1: they say nothing of it
+    /// in some direction).
+    pub resultant_prior_fraction: f64,
+    /// `force_std_n` is (mostly) a prior's width, not knowledge (also on
+    /// stderr): fewer than 0.5 load directions determined (the markers
+    /// barely see the load), or more than 0.8 of the resultant's prior
+    /// variance left (they do not see the resultant).
     pub weakly_informed: bool,
+    /// Why `weakly_informed` (absent when it is false).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub weakly_informed_reason: Option<softrod::estimate::WeakInformation>,
     pub report: EstimateReportRecord,
     /// The estimated configuration (not written).
     #[serde(skip)]

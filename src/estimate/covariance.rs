@@ -212,6 +212,61 @@ fn posterior(
     }
 }
 
+/// The prior covariance of the resultant force at `alpha` (`DIM × DIM`,
+/// row-major): `C (αH)⁻¹ Cᵀ`, what the penalty read as a prior says of
+/// the resultant before any marker. Representer form (`H = B`, `C = E_dᵀ
+/// B`): `C E_d / α`, as in [`posterior`]; primal form: with the factor of
+/// `H`. `nf` load parameters, `nd` coordinates per node. `None` if `H`
+/// cannot be factored.
+pub(crate) fn prior_resultant(
+    form: &GnForm,
+    nd: usize,
+    fw: &[f64],
+    nf: usize,
+    alpha: f64,
+) -> Option<Vec<f64>> {
+    let d = fw.len().checked_div(nf).unwrap_or(0);
+    let c = DMatrix::from_row_slice(d, nf, fw);
+    let r = match form {
+        GnForm::Representer => {
+            let mut ce = DMatrix::zeros(d, d);
+            for a in 0..d {
+                for b in 0..d {
+                    ce[(a, b)] = (0..nf / nd).map(|n| c[(a, n * nd + b)]).sum::<f64>();
+                }
+            }
+            ce / alpha
+        }
+        GnForm::Primal(h) => {
+            let chol = h.h.clone().cholesky()?;
+            count_dense(nf * nf * nf / 3 + d * nf * nf);
+            &c * chol.solve(&c.transpose()) / alpha
+        }
+    };
+    Some(row_major(&((&r + r.transpose()) * 0.5)))
+}
+
+/// The largest eigenvalue of `P⁻¹ Σ` for symmetric `P` (positive definite)
+/// and `Σ`, the largest ratio `uᵀ Σ u / uᵀ P u` over directions `u`, and
+/// that `u` (unit length): from `M = L⁻¹ Σ L⁻ᵀ` (`P = L Lᵀ`), whose top
+/// eigenvector `v` gives `u ∝ L⁻ᵀ v`. `None` unless `P` is positive
+/// definite.
+pub(crate) fn largest_relative_variance(
+    p: DMatrix<f64>,
+    sigma: &DMatrix<f64>,
+) -> Option<(f64, DVector<f64>)> {
+    let l = p.cholesky()?.l();
+    let x = l.solve_lower_triangular(sigma)?;
+    let m = l.solve_lower_triangular(&x.transpose())?;
+    let eig = ((&m + m.transpose()) * 0.5).symmetric_eigen();
+    let k = eig.eigenvalues.argmax().0;
+    let u = l
+        .transpose()
+        .solve_upper_triangular(&eig.eigenvectors.column(k))?;
+    let n = u.norm();
+    Some((eig.eigenvalues[k], u / n))
+}
+
 /// The largest `σ` of `ln α` (one decade): where the evidence is flatter
 /// than that, its curvature says little about where the truth's `α` is.
 pub(crate) const SIGMA_LN_ALPHA_MAX: f64 = std::f64::consts::LN_10;
@@ -618,6 +673,23 @@ mod tests {
         }
     }
 
+    /// The map `C = E_dᵀ B` to the resultant of the distributed load
+    /// (`E_d` the coordinates of a constant unit field: 1 at the position
+    /// slot of each component, `nd` coordinates per node), as a matrix and
+    /// row-major.
+    fn resultant_map(b: &DMatrix<f64>, nd: usize, d: usize) -> (DMatrix<f64>, Vec<f64>) {
+        let nf = b.nrows();
+        let mut e = DMatrix::zeros(nf, d);
+        for n in 0..nf / nd {
+            for a in 0..d {
+                e[(n * nd + a, a)] = 1.0;
+            }
+        }
+        let c = e.transpose() * b;
+        let fw = c.transpose().as_slice().to_vec();
+        (c, fw)
+    }
+
     /// The representer forms of the posterior covariances equal the dense
     /// `(JᵀWJ + αH)⁻¹` mapped by `C` and `J`: a planar layout of 5 nodes ×
     /// 4 coordinates, `B` symmetric positive definite, `C = E_dᵀ B`, for
@@ -643,14 +715,7 @@ mod tests {
         };
         // distributed: H = B, J = Zᵀ B, C = E_dᵀ B
         let jt = &b * &z;
-        let mut e = DMatrix::zeros(nf, d);
-        for n in 0..nodes {
-            for a in 0..d {
-                e[(n * nd + a, a)] = 1.0;
-            }
-        }
-        let c = e.transpose() * &b;
-        let fw: Vec<f64> = c.transpose().as_slice().to_vec();
+        let (c, fw) = resultant_map(&b, nd, d);
         let dv = Derivs {
             z: z.clone(),
             jt: jt.clone(),
@@ -1041,5 +1106,61 @@ mod tests {
                 assert!(sp.sigma_ln > 0.0 && sp.sigma_ln <= SIGMA_LN_ALPHA_MAX);
             }
         }
+    }
+
+    /// The prior covariance of the resultant equals the dense `C (αH)⁻¹
+    /// Cᵀ` in both forms of the distributed load's system (`H = B`, `C =
+    /// E_dᵀ B`) and for the concentrated force (`H = I`, `C = I`); the
+    /// posterior at the same `α` is below it in every direction, and the
+    /// largest ratio of the two with its direction equals the closed form
+    /// of the 2 × 2 generalized eigenproblem `det(Σ − λ P) = 0`. Bound
+    /// 1e-9 relative (a missing `1/α` is off by O(1)).
+    #[test]
+    fn prior_of_the_resultant_and_its_largest_ratio_match_the_dense_forms() {
+        let (nd, d, nodes, m) = (4, 2, 5, 3);
+        let nf = nd * nodes;
+        let Layout { b, z, w, .. } = layout(nd, m, 31);
+        let (c, fw) = resultant_map(&b, nd, d);
+        let alpha = 0.7;
+        let want = &c * b.clone().try_inverse().unwrap() * c.transpose() / alpha;
+        let dv = Derivs {
+            jt: &b * &z,
+            z: z.clone(),
+        };
+        for form in [GnForm::Representer, primal(b.clone())] {
+            let p =
+                DMatrix::from_row_slice(d, d, &prior_resultant(&form, nd, &fw, nf, alpha).unwrap());
+            assert!(
+                (&p - &want).norm() <= 1e-9 * want.norm(),
+                "{form:?}: {p} {want}"
+            );
+            let (post, _) =
+                posterior(&form, nd, &fw, &dv, &w, alpha, None, MarkerPart::None).unwrap();
+            let post = DMatrix::from_row_slice(d, d, &post);
+            let (lam, u) = largest_relative_variance(p.clone(), &post).unwrap();
+            // det(Σ − λ P) = 0: a λ² − b λ + c = 0
+            let qa = p.determinant();
+            let qb = post[(0, 0)] * p[(1, 1)] + post[(1, 1)] * p[(0, 0)]
+                - 2.0 * post[(0, 1)] * p[(0, 1)];
+            let qc = post.determinant();
+            let top = (qb + (qb * qb - 4.0 * qa * qc).sqrt()) / (2.0 * qa);
+            assert!(
+                (lam - top).abs() <= 1e-9 * top && lam > 0.0 && lam < 1.0,
+                "{lam} {top}"
+            );
+            // u is that direction: (Σ − λ P) u = 0, |u| = 1
+            assert!(
+                (&post * &u - &p * &u * lam).norm() <= 1e-9 * post.norm()
+                    && (u.norm() - 1.0).abs() < 1e-12
+            );
+        }
+        // concentrated: P = I / α
+        let eye = primal(DMatrix::identity(d, d));
+        let p = prior_resultant(&eye, nd, &[1.0, 0.0, 0.0, 1.0], d, alpha).unwrap();
+        assert!(
+            p.iter()
+                .zip([1.0 / alpha, 0.0, 0.0, 1.0 / alpha])
+                .all(|(x, y)| (x - y).abs() < 1e-15)
+        );
     }
 }

@@ -734,14 +734,84 @@ pub struct Estimate {
 /// ([`Estimate::weakly_informed`]).
 pub const WEAKLY_INFORMED_DIRECTIONS: f64 = 0.5;
 
+/// A larger fraction of the resultant's prior variance left by the markers
+/// in some direction than this ([`Estimate::resultant_prior_fraction`])
+/// makes an estimate weakly informed ([`Estimate::weakly_informed`]): the
+/// markers then remove less than a fifth of what the prior allows.
+pub const WEAKLY_INFORMED_PRIOR_FRACTION: f64 = 0.8;
+
+/// Why an estimate is weakly informed ([`Estimate::weak_information`]):
+/// its reported resultant standard deviations are then (mostly) the width
+/// of a prior the evidence fitted to what the markers see, not knowledge
+/// of the load.
+///
+/// # Example
+/// ```
+/// use softrod::estimate::WeakInformation;
+/// let w = WeakInformation::ResultantFromPrior { prior_fraction: 0.93, direction: vec![0.0, 1.0] };
+/// assert_eq!(serde_json::to_value(&w).unwrap()["reason"], "resultant_from_prior");
+/// assert!(w.to_string().contains("93 %") && w.to_string().contains("(0.00, 1.00)"));
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[serde(tag = "reason", rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum WeakInformation {
+    /// The markers barely see the load: fewer than
+    /// [`WEAKLY_INFORMED_DIRECTIONS`] load directions determined.
+    FewDirections {
+        /// [`Estimate::determined_directions`].
+        directions: f64,
+    },
+    /// The markers see the load but not (some direction of) its
+    /// resultant: they leave more than [`WEAKLY_INFORMED_PRIOR_FRACTION`]
+    /// of the resultant's prior variance. The load the markers cannot see
+    /// (near the clamp, or alternating along the arc so that its effects
+    /// cancel) then sets the resultant, and the prior the evidence fitted
+    /// to the visible load says how large it is.
+    ResultantFromPrior {
+        /// [`Estimate::resultant_prior_fraction`].
+        prior_fraction: f64,
+        /// The direction of the resultant it is for (unit, world axes;
+        /// empty when the markers see nothing of the load).
+        direction: Vec<f64>,
+    },
+}
+
+impl std::fmt::Display for WeakInformation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            WeakInformation::FewDirections { directions } => write!(
+                f,
+                "the markers determine {directions:.3} load directions (fewer than {WEAKLY_INFORMED_DIRECTIONS}): they barely see the load; the estimate stays near zero and `force_std_n` is the width of a prior fitted to markers that show no load, not knowledge of the load"
+            ),
+            WeakInformation::ResultantFromPrior {
+                prior_fraction,
+                direction,
+            } => write!(
+                f,
+                "the markers leave {:.0} % of the resultant's prior variance in the direction ({}) (more than {:.0} %): they do not see that part of the resultant, and `force_std_n` there is the width of a prior fitted to the load they see, not knowledge of the resultant",
+                100.0 * prior_fraction,
+                direction
+                    .iter()
+                    .map(|v| format!("{v:.2}"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                100.0 * WEAKLY_INFORMED_PRIOR_FRACTION
+            ),
+        }
+    }
+}
+
 impl Estimate {
-    /// Whether the markers barely see the load: fewer than
-    /// [`WEAKLY_INFORMED_DIRECTIONS`] load directions determined. The
-    /// estimate is then close to the prior's (zero load), and its standard
-    /// deviations are the width of a prior the evidence made narrow because
-    /// the markers showed no load: they say that these markers cannot tell
-    /// the load from zero, not that the load is known to be zero. (Markers
-    /// that see nothing at all end as [`EstimateStatus::NoInformation`].)
+    /// Whether the reported resultant σ is (mostly) a prior's width rather
+    /// than knowledge of the load: [`Estimate::weak_information`] gives a
+    /// reason. The estimate is then close to the prior's (zero load) in the
+    /// directions the markers do not determine, and its standard
+    /// deviations are the width of a prior the evidence fitted to what the
+    /// markers show: they say that these markers cannot tell that part of
+    /// the load from zero, not that it is known to be zero. (Markers that
+    /// see nothing at all end as [`EstimateStatus::NoInformation`].)
     ///
     /// # Example
     /// A tip marker that moves less than its noise under any load the
@@ -756,10 +826,68 @@ impl Estimate {
     /// let settings = EstimatorSettings { noise_sigma_m: 1e-5, ..Default::default() };
     /// let e = settings.build_for(&robot, &loads)?.step(&obs.with_noise(1e-5, 1))?;
     /// println!("{} directions, weakly informed: {}", e.determined_directions(), e.weakly_informed());
+    /// assert_eq!(e.weakly_informed(), e.weak_information().is_some());
     /// # Ok::<(), softrod::Error>(())
     /// ```
     pub fn weakly_informed(&self) -> bool {
-        self.determined_directions() < WEAKLY_INFORMED_DIRECTIONS
+        self.weak_information().is_some()
+    }
+
+    /// Why the estimate is weakly informed ([`Estimate::weakly_informed`]),
+    /// or `None`: fewer than [`WEAKLY_INFORMED_DIRECTIONS`] load directions
+    /// determined ([`WeakInformation::FewDirections`]), else more than
+    /// [`WEAKLY_INFORMED_PRIOR_FRACTION`] of the resultant's prior variance
+    /// left in some direction ([`WeakInformation::ResultantFromPrior`]).
+    ///
+    /// # Example
+    /// See [`Estimate::resultant_prior_fraction`].
+    pub fn weak_information(&self) -> Option<WeakInformation> {
+        let directions = self.determined_directions();
+        if directions < WEAKLY_INFORMED_DIRECTIONS {
+            return Some(WeakInformation::FewDirections { directions });
+        }
+        let (prior_fraction, direction) = self.cov.resultant_prior_fraction();
+        (*prior_fraction > WEAKLY_INFORMED_PRIOR_FRACTION).then(|| {
+            WeakInformation::ResultantFromPrior {
+                prior_fraction: *prior_fraction,
+                direction: direction.clone(),
+            }
+        })
+    }
+
+    /// How much of the resultant the markers leave to the prior: the
+    /// largest ratio, over directions `u`, of the resultant's posterior
+    /// variance to its prior variance at the estimate's `α`, `uᵀ Σ u / uᵀ P
+    /// u` with `P = C (αH)⁻¹ Cᵀ` and `Σ = C (JᵀWJ + αH)⁻¹ Cᵀ` (`C` the map
+    /// to the resultant; `Σ` at the one `α`, not averaged over it like
+    /// [`Estimate::resultant_force_cov`]). Between 0 (the markers fix the
+    /// resultant) and 1 (they say nothing of it in some direction; also
+    /// when they see nothing of the load); `NaN` if it cannot be formed.
+    /// Formed on the first request, like the covariances.
+    ///
+    /// # Example
+    /// Five markers of a robot bent by a tip force see the resultant; one
+    /// marker 3 mm from the clamp does not:
+    /// ```
+    /// use softrod::estimate::{EstimatorSettings, Observation, WeakInformation};
+    /// use softrod::loads::PointForce;
+    /// use softrod::{scene::Scene, statics::StaticSolver};
+    /// let scene = Scene::two_section();
+    /// let (robot, known) = (scene.robot()?, scene.loads()?);
+    /// let mut loads = known.clone();
+    /// loads.point_forces.push(PointForce { s_m: 0.24, force_n: vec![0.0, -0.1] });
+    /// let eq = StaticSolver::default().solve(&robot, &loads, None)?;
+    /// let settings = EstimatorSettings { noise_sigma_m: 1e-5, ..Default::default() };
+    /// let obs = Observation::of_nodes(&robot, eq.q.as_slice(), &[4, 8, 12, 16, 20])?;
+    /// let e = settings.build_for(&robot, &known)?.step(&obs.with_noise(1e-5, 1))?;
+    /// assert!(e.resultant_prior_fraction() < 0.5 && e.weak_information().is_none());
+    /// let near = Observation::of_nodes(&robot, eq.q.as_slice(), &[1])?;
+    /// let e = settings.build_for(&robot, &known)?.step(&near.with_noise(1e-5, 1))?;
+    /// assert!(e.weakly_informed());
+    /// # Ok::<(), softrod::Error>(())
+    /// ```
+    pub fn resultant_prior_fraction(&self) -> f64 {
+        self.cov.resultant_prior_fraction().0
     }
 
     /// How many load directions the markers determine at the chosen `α`:

@@ -9,7 +9,10 @@ use nalgebra::DMatrix;
 use super::super::LoadModel;
 use super::super::gn_form::GnForm;
 use super::super::problem::{Derivs, GnFactor};
-use super::{MarkerPart, cov_factor, noise_cov, posterior, posterior_alpha_marginal};
+use super::{
+    MarkerPart, cov_factor, largest_relative_variance, noise_cov, posterior,
+    posterior_alpha_marginal, prior_resultant,
+};
 
 /// What the covariances of an estimate are formed from: the derivatives
 /// and the Gauss–Newton factor of its last linearization, with what the
@@ -124,6 +127,7 @@ pub(crate) struct LazyCovariances {
     /// `Cov(A q)` without the rest).
     marker_variances: OnceLock<Vec<f64>>,
     gamma: OnceLock<f64>,
+    prior_fraction: OnceLock<(f64, Vec<f64>)>,
 }
 
 impl LazyCovariances {
@@ -136,6 +140,7 @@ impl LazyCovariances {
             resultant: OnceLock::new(),
             marker_variances: OnceLock::new(),
             gamma: OnceLock::new(),
+            prior_fraction: OnceLock::new(),
         }
     }
 
@@ -151,6 +156,43 @@ impl LazyCovariances {
                 )
                 .map_or(f64::NAN, |ev| ev.gamma),
                 None => 0.0,
+            }
+        })
+    }
+
+    /// The largest fraction of the resultant's prior variance the markers
+    /// leave in any direction at the estimate's `α`: the largest
+    /// eigenvalue of `P⁻¹ Σ`, `P = C (αH)⁻¹ Cᵀ` the prior's covariance of
+    /// the resultant ([`prior_resultant`]) and `Σ` the posterior's at the
+    /// same `α` ([`posterior`], not averaged over `α`), in `(0, 1]`, and
+    /// that direction (unit, world axes); 1 when the markers see nothing of
+    /// the load (no direction), `NaN` if it cannot be formed.
+    pub(crate) fn resultant_prior_fraction(&self) -> &(f64, Vec<f64>) {
+        self.prior_fraction.get_or_init(|| {
+            let i = &self.inputs;
+            if i.gamma.is_none() {
+                return (1.0, Vec::new());
+            }
+            let nf = i.dv.jt.nrows();
+            let d = i.fw.len().checked_div(nf).unwrap_or(0);
+            let prior = prior_resultant(&i.form, i.nd, &i.fw, nf, i.alpha);
+            let post = posterior(
+                &i.form,
+                i.nd,
+                &i.fw,
+                &i.dv,
+                &i.weights,
+                i.alpha,
+                i.gn.as_ref(),
+                MarkerPart::None,
+            );
+            match (prior, post) {
+                (Some(p), Some((s, _))) => largest_relative_variance(
+                    DMatrix::from_row_slice(d, d, &p),
+                    &DMatrix::from_row_slice(d, d, &s),
+                )
+                .map_or((f64::NAN, Vec::new()), |(r, u)| (r, u.as_slice().to_vec())),
+                _ => (f64::NAN, Vec::new()),
             }
         })
     }
