@@ -14,10 +14,12 @@
 //!   1 kPa, chord steps with the kept factors;
 //! - `parallel/track_step/ff_updater`: one control instant of the tracking
 //!   loop (estimator, updater, inverse kinematics) with the controller's
-//!   model of 2 elements per section, from a settled state.
+//!   model of 2 elements per section, from a settled state (the loop's
+//!   clone outside the measured time).
 //!
-//! Measured (2026-11-30, shared 2-core machine): static solve 129 ms with
-//! full 3-D legs, 4.8 ms with spatial-cable legs; a payload step 205 ms.
+//! Measured (2026-12-03, shared 2-core machine, medians): static solve
+//! 33.0 ms with full 3-D legs, 1.14 ms with spatial-cable legs; a payload
+//! step 53.3 ms; the warm solve 0.77 ms; one control instant 5.8 ms.
 //!
 //! Run: `cargo bench --bench parallel`.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
@@ -97,7 +99,12 @@ fn bench(c: &mut Criterion) {
     }
     let next = [x[0] + 1e-4, x[1], x[2]];
     g.bench_function("track_step/ff_updater", |b| {
-        b.iter(|| black_box(ctl.clone().control_step(&frame, &target, &next).unwrap()))
+        // the clone outside the measured time: one control instant alone
+        b.iter_batched(
+            || ctl.clone(),
+            |mut c| black_box(c.control_step(&frame, &target, &next).unwrap()),
+            criterion::BatchSize::SmallInput,
+        )
     });
     g.finish();
 }
