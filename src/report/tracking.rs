@@ -336,6 +336,17 @@ fn tracking_draw<DB: DrawingBackend>(
         ))
         .map_err(ms)?;
     let panels = body.split_evenly((1, 3));
+    paths_draw(&panels[0], r)?;
+    error_draw(&panels[1], r)?;
+    means_draw(&panels[2], r)
+}
+
+/// Panel (a) of the tracking chart: the paths with the 20 g tip mass and
+/// the updater.
+fn paths_draw<DB: DrawingBackend>(
+    panel: &DrawingArea<DB, Shift>,
+    r: &TrackingReport,
+) -> std::result::Result<(), String> {
     // (a) paths, 20 g tip mass, with the updater
     let tip: Vec<&(String, String, ControllerKind, TrackRun)> = r
         .runs
@@ -350,7 +361,7 @@ fn tracking_draw<DB: DrawingBackend>(
         .flat_map(|(_, _, _, run)| run.samples.iter().map(|s| s.desired_m[1] * 1e3));
     let (x0, x1) = range(xs, 0.1);
     let (y0, y1) = range(ys, 0.1);
-    let mut chart = ChartBuilder::on(&panels[0])
+    let mut chart = ChartBuilder::on(panel)
         .caption(
             "(a) paths, 20 g tip mass: desired (black), FF + updater",
             (FONT, 16),
@@ -397,6 +408,15 @@ fn tracking_draw<DB: DrawingBackend>(
         .border_style(BLACK)
         .draw()
         .map_err(ms)?;
+    Ok(())
+}
+
+/// Panel (b): the error over time of the first trajectory with the 20 g
+/// tip mass, both controllers.
+fn error_draw<DB: DrawingBackend>(
+    panel: &DrawingArea<DB, Shift>,
+    r: &TrackingReport,
+) -> std::result::Result<(), String> {
     // (b) error over time, the first trajectory with the 20 g tip mass
     let first = r.runs.first().map(|x| x.0.clone()).unwrap_or_default();
     let series: Vec<&(String, String, ControllerKind, TrackRun)> = r
@@ -413,7 +433,7 @@ fn tracking_draw<DB: DrawingBackend>(
         .iter()
         .flat_map(|(_, _, _, run)| run.samples.last().map(|s| s.time_s))
         .fold(1.0f64, f64::max);
-    let mut chart = ChartBuilder::on(&panels[1])
+    let mut chart = ChartBuilder::on(panel)
         .caption(
             format!("(b) error over time: {first}, 20 g tip mass"),
             (FONT, 16),
@@ -461,6 +481,15 @@ fn tracking_draw<DB: DrawingBackend>(
         .border_style(BLACK)
         .draw()
         .map_err(ms)?;
+    Ok(())
+}
+
+/// Panel (c): the mean error after the hold per payload, trajectory and
+/// controller.
+fn means_draw<DB: DrawingBackend>(
+    panel: &DrawingArea<DB, Shift>,
+    r: &TrackingReport,
+) -> std::result::Result<(), String> {
     // (c) mean error per payload
     let pays: Vec<String> = {
         let mut v: Vec<String> = Vec::new();
@@ -485,7 +514,7 @@ fn tracking_draw<DB: DrawingBackend>(
             .iter()
             .filter_map(|x| x.mean_error_m.map(|e| e * 1e3)),
     );
-    let mut chart = ChartBuilder::on(&panels[2])
+    let mut chart = ChartBuilder::on(panel)
         .caption(
             "(c) mean error after the 3 s hold: FF (open) vs FF + updater (filled)",
             (FONT, 16),
