@@ -542,100 +542,122 @@ fn stability_draw<DB: DrawingBackend>(
         .filter(|v| v.is_finite() && *v > 0.0)
         .collect();
     let (lo, hi) = log_range(vals.iter().copied());
-    let t_of = |v: f64| (v.log10() - lo.log10()) / (hi.log10() - lo.log10());
+    for (b, area) in report.backends.iter().zip(panels.iter()) {
+        backend_panel(area, report, map, *b, (lo, hi))?;
+    }
+    colour_bar(&bar, (lo, hi))
+}
+
+/// Where `v` lies on the logarithmic colour scale `[lo, hi]` (0 to 1).
+fn log_t(v: f64, (lo, hi): (f64, f64)) -> f64 {
+    (v.log10() - lo.log10()) / (hi.log10() - lo.log10())
+}
+
+/// One backend's panel of a stability map: a cell per grid point, its
+/// colour and numbers (or its failure's cause) on the scale `[lo, hi]` (mm).
+fn backend_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    report: &StabilityReport,
+    map: &MapSpec,
+    b: Backend,
+    scale: (f64, f64),
+) -> std::result::Result<(), String> {
+    let t_of = |v: f64| log_t(v, scale);
     let nx = map.x_values.len() as i32;
     let ny = map.y_values.len() as i32;
-    for (b, area) in report.backends.iter().zip(panels.iter()) {
-        let mut chart = ChartBuilder::on(area)
-            .caption(format!("backend {}", b.name()), (FONT, 18))
-            .margin(12)
-            .x_label_area_size(50)
-            .y_label_area_size(70)
-            .build_cartesian_2d((0..nx - 1).into_segmented(), (0..ny - 1).into_segmented())
-            .map_err(ms)?;
-        let xl = |v: &SegmentValue<i32>| match v {
-            SegmentValue::CenterOf(i) if *i >= 0 && *i < nx => {
-                map.x.label(map.x_values[*i as usize])
+    let mut chart = ChartBuilder::on(area)
+        .caption(format!("backend {}", b.name()), (FONT, 18))
+        .margin(12)
+        .x_label_area_size(50)
+        .y_label_area_size(70)
+        .build_cartesian_2d((0..nx - 1).into_segmented(), (0..ny - 1).into_segmented())
+        .map_err(ms)?;
+    let xl = |v: &SegmentValue<i32>| match v {
+        SegmentValue::CenterOf(i) if *i >= 0 && *i < nx => map.x.label(map.x_values[*i as usize]),
+        _ => String::new(),
+    };
+    let yl = |v: &SegmentValue<i32>| match v {
+        SegmentValue::CenterOf(i) if *i >= 0 && *i < ny => map.y.label(map.y_values[*i as usize]),
+        _ => String::new(),
+    };
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_labels(nx as usize + 1)
+        .y_labels(ny as usize + 1)
+        .x_desc(map.x.title())
+        .y_desc(map.y.title())
+        .axis_desc_style((FONT, 16))
+        .label_style((FONT, 14))
+        .x_label_formatter(&xl)
+        .y_label_formatter(&yl)
+        .draw()
+        .map_err(ms)?;
+    for c in report.cells_of(&map.name, b) {
+        let (ix, iy) = (c.index.0 as i32, c.index.1 as i32);
+        let rect = [
+            (SegmentValue::Exact(ix), SegmentValue::Exact(iy)),
+            (SegmentValue::Exact(ix + 1), SegmentValue::Exact(iy + 1)),
+        ];
+        let centre = (SegmentValue::CenterOf(ix), SegmentValue::CenterOf(iy));
+        let (fill, text, tc) = match (c.outcome.is_converged(), c.outcome.errors) {
+            (true, Some(e)) => {
+                let t = t_of(e.backbone_rms_m * 1e3);
+                let tc = if t > 0.55 { BLACK } else { WHITE };
+                (
+                    viridis(t),
+                    format!(
+                        "{}\n{:.0}%",
+                        fmt_mm(e.backbone_rms_m * 1e3),
+                        e.load_rel_l2 * 100.0
+                    ),
+                    tc,
+                )
             }
-            _ => String::new(),
-        };
-        let yl = |v: &SegmentValue<i32>| match v {
-            SegmentValue::CenterOf(i) if *i >= 0 && *i < ny => {
-                map.y.label(map.y_values[*i as usize])
-            }
-            _ => String::new(),
+            _ => (
+                RGBColor(200, 200, 200),
+                c.outcome
+                    .cause()
+                    .unwrap_or(FailureCause::Other)
+                    .code()
+                    .to_string(),
+                RGBColor(150, 0, 0),
+            ),
         };
         chart
-            .configure_mesh()
-            .disable_mesh()
-            .x_labels(nx as usize + 1)
-            .y_labels(ny as usize + 1)
-            .x_desc(map.x.title())
-            .y_desc(map.y.title())
-            .axis_desc_style((FONT, 16))
-            .label_style((FONT, 14))
-            .x_label_formatter(&xl)
-            .y_label_formatter(&yl)
-            .draw()
+            .draw_series(std::iter::once(Rectangle::new(rect.clone(), fill.filled())))
             .map_err(ms)?;
-        for c in report.cells_of(&map.name, *b) {
-            let (ix, iy) = (c.index.0 as i32, c.index.1 as i32);
-            let rect = [
-                (SegmentValue::Exact(ix), SegmentValue::Exact(iy)),
-                (SegmentValue::Exact(ix + 1), SegmentValue::Exact(iy + 1)),
-            ];
-            let centre = (SegmentValue::CenterOf(ix), SegmentValue::CenterOf(iy));
-            let (fill, text, tc) = match (c.outcome.is_converged(), c.outcome.errors) {
-                (true, Some(e)) => {
-                    let t = t_of(e.backbone_rms_m * 1e3);
-                    let tc = if t > 0.55 { BLACK } else { WHITE };
-                    (
-                        viridis(t),
-                        format!(
-                            "{}\n{:.0}%",
-                            fmt_mm(e.backbone_rms_m * 1e3),
-                            e.load_rel_l2 * 100.0
+        chart
+            .draw_series(std::iter::once(Rectangle::new(rect, WHITE.stroke_width(1))))
+            .map_err(ms)?;
+        let lines: Vec<&str> = text.lines().collect();
+        for (k, line) in lines.iter().enumerate() {
+            let dy = (k as i32 * 2 - (lines.len() as i32 - 1)) * 8;
+            chart
+                .draw_series(std::iter::once(
+                    EmptyElement::at(centre.clone())
+                        + Text::new(
+                            line.to_string(),
+                            (0, dy),
+                            (FONT, 13)
+                                .into_font()
+                                .color(&tc)
+                                .pos(Pos::new(HPos::Center, VPos::Center)),
                         ),
-                        tc,
-                    )
-                }
-                _ => (
-                    RGBColor(200, 200, 200),
-                    c.outcome
-                        .cause()
-                        .unwrap_or(FailureCause::Other)
-                        .code()
-                        .to_string(),
-                    RGBColor(150, 0, 0),
-                ),
-            };
-            chart
-                .draw_series(std::iter::once(Rectangle::new(rect.clone(), fill.filled())))
+                ))
                 .map_err(ms)?;
-            chart
-                .draw_series(std::iter::once(Rectangle::new(rect, WHITE.stroke_width(1))))
-                .map_err(ms)?;
-            let lines: Vec<&str> = text.lines().collect();
-            for (k, line) in lines.iter().enumerate() {
-                let dy = (k as i32 * 2 - (lines.len() as i32 - 1)) * 8;
-                chart
-                    .draw_series(std::iter::once(
-                        EmptyElement::at(centre.clone())
-                            + Text::new(
-                                line.to_string(),
-                                (0, dy),
-                                (FONT, 13)
-                                    .into_font()
-                                    .color(&tc)
-                                    .pos(Pos::new(HPos::Center, VPos::Center)),
-                            ),
-                    ))
-                    .map_err(ms)?;
-            }
         }
     }
-    // colour bar
-    let (w, h) = bar.dim_in_pixel();
+    Ok(())
+}
+
+/// The colour bar of the scale `[lo, hi]` (mm) beside the panels.
+fn colour_bar<DB: DrawingBackend>(
+    bar: &DrawingArea<DB, Shift>,
+    (lo, hi): (f64, f64),
+) -> std::result::Result<(), String> {
+    let t_of = |v: f64| log_t(v, (lo, hi));
+    let (_, h) = bar.dim_in_pixel();
     let (top, bottom) = (70i32, h as i32 - 70);
     let x0 = 20i32;
     let steps = 100;
@@ -669,7 +691,6 @@ fn stability_draw<DB: DrawingBackend>(
         (FONT, 14).into_font(),
     ))
     .map_err(ms)?;
-    let _ = w;
     Ok(())
 }
 
