@@ -10,6 +10,8 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 mod common;
+#[path = "common/scene_checks.rs"]
+mod scene_checks;
 
 use std::time::{Duration, Instant};
 
@@ -301,17 +303,7 @@ fn zero_mass_is_a_weightless_robot_that_solves() {
 
 /// Every number a solve returns: the coordinates and the report's floats.
 fn all_finite(q: &[f64], r: &softrod::statics::StaticReport) -> bool {
-    q.iter().all(|v| v.is_finite())
-        && [
-            r.residual_norm_n,
-            r.residual_tolerance_n,
-            r.residual_floor_n,
-            r.load_scale_n,
-            r.increment_norm_m,
-            r.wall_time_s,
-        ]
-        .iter()
-        .all(|v| v.is_finite())
+    q.iter().all(|v| v.is_finite()) && scene_checks::report_is_finite(r)
 }
 
 /// Loads far beyond what the model can carry and contradictory or

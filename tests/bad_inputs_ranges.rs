@@ -73,6 +73,30 @@ fn updater_gains_beyond_their_range_are_refused_and_the_largest_runs_finite() {
 }
 
 #[test]
+fn ik_weights_outside_their_range_are_refused_and_their_bounds_accepted() {
+    let scene = track_scene();
+    // the documented range of both is [0, 1e6] (`IkSettings`)
+    for field in ["pressure_weight", "null_space_damping"] {
+        for v in [-1e-300, -1.0, 1.000_001e6, 1e308] {
+            let file = trajectory(|t| t["loop"]["ik"] = serde_json::json!({ field: v }));
+            let e = check_track(&scene, &file, None).unwrap_err();
+            assert_eq!(
+                e.field(),
+                Some(format!("loop.ik.{field}").as_str()),
+                "{field} = {v}: {e}"
+            );
+        }
+        for v in [0.0, 1e6] {
+            let file = trajectory(|t| t["loop"]["ik"] = serde_json::json!({ field: v }));
+            assert!(
+                check_track(&scene, &file, None).is_ok(),
+                "{field} = {v} refused"
+            );
+        }
+    }
+}
+
+#[test]
 fn plant_noise_and_factors_beyond_their_range_are_refused_naming_the_trajectory_field() {
     let scene = track_scene();
     // before: noise 1e308 ran to exit 0 with markers read at 1e307 m;

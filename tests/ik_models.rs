@@ -184,6 +184,18 @@ fn bad_inputs_of_the_model_inverse_kinematics_are_refused_by_name() {
     )
     .unwrap_err();
     assert_eq!(e.field(), Some("effector.body"), "{e}");
+    // the distributed field lives on the clamped robot's rod: a structure
+    // has none, refused here (it used to fail only at the first solve)
+    let e = InverseKinematics::for_model(
+        s.clone(),
+        known.clone(),
+        IkSettings::default(),
+        PLATFORM,
+        LoadModel::Distributed,
+    )
+    .unwrap_err();
+    assert_eq!(e.field(), Some("load_model"), "{e}");
+    assert!(matches!(e, softrod::Error::InvalidParameter { .. }), "{e}");
     let mut ik = ik_of(&robot, &p);
     let e = ik.solve(&[0.0, 0.0], &[0.0; 3]).unwrap_err();
     assert_eq!(e.field(), Some("x_d"), "{e}");

@@ -272,7 +272,9 @@ impl<M: Actuated + EstimationModel> InverseKinematics<M> {
     /// [`Error::InvalidParameter`] for invalid settings, a model without
     /// chambers, or a chamber whose bounds are equal; the errors of
     /// [`crate::structure::Assembled::validate_loads`] and of the effector's and the load's
-    /// sites (named `effector` and `load_model`).
+    /// sites (named `effector` and `load_model`); [`Error::InvalidParameter`]
+    /// named `load_model` for [`LoadModel::Distributed`] on a model without
+    /// a field rod (a structure).
     ///
     /// # Example
     /// The parallel robot's platform moved 2 mm sideways under a 5 g
@@ -306,6 +308,7 @@ impl<M: Actuated + EstimationModel> InverseKinematics<M> {
         settings.validate()?;
         model.validate_loads(&known)?;
         let effector = model.site_rows("effector", &effector)?;
+        load.check_defined_on(&model, "load_model")?;
         load.site_rows(&model)?;
         let bounds = model.pressure_bounds();
         if bounds.is_empty() {

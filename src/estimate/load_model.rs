@@ -29,6 +29,21 @@ impl LoadModel {
         }
     }
 
+    /// Refuses the distributed field on a model that has no field rod (a
+    /// structure: it is defined on the clamped robot's rod only), as
+    /// [`field_rod`] does, naming the load model `name`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] named `name`.
+    pub(crate) fn check_defined_on<M: EstimationModel>(&self, model: &M, name: &str) -> Result<()> {
+        match self {
+            LoadModel::Distributed => field_rod_named(model, name).map(|_| ()),
+            LoadModel::Concentrated { .. } | LoadModel::AtSite { .. } | LoadModel::Along { .. } => {
+                Ok(())
+            }
+        }
+    }
+
     /// The position rows `A_x` of a concentrated load's site (`None` for
     /// the distributed field): at a node, its position coordinates exactly
     /// (no interpolation, whose weights at the last node are 1 and 0 only
@@ -116,19 +131,28 @@ fn site_force_transpose(
     Ok(basis.tr_mul(&ax))
 }
 
-/// The distributed field on a model that has none.
-fn no_distributed() -> Error {
-    Error::invalid(
-        "estimator.load_model",
-        "distributed",
-        "the distributed field is defined on the clamped robot's rod only: on a structure, \
-         estimate a force at a site ({\"kind\": \"at_site\", \"site\": …})",
-    )
+/// The rod of the distributed field.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] named `estimator.load_model` for a model
+/// without one.
+pub(crate) fn field_rod<M: EstimationModel>(model: &M) -> Result<&Rod<M::Element>> {
+    field_rod_named(model, "estimator.load_model")
 }
 
-/// The rod of the distributed field.
-pub(crate) fn field_rod<M: EstimationModel>(model: &M) -> Result<&Rod<M::Element>> {
-    model.field_rod().ok_or_else(no_distributed)
+/// [`field_rod`], its refusal naming the load model `name`.
+fn field_rod_named<'a, M: EstimationModel>(
+    model: &'a M,
+    name: &str,
+) -> Result<&'a Rod<M::Element>> {
+    model.field_rod().ok_or_else(|| {
+        Error::invalid(
+            name,
+            "distributed",
+            "the distributed field is defined on the clamped robot's rod only: on a structure, \
+             take a force at a site ({\"kind\": \"at_site\", \"site\": …})",
+        )
+    })
 }
 
 impl<M: EstimationModel> LinearLoad<M> for LoadModel {

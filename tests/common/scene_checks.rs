@@ -1,7 +1,8 @@
 //! Scene text in, everything the command line does with it, and the
 //! honesty invariants checked on every answer: shared by the fuzz targets
-//! (`tests/fuzz/fuzz_targets/`, which include this file by `#[path]`) and
-//! the random-scene property test (`tests/random_scenes.rs`).
+//! (`tests/fuzz/fuzz_targets/`, which include this file by `#[path]`),
+//! the random-scene property test (`tests/random_scenes.rs`) and the
+//! report check of `tests/bad_inputs.rs`.
 //!
 //! The invariants, each cheap to check on the answer alone:
 //! - no panic, and every refusal renders as text;
@@ -271,19 +272,26 @@ fn converged_bound(r: &StaticReport, c: StaticCriterion) -> f64 {
     }
 }
 
-/// The report of a returned solve: every number finite, a converged status
-/// within its bound, negative eigenvalues warned.
-pub fn check_static_report(r: &StaticReport) {
-    for v in [
+/// Whether every number of a static report is finite: its residual and
+/// step, the tolerance, floor and load scale they are judged by, and its
+/// wall time (also used by `tests/bad_inputs.rs`).
+pub fn report_is_finite(r: &StaticReport) -> bool {
+    [
         r.residual_norm_n,
         r.residual_tolerance_n,
         r.residual_floor_n,
         r.load_scale_n,
         r.increment_norm_m,
         r.wall_time_s,
-    ] {
-        assert!(v.is_finite(), "non-finite number in the report: {r}");
-    }
+    ]
+    .iter()
+    .all(|v| v.is_finite())
+}
+
+/// The report of a returned solve: every number finite, a converged status
+/// within its bound, negative eigenvalues warned.
+pub fn check_static_report(r: &StaticReport) {
+    assert!(report_is_finite(r), "non-finite number in the report: {r}");
     if let Some(c) = r.status.criterion() {
         let bound = converged_bound(r, c);
         assert!(

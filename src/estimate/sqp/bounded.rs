@@ -19,13 +19,36 @@ use super::super::gn_form::weighted_columns;
 use super::super::gn_form::{GnForm, count_dense};
 use super::super::load_model::field_rod;
 use super::super::problem::{Derivs, Problem};
-use super::super::{BoundFrame, EstimationModel, LoadModel};
+use super::super::{BoundFrame, EstimationModel, LoadBound, LoadModel};
 use super::{QpError, QpStep, SqpEstimator, Unconstrained};
 
 /// One bound row `a · dF ≤ h` (`a` sparse over the load parameters).
 pub(super) struct Ineq {
     pub a: Vec<(usize, f64)>,
     pub h: f64,
+}
+
+/// `t` scaled to unit length.
+fn unit(mut t: Vec<f64>) -> Vec<f64> {
+    let n = norm2(&t).max(1e-300);
+    t.iter_mut().for_each(|v| *v /= n);
+    t
+}
+
+/// The bound's direction in world axes: in the local frame (planar), its
+/// components along the unit tangent `t` and the normal; else as given
+/// (3-D local bounds are refused when the problem is built: no section
+/// frame).
+fn world_direction(b: &LoadBound, tangent: Option<Vec<f64>>) -> Vec<f64> {
+    match (b.frame, tangent) {
+        (BoundFrame::Local, Some(t)) if t.len() == 2 => {
+            let nrm = [-t[1], t[0]];
+            (0..2)
+                .map(|i| b.direction[0] * t[i] + b.direction[1] * nrm[i])
+                .collect()
+        }
+        _ => b.direction.clone(),
+    }
 }
 
 impl<M: EstimationModel> SqpEstimator<M> {
@@ -38,89 +61,65 @@ impl<M: EstimationModel> SqpEstimator<M> {
         let model = problem.robot();
         // slot k of element e: node e + k/2, its value (k even) or slope
         let slot = |e: usize, k: usize, i: usize| (e + k / 2) * nd + (k % 2) * d + i;
-        let local = |t: &mut Vec<f64>| -> Vec<f64> {
-            let n = norm2(t).max(1e-300);
-            t.iter_mut().for_each(|v| *v /= n);
-            t.clone()
+        // the unit tangent at a rod's point when the bound is in the local frame
+        let rod_tangent = |b: &LoadBound, p: &ArcPoint| -> Result<Option<Vec<f64>>> {
+            match b.frame {
+                BoundFrame::World => Ok(None),
+                BoundFrame::Local => {
+                    let mut t = vec![0.0; d];
+                    p.slope_into(q, &mut t)?;
+                    Ok(Some(unit(t)))
+                }
+            }
+        };
+        // a force of basis θ: the bound reads basisᵀ dir · θ
+        let basis_coeffs = |dir: &[f64]| -> Result<Vec<(usize, f64)>> {
+            let basis = problem.load().force_basis(d)?.unwrap_or_default();
+            Ok((0..basis.ncols())
+                .map(|j| (j, (0..d).map(|i| basis[(i, j)] * dir[i]).sum()))
+                .collect())
         };
         let mut rows = Vec::new();
         for b in &problem.settings().bounds {
-            // the field's point (distributed and nodal loads) and the unit
-            // tangent there when the bound is in the local frame
-            let (point, tangent) = match problem.load() {
-                LoadModel::Distributed | LoadModel::Concentrated { .. } => {
-                    let rod = field_rod(model)?;
-                    let p = match problem.load() {
-                        LoadModel::Concentrated { node } => {
-                            let (e, xi) = if node == 0 { (0, 0.0) } else { (node - 1, 1.0) };
-                            ArcPoint::new(e, xi, rod.elements()[e].length())
-                        }
-                        _ => rod.arc_point("bound.s_m", b.s_m)?,
-                    };
-                    let t = match b.frame {
-                        BoundFrame::World => None,
-                        BoundFrame::Local => {
-                            let mut t = vec![0.0; d];
-                            p.slope_into(q, &mut t)?;
-                            Some(local(&mut t))
-                        }
-                    };
-                    (Some(p), t)
-                }
-                LoadModel::AtSite { site } | LoadModel::Along { site, .. } => {
-                    let field = "estimator.load_model.site";
-                    let t = match b.frame {
-                        BoundFrame::World => None,
-                        BoundFrame::Local => {
-                            let mut t = model.site_rows(field, &site)?.tangent_at(q).ok_or_else(|| {
-                                crate::Error::invalid(
-                                    "estimator.bounds.frame",
-                                    "local",
-                                    "a rigid body's site has no tangent: bound it in the world frame",
-                                )
-                            })?;
-                            Some(local(&mut t))
-                        }
-                    };
-                    (None, t)
-                }
-            };
-            // world direction
-            let dir: Vec<f64> = match (b.frame, tangent) {
-                (BoundFrame::Local, Some(t)) if d == 2 => {
-                    let nrm = [-t[1], t[0]];
-                    (0..2)
-                        .map(|i| b.direction[0] * t[i] + b.direction[1] * nrm[i])
-                        .collect()
-                }
-                // the world frame; 3-D local bounds are refused when the
-                // problem is built (no section frame)
-                _ => b.direction.clone(),
-            };
             let coeffs: Vec<(usize, f64)> = match problem.load() {
                 LoadModel::Distributed => {
-                    // (the point is always there for the distributed load)
-                    let (e, sh) = point
-                        .map(|p| (p.element, p.values))
-                        .unwrap_or((0, [0.0; 4]));
+                    // the field's shape functions at the bound's point
+                    let p = field_rod(model)?.arc_point("bound.s_m", b.s_m)?;
+                    let dir = world_direction(b, rod_tangent(b, &p)?);
                     let mut c = Vec::new();
-                    for (k, sk) in sh.iter().enumerate() {
+                    for (k, sk) in p.values.iter().enumerate() {
                         for (i, di) in dir.iter().enumerate() {
                             if sk * di != 0.0 {
-                                c.push((slot(e, k, i), sk * di));
+                                c.push((slot(p.element, k, i), sk * di));
                             }
                         }
                     }
                     c
                 }
-                LoadModel::Concentrated { .. }
-                | LoadModel::AtSite { .. }
-                | LoadModel::Along { .. } => {
-                    // the force is basis θ: the bound reads basisᵀ dir · θ
-                    let basis = problem.load().force_basis(d)?.unwrap_or_default();
-                    (0..basis.ncols())
-                        .map(|j| (j, (0..d).map(|i| basis[(i, j)] * dir[i]).sum()))
-                        .collect()
+                LoadModel::Concentrated { node } => {
+                    let rod = field_rod(model)?;
+                    let (e, xi) = if node == 0 { (0, 0.0) } else { (node - 1, 1.0) };
+                    let p = ArcPoint::new(e, xi, rod.elements()[e].length());
+                    basis_coeffs(&world_direction(b, rod_tangent(b, &p)?))?
+                }
+                LoadModel::AtSite { site } | LoadModel::Along { site, .. } => {
+                    let tangent = match b.frame {
+                        BoundFrame::World => None,
+                        BoundFrame::Local => {
+                            let t = model
+                                .site_rows("estimator.load_model.site", &site)?
+                                .tangent_at(q)
+                                .ok_or_else(|| {
+                                    crate::Error::invalid(
+                                        "estimator.bounds.frame",
+                                        "local",
+                                        "a rigid body's site has no tangent: bound it in the world frame",
+                                    )
+                                })?;
+                            Some(unit(t))
+                        }
+                    };
+                    basis_coeffs(&world_direction(b, tangent))?
                 }
             };
             rows.push((coeffs, b.min_n_per_m, b.max_n_per_m));
