@@ -98,7 +98,7 @@ pub(crate) fn chord_strategy(spec: &crate::parallel::ParallelSpec, confirm: bool
 ///
 /// # Errors
 /// The factors' solve errors (factors that do not fit the robot).
-pub(crate) fn compliance_columns<E: Element>(
+fn compliance_columns<E: Element>(
     robot: &ParallelRobot<E>,
     factors: &AutoFactors,
 ) -> Result<(Vec<f64>, SMatrix<f64, 3, 3>)> {
